@@ -1,0 +1,118 @@
+"""The one-to-one port of the thesis's MATLAB, checked on hand-worked cases."""
+import numpy as np
+import pytest
+
+from dynia import thesis
+
+
+def test_conf_limits_use_floor_of_c_times_count_minus_one():
+    values = np.arange(200.0)
+    # c1 = (1 - 0.9)/2 = 0.04999..., floor(0.04999*199) = 9; c2 = 0.95, floor(189.05) = 189
+    np.testing.assert_array_equal(thesis.conf_limits(values, 200, 90), [9.0, 189.0])
+    np.testing.assert_array_equal(thesis.conf_limits(np.arange(10.0), 10, 50), [2.0, 6.0])
+
+
+def test_select_best_parameters_is_a_stable_ascending_rank():
+    cost = np.array([3.0, 1.0, 2.0, 1.0, 0.5])
+    par = np.array([10.0, 11.0, 12.0, 13.0, 14.0])
+    best_mat, best_indices = thesis.select_best_parameters(cost, par, 3)
+    np.testing.assert_array_equal(best_indices, [4, 1, 3])  # the tie 1.0 keeps sample order
+    np.testing.assert_array_equal(best_mat, [[0.5, 14.0], [1.0, 11.0], [1.0, 13.0]])
+
+
+def test_calc_likelihood_shifts_only_when_negative_and_normalises():
+    lhood = thesis.calc_likelihood(np.array([[0.2, 0], [0.6, 0]]))
+    np.testing.assert_allclose(lhood, [0.8 / 1.2, 0.4 / 1.2])
+    lhood = thesis.calc_likelihood(np.array([[0.5, 0], [3.0, 0], [1.0, 0]]))
+    # 1 - cost = [0.5, -2, 0] -> shifted by 2 -> [2.5, 0, 2] -> / 4.5
+    np.testing.assert_allclose(lhood, [2.5 / 4.5, 0, 2 / 4.5])
+
+
+def test_calc_likelihood_of_equal_costs_above_one_is_nan_as_in_matlab():
+    assert np.isnan(thesis.calc_likelihood(np.array([[2.0, 0], [2.0, 0]]))).all()
+
+
+def test_calc_likelihood_with_one_row_fails_where_matlab_does():
+    with pytest.raises(ValueError, match="at least 2 behavioural sets"):
+        thesis.calc_likelihood(np.array([[0.1, 1.0]]))
+
+
+def test_cumul_likelihood_accumulates_in_parameter_order():
+    lhood = np.array([0.5, 0.3, 0.2])
+    par_sorted = np.array([1.0, 2.0, 3.0])
+    cumulated, c_all = thesis.cumul_likelihood(5, np.array([0.5, 1.0, 2.0, 3.0, 4.0]), par_sorted,
+                                               np.array([2, 0, 1]), lhood)
+    np.testing.assert_allclose(cumulated, [0.2, 0.7, 1.0])
+    # MATLAB: 0 below the set, the loop skips values in [min, max), then the CLD, then ones
+    assert c_all[0] == 0
+
+
+def test_cld_gradient_reproduces_the_matlab_quirks():
+    # lb=0, ub=4, bins=5: width (4-0)/(5-1) = 1, first limit at 1.
+    par_sorted = np.array([0.5, 1.5, 1.6, 2.5, 3.5])
+    weights = np.array([0.1, 0.2, 0.3, 0.15, 0.25])
+    cumulated = np.cumsum(weights)
+    grad = thesis.cld_gradient(5, 4, 0, par_sorted, cumulated, 5)
+    # bin [.., 1): samples 0 only -> C(0) - C(0) = 0 (the first sample's weight is dropped)
+    # bin [1, 2): samples 1, 2 -> C(2) - C(1) = 0.3
+    # bin [2, 3): sample 3 -> C(3) - C(3) = 0
+    # bin [3, 4): holds the largest value -> loop ends (next limit 4 > 3.5) -> 0
+    np.testing.assert_allclose(grad[:, 0], [0, 0.3, 0, 0, 0], atol=1e-15)
+    np.testing.assert_allclose(grad[:4, 3], [2, 3, 4, 5])  # edges built by repeated addition
+
+
+def test_cld_gradient_gives_an_empty_bin_minus_the_next_weight():
+    par_sorted = np.array([0.5, 2.5, 3.5])
+    cumulated = np.cumsum([0.2, 0.3, 0.5])
+    grad = thesis.cld_gradient(5, 4, 0, par_sorted, cumulated, 3)
+    # bin [1, 2) is empty: end_index = start_index - 1 -> C(0) - C(1) = -0.3
+    np.testing.assert_allclose(grad[:, 0], [0, -0.3, 0, 0, 0])
+
+
+def test_cld_gradient_on_an_edge_fails_where_matlab_does():
+    with pytest.raises(ValueError, match="bin edge"):
+        thesis.cld_gradient(5, 4, 0, np.array([1.0, 2.5]), np.array([0.5, 1.0]), 2)
+
+
+def _tiny_problem(seed=0, ns=50, steps=30):
+    rng = np.random.default_rng(seed)
+    par = rng.uniform(0, 1, ns)
+    u = np.r_[np.zeros(steps // 2), np.ones(steps - steps // 2)]
+    mct = par[:, None] * u
+    y = 0.4 * u + rng.normal(0, 0.01, steps)
+    return par, mct, y
+
+
+def test_moving_window_calcs_identifies_a_gain_when_the_input_is_large():
+    par, mct, y = _tiny_problem()
+    IC, CI_t, grad = thesis.moving_window_calcs(30, par, 0, 1, 50, mct, y, 10, 20, 2)
+    assert IC.shape == (30,) and CI_t.shape == (30, 2) and grad.shape == (10, 30)
+    assert IC[-10:].min() > 0.8 > 0.5 > IC[:10].max()
+    assert np.all(CI_t[:, 0] <= CI_t[:, 1])
+    assert CI_t[-1, 0] <= 0.4 <= CI_t[-1, 1]
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(ns=2000 // 3 * 3 + 1), "not a whole number"),
+    (dict(percentage=2), "leaves 1 behavioural sets"),
+    (dict(n=20), "TIME >= 2n"),
+    (dict(lb=1, ub=1), "lb must be below ub"),
+    (dict(bins=1), "bins must be at least 2"),
+])
+def test_moving_window_calcs_rejects_what_matlab_cannot_run(kwargs, message):
+    args = dict(TIME=30, lb=0, ub=1, ns=50, bins=10, percentage=20, n=2)
+    args.update(kwargs)
+    par, mct, y = _tiny_problem(ns=args["ns"], steps=args["TIME"])
+    if "ns" in kwargs:
+        args["percentage"] = 10.1
+    with pytest.raises(ValueError, match=message):
+        thesis.moving_window_calcs(args["TIME"], par, args["lb"], args["ub"], args["ns"], mct, y,
+                                   args["bins"], args["percentage"], args["n"])
+
+
+def test_moving_window_calcs_checks_shapes():
+    par, mct, y = _tiny_problem()
+    with pytest.raises(ValueError, match="mct must have shape"):
+        thesis.moving_window_calcs(30, par, 0, 1, 50, mct.T, y, 10, 20, 2)
+    with pytest.raises(ValueError, match="y must have shape"):
+        thesis.moving_window_calcs(30, par, 0, 1, 50, mct, y[:-1], 10, 20, 2)
