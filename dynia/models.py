@@ -1,0 +1,716 @@
+"""Exact batched simulation of many parameter sets of a linear model at once.
+
+A DYNIA run simulates the same single-input single-output model for tens of
+thousands of parameter sets on the same input record. The models here
+discretise every parameter set exactly (zero-order hold, fractional dead
+times included) and then advance all samples together, one vectorised update
+per time step.
+
+Shape convention
+----------------
+``params``
+    ``(n_samples, n_params)``; the columns follow ``model.names``. A 1-D
+    array of length ``n_params`` is accepted as a single sample.
+``u``
+    ``(n_steps,)``, the input sampled every ``dt``.
+outputs
+    ``(n_samples, n_steps)``; ``simulate_chunks`` yields consecutive
+    ``(n_samples, m)`` pieces of it.
+
+Time convention
+---------------
+The same as ``control.forced_response`` and MATLAB's ``lsim``: ``y[k]`` is
+the output at ``t = k*dt`` and the input is held from one sample to the next,
+``u(t) = u[k]`` for ``k*dt <= t < (k+1)*dt``. Hence ``y[0]`` is the initial
+output. Before ``t = 0`` the input is 0 for ``x0="zero"`` and ``u[0]`` for
+``x0="steady"``, which starts every sample in the steady state at ``u[0]``.
+
+Examples
+--------
+>>> import numpy as np
+>>> from dynia.models import FOPDT
+>>> model = FOPDT()
+>>> model.names
+('K', 'T', 'theta')
+>>> params = np.array([[2.0, 1.0, 0.0], [2.0, 1.0, 1.5]])
+>>> model.simulate(params, np.ones(4)).round(3)
+array([[0.   , 1.264, 1.729, 1.9  ],
+       [0.   , 0.   , 0.787, 1.554]])
+"""
+
+from __future__ import annotations
+
+import numbers
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
+
+import control
+import numpy as np
+import scipy.linalg
+
+__all__ = ["Model", "FirstOrder", "FOPDT", "SecondOrderDelay", "TransferFunction"]
+
+_X0_CHOICES = ("zero", "steady")
+
+# Default chunk size: 4e6 float64 values are 32 MB per output chunk, large
+# enough that the per-chunk overhead is negligible and small enough that the
+# chunk plus the gathered inputs stay far below typical memory limits.
+_VALUES_PER_CHUNK = 4_000_000
+
+# Time constants are clamped to this fraction of dt. Below it every factor
+# exp(-tau/T) used by the discretisation is exactly 0.0 in float64: tau is dt
+# or a part of dt that _split_delay keeps at least ~1e-9*dt long, so
+# tau/T >= 1000, far past exp's underflow at about 745. A clamped lag
+# therefore reproduces the static-gain limit T -> 0 to machine precision,
+# while the clamp avoids dividing by a zero time constant.
+_TIME_CONSTANT_FLOOR = 1e-12
+
+# theta/dt within this relative distance of an integer is taken as that
+# integer, so that e.g. theta=0.3, dt=0.1 (0.3/0.1 = 2.9999999999999996) is
+# a whole number of steps instead of a fractional delay of almost a step.
+_DELAY_SNAP = 1e-9
+
+# Samples per block when turning a (time, sample) chunk into (sample, time):
+# a blocked copy keeps source and destination in cache and measured about
+# four times faster than a plain transposed copy for 20 000 samples.
+_TRANSPOSE_BLOCK = 256
+
+
+@dataclass(frozen=True)
+class _DiscreteSystem:
+    """Exact discretisation of every sample, sample axis last.
+
+    With ``d`` the whole-step part of the dead time, the recursion is::
+
+        x[k+1] = phi x[k] + gamma_now u[k-d] + gamma_prev u[k-d-1]
+        y[k]   = c x[k]   + feed_now  u[k-d] + feed_prev  u[k-d-1]
+
+    Keeping samples on the last axis makes each coefficient row used in the
+    time loop one contiguous vector over samples.
+    """
+
+    phi: np.ndarray  # (n_states, n_states, n_samples)
+    gamma_now: np.ndarray  # (n_states, n_samples)
+    gamma_prev: np.ndarray  # (n_states, n_samples)
+    c: np.ndarray  # (n_states, n_samples)
+    feed_now: np.ndarray  # (n_samples,)
+    feed_prev: np.ndarray  # (n_samples,)
+    delay_steps: np.ndarray  # (n_samples,) int64
+    steady_state: np.ndarray | None  # (n_states, n_samples), per unit input
+
+
+class Model:
+    """Base class of the batched models.
+
+    Subclasses set the parameter names and implement ``_discretise``; the
+    validation, the chunking and the time loop live here, shared by all.
+
+    Parameters
+    ----------
+    names : sequence of str
+        Parameter names, in the column order of ``params``.
+    """
+
+    def __init__(self, names: Sequence[str]):
+        self._names = _check_names(names)
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Parameter names, in the column order of ``params``."""
+        return self._names
+
+    @property
+    def n_params(self) -> int:
+        """Number of parameters (columns of ``params``)."""
+        return len(self._names)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}()"
+
+    def simulate(self, params, u, dt: float = 1.0, x0: str = "zero") -> np.ndarray:
+        """Simulate every parameter set on the input ``u``.
+
+        Parameters
+        ----------
+        params : array_like, shape (n_samples, n_params)
+            One parameter set per row, columns in the order of `names`.
+        u : array_like, shape (n_steps,)
+            Input samples, held constant over each interval of length `dt`.
+        dt : float, default 1.0
+            Sampling interval, > 0.
+        x0 : {"zero", "steady"}, default "zero"
+            Initial state: zero, or the steady state at ``u[0]``.
+
+        Returns
+        -------
+        ndarray, shape (n_samples, n_steps)
+            ``y[i, k]`` is the output of sample ``i`` at ``t = k*dt``.
+
+        Raises
+        ------
+        ValueError
+            If an argument has the wrong shape or value (the message names
+            it), or ``x0="steady"`` for a sample without a steady state.
+
+        Examples
+        --------
+        >>> from dynia.models import FirstOrder
+        >>> FirstOrder().simulate([[2.0, 1.0], [1.0, 0.5]], [1.0, 1.0, 1.0]).round(4)
+        array([[0.    , 1.2642, 1.7293],
+               [0.    , 0.8647, 0.9817]])
+        """
+        u = _check_input(u)
+        output = None
+        start = 0
+        for chunk in self.simulate_chunks(params, u, dt=dt, x0=x0):
+            if output is None:
+                output = np.empty((chunk.shape[0], u.shape[0]))
+            output[:, start : start + chunk.shape[1]] = chunk
+            start += chunk.shape[1]
+        return output
+
+    def simulate_chunks(
+        self, params, u, dt: float = 1.0, x0: str = "zero", chunk_steps: int | None = None
+    ) -> Iterator[np.ndarray]:
+        """Simulate like `simulate`, yielding the output a block of steps at a time.
+
+        Only the state and one chunk are held in memory, so arbitrarily many
+        samples times steps can be processed. Concatenating the chunks along
+        axis 1 gives exactly (bit for bit) the result of `simulate`.
+        Arguments are validated immediately, not on the first ``next()``.
+
+        Parameters
+        ----------
+        params, u, dt, x0
+            As for `simulate`.
+        chunk_steps : int, optional
+            Time steps per chunk (the last one may be shorter). By default
+            about 4e6 values per chunk, i.e. ``4e6 // n_samples`` steps, at
+            least 1.
+
+        Yields
+        ------
+        ndarray, shape (n_samples, m)
+            Consecutive blocks of the output.
+
+        Raises
+        ------
+        ValueError
+            As for `simulate`, or for a `chunk_steps` that is not a positive
+            integer; raised by this call, before any chunk is produced.
+
+        Examples
+        --------
+        >>> from dynia.models import FirstOrder
+        >>> chunks = FirstOrder().simulate_chunks([1.0, 1.0], [1.0] * 5, chunk_steps=2)
+        >>> [chunk.shape for chunk in chunks]
+        [(1, 2), (1, 2), (1, 1)]
+        """
+        params = self._check_params(params)
+        u = _check_input(u)
+        dt = _check_dt(dt)
+        x0 = _check_x0(x0)
+        n_samples = params.shape[0]
+        if chunk_steps is None:
+            chunk_steps = max(1, _VALUES_PER_CHUNK // n_samples)
+        else:
+            chunk_steps = _check_chunk_steps(chunk_steps)
+        system = self._discretise(params, dt, u.shape[0], steady=x0 == "steady")
+        return _run(system, u, x0, chunk_steps)
+
+    def _check_params(self, params) -> np.ndarray:
+        """Return ``params`` as a finite float (n_samples, n_params) array."""
+        expected = f"(n_samples, {self.n_params}) with columns {self.names}"
+        try:
+            params = np.asarray(params, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(f"params must be a numeric array of shape {expected}") from None
+        if params.ndim == 1 and params.shape[0] == self.n_params:
+            params = params.reshape(1, -1)
+        if params.ndim != 2 or params.shape[1] != self.n_params:
+            raise ValueError(f"params must have shape {expected}; got shape {params.shape}")
+        if params.shape[0] == 0:
+            raise ValueError("params must contain at least one sample (row)")
+        bad = ~np.isfinite(params)
+        if bad.any():
+            sample, column = np.argwhere(bad)[0]
+            raise ValueError(
+                f"params must be finite; sample {sample} has "
+                f"{self.names[column]} = {params[sample, column]}"
+            )
+        return params
+
+    def _require_nonnegative(self, params: np.ndarray, names: Sequence[str]) -> None:
+        """Raise for the first sample with a negative value of one of ``names``."""
+        for name in names:
+            column = params[:, self.names.index(name)]
+            negative = np.flatnonzero(column < 0)
+            if negative.size:
+                sample = negative[0]
+                raise ValueError(
+                    f"{name} must be >= 0; sample {sample} has {name} = {column[sample]}"
+                )
+
+    def _discretise(
+        self, params: np.ndarray, dt: float, n_steps: int, steady: bool
+    ) -> _DiscreteSystem:
+        raise NotImplementedError
+
+
+class FirstOrder(Model):
+    """First-order lag ``K / (T s + 1)``.
+
+    Parameters (columns of ``params``): ``K`` gain, ``T`` time constant
+    (>= 0; ``T = 0`` is the static gain).
+
+    Examples
+    --------
+    >>> from dynia.models import FirstOrder
+    >>> FirstOrder().simulate([[2.0, 1.0]], [1.0, 1.0, 1.0], x0="steady")
+    array([[2., 2., 2.]])
+    """
+
+    def __init__(self):
+        super().__init__(("K", "T"))
+
+    def _discretise(self, params, dt, n_steps, steady):
+        self._require_nonnegative(params, ("T",))
+        gain, time_constant = params.T
+        return _first_order_system(gain, time_constant, np.zeros_like(gain), dt, n_steps)
+
+
+class FOPDT(Model):
+    """First-order lag plus dead time ``K exp(-theta s) / (T s + 1)``.
+
+    Parameters (columns of ``params``): ``K`` gain, ``T`` time constant
+    (>= 0), ``theta`` dead time (>= 0, any real value, not only multiples of
+    ``dt``).
+
+    Examples
+    --------
+    >>> from dynia.models import FOPDT
+    >>> FOPDT().simulate([[1.0, 0.0, 2.0]], [1.0, 2.0, 3.0, 4.0])
+    array([[0., 0., 0., 1.]])
+    """
+
+    def __init__(self):
+        super().__init__(("K", "T", "theta"))
+
+    def _discretise(self, params, dt, n_steps, steady):
+        self._require_nonnegative(params, ("T", "theta"))
+        gain, time_constant, delay = params.T
+        return _first_order_system(gain, time_constant, delay, dt, n_steps)
+
+
+class SecondOrderDelay(Model):
+    """Two lags plus dead time ``K exp(-theta s) / ((T1 s + 1)(T2 s + 1))``.
+
+    Parameters (columns of ``params``): ``K`` gain, ``T1`` and ``T2`` time
+    constants (>= 0, equal values allowed), ``theta`` dead time (>= 0).
+
+    The model is discretised in closed form, with the lags realised as a
+    cascade, which stays exact and free of cancellation for ``T1 == T2`` and
+    for vanishing time constants.
+
+    Examples
+    --------
+    >>> from dynia.models import SecondOrderDelay
+    >>> SecondOrderDelay().simulate([[1.0, 1.0, 1.0, 0.0]], [1.0] * 4).round(4)
+    array([[0.    , 0.2642, 0.594 , 0.8009]])
+    """
+
+    def __init__(self):
+        super().__init__(("K", "T1", "T2", "theta"))
+
+    def _discretise(self, params, dt, n_steps, steady):
+        self._require_nonnegative(params, ("T1", "T2", "theta"))
+        gain, lag1, lag2, delay = params.T
+        delay_steps, fraction = _split_delay(delay, dt, n_steps)
+        lag1_clamped = np.maximum(lag1, _TIME_CONSTANT_FLOOR * dt)
+        lag2_clamped = np.maximum(lag2, _TIME_CONSTANT_FLOOR * dt)
+
+        # State x1 is the first lag's output (unit gain), x2 = y is the
+        # second lag's output driven by K*x1.
+        def over(duration):
+            """Free-response factors and the state after a unit input step."""
+            decay1 = np.exp(-duration / lag1_clamped)
+            decay2 = np.exp(-duration / lag2_clamped)
+            coupling = _cascade_coupling(
+                duration, lag1, lag2, lag1_clamped, lag2_clamped, decay1, decay2
+            )
+            step_x1 = -np.expm1(-duration / lag1_clamped)
+            # By superposition the step response of x2 is K (1 - e^{-t/T2} - coupling).
+            step_x2 = gain * (-np.expm1(-duration / lag2_clamped) - coupling)
+            return decay1, decay2, coupling, step_x1, step_x2
+
+        n_samples = gain.shape[0]
+        decay1, decay2, coupling, _, _ = over(np.full(n_samples, dt))
+        phi = np.zeros((2, 2, n_samples))
+        phi[0, 0] = decay1
+        phi[1, 0] = gain * coupling
+        phi[1, 1] = decay2
+
+        late_decay1, late_decay2, late_coupling, late_x1, late_x2 = over((1.0 - fraction) * dt)
+        _, _, _, early_x1, early_x2 = over(fraction * dt)
+        gamma_now = np.stack((late_x1, late_x2))
+        gamma_prev = np.stack(
+            (late_decay1 * early_x1, gain * late_coupling * early_x1 + late_decay2 * early_x2)
+        )
+        zeros = np.zeros(n_samples)
+        return _DiscreteSystem(
+            phi=phi,
+            gamma_now=gamma_now,
+            gamma_prev=gamma_prev,
+            c=np.stack((zeros, np.ones(n_samples))),
+            feed_now=zeros,
+            feed_prev=zeros,
+            delay_steps=delay_steps,
+            steady_state=np.stack((np.ones(n_samples), gain)),
+        )
+
+
+class TransferFunction(Model):
+    """Any SISO continuous-time LTI model built by python-control from the parameters.
+
+    Parameters
+    ----------
+    factory : callable
+        ``factory(p)`` receives one sample's parameters as a 1-D float array
+        (in `names` order) and returns a continuous-time, single-input
+        single-output ``control.TransferFunction`` or ``control.StateSpace``.
+        Every sample must give the same number of states. Direct feedthrough
+        (proper, not strictly proper models) is supported.
+    names : sequence of str
+        Parameter names, in the column order of ``params``.
+    delay : str, optional
+        Name of the parameter (one of `names`) that is an input dead time in
+        time units. python-control has no exact delay element; this one is
+        simulated exactly, including fractions of ``dt``. The factory still
+        receives it but should not model it.
+
+    Notes
+    -----
+    Each sample is discretised with the matrix exponential of
+    ``[[A, B], [0, 0]] * h``, batched over samples. The factory is called
+    once per sample in a Python loop, so building the model costs what
+    python-control needs per system (~0.15 ms, about 3 s for 20 000
+    samples); the time loop itself is vectorised like the other models.
+
+    Examples
+    --------
+    >>> import control
+    >>> from dynia.models import TransferFunction
+    >>> model = TransferFunction(
+    ...     lambda p: control.tf([p[0]], [p[1], 1.0]), names=("K", "T", "theta"), delay="theta"
+    ... )
+    >>> model.simulate([[1.0, 1.0, 1.0]], [1.0, 1.0, 1.0, 1.0]).round(4)
+    array([[0.    , 0.    , 0.6321, 0.8647]])
+    """
+
+    def __init__(
+        self,
+        factory: Callable[[np.ndarray], control.TransferFunction | control.StateSpace],
+        names: Sequence[str],
+        delay: str | None = None,
+    ):
+        super().__init__(names)
+        if not callable(factory):
+            raise TypeError(f"factory must be callable; got {type(factory).__name__}")
+        if delay is not None and delay not in self.names:
+            raise ValueError(f"delay must be None or one of names {self.names}; got {delay!r}")
+        self._factory = factory
+        self._delay = delay
+
+    @property
+    def delay(self) -> str | None:
+        """Name of the dead-time parameter, or None."""
+        return self._delay
+
+    def __repr__(self) -> str:
+        factory = getattr(self._factory, "__name__", repr(self._factory))
+        return f"TransferFunction({factory}, names={self.names}, delay={self._delay!r})"
+
+    def _discretise(self, params, dt, n_steps, steady):
+        if self._delay is None:
+            delay = np.zeros(params.shape[0])
+        else:
+            self._require_nonnegative(params, (self._delay,))
+            delay = params[:, self.names.index(self._delay)]
+        a, b, c, d = self._state_space(params)
+        n_samples, n_states = b.shape
+        delay_steps, fraction = _split_delay(delay, dt, n_steps)
+
+        augmented = np.zeros((n_samples, n_states + 1, n_states + 1))
+        augmented[:, :n_states, :n_states] = a
+        augmented[:, :n_states, n_states] = b
+        # expm([[A, B], [0, 0]] tau) = [[e^{A tau}, int_0^tau e^{As} B ds], [0, 1]]
+        late = scipy.linalg.expm(augmented * ((1.0 - fraction) * dt)[:, None, None])
+        early = scipy.linalg.expm(augmented * (fraction * dt)[:, None, None])
+        late_transition = late[:, :n_states, :n_states]
+        # For fraction == 0 `early` is the identity, so phi equals e^{A dt} exactly.
+        phi = late_transition @ early[:, :n_states, :n_states]
+        gamma_now = late[:, :n_states, n_states]
+        gamma_prev = (late_transition @ early[:, :n_states, n_states:])[:, :, 0]
+        discretised = np.concatenate(
+            (phi.reshape(n_samples, -1), gamma_now, gamma_prev), axis=1
+        )
+        bad = ~np.isfinite(discretised).all(axis=1)
+        if bad.any():
+            raise ValueError(
+                f"discretising the system of sample {np.flatnonzero(bad)[0]} gave "
+                f"non-finite values; check its poles against dt={dt}"
+            )
+
+        feed_now, feed_prev = _split_feedthrough(d, fraction)
+        return _DiscreteSystem(
+            phi=np.moveaxis(phi, 0, -1).copy(),
+            gamma_now=gamma_now.T.copy(),
+            gamma_prev=gamma_prev.T.copy(),
+            c=c.T.copy(),
+            feed_now=feed_now,
+            feed_prev=feed_prev,
+            delay_steps=delay_steps,
+            steady_state=_steady_state(a, b) if steady else None,
+        )
+
+    def _state_space(self, params: np.ndarray):
+        """Stack A (n, s, s), B (n, s), C (n, s), D (n,) of every sample's system."""
+        matrices = []
+        for sample, values in enumerate(params):
+            system = self._factory(values.copy())
+            if not isinstance(system, (control.TransferFunction, control.StateSpace)):
+                raise TypeError(
+                    f"factory must return a control.TransferFunction or control.StateSpace; "
+                    f"got {type(system).__name__} for sample {sample}"
+                )
+            if not system.isctime():
+                raise ValueError(
+                    f"factory must return a continuous-time system; sample {sample} "
+                    f"gave dt={system.dt}"
+                )
+            if system.ninputs != 1 or system.noutputs != 1:
+                raise ValueError(
+                    f"factory must return a single-input single-output system; sample "
+                    f"{sample} has {system.ninputs} inputs and {system.noutputs} outputs"
+                )
+            try:
+                system = control.ss(system)
+            except ValueError as error:
+                raise ValueError(
+                    f"the system of sample {sample} cannot be converted to state space: {error}"
+                ) from error
+            if matrices and system.nstates != matrices[0][0].shape[0]:
+                raise ValueError(
+                    f"all samples must have the same state dimension; sample {sample} has "
+                    f"{system.nstates} states, sample 0 has {matrices[0][0].shape[0]}"
+                )
+            matrices.append((system.A, system.B[:, 0], system.C[0], system.D[0, 0]))
+        a, b, c, d = (np.array(stack, dtype=float) for stack in zip(*matrices))
+        return a, b, c, d
+
+
+def _first_order_system(gain, time_constant, delay, dt, n_steps) -> _DiscreteSystem:
+    """Closed-form discretisation of K e^{-theta s}/(T s + 1), state x = y."""
+    delay_steps, fraction = _split_delay(delay, dt, n_steps)
+    time_constant = np.maximum(time_constant, _TIME_CONSTANT_FLOOR * dt)
+    late = (1.0 - fraction) * dt
+    # -expm1(-x) is 1 - exp(-x) without cancellation when T >> dt.
+    gamma_now = gain * -np.expm1(-late / time_constant)
+    gamma_prev = np.exp(-late / time_constant) * gain * -np.expm1(-fraction * dt / time_constant)
+    zeros = np.zeros_like(gain)
+    return _DiscreteSystem(
+        phi=np.exp(-dt / time_constant)[None, None, :],
+        gamma_now=gamma_now[None, :],
+        gamma_prev=gamma_prev[None, :],
+        c=np.ones((1, gain.shape[0])),
+        feed_now=zeros,
+        feed_prev=zeros,
+        delay_steps=delay_steps,
+        steady_state=gain[None, :].copy(),
+    )
+
+
+def _cascade_coupling(duration, lag1, lag2, lag1_clamped, lag2_clamped, decay1, decay2):
+    """x2(t) of 1/(T1 s+1) -> 1/(T2 s+1) from x1(0) = 1, x2(0) = 0, no input.
+
+    This is ``T1 (e^{-t/T1} - e^{-t/T2}) / (T1 - T2)``. For close time
+    constants the difference cancels, so it is rewritten with
+    ``z = t/T2 - t/T1`` as ``e^{-t/T2} (t/T2) expm1(z)/z``, whose limit for
+    ``T1 == T2`` is ``(t/T) e^{-t/T}``.
+    """
+    z = duration / lag2_clamped - duration / lag1_clamped
+    close = np.abs(z) <= 0.5
+    safe_z = np.where(close & (z != 0), z, 1.0)
+    relative_growth = np.where(z == 0, 1.0, np.expm1(safe_z) / safe_z)
+    close_value = decay2 * (duration / lag2_clamped) * relative_growth
+    # Away from the close branch the clamped constants differ, so at least one
+    # raw constant exceeds the floor and T1 - T2 != 0. Using the raw T1 keeps
+    # T1 = 0 an exact zero coupling (the first lag then follows u at once).
+    gap = np.where(close, 1.0, lag1 - lag2)
+    far_value = lag1 * (decay1 - decay2) / gap
+    return np.where(close, close_value, far_value)
+
+
+def _split_delay(delay, dt, n_steps):
+    """Write each dead time as (d + f)*dt, d integer >= 0, 0 <= f < 1."""
+    # A dead time beyond the record only ever sees the input before t=0, so
+    # capping it changes nothing and keeps theta/dt and the int cast finite.
+    steps = np.minimum(delay, (n_steps + 1) * dt) / dt
+    nearest = np.rint(steps)
+    snap = np.abs(steps - nearest) <= _DELAY_SNAP * np.maximum(1.0, steps)
+    steps = np.where(snap, nearest, steps)
+    whole = np.floor(steps)
+    return whole.astype(np.int64), steps - whole
+
+
+def _split_feedthrough(feedthrough, fraction):
+    """Direct feedthrough sees the delayed input at t = k*dt: u[k-d-1] if f > 0 else u[k-d]."""
+    fractional = fraction > 0
+    return np.where(fractional, 0.0, feedthrough), np.where(fractional, feedthrough, 0.0)
+
+
+def _steady_state(a, b):
+    """Per-sample state -A^{-1} B for a unit constant input, shape (n_states, n_samples)."""
+    n_samples, n_states = b.shape
+    if n_states == 0:
+        return np.zeros((0, n_samples))
+    singular = np.linalg.matrix_rank(a) < n_states
+    if singular.any():
+        raise ValueError(
+            f'x0="steady" needs a steady state, but A of sample {np.flatnonzero(singular)[0]} '
+            f"is singular (the model has an integrator or a pole at 0)"
+        )
+    return -np.linalg.solve(a, b[:, :, None])[:, :, 0].T
+
+
+def _run(
+    system: _DiscreteSystem, u: np.ndarray, x0: str, chunk_steps: int
+) -> Iterator[np.ndarray]:
+    """Advance all samples through ``u`` and yield (n_samples, m) output chunks."""
+    n_states, n_samples = system.c.shape
+    n_steps = u.shape[0]
+    # Slot 0 stands for every time before t=0, so clipping indices at -1 and
+    # shifting by one gathers the pre-history without padding by the delay.
+    padded_input = np.concatenate(([u[0] if x0 == "steady" else 0.0], u))
+
+    # Sources of the linear combinations: the states, then u[k-d], u[k-d-1].
+    now_source, prev_source = n_states, n_states + 1
+    state_terms = [
+        _nonzero_terms(
+            [(system.phi[i, j], j) for j in range(n_states)]
+            + [(system.gamma_now[i], now_source), (system.gamma_prev[i], prev_source)]
+        )
+        for i in range(n_states)
+    ]
+    output_terms = _nonzero_terms(
+        [(system.c[i], i) for i in range(n_states)]
+        + [(system.feed_now, now_source), (system.feed_prev, prev_source)]
+    )
+    needs_prev = any(
+        source == prev_source for terms in [*state_terms, output_terms] for _, source in terms
+    )
+
+    if x0 == "steady":
+        state = system.steady_state * u[0]
+    else:
+        state = np.zeros((n_states, n_samples))
+    current, upcoming = list(state), list(np.empty_like(state))
+    scratch = np.empty(n_samples)
+    time_major = np.empty((min(chunk_steps, n_steps), n_samples))
+
+    delays = system.delay_steps
+    # With one common delay the delayed input is a scalar per step, so no
+    # (steps, samples) gather is needed.
+    offsets = delays[:1] if np.all(delays == delays[0]) else delays
+    for start in range(0, n_steps, chunk_steps):
+        stop = min(start + chunk_steps, n_steps)
+        source_index = np.arange(start, stop)[:, None] - offsets[None, :]
+        inputs = [padded_input[np.maximum(source_index, -1) + 1]]
+        if needs_prev:
+            inputs.append(padded_input[np.maximum(source_index - 1, -1) + 1])
+        if offsets.shape[0] == 1:
+            inputs = [column[:, 0] for column in inputs]
+        for step in range(stop - start):
+            sources = current + [rows[step] for rows in inputs]
+            _combine(time_major[step], output_terms, sources, scratch)
+            for row, terms in zip(upcoming, state_terms):
+                _combine(row, terms, sources, scratch)
+            current, upcoming = upcoming, current
+        yield _to_sample_major(time_major[: stop - start])
+
+
+def _nonzero_terms(terms):
+    """Drop terms whose coefficient is zero for every sample (structural zeros)."""
+    return [(coefficient, source) for coefficient, source in terms if np.any(coefficient != 0)]
+
+
+def _combine(out, terms, sources, scratch):
+    """out = sum(coefficient * sources[source]) without allocating."""
+    if not terms:
+        out.fill(0.0)
+        return
+    coefficient, source = terms[0]
+    np.multiply(coefficient, sources[source], out=out)
+    for coefficient, source in terms[1:]:
+        np.multiply(coefficient, sources[source], out=scratch)
+        out += scratch
+
+
+def _to_sample_major(time_major: np.ndarray) -> np.ndarray:
+    n_steps, n_samples = time_major.shape
+    sample_major = np.empty((n_samples, n_steps))
+    for start in range(0, n_samples, _TRANSPOSE_BLOCK):
+        block = slice(start, start + _TRANSPOSE_BLOCK)
+        sample_major[block] = time_major[:, block].T
+    return sample_major
+
+
+def _check_names(names) -> tuple[str, ...]:
+    if isinstance(names, str) or not all(isinstance(name, str) for name in names):
+        raise ValueError(f"names must be a sequence of strings; got {names!r}")
+    names = tuple(names)
+    if not names or len(set(names)) != len(names):
+        raise ValueError(f"names must be non-empty and unique; got {names}")
+    return names
+
+
+def _check_input(u) -> np.ndarray:
+    try:
+        u = np.asarray(u, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError("u must be a 1-D sequence of numbers, shape (n_steps,)") from None
+    if u.ndim != 1:
+        raise ValueError(f"u must be 1-D with shape (n_steps,); got shape {u.shape}")
+    if u.shape[0] == 0:
+        raise ValueError("u must contain at least one step; got an empty array")
+    bad = np.flatnonzero(~np.isfinite(u))
+    if bad.size:
+        raise ValueError(f"u must be finite; u[{bad[0]}] = {u[bad[0]]}")
+    return u
+
+
+def _check_dt(dt) -> float:
+    try:
+        value = float(dt) if np.ndim(dt) == 0 else None
+    except (TypeError, ValueError):
+        value = None
+    if value is None or not np.isfinite(value) or value <= 0:
+        raise ValueError(f"dt must be a finite number > 0; got {dt!r}")
+    return value
+
+
+def _check_x0(x0) -> str:
+    if not (isinstance(x0, str) and x0 in _X0_CHOICES):
+        choices = ", ".join(repr(choice) for choice in _X0_CHOICES)
+        raise ValueError(f"x0 must be one of {choices}; got {x0!r}")
+    return x0
+
+
+def _check_chunk_steps(chunk_steps) -> int:
+    if (
+        isinstance(chunk_steps, bool)
+        or not isinstance(chunk_steps, numbers.Integral)
+        or chunk_steps < 1
+    ):
+        raise ValueError(f"chunk_steps must be None or an integer >= 1; got {chunk_steps!r}")
+    return int(chunk_steps)
