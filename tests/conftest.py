@@ -1,0 +1,36 @@
+"""Shared test data: the thesis's example 1, simulated independently of dynia.models."""
+import numpy as np
+import pytest
+
+
+def first_order_response(gain, time_constant, u):
+    """Exact zero-order-hold response of K/(T s + 1), one row per (gain, time constant) pair.
+
+    Deliberately separate from dynia.models so the engine tests do not rest on it.
+    """
+    gain = np.atleast_1d(np.asarray(gain, dtype=float))
+    pole = np.exp(-1.0 / np.maximum(np.atleast_1d(time_constant), 1e-12))
+    out = np.zeros((gain.size, len(u)))
+    for k in range(len(u) - 1):
+        out[:, k + 1] = pole * out[:, k] + gain * (1 - pole) * u[k]
+    return out
+
+
+def example_firstorder_input(steps=500):
+    """The input of example_firstorder.m, 0-based: 35, with two dips to 10 and a final 0."""
+    u = 35.0 * np.ones(steps)
+    u[139:160] = 10
+    u[329:332] = 10
+    u[399:] = 0
+    return u
+
+
+@pytest.fixture(scope="session")
+def example1():
+    """Thesis example 1 on 500 steps: k=2, T=3, noise 0.5, 2000 samples of [0, 7]^2."""
+    rng = np.random.default_rng(2009)
+    u = example_firstorder_input()
+    y = first_order_response(2.0, 3.0, u)[0] + rng.normal(0, 0.5, u.size)
+    params = rng.uniform(0, 7, (2000, 2))  # columns: gain, time constant
+    sims = first_order_response(params[:, 0], params[:, 1], u)
+    return dict(u=u, y=y, params=params, sims=sims, bounds=np.array([[0.0, 7.0], [0.0, 7.0]]))

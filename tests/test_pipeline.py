@@ -1,0 +1,100 @@
+"""dynia.run end to end: the thesis's example 1, result objects, bad input."""
+import matplotlib
+import numpy as np
+import pytest
+
+import dynia
+from dynia.models import FirstOrder
+
+from conftest import example_firstorder_input
+
+matplotlib.use("Agg")
+
+
+@pytest.fixture(scope="module")
+def example1_run():
+    u = example_firstorder_input()
+    rng = np.random.default_rng(7)
+    y = FirstOrder().simulate([[2.0, 3.0]], u)[0] + rng.normal(0, 0.5, u.size)
+    return dynia.run(u, y, FirstOrder(), {"K": (0, 7), "T": (0, 7)}, n_samples=2000, n=10,
+                     percentage=10, bins=40, rng=rng)
+
+
+def test_example1_gain_is_identified_while_the_input_is_steady_and_non_zero(example1_run):
+    ic = example1_run.ic[example1_run.index("K")]
+    steady = np.r_[40:130, 180:320, 350:390]  # 0-based steps away from the input changes
+    assert ic[steady].mean() > 0.8
+    assert ic[440:490].mean() < 0.5  # the system has settled at zero: nothing tells K apart
+
+
+def test_example1_time_constant_is_identified_after_the_final_step_to_zero(example1_run):
+    ic = example1_run.ic[example1_run.index("T")]
+    steady = np.r_[40:130, 180:320, 350:390]
+    assert ic[405:440].mean() > 0.6
+    assert ic[steady].mean() < 0.3
+    lower, upper = example1_run.ci[example1_run.index("T"), 420]
+    assert lower <= 3.0 <= upper
+
+
+def test_result_axes_follow_the_bounds_order():
+    u = np.r_[np.zeros(10), np.ones(30)]
+    y = FirstOrder().simulate([[2.0, 3.0]], u)[0]
+    forward = dynia.run(u, y, FirstOrder(), {"K": (0, 7), "T": (0, 7)}, n_samples=200, n=3, rng=4)
+    backward = dynia.run(u, y, FirstOrder(), {"T": (0, 7), "K": (0, 7)}, n_samples=200, n=3, rng=4)
+    assert forward.names == ("K", "T") and backward.names == ("T", "K")
+    # the same draws land in the bounds order, so both runs see the same samples
+    np.testing.assert_array_equal(forward.samples, backward.samples)
+    assert forward.settings["bounds"] == {"K": (0.0, 7.0), "T": (0.0, 7.0)}
+
+
+def test_same_seed_same_result_bit_for_bit():
+    u = np.r_[np.zeros(10), np.ones(30)]
+    y = FirstOrder().simulate([[2.0, 3.0]], u)[0] + 0.01
+    runs = [dynia.run(u, y, FirstOrder(), {"K": (0, 7), "T": (0, 7)}, n_samples=300, n=3,
+                      sampler="lhs", rng=np.random.default_rng(11)) for _ in range(2)]
+    np.testing.assert_array_equal(runs[0].ic, runs[1].ic)
+    np.testing.assert_array_equal(runs[0].gradient, runs[1].gradient)
+
+
+def test_run_equals_moving_window_on_the_same_samples():
+    u = np.r_[np.zeros(10), np.ones(50)]
+    y = FirstOrder().simulate([[2.0, 3.0]], u, dt=0.5)[0] + 0.05
+    res = dynia.run(u, y, FirstOrder(), {"T": (0, 7), "K": (0, 7)}, dt=0.5, n_samples=400, n=4, rng=2)
+    sims = FirstOrder().simulate(res.samples[:, [1, 0]], u, dt=0.5)
+    direct = dynia.moving_window(y, sims, res.samples, res.bounds, n=4)
+    np.testing.assert_array_equal(res.ic, direct.ic)
+    np.testing.assert_array_equal(res.gradient, direct.gradient)
+    np.testing.assert_array_equal(res.time, np.arange(60) * 0.5)
+
+
+def test_to_dataframe_and_plots(example1_run):
+    table = example1_run.to_dataframe()
+    assert list(table.columns) == ["time", "parameter", "ic", "lower", "upper"]
+    assert len(table) == 2 * 500
+    row = table[(table.parameter == "T") & (table.time == 420)].iloc[0]
+    assert row.ic == example1_run.ic[1, 420]
+    ax = example1_run.plot_information_content("K")
+    assert ax.get_ylim() == (0, 1)
+    ax = example1_run.plot_identifiability("T", true_value=3.0)
+    assert ax.get_ylabel() == "T"
+    with pytest.raises(ValueError, match="unknown parameter 'tau'"):
+        example1_run.plot_identifiability("tau")
+
+
+@pytest.mark.parametrize("change, message", [
+    (dict(bounds={"K": (0, 7)}), r"missing: \['T'\]"),
+    (dict(bounds={"K": (0, 7), "T": (0, 7), "theta": (0, 1)}), r"unknown: \['theta'\]"),
+    (dict(bounds=[(0, 7), (0, 7)]), "bounds must map each parameter name"),
+    (dict(bounds={"K": (7, 0), "T": (0, 7)}), r"bounds\['K'\]: need finite low < high"),
+    (dict(bounds={"K": "07", "T": (0, 7)}), r"bounds\['K'\] must be a \(low, high\) pair"),
+    (dict(u=np.ones(5)), "u has 5 samples but y has 40"),
+    (dict(sampler="grid"), "sampler must be one of"),
+    (dict(x0="warm"), "x0 must be one of"),
+    (dict(n_samples=0), "n_samples must be at least 1"),
+])
+def test_bad_input_gets_a_clear_error(change, message):
+    args = dict(u=np.ones(40), y=np.ones(40), bounds={"K": (0, 7), "T": (0, 7)})
+    args.update(change)
+    options = {key: value for key, value in args.items() if key not in ("u", "y", "bounds")}
+    with pytest.raises(ValueError, match=message):
+        dynia.run(args["u"], args["y"], FirstOrder(), args["bounds"], n=2, **options)
