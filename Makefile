@@ -1,0 +1,49 @@
+# Two entry points for a fresh machine (see README): `make figures` and `make test`.
+# Both install the package into the active virtual environment, or into a local
+# .venv when none is active.
+
+PYTHON ?= python3
+ifdef VIRTUAL_ENV
+ENV_DIR := $(VIRTUAL_ENV)
+else
+ENV_DIR := .venv
+endif
+PY := $(ENV_DIR)/bin/python
+INSTALLED := $(ENV_DIR)/.dynia-installed
+
+PACKAGE := $(wildcard dynia/*.py)
+NOTEBOOKS := $(wildcard notebooks/*.py)
+REPORTS := $(patsubst notebooks/%.py,reports/%.html,$(NOTEBOOKS))
+# Notebook parameters: override with `make figures PARAMS=my.yaml`.
+PARAMS ?=
+PARAMS_FLAG := $(if $(PARAMS),-f $(PARAMS),)
+
+.PHONY: install test bench figures clean
+
+install: $(INSTALLED)
+
+$(INSTALLED): pyproject.toml
+	test -x $(PY) || $(PYTHON) -m venv $(ENV_DIR)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e ".[dev]"
+	touch $@
+
+test: $(INSTALLED)
+	$(PY) -m pytest
+
+bench: $(INSTALLED)
+	$(PY) -m dynia.bench
+
+figures: $(REPORTS)
+
+# Executed notebook and its HTML (input cells hidden) are redone only when the
+# notebook, the package or the parameter file changed.
+reports/%.html: notebooks/%.py $(PACKAGE) $(PARAMS) $(INSTALLED)
+	mkdir -p reports/figures
+	$(PY) -m jupytext --to ipynb --output reports/$*.source.ipynb $<
+	$(PY) -m papermill --cwd reports --kernel python3 $(PARAMS_FLAG) reports/$*.source.ipynb reports/$*.ipynb
+	rm reports/$*.source.ipynb
+	$(PY) -m jupyter nbconvert --to html --no-input --output $*.html reports/$*.ipynb
+
+clean:
+	rm -rf reports/*.ipynb reports/*.html

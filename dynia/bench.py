@@ -1,0 +1,119 @@
+"""Benchmark: the one-to-one port against the engine, then the engine at scale.
+
+Run with ``make bench`` or ``python -m dynia.bench``. Each case runs in its own
+process so that its peak resident memory (``ru_maxrss``) is its own.
+
+1. Thesis example 1 (500 steps, 2000 samples, both parameters): the port
+   (:mod:`dynia.thesis`, once per parameter) against :func:`dynia.moving_window`
+   (all parameters in one pass) on the same simulations; ratio target >= 300.
+2. The engine on 20 000 samples x 2 000 steps (simulations held in memory).
+3. :func:`dynia.run` (simulate and analyse, streamed) on 20 000 x 2 000 and on
+   10^5 samples x 10^4 steps, which never holds the 8 GB simulation matrix.
+"""
+import argparse
+import json
+import resource
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+__all__ = ["main"]
+
+
+def _example1(n_samples, n_steps, seed=2009):
+    from .models import FirstOrder
+    rng = np.random.default_rng(seed)
+    u = 35.0 * np.ones(n_steps)
+    u[139:160], u[329:332], u[399:] = 10, 10, 0
+    model = FirstOrder()
+    y = model.simulate([[2.0, 3.0]], u)[0] + rng.normal(0, 0.5, n_steps)
+    params = rng.uniform(0, 7, (n_samples, 2))
+    return u, y, params, model
+
+
+def _best_of(function, repeats):
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        function()
+        times.append(time.perf_counter() - start)
+    return min(times)
+
+
+def _case_port_vs_engine():
+    from . import thesis
+    from .analysis import moving_window
+    u, y, params, model = _example1(2000, 500)
+    sims = model.simulate(params, u)
+    start = time.perf_counter()
+    for p in range(2):
+        thesis.moving_window_calcs(500, params[:, p], 0, 7, 2000, sims, y, 40, 10, 10)
+    port = time.perf_counter() - start
+    engine = _best_of(lambda: moving_window(y, sims, params, [[0, 7], [0, 7]], n=10), 7)
+    single = _best_of(lambda: moving_window(y, sims, params, [[0, 7], [0, 7]], n=10, workers=1), 7)
+    return dict(port_s=port, engine_s=engine, engine_one_thread_s=single, ratio=port / engine,
+                ratio_one_thread=port / single)
+
+
+def _case_engine(n_samples, n_steps):
+    from .analysis import moving_window
+    u, y, params, model = _example1(n_samples, n_steps)
+    sims = model.simulate(params, u)
+    seconds = _best_of(lambda: moving_window(y, sims, params, [[0, 7], [0, 7]], n=10), 2)
+    return dict(seconds=seconds, sample_steps_per_s=n_samples * n_steps / seconds)
+
+
+def _case_run(n_samples, n_steps):
+    from .pipeline import run
+    u, y, _, model = _example1(1, n_steps)
+    start = time.perf_counter()
+    run(u, y, model, {"K": (0, 7), "T": (0, 7)}, n_samples=n_samples, n=10, rng=1)
+    seconds = time.perf_counter() - start
+    return dict(seconds=seconds, sample_steps_per_s=n_samples * n_steps / seconds)
+
+
+CASES = {
+    "port-vs-engine": _case_port_vs_engine,
+    "engine-20000x2000": lambda: _case_engine(20_000, 2_000),
+    "run-20000x2000": lambda: _case_run(20_000, 2_000),
+    "run-100000x10000": lambda: _case_run(100_000, 10_000),
+}
+
+
+def _run_case(name):
+    result = CASES[name]()
+    result["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(json.dumps(result))
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--case", choices=sorted(CASES), help="run one case in this process")
+    parser.add_argument("--skip", nargs="*", default=[], choices=sorted(CASES), help="cases to leave out")
+    args = parser.parse_args(argv)
+    if args.case:
+        _run_case(args.case)
+        return
+    for name in CASES:
+        if name in args.skip:
+            continue
+        output = subprocess.run([sys.executable, "-m", "dynia.bench", "--case", name],
+                                check=True, capture_output=True, text=True).stdout
+        result = json.loads(output.strip().splitlines()[-1])
+        print(_describe(name, result), flush=True)
+
+
+def _describe(name, r):
+    if name == "port-vs-engine":
+        return (f"thesis example 1 (500 steps, 2000 samples, K and T): port {r['port_s']:.2f} s, "
+                f"engine {r['engine_s'] * 1e3:.1f} ms -> {r['ratio']:.0f}x (target >= 300x); "
+                f"one thread {r['engine_one_thread_s'] * 1e3:.1f} ms -> {r['ratio_one_thread']:.0f}x; "
+                f"peak RSS {r['peak_rss_mb']:.0f} MB")
+    return (f"{name}: {r['seconds']:.2f} s, {r['sample_steps_per_s']:.3g} sample-steps/s, "
+            f"peak RSS {r['peak_rss_mb']:.0f} MB")
+
+
+if __name__ == "__main__":
+    main()
