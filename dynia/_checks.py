@@ -61,6 +61,15 @@ def open_interval(value, name, low, high):
     return float(value)
 
 
+def percentage_value(value):
+    """Return the behavioural percentage as a float in (0, 100], or raise."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
+        raise ValueError(f"percentage must be a finite number; got {value!r}")
+    if not 0 < value <= 100:
+        raise ValueError(f"percentage must lie in (0, 100]; got {value}")
+    return float(value)
+
+
 def bounds_array(bounds, n_params):
     """Check an (n_params, 2) array of [low, high] rows with low < high."""
     array = as_2d_float(bounds, "bounds", columns=2)

@@ -143,14 +143,10 @@ def moving_window(y, sims, params, bounds, *, n=10, percentage=10, bins=40, conf
     if params.shape[0] != sims.shape[0]:
         raise ValueError(
             f"params has {params.shape[0]} rows but sims has {sims.shape[0]}; one row per parameter set")
-    n = _checks.whole_number(n, "n", minimum=0)
-    if chunk_steps is None:
-        steps = default_chunk_steps(sims.shape[0], 2 * n)
-    else:
-        steps = _checks.whole_number(chunk_steps, "chunk_steps", minimum=1)
     return _analyse(y, _ArrayErrors(y, sims), params, bounds, n=n, percentage=percentage, bins=bins,
-                          conf_level=conf_level, flavour=flavour, names=names, time=time,
-                          min_points=min_points, chunk_steps=steps, workers=workers, progress=progress)
+                    conf_level=conf_level, flavour=flavour, names=names, time=time,
+                    min_points=min_points, chunk_steps=chunk_steps, workers=workers,
+                    progress=progress)
 
 
 def default_chunk_steps(n_samples, halo):
@@ -192,14 +188,19 @@ def _analyse(y, errors, params, bounds, *, n, percentage, bins, conf_level, flav
     bins = _checks.whole_number(bins, "bins", minimum=1)
     min_points = _checks.whole_number(min_points, "min_points", minimum=1)
     conf_level = _checks.open_interval(conf_level, "conf_level", 0, 100)
-    percentage = _checks.open_interval(percentage, "percentage", 0, 100.000001)
+    percentage = _checks.percentage_value(percentage)
     if flavour not in FLAVOURS:
         raise ValueError(f"flavour must be one of {FLAVOURS}; got {flavour!r}")
     names = _parameter_names(names, n_params)
     time = np.arange(y.size, dtype=float) if time is None else _checks.as_1d_float(time, "time")
     if time.size != y.size:
         raise ValueError(f"time has {time.size} values but y has {y.size}; they must match")
-    chunk_steps = chunk_steps or default_chunk_steps(n_samples, 2 * n)
+    if chunk_steps is None:
+        chunk_steps = default_chunk_steps(n_samples, 2 * n)
+    chunk_steps = _checks.whole_number(chunk_steps, "chunk_steps", minimum=1)
+    if workers is None:
+        workers = os.cpu_count() or 1
+    workers = 1 if flavour == "mcat" else _checks.whole_number(workers, "workers", minimum=1)
 
     flavour_impl = {"thesis": _ThesisFlavour, "weighted": _WeightedFlavour,
                     "mcat": _McatFlavour}[flavour](params, bounds, percentage, bins, conf_level)
@@ -225,8 +226,6 @@ def _analyse(y, errors, params, bounds, *, n, percentage, bins, conf_level, flav
     # Errors are pulled in time order (a simulation stream is sequential); the
     # windows of each chunk are then analysed on a worker. MCAT's likelihood
     # carries state from window to window, so it stays on one worker.
-    workers = 1 if flavour == "mcat" else _checks.whole_number(
-        workers or os.cpu_count() or 1, "workers", minimum=1)
     with ThreadPoolExecutor(max_workers=workers) as pool:
         pending = deque()
         for start in starts:
