@@ -59,7 +59,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from . import _checks
+from . import _checks, cld
 from .result import DyniaResult
 
 __all__ = ["moving_window", "FLAVOURS"]
@@ -413,18 +413,15 @@ class _ThesisFlavour:
         self.bounds = bounds
         self.bins = bins
         self.n_bins = bins
+        self.conf_level = conf_level
         edges = np.linspace(bounds[:, 0], bounds[:, 1], bins + 1, axis=1)
         self.bin_centres = (edges[:, :-1] + edges[:, 1:]) / 2
-        c1 = (1 - conf_level / 100) / 2
-        c2 = 1 - c1
-        self.limit_index = (math.floor(c1 * (self.count - 1)), math.floor(c2 * (self.count - 1)))
-        self.levels = ((100 - conf_level) / 200, (100 + conf_level) / 200)
 
     def analyse(self, mae, usable):
         cost = mae ** 2
         cost[~usable] = 0.0  # any finite value: these windows are blanked below
         selected = lowest_stable(cost, self.count)
-        weights = self._likelihood(np.take_along_axis(cost, selected, axis=1))
+        weights = cld.likelihood(np.take_along_axis(cost, selected, axis=1))
         rows = selected.shape[0]
         ic = np.empty((self.columns.shape[0], rows))
         ci = np.empty((self.columns.shape[0], rows, 2))
@@ -434,52 +431,21 @@ class _ThesisFlavour:
             low, high = self.bounds[p]
             ci[p] = self._limits(values, weights)
             ic[p] = 1 - (ci[p, :, 1] - ci[p, :, 0]) / (high - low)
-            gradient[p] = self._binned_mass(values, weights, low, high)
+            gradient[p] = cld.binned_mass(values, weights, low, high, self.bins).T
         ic[:, ~usable] = np.nan
         ci[:, ~usable] = np.nan
         gradient[:, :, ~usable] = np.nan
         return ic, ci, gradient
 
-    @staticmethod
-    def _likelihood(cost):
-        """``1 - cost``, shifted by its minimum where negative, normalised per window."""
-        likelihood = 1 - cost
-        minimum = likelihood.min(axis=1, keepdims=True)
-        likelihood = np.where(minimum < 0, likelihood - minimum, likelihood)
-        total = likelihood.sum(axis=1, keepdims=True)
-        degenerate = total[:, 0] == 0
-        likelihood[degenerate] = 1.0
-        total[degenerate] = likelihood.shape[1]
-        return likelihood / total
-
     def _limits(self, values, weights):
-        ordered = np.sort(values, axis=1)
-        return ordered[:, list(self.limit_index)]
-
-    def _binned_mass(self, values, weights, low, high):
-        rows = values.shape[0]
-        which = np.clip(((values - low) / (high - low) * self.bins).astype(np.intp), 0, self.bins - 1)
-        flat = which + self.bins * np.arange(rows)[:, None]
-        mass = np.bincount(flat.ravel(), weights=weights.ravel(), minlength=rows * self.bins)
-        return mass.reshape(rows, self.bins).T
+        return cld.limits(values, self.conf_level)
 
 
 class _WeightedFlavour(_ThesisFlavour):
     """As the thesis, but limits where the cumulative likelihood reaches the levels."""
 
     def _limits(self, values, weights):
-        order = np.argsort(values, axis=1, kind="stable")
-        ordered = np.take_along_axis(values, order, axis=1)
-        cumulative = np.cumsum(np.take_along_axis(weights, order, axis=1), axis=1)
-        last = ordered.shape[1] - 1
-        limits = np.empty((ordered.shape[0], 2))
-        for side, level in enumerate(self.levels):
-            # The CLD is non-decreasing, so the count of points below the level is
-            # the first index reaching it; rounding can leave the total a hair
-            # under a level close to 1, hence the clip to the last value.
-            first = np.minimum((cumulative < level).sum(axis=1), last)
-            limits[:, side] = ordered[np.arange(ordered.shape[0]), first]
-        return limits
+        return cld.weighted_limits(values, weights, self.conf_level)
 
 
 class _McatFlavour:
