@@ -18,7 +18,12 @@ REPORTS := $(patsubst notebooks/%.py,reports/%.html,$(NOTEBOOKS))
 PARAMS ?=
 PARAMS_FLAG := $(if $(PARAMS),-f $(PARAMS),)
 
-.PHONY: install test bench figures clean
+# Reference runs of every notebook with the small CI parameters: committed, and
+# re-executed by `make test` (nbval), which compares the cells marked
+# NBVAL_CHECK_OUTPUT and checks that their code matches notebooks/.
+REFERENCES := $(patsubst notebooks/%.py,tests/notebooks/%.ipynb,$(NOTEBOOKS))
+
+.PHONY: install test bench figures references clean
 
 install: $(INSTALLED)
 
@@ -44,6 +49,14 @@ reports/%.html: notebooks/%.py $(PACKAGE) $(PARAMS) $(INSTALLED)
 	$(PY) -m papermill --cwd reports --kernel python3 $(PARAMS_FLAG) reports/$*.source.ipynb reports/$*.ipynb
 	rm reports/$*.source.ipynb
 	$(PY) -m jupyter nbconvert --to html --no-input --output $*.html reports/$*.ipynb
+
+references: $(REFERENCES)
+
+tests/notebooks/%.ipynb: notebooks/%.py tests/notebook_params/%.yaml $(PACKAGE) $(INSTALLED)
+	mkdir -p tests/notebooks
+	$(PY) -m jupytext --to ipynb --output tests/notebooks/$*.source.ipynb $<
+	$(PY) -m papermill --cwd tests/notebooks --kernel python3 -f tests/notebook_params/$*.yaml tests/notebooks/$*.source.ipynb $@
+	rm tests/notebooks/$*.source.ipynb
 
 clean:
 	rm -rf reports/*.ipynb reports/*.html

@@ -27,12 +27,17 @@ percentage = 10  # behavioural share of the samples, in percent (thesis: 10)
 bins = 40  # CLD gradient bins (thesis: 40)
 noise = 0.5  # standard deviation of the output noise (thesis: 0.5)
 seed = 2009  # seed of every random draw
+figure_dir = "figures"  # where the PNGs go
 
 # %%
+import os
+
 import matplotlib.pyplot as plt
 import numpy as np
 
 import dynia
+
+os.makedirs(figure_dir, exist_ok=True)
 
 rng = np.random.default_rng(seed)
 u = 35.0 * np.ones(500)
@@ -47,7 +52,7 @@ ax.plot(u, label="input u")
 ax.plot(y, label="measured output y")
 ax.set_xlabel("time step")
 ax.legend()
-fig.savefig("figures/quickstart_data.png", dpi=120, bbox_inches="tight")
+fig.savefig(f"{figure_dir}/quickstart_data.png", dpi=120, bbox_inches="tight")
 
 # %%
 res = dynia.run(u, y, model, {"K": (0, 7), "T": (0, 7)}, n_samples=n_samples, n=n,
@@ -57,7 +62,7 @@ fig, axes = plt.subplots(2, 2, figsize=(12, 7), constrained_layout=True)
 for row, (name, true_value) in enumerate([("K", 2.0), ("T", 3.0)]):
     res.plot_information_content(name, ax=axes[row, 0])
     res.plot_identifiability(name, ax=axes[row, 1], true_value=true_value)
-fig.savefig("figures/quickstart_example1.png", dpi=120)
+fig.savefig(f"{figure_dir}/quickstart_example1.png", dpi=120)
 
 # %% [markdown]
 # The gain is well identified (IC near 0.9) wherever the input is steady and
@@ -67,6 +72,7 @@ fig.savefig("figures/quickstart_example1.png", dpi=120)
 # thesis's finding for this example (its Figures 3.3 to 3.6).
 
 # %%
+# NBVAL_CHECK_OUTPUT
 steady = np.r_[40:130, 180:320, 350:390]
 print("mean IC of K on steady non-zero input:", round(float(res.ic[0, steady].mean()), 2))
 print("mean IC of T after the final step (steps 405-440):", round(float(res.ic[1, 405:440].mean()), 2))
