@@ -14,9 +14,14 @@ INSTALLED := $(ENV_DIR)/.dynia-installed
 PACKAGE := $(wildcard dynia/*.py)
 NOTEBOOKS := $(wildcard notebooks/*.py)
 REPORTS := $(patsubst notebooks/%.py,reports/%.html,$(NOTEBOOKS))
-# Notebook parameters: override with `make figures PARAMS=my.yaml`.
+# Notebook parameters: override with `make figures PARAMS=my.yaml` (or one
+# report: `make reports/ch3_example1.html PARAMS=my.yaml`). reports/.params
+# records which parameters the reports were made with, and is rewritten only
+# when that changes, so a change of parameters redoes the reports.
 PARAMS ?=
 PARAMS_FLAG := $(if $(PARAMS),-f $(PARAMS),)
+PARAMS_ID := $(PARAMS) $(if $(PARAMS),$(shell md5sum < $(PARAMS)),defaults)
+$(shell mkdir -p reports && echo '$(PARAMS_ID)' | cmp -s - reports/.params || echo '$(PARAMS_ID)' > reports/.params)
 
 # Reference runs of every notebook with the small CI parameters: committed, and
 # re-executed by `make test` (nbval), which compares the cells marked
@@ -43,7 +48,7 @@ figures: $(REPORTS)
 
 # Executed notebook and its HTML (input cells hidden) are redone only when the
 # notebook, the package or the parameter file changed.
-reports/%.html: notebooks/%.py $(PACKAGE) $(PARAMS) $(INSTALLED)
+reports/%.html: notebooks/%.py $(PACKAGE) reports/.params $(INSTALLED)
 	mkdir -p reports/figures
 	$(PY) -m jupytext --to ipynb --output reports/$*.source.ipynb $<
 	$(PY) -m papermill --cwd reports --kernel python3 $(PARAMS_FLAG) reports/$*.source.ipynb reports/$*.ipynb
@@ -57,6 +62,7 @@ tests/notebooks/%.ipynb: notebooks/%.py tests/notebook_params/%.yaml $(PACKAGE) 
 	$(PY) -m jupytext --to ipynb --output tests/notebooks/$*.source.ipynb $<
 	$(PY) -m papermill --cwd tests/notebooks --kernel python3 -f tests/notebook_params/$*.yaml tests/notebooks/$*.source.ipynb $@
 	rm tests/notebooks/$*.source.ipynb
+	$(PY) tests/keep_checked_outputs.py $@
 
 clean:
 	rm -rf reports/*.ipynb reports/*.html
