@@ -163,13 +163,15 @@ save(fig, 20)
 # the span they share. Linear interpolation is what exception logging
 # implies: every reading between two stored values was within the deadband of
 # them. Without `dt`, it would take the median spacing of all timestamps;
-# here that is about a scan (10 s), because exception reporting stores each
-# exception together with the reading before it. We pass 1 minute instead,
-# half the time constant we are after, which keeps the month at about 43 000
-# steps.
+# with the defaults that is about a scan (10 s), because exception reporting
+# stores each exception together with the reading before it, and the month
+# would have over 200 000 steps. We pass 1 minute instead, half the time
+# constant we are after, which keeps the month at about 43 000 steps.
 
 # %%
-print(f"default dt (median spacing of the union of timestamps): {np.median(np.diff(np.union1d(time_u, time_y))) * 60:.1f} s")
+default_grid, _, _ = resample_events(time_u, u_log, time_y, y_log)
+print(f"default dt (median spacing of the union of timestamps): {(default_grid[1] - default_grid[0]) * 60:.1f} s, "
+      f"{default_grid.size} steps")
 print(f"grid: {grid.size} steps of {dt} min from minute {grid[0]:.0f} to {grid[-1]:.0f}")
 g = int(np.argmin(np.abs(grid - truth.glitch_time)))  # grid index of the input's zero
 print(f"around the glitch (minutes {grid[g - 1]:.0f}..{grid[g + 2]:.0f}): u = {np.round(u[g - 1:g + 3], 1).tolist()}, "
