@@ -61,25 +61,25 @@
 # comes out well identified too.
 
 # %% tags=["parameters"]
-n_samples = 5000  # Monte Carlo parameter sets, drawn once and used by every figure (not stated for ch. 2)
-n_steps = 600  # length of the record in time steps
-dt = 0.25  # time step in days (6-hourly data)
-gain_true = 0.5  # true gain (runoff coefficient) of the linear storage
-rt_true = 1.0  # true residence time in days; the parameter of Figures 2.3-2.5 and 2.7-2.9 (thesis: 1)
-gain_range = [0.45, 0.55]  # sampling range of the gain: narrow, so the gain is poorly identified
-rt_range = [0.0, 5.0]  # sampling range of rt in days: wide, so rt is well identified
-mean_dry = 15.0  # mean length of a dry spell, in days
-mean_storm = 8.0  # mean length of a storm, in days
-mean_intensity = 4.0  # mean rainfall intensity of a storm, per day
-noise = 0.1  # standard deviation of the Gaussian noise on the observed flow
-percentage = 10  # behavioural share of the samples, in percent (thesis: 10)
-conf_level = 90  # confidence level of the limits and of the GLUE band, in percent (thesis: 90)
-cld_bins = 8  # ranges of the CLD gradient in Figure 2.7 (thesis: eight)
-n = 10  # half window of the moving window, which holds 2n+1 steps (thesis: 10)
-bins = 20  # gradient points of the identifiability plot (MCAT: 20 containers)
-flavour = "mcat"  # moving-window flavour: the thesis's chapter-2 figures come from MCAT
-seed = 2009  # seed of every random draw
-figure_dir = "figures"  # where the PNGs go, relative to the working directory
+n_samples: int = 5000  # Monte Carlo parameter sets, drawn once and used by every figure (not stated for ch. 2)
+n_steps: int = 600  # length of the record in time steps
+dt: float = 0.25  # time step in days (6-hourly data)
+gain_true: float = 0.5  # true gain (runoff coefficient) of the linear storage
+rt_true: float = 1.0  # true residence time in days; the parameter of Figures 2.3-2.5 and 2.7-2.9 (thesis: 1)
+gain_range: list = [0.45, 0.55]  # sampling range of the gain: narrow, so the gain is poorly identified
+rt_range: list = [0.0, 5.0]  # sampling range of rt in days: wide, so rt is well identified
+mean_dry: float = 15.0  # mean length of a dry spell, in days
+mean_storm: float = 8.0  # mean length of a storm, in days
+mean_intensity: float = 4.0  # mean rainfall intensity of a storm, per day
+noise: float = 0.1  # standard deviation of the Gaussian noise on the observed flow
+percentage: float = 10  # behavioural share of the samples, in percent (thesis: 10)
+conf_level: int = 90  # confidence level of the limits and of the GLUE band, in percent (thesis: 90)
+cld_bins: int = 8  # ranges of the CLD gradient in Figure 2.7 (thesis: eight)
+n: int = 10  # half window of the moving window, which holds 2n+1 steps (thesis: 10)
+bins: int = 20  # gradient points of the identifiability plot (MCAT: 20 containers)
+flavour: str = "mcat"  # moving-window flavour: the thesis's chapter-2 figures come from MCAT
+seed: int = 2009  # seed of every random draw
+figure_dir: str = "figures"  # where the PNGs go, relative to the working directory
 
 # %%
 import os

@@ -45,15 +45,15 @@
 # second run with k narrowed to [1.8, 2.2].
 
 # %% tags=["parameters"]
-days = 30  # length of the record in days (thesis: about a month)
-n_samples = 5000  # Monte Carlo parameter sets (thesis: 5000)
-windows = [1, 2, 3]  # half windows n; the window holds 2n+1 grid steps (thesis: n = 1-3)
-n_main = 2  # the n whose identifiability plots are drawn in full
-percentage = 10  # behavioural share of the samples, in percent (thesis: 10)
-bins = 40  # CLD gradient bins
-dt = 1.0  # grid spacing in minutes
-seed = 2009  # seed of every random draw (the synthetic data and the Monte Carlo samples)
-figure_dir = "figures"  # where the PNGs go
+days: int = 30  # length of the record in days (thesis: about a month)
+n_samples: int = 5000  # Monte Carlo parameter sets (thesis: 5000)
+windows: list = [1, 2, 3]  # half windows n; the window holds 2n+1 grid steps (thesis: n = 1-3)
+n_main: int = 2  # the n whose identifiability plots are drawn in full
+percentage: float = 10  # behavioural share of the samples, in percent (thesis: 10)
+bins: int = 40  # CLD gradient bins
+dt: float = 1.0  # grid spacing in minutes
+seed: int = 2009  # seed of every random draw (the synthetic data and the Monte Carlo samples)
+figure_dir: str = "figures"  # where the PNGs go
 
 # %%
 import dataclasses

@@ -25,16 +25,16 @@
 # Time here is 0-based (MATLAB step 140 is step 139).
 
 # %% tags=["parameters"]
-n_samples = 2000  # Monte Carlo parameter sets per run (thesis: 2000)
-n = 10  # half window: 2n+1 steps per window (thesis: 10)
-percentage = 10  # behavioural share of the samples, percent (thesis: 10)
-bins = 40  # CLD gradient bins (thesis: 40)
-noise = 0.5  # standard deviation of the output noise (thesis: 0.5)
-prior_high = 7.0  # both parameters are sampled on [0, prior_high] (thesis: 7)
-narrowing_margin = 0.02  # second run: the gain band at its max IC, widened by this fraction of the prior
-compare_with_port = True  # also run the one-to-one thesis port and compare (about 5 s at the defaults)
-seed = 2009  # seed of every random draw
-figure_dir = "figures"  # where the PNGs go
+n_samples: int = 2000  # Monte Carlo parameter sets per run (thesis: 2000)
+n: int = 10  # half window: 2n+1 steps per window (thesis: 10)
+percentage: float = 10  # behavioural share of the samples, percent (thesis: 10)
+bins: int = 40  # CLD gradient bins (thesis: 40)
+noise: float = 0.5  # standard deviation of the output noise (thesis: 0.5)
+prior_high: float = 7.0  # both parameters are sampled on [0, prior_high] (thesis: 7)
+narrowing_margin: float = 0.02  # second run: the gain band at its max IC, widened by this fraction of the prior
+compare_with_port: bool = True  # also run the one-to-one thesis port and compare (about 5 s at the defaults)
+seed: int = 2009  # seed of every random draw
+figure_dir: str = "figures"  # where the PNGs go
 
 # %%
 import os

@@ -60,20 +60,20 @@
 # the code cells print them.
 
 # %% tags=["parameters"]
-n_samples = 20000  # Monte Carlo parameter sets per run (the thesis does not say)
-n = 10  # half window: the window holds 2n+1 steps (thesis: 10)
-percentage = 10  # behavioural share of the samples, in percent (thesis: 10)
-bins = 40  # CLD gradient bins (thesis: 40)
-conf_level = 90  # confidence limits, in percent (thesis: 90)
-n_steps = 600  # record length, in samples
-step_starts = [100, 350]  # first sample of each input step
-step_length = 10  # samples each input step lasts
-step_height = 1.0  # height of both input steps
-noise = 0.2  # standard deviation of the output noise
-seed = 2009  # seed of every random draw
-ic_threshold = 0.75  # a parameter whose max IC reaches this counts as well identified
-margin = 0.5  # the new range adds this fraction of the band width on each side of the band
-figure_dir = "figures"  # where the PNGs go
+n_samples: int = 20000  # Monte Carlo parameter sets per run (the thesis does not say)
+n: int = 10  # half window: the window holds 2n+1 steps (thesis: 10)
+percentage: float = 10  # behavioural share of the samples, in percent (thesis: 10)
+bins: int = 40  # CLD gradient bins (thesis: 40)
+conf_level: int = 90  # confidence limits, in percent (thesis: 90)
+n_steps: int = 600  # record length, in samples
+step_starts: list = [100, 350]  # first sample of each input step
+step_length: int = 10  # samples each input step lasts
+step_height: float = 1.0  # height of both input steps
+noise: float = 0.2  # standard deviation of the output noise
+seed: int = 2009  # seed of every random draw
+ic_threshold: float = 0.75  # a parameter whose max IC reaches this counts as well identified
+margin: float = 0.5  # the new range adds this fraction of the band width on each side of the band
+figure_dir: str = "figures"  # where the PNGs go
 
 # %%
 import os

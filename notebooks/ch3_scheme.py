@@ -21,7 +21,7 @@
 # function that does each step. Nothing here is random, so there is no seed.
 
 # %% tags=["parameters"]
-figure_dir = "figures"  # where the PNG goes
+figure_dir: str = "figures"  # where the PNG goes
 
 # %%
 import os

@@ -29,32 +29,33 @@
 # | `fig4_04.png` | measured run time of the engine and of the simulation against samples, steps and parameters (log-log, fitted slopes) |
 # | `fig4_05.png` | sampling density: error of the IC curve against S for 1-4 free parameters, and the S needed for a tolerance against the thesis's `s^n` law |
 #
-# Figures are written to `figures/` (relative to the working directory;
+# Figures are written to `figure_dir` (relative to the working directory;
 # `make figures` runs notebooks in `reports/`).
 
 # %% tags=["parameters"]
 # Window-size study (4.1)
-window_sizes = [2, 5, 10, 20, 40]  # half windows n: the window holds 2n+1 steps
-ex1_samples = 2000  # Monte Carlo samples of example 1 (thesis: 2000)
-ex2_samples = 10000  # Monte Carlo samples of example 2
-noise_repeats = 8  # output-noise realisations (same samples) for the noise sensitivity
-percentage = 10  # behavioural share in percent (thesis: 10)
-seed = 2009  # seed of every random draw
+window_sizes: list = [2, 5, 10, 20, 40]  # half windows n: the window holds 2n+1 steps
+ex1_samples: int = 2000  # Monte Carlo samples of example 1 (thesis: 2000)
+ex2_samples: int = 10000  # Monte Carlo samples of example 2
+noise_repeats: int = 8  # output-noise realisations (same samples) for the noise sensitivity
+percentage: float = 10  # behavioural share in percent (thesis: 10)
+seed: int = 2009  # seed of every random draw
+figure_dir: str = "figures"  # where the PNGs go
 
 # Computational complexity (4.2); timings use one thread (workers=1)
-timing_samples = [500, 1000, 2000, 4000, 8000, 16000, 32000]  # S, at timing_fixed_steps steps
-timing_steps = [250, 500, 1000, 2000, 4000, 8000, 16000]  # steps, at timing_fixed_samples samples
-timing_fixed_samples = 2000
-timing_fixed_steps = 500
-timing_repeats = 5  # best of this many runs
-port_samples = [250, 500, 1000, 2000, 4000]  # the one-to-one thesis port, one parameter
-port_steps = 100
+timing_samples: list = [500, 1000, 2000, 4000, 8000, 16000, 32000]  # S, at timing_fixed_steps steps
+timing_steps: list = [250, 500, 1000, 2000, 4000, 8000, 16000]  # steps, at timing_fixed_samples samples
+timing_fixed_samples: int = 2000  # samples while the number of steps varies
+timing_fixed_steps: int = 500  # steps while the number of samples varies
+timing_repeats: int = 5  # best of this many runs
+port_samples: list = [250, 500, 1000, 2000, 4000]  # the one-to-one thesis port, one parameter
+port_steps: int = 100  # steps of the port's timing runs (it is slow)
 
 # Sampling density (eq. 4.1-4.3)
-density_sizes = [250, 500, 1000, 2000, 4000, 8000, 16000, 32000]  # doubling sequence of S
-density_reference = 128000  # samples of the reference IC curves
-density_repeats = 3  # independent sample draws averaged at every S
-density_tolerance = 0.03  # RMSE of the IC curve (IC units) counted as converged
+density_sizes: list = [250, 500, 1000, 2000, 4000, 8000, 16000, 32000]  # doubling sequence of S
+density_reference: int = 128000  # samples of the reference IC curves
+density_repeats: int = 3  # independent sample draws averaged at every S
+density_tolerance: float = 0.03  # RMSE of the IC curve (IC units) counted as converged
 
 # %%
 import os
@@ -66,7 +67,7 @@ import numpy as np
 import dynia
 from dynia import thesis
 
-os.makedirs("figures", exist_ok=True)
+os.makedirs(figure_dir, exist_ok=True)
 UNINFORMED = 0.1  # IC of a parameter the window says nothing about: 90 % band of a uniform set
 
 
@@ -188,9 +189,9 @@ def plot_example(u, y, results, names, path, title):
     fig.savefig(path, dpi=110)
 
 
-plot_example(u1, y1, results1, model1.names, "figures/fig4_01.png",
+plot_example(u1, y1, results1, model1.names, f"{figure_dir}/fig4_01.png",
              "Example 1: first order, K = 2, T = 3, noise 0.5")
-plot_example(u2, y2, results2, model2.names, "figures/fig4_02.png",
+plot_example(u2, y2, results2, model2.names, f"{figure_dir}/fig4_02.png",
              "Example 2: second order with dead time, K = 2, T1 = 2, T2 = 2/3, theta = 100, noise 1")
 
 # %% [markdown]
@@ -302,7 +303,7 @@ for ax in axes:
     ax.set_xticks(window_sizes, [str(n) for n in window_sizes])
     ax.xaxis.set_minor_formatter(plt.NullFormatter())
     ax.legend(fontsize="x-small")
-fig.savefig("figures/fig4_03.png", dpi=110)
+fig.savefig(f"{figure_dir}/fig4_03.png", dpi=110)
 
 # %% [markdown]
 # **What the window size does** (numbers from the default parameters; the
@@ -497,7 +498,7 @@ for ax, values in zip(axes, ticks):
 fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower left", fontsize="x-small", ncol=3)
 for ax in axes[1:]:
     ax.legend(fontsize="x-small")
-fig.savefig("figures/fig4_04.png", dpi=110)
+fig.savefig(f"{figure_dir}/fig4_04.png", dpi=110)
 
 # %% [markdown]
 # **What we measure** (default parameters, one thread, on a shared 2-core
@@ -626,7 +627,7 @@ axes[1].set(yscale="log", xlabel="number of free parameters n", ylabel="samples 
 axes[1].set_xticks(parameter_counts, [str(c) for c in parameter_counts])
 axes[1].set_ylim(density_sizes[0] / 2, 3 * float(anchor) ** parameter_counts[-1])
 axes[1].legend(fontsize="x-small", loc="upper left")
-fig.savefig("figures/fig4_05.png", dpi=110)
+fig.savefig(f"{figure_dir}/fig4_05.png", dpi=110)
 
 # %% [markdown]
 # **What comes out** (default parameters). On this example the number of

@@ -21,13 +21,13 @@
 # the samples over a window of 2n+1 steps.
 
 # %% tags=["parameters"]
-n_samples = 2000  # Monte Carlo parameter sets (thesis: 2000)
-n = 10  # half window: the window holds 2n+1 steps (thesis: 10)
-percentage = 10  # behavioural share of the samples, in percent (thesis: 10)
-bins = 40  # CLD gradient bins (thesis: 40)
-noise = 0.5  # standard deviation of the output noise (thesis: 0.5)
-seed = 2009  # seed of every random draw
-figure_dir = "figures"  # where the PNGs go
+n_samples: int = 2000  # Monte Carlo parameter sets (thesis: 2000)
+n: int = 10  # half window: the window holds 2n+1 steps (thesis: 10)
+percentage: float = 10  # behavioural share of the samples, in percent (thesis: 10)
+bins: int = 40  # CLD gradient bins (thesis: 40)
+noise: float = 0.5  # standard deviation of the output noise (thesis: 0.5)
+seed: int = 2009  # seed of every random draw
+figure_dir: str = "figures"  # where the PNGs go
 
 # %%
 import os
