@@ -19,21 +19,23 @@ import time
 
 import numpy as np
 
-__all__ = ["main"]
+from .synthetic import example_firstorder_input
+
+__all__ = ["main", "best_of"]
 
 
 def _example1(n_samples, n_steps, seed=2009):
     from .models import FirstOrder
     rng = np.random.default_rng(seed)
-    u = 35.0 * np.ones(n_steps)
-    u[139:160], u[329:332], u[399:] = 10, 10, 0
+    u = example_firstorder_input(n_steps)
     model = FirstOrder()
     y = model.simulate([[2.0, 3.0]], u)[0] + rng.normal(0, 0.5, n_steps)
     params = rng.uniform(0, 7, (n_samples, 2))
     return u, y, params, model
 
 
-def _best_of(function, repeats):
+def best_of(function, repeats):
+    """Smallest wall-clock time of ``repeats`` calls of ``function``, in seconds."""
     times = []
     for _ in range(repeats):
         start = time.perf_counter()
@@ -51,8 +53,8 @@ def _case_port_vs_engine():
     for p in range(2):
         thesis.moving_window_calcs(500, params[:, p], 0, 7, 2000, sims, y, 40, 10, 10)
     port = time.perf_counter() - start
-    engine = _best_of(lambda: moving_window(y, sims, params, [[0, 7], [0, 7]], n=10), 7)
-    single = _best_of(lambda: moving_window(y, sims, params, [[0, 7], [0, 7]], n=10, workers=1), 7)
+    engine = best_of(lambda: moving_window(y, sims, params, [[0, 7], [0, 7]], n=10), 7)
+    single = best_of(lambda: moving_window(y, sims, params, [[0, 7], [0, 7]], n=10, workers=1), 7)
     return dict(port_s=port, engine_s=engine, engine_one_thread_s=single, ratio=port / engine,
                 ratio_one_thread=port / single)
 
@@ -61,7 +63,7 @@ def _case_engine(n_samples, n_steps):
     from .analysis import moving_window
     u, y, params, model = _example1(n_samples, n_steps)
     sims = model.simulate(params, u)
-    seconds = _best_of(lambda: moving_window(y, sims, params, [[0, 7], [0, 7]], n=10), 2)
+    seconds = best_of(lambda: moving_window(y, sims, params, [[0, 7], [0, 7]], n=10), 2)
     return dict(seconds=seconds, sample_steps_per_s=n_samples * n_steps / seconds)
 
 

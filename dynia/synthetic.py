@@ -1,6 +1,7 @@
 """Synthetic process data with a known truth.
 
-:func:`cooling_water_loop` makes a stand-in for the thesis's case study
+:func:`example_firstorder_input` is the input of the thesis's examples
+(``example_firstorder.m``, Appendix B). :func:`cooling_water_loop` makes a stand-in for the thesis's case study
 (section 3.1.3): a month of event-logged input and output of the control of
 the cooling water return of an offshore cooling water system. The thesis's
 data are not public; this generator reproduces what the thesis reports about
@@ -27,9 +28,30 @@ import scipy.signal
 
 from . import _checks
 
-__all__ = ["CoolingWaterTruth", "cooling_water_loop"]
+__all__ = ["CoolingWaterTruth", "cooling_water_loop", "example_firstorder_input"]
 
 MINUTES_PER_DAY = 1440.0
+
+
+def example_firstorder_input(n_steps=500):
+    """The input of the thesis's ``example_firstorder.m``, with 0-based steps.
+
+    35 everywhere, except 10 at MATLAB steps 140-160 and 330-332 (0-based
+    139-159 and 329-331) and 0 from MATLAB step 400 (0-based 399) on. The
+    thesis uses 500 steps; a longer record stays at 0, a shorter one is cut.
+
+    Examples
+    --------
+    >>> u = example_firstorder_input()
+    >>> float(u[0]), float(u[139]), float(u[331]), float(u[398]), float(u[399])
+    (35.0, 10.0, 10.0, 35.0, 0.0)
+    """
+    n_steps = _checks.whole_number(n_steps, "n_steps", minimum=1)
+    u = 35.0 * np.ones(n_steps)
+    u[139:160] = 10
+    u[329:332] = 10
+    u[399:] = 0
+    return u
 
 
 @dataclass(frozen=True, eq=False)

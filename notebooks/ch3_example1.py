@@ -47,10 +47,7 @@ import dynia
 os.makedirs(figure_dir, exist_ok=True)
 rng = np.random.default_rng(seed)
 TRUE = {"K": 2.0, "T": 3.0}
-u = 35.0 * np.ones(500)
-u[139:160] = 10
-u[329:332] = 10
-u[399:] = 0
+u = dynia.synthetic.example_firstorder_input()
 model = dynia.models.FirstOrder()
 y = model.simulate([[TRUE["K"], TRUE["T"]]], u)[0] + rng.normal(0, noise, u.size)
 

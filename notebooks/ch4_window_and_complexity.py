@@ -66,19 +66,10 @@ import numpy as np
 
 import dynia
 from dynia import thesis
+from dynia.bench import best_of
 
 os.makedirs(figure_dir, exist_ok=True)
 UNINFORMED = 0.1  # IC of a parameter the window says nothing about: 90 % band of a uniform set
-
-
-def best_of(function, repeats):
-    """Smallest wall-clock time of `repeats` calls, by time.perf_counter."""
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - start)
-    return min(times)
 
 
 def loglog_slope(x, seconds):
@@ -132,10 +123,7 @@ def segment(ic, lo, hi):
 # %%
 rng = np.random.default_rng(seed)
 
-u1 = 35.0 * np.ones(500)
-u1[139:160] = 10
-u1[329:332] = 10
-u1[399:] = 0
+u1 = dynia.synthetic.example_firstorder_input()
 model1 = dynia.models.FirstOrder()
 true1 = np.array([2.0, 3.0])
 bounds1 = np.array([[0.0, 7.0], [0.0, 7.0]])

@@ -40,10 +40,7 @@ import dynia
 os.makedirs(figure_dir, exist_ok=True)
 
 rng = np.random.default_rng(seed)
-u = 35.0 * np.ones(500)
-u[139:160] = 10
-u[329:332] = 10
-u[399:] = 0
+u = dynia.synthetic.example_firstorder_input()
 model = dynia.models.FirstOrder()
 y = model.simulate([[2.0, 3.0]], u)[0] + rng.normal(0, noise, u.size)
 

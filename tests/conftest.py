@@ -2,6 +2,8 @@
 import numpy as np
 import pytest
 
+import dynia
+
 
 def first_order_response(gain, time_constant, u):
     """Exact zero-order-hold response of K/(T s + 1), one row per (gain, time constant) pair.
@@ -18,11 +20,7 @@ def first_order_response(gain, time_constant, u):
 
 def example_firstorder_input(steps=500):
     """The input of example_firstorder.m, 0-based: 35, with two dips to 10 and a final 0."""
-    u = 35.0 * np.ones(steps)
-    u[139:160] = 10
-    u[329:332] = 10
-    u[399:] = 0
-    return u
+    return dynia.synthetic.example_firstorder_input(steps)
 
 
 @pytest.fixture(scope="session")
