@@ -418,7 +418,8 @@ class _ThesisFlavour:
         self.bin_centres = (edges[:, :-1] + edges[:, 1:]) / 2
 
     def analyse(self, mae, usable):
-        cost = mae ** 2
+        with np.errstate(over="ignore"):  # an error beyond 1e154 costs inf: still the worst
+            cost = mae ** 2
         cost[~usable] = 0.0  # any finite value: these windows are blanked below
         selected = lowest_stable(cost, self.count)
         weights = cld.likelihood(np.take_along_axis(cost, selected, axis=1))

@@ -218,6 +218,33 @@ class Model:
         system = self._discretise(params, dt, u.shape[0], steady=x0 == "steady")
         return _run(system, u, x0, chunk_steps)
 
+    def finite_samples(self, params, u, dt: float = 1.0, x0: str = "zero") -> np.ndarray:
+        """Which parameter sets simulate to finite output over the whole record.
+
+        A model with unstable or huge coefficients can overflow; such sets
+        must be left out of a DYNIA run rather than rank as anything. This
+        default simulates once, streaming, and keeps only the verdict; the
+        lag models, which cannot grow beyond their gain times the input,
+        answer from that bound without simulating.
+
+        Returns
+        -------
+        ndarray of bool, shape (n_samples,)
+
+        Examples
+        --------
+        >>> import control
+        >>> from dynia.models import TransferFunction
+        >>> unstable = TransferFunction(lambda p: control.tf([1.0], [1.0, -p[0]]), names=("a",))
+        >>> unstable.finite_samples([[0.5], [800.0]], [1.0] * 5).tolist()
+        [True, False]
+        """
+        finite = np.ones(self._check_params(params).shape[0], dtype=bool)
+        with np.errstate(over="ignore", invalid="ignore"):
+            for chunk in self.simulate_chunks(params, u, dt=dt, x0=x0):
+                finite &= np.isfinite(chunk).all(axis=1)
+        return finite
+
     def _check_params(self, params) -> np.ndarray:
         """Return ``params`` as a finite float (n_samples, n_params) array."""
         expected = f"(n_samples, {self.n_params}) with columns {self.names}"
@@ -257,7 +284,21 @@ class Model:
         raise NotImplementedError
 
 
-class FirstOrder(Model):
+class _Lag(Model):
+    """Models whose output never exceeds |K| times the largest input in magnitude.
+
+    Lags with non-negative time constants and a dead time have no overshoot,
+    from a zero or a steady start alike, so that bound decides finiteness.
+    """
+
+    def finite_samples(self, params, u, dt: float = 1.0, x0: str = "zero") -> np.ndarray:
+        params = self._check_params(params)
+        peak = np.abs(_check_input(u)).max()
+        with np.errstate(over="ignore"):
+            return np.isfinite(np.abs(params[:, self.names.index("K")]) * peak * 2.0)
+
+
+class FirstOrder(_Lag):
     """First-order lag ``K / (T s + 1)``.
 
     Parameters (columns of ``params``): ``K`` gain, ``T`` time constant
@@ -279,7 +320,7 @@ class FirstOrder(Model):
         return _first_order_system(gain, time_constant, np.zeros_like(gain), dt, n_steps)
 
 
-class FOPDT(Model):
+class FOPDT(_Lag):
     """First-order lag plus dead time ``K exp(-theta s) / (T s + 1)``.
 
     Parameters (columns of ``params``): ``K`` gain, ``T`` time constant
@@ -302,7 +343,7 @@ class FOPDT(Model):
         return _first_order_system(gain, time_constant, delay, dt, n_steps)
 
 
-class SecondOrderDelay(Model):
+class SecondOrderDelay(_Lag):
     """Two lags plus dead time ``K exp(-theta s) / ((T1 s + 1)(T2 s + 1))``.
 
     Parameters (columns of ``params``): ``K`` gain, ``T1`` and ``T2`` time
@@ -444,22 +485,24 @@ class TransferFunction(Model):
         augmented[:, :n_states, :n_states] = a
         augmented[:, :n_states, n_states] = b
         # expm([[A, B], [0, 0]] tau) = [[e^{A tau}, int_0^tau e^{As} B ds], [0, 1]]
-        late = scipy.linalg.expm(augmented * ((1.0 - fraction) * dt)[:, None, None])
-        early = scipy.linalg.expm(augmented * (fraction * dt)[:, None, None])
-        late_transition = late[:, :n_states, :n_states]
-        # For fraction == 0 `early` is the identity, so phi equals e^{A dt} exactly.
-        phi = late_transition @ early[:, :n_states, :n_states]
-        gamma_now = late[:, :n_states, n_states]
-        gamma_prev = (late_transition @ early[:, :n_states, n_states:])[:, :, 0]
-        discretised = np.concatenate(
-            (phi.reshape(n_samples, -1), gamma_now, gamma_prev), axis=1
-        )
-        bad = ~np.isfinite(discretised).all(axis=1)
-        if bad.any():
-            raise ValueError(
-                f"discretising the system of sample {np.flatnonzero(bad)[0]} gave "
-                f"non-finite values; check its poles against dt={dt}"
-            )
+        # Overflow is detected below, per sample, so numpy need not warn of it.
+        with np.errstate(over="ignore", invalid="ignore"):
+            late = scipy.linalg.expm(augmented * ((1.0 - fraction) * dt)[:, None, None])
+            early = scipy.linalg.expm(augmented * (fraction * dt)[:, None, None])
+            late_transition = late[:, :n_states, :n_states]
+            # For fraction == 0 `early` is the identity, so phi equals e^{A dt} exactly.
+            phi = late_transition @ early[:, :n_states, :n_states]
+            gamma_now = late[:, :n_states, n_states]
+            gamma_prev = (late_transition @ early[:, :n_states, n_states:])[:, :, 0]
+        discretised = np.concatenate((phi.reshape(n_samples, -1), gamma_now, gamma_prev), axis=1)
+        # A pole far in the right half-plane overflows e^{A dt}. Such a sample
+        # cannot be simulated; NaN coefficients make its output NaN (quietly:
+        # NaN arithmetic raises no floating-point warning), which
+        # finite_samples reports and dynia.run drops.
+        overflowed = ~np.isfinite(discretised).all(axis=1)
+        phi[overflowed] = np.nan
+        gamma_now[overflowed] = np.nan
+        gamma_prev[overflowed] = np.nan
 
         feed_now, feed_prev = _split_feedthrough(d, fraction)
         return _DiscreteSystem(
@@ -633,6 +676,8 @@ def _run(
         for step in range(stop - start):
             sources = current + [rows[step] for rows in inputs]
             _combine(time_major[step], output_terms, sources, scratch)
+            if start + step + 1 == n_steps:
+                break  # the state after the record is never output; it could only overflow
             for row, terms in zip(upcoming, state_terms):
                 _combine(row, terms, sources, scratch)
             current, upcoming = upcoming, current

@@ -11,7 +11,8 @@ __all__ = ["run"]
 
 
 def run(u, y, model, bounds, *, dt=1.0, n_samples=2000, sampler="uniform", n=10, percentage=10,
-        bins=40, conf_level=90, flavour="thesis", x0="zero", rng=None, progress=False):
+        bins=40, conf_level=90, flavour="thesis", x0="zero", rng=None, progress=False,
+        min_points=1):
     """Dynamic identifiability analysis of a model against measured data.
 
     Draws ``n_samples`` parameter sets from the box ``bounds``, simulates the
@@ -44,10 +45,16 @@ def run(u, y, model, bounds, *, dt=1.0, n_samples=2000, sampler="uniform", n=10,
         Source of every random draw; the same seed gives identical results.
     progress : bool, default False
         Show a tqdm progress bar.
+    min_points : int, default 1
+        Windows with fewer measured points get NaN results.
 
     Returns
     -------
     DyniaResult
+        Parameter sets whose simulation is not finite over the record
+        (an unstable model overflowing) are left out of the analysis, never
+        ranked; ``settings["n_dropped"]`` counts them and ``.samples`` holds
+        the sets analysed.
 
     Examples
     --------
@@ -67,14 +74,20 @@ def run(u, y, model, bounds, *, dt=1.0, n_samples=2000, sampler="uniform", n=10,
     n = _checks.whole_number(n, "n", minimum=0)
     samples = sample(sampler, n_samples, box, np.random.default_rng(rng))
     model_order = [names.index(name) for name in model.names]
-    chunk_steps = default_chunk_steps(n_samples, 2 * n)
+    finite = model.finite_samples(samples[:, model_order], u, dt=dt, x0=x0)
+    if not finite.any():
+        raise ValueError(f"the simulation of every one of the {n_samples} parameter sets overflowed; "
+                         "check the model and the parameter ranges")
+    samples = samples[finite]
+    chunk_steps = default_chunk_steps(samples.shape[0], 2 * n)
     sim_chunks = model.simulate_chunks(samples[:, model_order], u, dt=dt, x0=x0, chunk_steps=chunk_steps)
     settings = dict(dt=dt, sampler=sampler, x0=x0, model=type(model).__name__,
-                    bounds={name: tuple(map(float, row)) for name, row in zip(names, box)})
+                    bounds={name: tuple(map(float, row)) for name, row in zip(names, box)},
+                    n_sampled=n_samples, n_dropped=int(n_samples - samples.shape[0]))
     return analyse_stream(y, sim_chunks, samples, box, n=n, percentage=percentage, bins=bins,
                           conf_level=conf_level, flavour=flavour, names=names,
                           time=np.arange(y.size) * float(dt), chunk_steps=chunk_steps,
-                          progress=progress, settings=settings)
+                          progress=progress, min_points=min_points, settings=settings)
 
 
 def _ordered_bounds(bounds, model):

@@ -56,6 +56,33 @@ class DyniaResult:
         except ValueError:
             raise ValueError(f"unknown parameter {name!r}; this result has {list(self.names)}") from None
 
+    def summary(self):
+        """Per parameter: the highest IC, when it occurs, the band and the estimate there.
+
+        The estimate is the centre of the bin with the largest CLD gradient
+        at the time of the highest IC. Parameters whose IC is missing
+        everywhere get None throughout.
+
+        Returns
+        -------
+        dict
+            ``{name: {"max_ic", "time_of_max_ic", "band": [lower, upper], "estimate"}}``
+            with plain Python floats.
+        """
+        summary = {}
+        for p, name in enumerate(self.names):
+            if np.isnan(self.ic[p]).all():
+                summary[name] = dict(max_ic=None, time_of_max_ic=None, band=[None, None], estimate=None)
+                continue
+            best = int(np.nanargmax(self.ic[p]))
+            summary[name] = dict(
+                max_ic=float(self.ic[p, best]),
+                time_of_max_ic=float(self.time[best]),
+                band=[float(self.ci[p, best, 0]), float(self.ci[p, best, 1])],
+                estimate=float(self.bin_centres[p, int(np.argmax(self.gradient[p, :, best]))]),
+            )
+        return summary
+
     def to_dataframe(self):
         """Long table: one row per (time, parameter) with ic, lower and upper.
 

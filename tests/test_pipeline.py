@@ -98,3 +98,28 @@ def test_bad_input_gets_a_clear_error(change, message):
     options = {key: value for key, value in args.items() if key not in ("u", "y", "bounds")}
     with pytest.raises(ValueError, match=message):
         dynia.run(args["u"], args["y"], FirstOrder(), args["bounds"], n=2, **options)
+
+
+def test_parameter_sets_that_overflow_are_dropped_and_counted():
+    import control
+    from dynia.models import TransferFunction
+    lag = TransferFunction(lambda p: control.tf([p[0]], [1.0, -p[1]]), names=("K", "a"))
+    u = np.r_[np.zeros(5), np.ones(60)]
+    y = lag.simulate([[1.0, -0.5]], u)[0]
+    # a > ~12 overflows within 60 steps; about a third of [-1, 30] does
+    res = dynia.run(u, y, lag, {"K": (0, 2), "a": (-1, 30)}, n_samples=300, n=3, rng=3)
+    assert 0 < res.settings["n_dropped"] < 300
+    assert res.samples.shape[0] == 300 - res.settings["n_dropped"]
+    assert np.isfinite(res.ic).all()
+    assert (res.samples[:, 1] < 15).all()
+
+
+def test_summary_reports_the_band_and_estimate_at_the_highest_ic(example1_run):
+    summary = example1_run.summary()
+    k = example1_run.index("K")
+    best = int(np.nanargmax(example1_run.ic[k]))
+    assert summary["K"]["max_ic"] == example1_run.ic[k, best]
+    assert summary["K"]["time_of_max_ic"] == example1_run.time[best]
+    assert summary["K"]["band"] == list(example1_run.ci[k, best])
+    assert summary["K"]["band"][0] <= summary["K"]["estimate"] <= summary["K"]["band"][1]
+    assert abs(summary["K"]["estimate"] - 2.0) < 0.3
