@@ -1,14 +1,21 @@
-"""Process data: event logs onto the uniform grid DYNIA needs.
+"""Process data: logged plant data onto the uniform grid DYNIA needs.
+
+The models of :mod:`dynia.models` and the moving window of
+:mod:`dynia.analysis` need one input and one output value per step of a
+uniform grid. :func:`load_csv` makes them from what an engineer exports: a
+CSV file with one row per sample, two event logs in two files, or a
+historian's long table of (time, tag, value) rows. It returns a
+:class:`ProcessData` and says in its ``notes`` what it did to the data, and
+it stops with a one-line :class:`DataError` naming the file, row and column
+of anything it cannot read.
 
 Plant historians log each tag on its own clock, and most log by exception:
 a value is stored only when it has moved by more than a deadband since the
 last stored value, or when a maximum interval has passed. The records are
 dense while something happens and sparse while the plant is steady, and the
-input and output of a loop have different timestamps. The models of
-:mod:`dynia.models` and the moving window of :mod:`dynia.analysis` need one
-input and one output value per step of a uniform grid;
-:func:`resample_events` makes them, as the thesis did (section 3.1.3), by
-linear interpolation.
+input and output of a loop have different timestamps.
+:func:`resample_events` puts two such logs on one uniform grid, as the
+thesis did (section 3.1.3), by linear interpolation.
 
 Examples
 --------
@@ -21,19 +28,245 @@ array([1.        , 1.        , 1.        , 2.33333333])
 >>> y
 array([2., 3., 4., 5.])
 """
+import csv
+import dataclasses
+import datetime
+import io
 import math
 import numbers
+import os
+import re
 
 import numpy as np
 
 from . import _checks
 
-__all__ = ["resample_events"]
+__all__ = ["DataError", "ProcessData", "load_csv", "resample_events"]
 
 # Relative slack when deciding whether ``stop`` is itself a grid point: stop -
 # start is rarely an exact float multiple of dt (0.3/0.1 = 2.9999999999999996),
 # and a grid that loses its last point to rounding would surprise.
 _GRID_SNAP = 1e-9
+
+# What spreadsheets, pandas, R and databases write into a cell without a value.
+_MISSING = frozenset({"", "nan", "na", "null"})
+
+# Rows count as uniformly spaced when every spacing is this close to their
+# mean, relative to it: times printed with a few decimals or summed in floats
+# are never exactly uniform, and an error of 1e-6 in dt is far below anything
+# a moving-window analysis can resolve.
+_UNIFORM = 1e-6
+
+# A grid longer than this comes from a dt in the wrong unit (or a log whose
+# median spacing is a burst of near-coincident records); it would take
+# gigabytes before the analysis even starts.
+_MAX_GRID_STEPS = 10_000_000
+
+# Longer cells are cut in messages, so that a garbled file still gives one readable line.
+_SHOWN_CHARS = 40
+
+# How many column or tag names a message lists before it only counts the rest.
+_LISTED_NAMES = 20
+
+# The three kinds of time a time column may hold; one column holds one kind.
+_SECONDS = "a number of seconds"
+_NAIVE = "a timestamp without UTC offset"
+_AWARE = "a timestamp with UTC offset"
+
+
+class DataError(ValueError):
+    """Bad input data.
+
+    The message is one line naming the file, the column and the row (1-based,
+    as a spreadsheet shows, counting the header as row 1), and what was
+    expected there.
+
+    Examples
+    --------
+    >>> from dynia.data import DataError, load_csv
+    >>> try:
+    ...     load_csv("no_such_file.csv", time="time", input="u", output="y")
+    ... except DataError as error:
+    ...     print(error)
+    no_such_file.csv: no such file; expected a CSV file with a header row
+    """
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class ProcessData:
+    """One input and one output on a uniform time grid, ready for DYNIA.
+
+    ``u`` and ``y`` go to :func:`dynia.run` as they are, with ``dt=data.dt``.
+
+    Attributes
+    ----------
+    time : ndarray, shape (n_steps,)
+        Seconds from the start of the record, ``time[0] + dt * arange(n_steps)``.
+        ``time[0]`` is 0.0 unless the signals start at different times, when
+        the grid starts where both have data.
+    u : ndarray, shape (n_steps,)
+        Input, finite everywhere.
+    y : ndarray, shape (n_steps,)
+        Output, NaN where the measurement is missing.
+    dt : float
+        Grid spacing in seconds.
+    start : datetime.datetime or float
+        The file's own time at ``time == 0``: a timestamp when the file had
+        ISO 8601 timestamps (with its UTC offset if they had one), else the
+        number in its time column. ``start + time`` is the file's time of a
+        grid point.
+    notes : tuple of str
+        What was done to the data, one sentence each: resampling, filled
+        inputs, missing outputs. Empty when the rows were used as they are.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dynia.data import ProcessData
+    >>> data = ProcessData(time=np.array([0.0, 2.0, 4.0]), u=np.array([1.0, 1.0, 2.0]),
+    ...                    y=np.array([0.0, np.nan, 0.8]), dt=2.0, start=0.0,
+    ...                    notes=("1 output value missing, left as NaN in y",))
+    >>> int(np.isnan(data.y).sum()), data.time.size * data.dt
+    (1, 6.0)
+    """
+
+    time: np.ndarray
+    u: np.ndarray
+    y: np.ndarray
+    dt: float
+    start: datetime.datetime | float
+    notes: tuple[str, ...]
+
+
+def load_csv(path, *, time, input, output, output_path=None, long_format=False,
+             tag_column="tag", value_column="value", dt=None):
+    """Read logged process data from CSV into a uniform :class:`ProcessData`.
+
+    Three layouts are read:
+
+    * wide (default): ``path`` has a time, an input and an output column,
+      one row per sample;
+    * two files (``output_path`` given): ``path`` holds the time and input
+      columns, ``output_path`` its own time column (also named ``time``) and
+      the output column, each an event log with its own timestamps;
+    * long (``long_format=True``): ``path`` has the columns ``time``,
+      ``tag_column`` and ``value_column``, one row per stored value of any
+      tag; ``input`` and ``output`` name tags, and each tag's rows form an
+      event log.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The CSV file (the input file when ``output_path`` is given).
+    time, input, output : str
+        Column names, matched exactly after stripping whitespace; in the long
+        layout ``input`` and ``output`` are tag names.
+    output_path : str or os.PathLike, optional
+        A second CSV file holding the output's event log.
+    long_format : bool, default False
+        Read ``path`` as a long (time, tag, value) table.
+    tag_column, value_column : str
+        The long layout's tag and value columns.
+    dt : float, optional
+        Grid spacing in seconds, > 0. By default the spacing of uniformly
+        spaced rows, else the median spacing of the timestamps (see Notes).
+
+    Returns
+    -------
+    ProcessData
+
+    Raises
+    ------
+    DataError
+        One line naming the file, row and column: a file that is missing,
+        empty or has no data rows, a missing column or tag, a cell that is
+        not a number, a time that is missing, not finite, not a timestamp or
+        of another kind than the rows before (seconds, timestamps with or
+        without UTC offset), times that do not strictly increase (duplicates
+        included), fewer than 2 rows, an input or output without any value,
+        logs that do not overlap in time, or a ``dt`` that is not a finite
+        number > 0 or gives fewer than 2 or absurdly many grid points.
+    ValueError
+        ``output_path`` given together with ``long_format``.
+
+    Notes
+    -----
+    **Reading.** The first non-blank row is the header. Columns are
+    separated by commas, unless the header (outside quotes) holds no comma
+    and exactly one of semicolon and tab: then by that one. Blank rows are
+    skipped; a row shorter than the header is missing its last cells, one
+    longer than the header with anything in the extra cells is an error
+    (often a decimal comma in a comma-separated file). Files are read as
+    UTF-8, or as Windows-1252 (what Excel writes) when they are not UTF-8.
+    Empty cells and ``NaN``, ``NA``, ``null`` (any case) are missing values.
+
+    **Time.** A time column holds numbers of seconds or ISO 8601 timestamps
+    (:meth:`datetime.datetime.fromisoformat`, with a trailing ``Z`` read as
+    UTC); timestamps with a UTC offset are compared across offsets, so a
+    daylight-saving change is no jump. Time zero is the first row, or for
+    two logs the earlier of their first rows.
+
+    **Grid.** Uniformly spaced rows (every spacing within 1e-6 of their mean,
+    relative) are used as they are, with ``dt`` their mean spacing. Other
+    rows, rows whose spacing differs from a given ``dt``, and every pair of
+    event logs are interpolated linearly onto ``time[0] + k * dt`` by
+    :func:`resample_events`, over the span where both signals have rows;
+    the default ``dt`` is then the median spacing of all timestamps (of the
+    rows, or of the union of both logs), as :func:`resample_events` infers
+    it. See there for when to pass a ``dt`` instead.
+
+    **Missing input values** are filled by linear interpolation between the
+    nearest present values in time, held constant before the first and after
+    the last.
+
+    **Missing output values** are gaps. On rows used as they are, ``y`` is
+    NaN there. On a resampled grid, a point is NaN when it falls on a missing
+    value's row or between a missing value and the present values on either
+    side of it: exactly the points whose interpolation between neighbouring
+    rows would use a missing value. All other points interpolate between the
+    present values around them, however far apart: a long stretch without
+    records is how a historian logs a steady signal, not a gap. The
+    timestamps of missing values still count for the span and for ``dt``.
+
+    Examples
+    --------
+    Uniform rows are used as they are; a missing output stays NaN:
+
+    >>> import pathlib, tempfile
+    >>> from dynia.data import load_csv
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     csv_path = pathlib.Path(folder, "loop.csv")
+    ...     _ = csv_path.write_text("time,u,y\\n0,1,0.0\\n2,1,0.5\\n4,2,\\n6,2,1.4\\n")
+    ...     data = load_csv(csv_path, time="time", input="u", output="y")
+    >>> data.dt, data.time, data.y
+    (2.0, array([0., 2., 4., 6.]), array([0. , 0.5, nan, 1.4]))
+    >>> data.notes
+    ('1 output value missing, left as NaN in y',)
+
+    Irregular ISO timestamps are resampled; ``start`` keeps the first one:
+
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     csv_path = pathlib.Path(folder, "loop.csv")
+    ...     _ = csv_path.write_text("time;u;y\\n2024-05-01T12:00:00Z;0;10\\n"
+    ...                             "2024-05-01T12:00:01Z;1;10\\n2024-05-01T12:00:04Z;4;13\\n")
+    ...     data = load_csv(csv_path, time="time", input="u", output="y")
+    >>> data.start.isoformat(), data.dt, data.u
+    ('2024-05-01T12:00:00+00:00', 2.0, array([0., 2., 4.]))
+    >>> print(*data.notes)
+    resampled 3 irregular rows onto a 2 s grid by linear interpolation (dt inferred: the median spacing of the rows)
+    """
+    if long_format and output_path is not None:
+        raise ValueError("long_format reads both signals from one file; do not give output_path with it")
+    if dt is not None:
+        dt = _grid_spacing(dt)
+    if long_format:
+        input_log, output_log = _tag_logs(_read_table(path), time, tag_column, value_column, input, output)
+    elif output_path is not None:
+        input_log = _column_log(_read_table(path), time, input, "input")
+        output_log = _column_log(_read_table(output_path), time, output, "output")
+    else:
+        return _from_rows(_read_table(path), time, input, output, dt)
+    return _from_logs(input_log, output_log, dt)
 
 
 def resample_events(times_u, u, times_y, y, dt=None, start=None, stop=None):
@@ -176,3 +409,399 @@ def _median_spacing(times_u, times_y, start, stop):
     union = np.union1d(times_u, times_y)
     union = np.union1d(union[(union >= start) & (union <= stop)], [start, stop])
     return float(np.median(np.diff(union)))
+
+
+@dataclasses.dataclass(frozen=True)
+class _Table:
+    """A CSV file as read: its header and its data records, each with the row a spreadsheet shows."""
+
+    path: str
+    header_row: int
+    header: tuple
+    rows: list
+    records: list
+    notes: tuple
+
+    def cells(self, name, argument):
+        """The cells of column ``name`` (the ``argument`` of load_csv that named it), '' past a short record's end."""
+        index = self._index(name, argument)
+        return [record[index] if index < len(record) else "" for record in self.records]
+
+    def _index(self, name, argument):
+        wanted = name.strip()
+        found = [index for index, column in enumerate(self.header) if column == wanted]
+        if len(found) == 1:
+            return found[0]
+        where = f"{self.path}: row {self.header_row} (the header)"
+        if found:
+            raise DataError(f"{where} names {len(found)} columns {wanted!r}; expected one, to read {argument} from")
+        hint = (" (they are numbers: the file seems to lack a header row naming the columns)"
+                if all(_is_number(column) for column in self.header) else "")
+        raise DataError(f"{where} has no column {wanted!r} (given as {argument}); "
+                        f"available columns: {_listed(self.header)}{hint}")
+
+
+@dataclasses.dataclass(frozen=True)
+class _Timeline:
+    """The time column of one log: its first time as read, its kind, and every row in seconds from the first."""
+
+    column: str
+    first: object
+    kind: str
+    first_row: int
+    first_cell: str
+    last_cell: str
+    seconds: np.ndarray
+
+
+@dataclasses.dataclass(frozen=True)
+class _Log:
+    """One signal as an event log: the table it came from, its times and its values (NaN where missing)."""
+
+    table: _Table
+    label: str
+    rows: list
+    timeline: _Timeline
+    values: np.ndarray
+
+
+def _read_table(path):
+    """Header and data records of a CSV file, or a DataError saying why there are none."""
+    name = os.fspath(path)
+    try:
+        with open(path, "rb") as file:
+            raw = file.read()
+    except FileNotFoundError:
+        raise DataError(f"{name}: no such file; expected a CSV file with a header row") from None
+    except OSError as error:
+        raise DataError(f"{name}: cannot be read ({error.strerror or error}); expected a CSV file") from None
+    notes = ()
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        # Excel on Windows saves "CSV" in the ANSI code page; a degree sign in
+        # a column name should not stop a load.
+        text = raw.decode("cp1252", errors="replace")
+        notes = (f"read {name} as Windows-1252 text, since it is not valid UTF-8",)
+    header_line = next((line for line in io.StringIO(text) if line.strip()), "")
+    reader = csv.reader(io.StringIO(text, newline=""), delimiter=_delimiter(header_line))
+    header_row = header = None
+    rows, records = [], []
+    row = 0  # a csv.Error is raised before its record is counted
+    try:
+        for row, record in enumerate(reader, start=1):
+            if not any(cell.strip() for cell in record):
+                continue
+            if header is None:
+                header_row, header = row, tuple(cell.strip() for cell in record)
+                continue
+            if any(cell.strip() for cell in record[len(header):]):
+                raise DataError(
+                    f"{name}: row {row} has {len(record)} cells but the header (row {header_row}) names "
+                    f"{len(header)} columns; expected one cell per column (a decimal comma in a "
+                    "comma-separated file splits a number in two)")
+            rows.append(row)
+            records.append(record)
+    except csv.Error as error:
+        raise DataError(f"{name}: row {row + 1} cannot be read as CSV ({error})") from None
+    if header is None:
+        raise DataError(f"{name}: the file is empty; expected a header row and at least 2 data rows")
+    if not records:
+        raise DataError(f"{name}: the file has a header (row {header_row}) but no data rows; expected at least 2")
+    return _Table(name, header_row, header, rows, records, notes)
+
+
+def _delimiter(header_line):
+    """Comma, unless the header holds (outside quotes) no comma and exactly one of semicolon and tab."""
+    bare = re.sub(r'"[^"]*"', "", header_line)
+    if "," not in bare and (";" in bare) != ("\t" in bare):
+        return ";" if ";" in bare else "\t"
+    return ","
+
+
+def _from_rows(table, time, input, output, dt):
+    """A wide table: its rows as they are when uniformly spaced at ``dt``, else resampled."""
+    rows = table.rows
+    _at_least_two_rows(table, "the file", rows)
+    timeline = _timeline(table, time, rows, table.cells(time, "time"))
+    seconds = timeline.seconds
+    u = _values(table, input, rows, table.cells(input, "input"))
+    y = _values(table, output, rows, table.cells(output, "output"))
+    notes = list(table.notes)
+    u = _filled_input(table, f"column {input.strip()!r}", rows, seconds, u, notes)
+    missing = _output_gaps(table, f"column {output.strip()!r}", rows, y)
+    start = timeline.first
+    spacing = seconds[-1] / (seconds.size - 1)
+    uniform = np.abs(np.diff(seconds) - spacing).max() <= _UNIFORM * spacing
+    if uniform and (dt is None or abs(dt - spacing) <= _UNIFORM * spacing):
+        step = spacing if dt is None else dt
+        if missing.any():
+            notes.append(f"{_counted(missing.sum(), 'output value')} missing, left as NaN in y")
+        return ProcessData(step * np.arange(seconds.size), u, y, float(step), start, tuple(notes))
+    grid, u_grid, y_grid, step = _resampled(table.path, seconds, u, seconds, y, dt)
+    if uniform:
+        notes.append(f"resampled {len(rows)} rows spaced {spacing:g} s onto the given {step:g} s grid "
+                     "by linear interpolation")
+    else:
+        dt_source = "given" if dt is not None else "inferred: the median spacing of the rows"
+        notes.append(f"resampled {len(rows)} irregular rows onto a {step:g} s grid by linear interpolation "
+                     f"(dt {dt_source})")
+    _note_output_gaps(notes, missing, y_grid)
+    return ProcessData(grid, u_grid, y_grid, step, start, tuple(notes))
+
+
+def _from_logs(input_log, output_log, dt):
+    """Two event logs resampled onto a common grid over the span both cover."""
+    origin = _common_origin(input_log, output_log)
+    times_u = input_log.timeline.seconds + _elapsed(input_log.timeline.first, origin)
+    times_y = output_log.timeline.seconds + _elapsed(output_log.timeline.first, origin)
+    if not max(times_u[0], times_y[0]) < min(times_u[-1], times_y[-1]):
+        raise DataError(
+            f"{output_log.table.path}: the output log ({_described(output_log)}) does not overlap the input log "
+            f"({_described(input_log)}) of {input_log.table.path} in time; expected a stretch where both have data")
+    notes = list(dict.fromkeys(input_log.table.notes + output_log.table.notes))
+    u = _filled_input(input_log.table, input_log.label, input_log.rows, times_u, input_log.values, notes)
+    missing = _output_gaps(output_log.table, output_log.label, output_log.rows, output_log.values)
+    grid, u_grid, y_grid, step = _resampled(output_log.table.path, times_u, u, times_y, output_log.values, dt)
+    dt_source = "given" if dt is not None else "inferred: the median spacing of both logs' timestamps"
+    notes.append(
+        f"resampled the input log ({input_log.label} of {input_log.table.path}, "
+        f"{_counted(len(input_log.rows), 'row')}) and the output log ({output_log.label} of "
+        f"{output_log.table.path}, {_counted(len(output_log.rows), 'row')}) onto a common {step:g} s grid "
+        f"from {grid[0]:g} s to {grid[-1]:g} s by linear interpolation (dt {dt_source})")
+    _note_output_gaps(notes, missing, y_grid)
+    return ProcessData(grid, u_grid, y_grid, step, origin, tuple(notes))
+
+
+def _column_log(table, time, column, argument):
+    """The log of one column of a two-file layout: every data row of ``table``."""
+    label = f"column {column.strip()!r}"
+    return _event_log(table, label, time, column, argument, range(len(table.rows)))
+
+
+def _tag_logs(table, time, tag_column, value_column, input, output):
+    """The input and output logs of a long table: the rows of each tag."""
+    tags = [cell.strip() for cell in table.cells(tag_column, "tag_column")]
+    logs = []
+    for argument, tag in (("input", input), ("output", output)):
+        wanted = tag.strip()
+        picks = [index for index, cell in enumerate(tags) if cell == wanted]
+        if not picks:
+            present = [cell for cell in dict.fromkeys(tags) if cell]
+            raise DataError(f"{table.path}: column {tag_column.strip()!r} holds no tag {wanted!r} "
+                            f"(given as {argument}) in rows {table.rows[0]} to {table.rows[-1]}; "
+                            f"tags present: {_listed(present)}")
+        logs.append(_event_log(table, f"tag {wanted!r}", time, value_column, "value_column", picks))
+    return logs
+
+
+def _event_log(table, label, time, column, argument, picks):
+    """The log of the records ``picks`` of ``table``: their times and the values of ``column``."""
+    rows = [table.rows[index] for index in picks]
+    _at_least_two_rows(table, label, rows)
+    time_cells, value_cells = table.cells(time, "time"), table.cells(column, argument)
+    timeline = _timeline(table, time, rows, [time_cells[index] for index in picks])
+    values = _values(table, column, rows, [value_cells[index] for index in picks])
+    return _Log(table, label, rows, timeline, values)
+
+
+def _at_least_two_rows(table, label, rows):
+    if len(rows) < 2:
+        raise DataError(f"{table.path}: {label} has only one data row (row {rows[0]}); "
+                        "expected at least 2 to span a time")
+
+
+def _timeline(table, column, rows, cells):
+    """Parse a time column: one kind of time throughout, strictly increasing; seconds from its first row."""
+    column = column.strip()
+    stamps = [_time_stamp(table.path, column, row, cell) for row, cell in zip(rows, cells)]
+    kind = _kind(stamps[0])
+    for row, cell, stamp in zip(rows, cells, stamps):
+        if _kind(stamp) != kind:
+            raise DataError(f"{table.path}: row {row}, column {column!r}: {_shown(cell)} is {_kind(stamp)}, "
+                            f"but row {rows[0]} holds {kind} ({_shown(cells[0])}); expected one kind of time "
+                            "throughout")
+    first = stamps[0]
+    if kind == _SECONDS:
+        with np.errstate(over="ignore"):  # an overflow is reported below, with its row
+            seconds = np.array(stamps) - first
+    else:
+        seconds = np.array([(stamp - first).total_seconds() for stamp in stamps])
+    if not np.isfinite(seconds).all():
+        far = int(np.argmin(np.isfinite(seconds)))
+        raise DataError(f"{table.path}: row {rows[far]}, column {column!r}: {_shown(cells[far])} is so far from "
+                        f"{_shown(cells[0])} on row {rows[0]} that the seconds between them overflow; "
+                        "expected times of one record")
+    steps = np.diff(seconds)
+    if not (steps > 0).all():
+        later = int(np.argmax(steps <= 0)) + 1
+        where = f"{table.path}: row {rows[later]}, column {column!r}"
+        if steps[later - 1] == 0:
+            raise DataError(f"{where}: duplicate timestamp {_shown(cells[later])}, already on row {rows[later - 1]}; "
+                            "expected strictly increasing times")
+        raise DataError(f"{where}: {_shown(cells[later])} is earlier than {_shown(cells[later - 1])} on row "
+                        f"{rows[later - 1]}; expected strictly increasing times")
+    return _Timeline(column, first, kind, rows[0], cells[0].strip(), cells[-1].strip(), seconds)
+
+
+def _time_stamp(path, column, row, cell):
+    """A time cell as float seconds or a datetime, or a DataError naming the row."""
+    text = cell.strip()
+    where = f"{path}: row {row}, column {column!r}"
+    if text.lower() in _MISSING:
+        raise DataError(f"{where}: the time is missing ({_shown(cell)}); "
+                        "expected a number of seconds or an ISO 8601 timestamp")
+    try:
+        seconds = float(text)
+    except ValueError:
+        # fromisoformat reads a trailing Z only from Python 3.11 on.
+        iso = text[:-1] + "+00:00" if text.endswith(("Z", "z")) else text
+        try:
+            return datetime.datetime.fromisoformat(iso)
+        except ValueError:
+            raise DataError(f"{where}: {_shown(cell)} is neither a number of seconds nor an ISO 8601 timestamp "
+                            "such as 2024-05-01T12:00:00") from None
+    if not math.isfinite(seconds):
+        raise DataError(f"{where}: {_shown(cell)} is not a finite time; expected a number of seconds")
+    return seconds
+
+
+def _kind(stamp):
+    if isinstance(stamp, float):
+        return _SECONDS
+    return _NAIVE if stamp.utcoffset() is None else _AWARE
+
+
+def _common_origin(input_log, output_log):
+    """Time zero of two logs: the earlier first time, once both hold the same kind of time."""
+    first_u, first_y = input_log.timeline, output_log.timeline
+    if first_u.kind != first_y.kind:
+        raise DataError(
+            f"{output_log.table.path}: row {first_y.first_row}, column {first_y.column!r}: "
+            f"{_shown(first_y.first_cell)} is {first_y.kind}, but row {first_u.first_row} of "
+            f"{input_log.table.path} ({input_log.label}) holds {first_u.kind} ({_shown(first_u.first_cell)}); "
+            "expected one kind of time for both signals")
+    return min(first_u.first, first_y.first)
+
+
+def _elapsed(stamp, origin):
+    """Seconds from ``origin`` to ``stamp``, both numbers of seconds or both datetimes."""
+    difference = stamp - origin
+    return difference if isinstance(difference, float) else difference.total_seconds()
+
+
+def _values(table, column, rows, cells):
+    """Parse a value column: float per cell, NaN for a missing one."""
+    values = np.empty(len(cells))
+    for index, (row, cell) in enumerate(zip(rows, cells)):
+        text = cell.strip()
+        if text.lower() in _MISSING:
+            values[index] = np.nan
+            continue
+        where = f"{table.path}: row {row}, column {column.strip()!r}"
+        expected = "expected a number, or an empty cell, NaN, NA or null where the value is missing"
+        try:
+            value = float(text)
+        except ValueError:
+            hint = " (decimals need a point, not a comma)" if "," in text else ""
+            raise DataError(f"{where}: {_shown(cell)} is not a number{hint}; {expected}") from None
+        if not math.isfinite(value):
+            raise DataError(f"{where}: {_shown(cell)} is not a finite number; {expected}")
+        values[index] = value
+    return values
+
+
+def _filled_input(table, label, rows, times, values, notes):
+    """The input with its missing values interpolated in time, ends held; a note says how many."""
+    missing = np.isnan(values)
+    if missing.all():
+        raise DataError(f"{table.path}: {label} has no value in rows {rows[0]} to {rows[-1]}; "
+                        "expected at least one number for the input")
+    if not missing.any():
+        return values
+    notes.append(f"filled {_counted(missing.sum(), 'missing input value')} by linear interpolation "
+                 "between the nearest present values")
+    return np.interp(times, times[~missing], values[~missing])
+
+
+def _output_gaps(table, label, rows, values):
+    """Where the output is missing; a DataError when it is missing everywhere."""
+    missing = np.isnan(values)
+    if missing.all():
+        raise DataError(f"{table.path}: {label} has no value in rows {rows[0]} to {rows[-1]}; "
+                        "expected at least one number for the output")
+    return missing
+
+
+def _note_output_gaps(notes, missing, y_grid):
+    if missing.any():
+        notes.append(f"{_counted(missing.sum(), 'output value')} missing, leaving "
+                     f"{_counted(np.isnan(y_grid).sum(), 'grid point')} NaN in y")
+
+
+def _resampled(path, times_u, u, times_y, y, dt):
+    """Complete ``u`` and gappy ``y`` on one grid by :func:`resample_events`; NaN in y inside its gaps.
+
+    Returns grid, u on it, y on it and the grid spacing (``dt``, or inferred when None).
+    """
+    first, last = max(times_u[0], times_y[0]), min(times_u[-1], times_y[-1])
+    step = _median_spacing(times_u, times_y, first, last) if dt is None else dt
+    which = f"dt = {step:g} s" if dt is not None else f"the inferred dt ({step:g} s, the median spacing)"
+    if (last - first) / step > _MAX_GRID_STEPS:
+        raise DataError(f"{path}: {which} would put {(last - first) / step:.3g} points on the {last - first:g} s "
+                        f"the data span; expected at most {_MAX_GRID_STEPS:,}: give a larger dt, in seconds")
+    missing = np.isnan(y)
+    bridged = np.interp(times_y, times_y[~missing], y[~missing])
+    grid, u_grid, y_grid = resample_events(times_u, u, times_y, bridged, dt=step)
+    if grid.size < 2:
+        raise DataError(f"{path}: {which} is longer than the {last - first:g} s the data span; "
+                        "expected a dt that leaves at least 2 grid points")
+    y_grid[_in_gaps(grid, times_y, missing, step)] = np.nan
+    return grid, u_grid, y_grid, float(step)
+
+
+def _in_gaps(grid, times, missing, dt):
+    """Grid points on the row of a missing value, or between such a row and a row next to it.
+
+    A grid point within rounding (``_GRID_SNAP * dt``) of a row counts as on
+    it, so 3 * 0.1 lands on a row logged at 0.3.
+    """
+    after = np.searchsorted(times, grid, side="right")
+    before = after - 1
+    after = np.minimum(after, times.size - 1)
+    on_before = grid - times[before] <= _GRID_SNAP * dt
+    on_after = times[after] - grid <= _GRID_SNAP * dt
+    return np.where(on_before, missing[before],
+                    np.where(on_after, missing[after], missing[before] | missing[after]))
+
+
+def _grid_spacing(dt):
+    if isinstance(dt, bool) or not isinstance(dt, numbers.Real) or not (math.isfinite(dt) and dt > 0):
+        raise DataError(f"dt must be a finite number of seconds > 0; got {dt!r}")
+    return float(dt)
+
+
+def _described(log):
+    return f"{log.label}, {log.timeline.first_cell} to {log.timeline.last_cell}"
+
+
+def _is_number(text):
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _shown(cell):
+    """A cell for a message: quoted, and cut when long."""
+    return repr(cell if len(cell) <= _SHOWN_CHARS else cell[:_SHOWN_CHARS - 3] + "...")
+
+
+def _listed(names):
+    shown = ", ".join(repr(name) for name in names[:_LISTED_NAMES])
+    return shown if len(names) <= _LISTED_NAMES else f"{shown}, ... ({len(names)} in all)"
+
+
+def _counted(number, noun):
+    return f"{number} {noun}" if number == 1 else f"{number} {noun}s"

@@ -1,8 +1,21 @@
-"""resample_events: exact on piecewise-linear signals, the grid it promises, one clear error per mistake."""
+"""dynia.data: resample_events on event logs, load_csv on the files engineers export.
+
+resample_events: exact on piecewise-linear signals, the grid it promises, one
+clear error per mistake. load_csv: every layout and kind of time, missing
+values, and one DataError line naming file, row and column per bad input.
+"""
+import datetime
+import math
+import pathlib
+
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
-from dynia.data import resample_events
+from dynia.data import DataError, ProcessData, load_csv, resample_events
+
+HEATING_SYSTEM = pathlib.Path("/work/shared/data/heating_system/heating_system.dat")
 
 
 def _event_times(rng, size, start=0.0):
@@ -120,3 +133,429 @@ def test_mistakes_are_named(kwargs, message):
     arguments.update(kwargs)
     with pytest.raises(ValueError, match=message):
         resample_events(**arguments)
+
+
+# --- load_csv -----------------------------------------------------------------
+
+def _write(folder, text, name="data.csv", encoding="utf-8"):
+    """Write ``text`` as the file ``name`` in ``folder``, byte for byte (no newline translation)."""
+    path = folder / name
+    path.write_bytes(text.encode(encoding))
+    return path
+
+
+def _load(path, **kwargs):
+    kwargs = {"time": "time", "input": "u", "output": "y", **kwargs}
+    return load_csv(path, **kwargs)
+
+
+def test_uniform_rows_are_used_as_they_are(tmp_path):
+    path = _write(tmp_path, "time,u,y\n100,1.5,2\n102,1.5,2.25\n104,3,2.5\n106,3,3.125\n")
+    data = _load(path)
+    assert isinstance(data, ProcessData)
+    np.testing.assert_array_equal(data.time, [0, 2, 4, 6])
+    np.testing.assert_array_equal(data.u, [1.5, 1.5, 3, 3])
+    np.testing.assert_array_equal(data.y, [2, 2.25, 2.5, 3.125])
+    assert data.dt == 2.0 and isinstance(data.dt, float)
+    assert data.start == 100.0 and data.notes == ()  # the file's time of grid time 0
+
+
+def test_columns_are_chosen_by_name_in_any_order_with_whitespace_stripped(tmp_path):
+    path = _write(tmp_path, " flow , T out ,stamp,other\n1,20,0,x\n2,21,1,y\n")
+    data = load_csv(path, time="stamp", input="flow ", output="T out")
+    np.testing.assert_array_equal(data.u, [1, 2])
+    np.testing.assert_array_equal(data.y, [20, 21])
+
+
+def test_a_given_dt_equal_to_the_spacing_keeps_the_rows(tmp_path):
+    path = _write(tmp_path, "time,u,y\n0,1,2\n0.1,2,3\n0.2,3,4\n0.30000000000000004,4,5\n")
+    data = _load(path, dt=0.1)
+    assert data.dt == 0.1 and data.notes == ()
+    np.testing.assert_array_equal(data.u, [1, 2, 3, 4])
+
+
+def test_a_given_dt_that_differs_resamples_uniform_rows(tmp_path):
+    path = _write(tmp_path, "time,u,y\n0,0,10\n2,2,8\n4,4,6\n6,6,4\n")
+    data = _load(path, dt=1.5)
+    np.testing.assert_allclose(data.time, [0, 1.5, 3, 4.5, 6])
+    np.testing.assert_allclose(data.u, data.time)
+    np.testing.assert_allclose(data.y, 10 - data.time)
+    assert data.notes == ("resampled 4 rows spaced 2 s onto the given 1.5 s grid by linear interpolation",)
+
+
+def test_irregular_rows_are_resampled_at_the_median_spacing(tmp_path):
+    path = _write(tmp_path, "time,u,y\n0,0,1\n1,1,3\n2,2,5\n5,5,11\n6,6,13\n")
+    data = _load(path)
+    assert data.dt == 1.0  # spacings 1, 1, 3, 1
+    np.testing.assert_allclose(data.time, np.arange(7.0))
+    np.testing.assert_allclose(data.u, data.time)
+    np.testing.assert_allclose(data.y, 1 + 2 * data.time)
+    assert data.notes == ("resampled 5 irregular rows onto a 1 s grid by linear interpolation "
+                          "(dt inferred: the median spacing of the rows)",)
+    assert _load(path, dt=2).notes == ("resampled 5 irregular rows onto a 2 s grid by linear interpolation "
+                                       "(dt given)",)
+
+
+def test_iso_timestamps_with_z_are_utc_and_start_keeps_the_first(tmp_path):
+    path = _write(tmp_path, "time,u,y\n2024-05-01T12:00:00Z,1,2\n2024-05-01T12:00:30Z,1,2\n"
+                            "2024-05-01T12:01:00Z,1,2\n")
+    data = _load(path)
+    assert data.dt == 30.0
+    np.testing.assert_array_equal(data.time, [0, 30, 60])
+    assert data.start == datetime.datetime(2024, 5, 1, 12, tzinfo=datetime.timezone.utc)
+
+
+def test_timestamps_with_offsets_are_compared_across_a_daylight_saving_change(tmp_path):
+    path = _write(tmp_path, "time,u,y\n2024-03-31T01:59:00+01:00,1,2\n2024-03-31T03:00:00+02:00,1,2\n"
+                            "2024-03-31T03:01:00+02:00,1,2\n")
+    data = _load(path)
+    assert data.dt == 60.0 and data.notes == ()
+    assert data.start.utcoffset() == datetime.timedelta(hours=1)
+
+
+def test_naive_timestamps_with_a_space_and_fractions_of_a_second(tmp_path):
+    path = _write(tmp_path, "time,u,y\n2024-01-01 23:59:59.500,1,2\n2024-01-02 00:00:00.000,1,2\n"
+                            "2024-01-02 00:00:00.500,1,2\n")
+    data = _load(path)
+    assert data.dt == 0.5
+    assert data.start == datetime.datetime(2024, 1, 1, 23, 59, 59, 500000)
+
+
+@pytest.mark.parametrize("text", [
+    "time;u;y\n0;1;2\n1;3;4\n",
+    "time\tu\ty\n0\t1\t2\n1\t3\t4\n",
+    '"time";"u";"y"\r\n"0";"1";"2"\r\n"1";"3";"4"\r\n',
+    '\ufefftime,u,y\n0,1,2\n1,3,4\n',  # Excel's "CSV UTF-8" starts with a byte order mark
+    "\n\ntime,u,y\n\n0,1,2\n1,3,4\n\n\n,,\n",
+])
+def test_separators_quotes_byte_order_mark_and_blank_rows(tmp_path, text):
+    data = _load(_write(tmp_path, text))
+    np.testing.assert_array_equal(data.u, [1, 3])
+    np.testing.assert_array_equal(data.y, [2, 4])
+
+
+def test_a_comma_header_wins_over_semicolons_and_quoted_commas_do_not_count(tmp_path):
+    data = load_csv(_write(tmp_path, "time,flow;m3/h,y\n0,1,2\n1,3,4\n"), time="time", input="flow;m3/h", output="y")
+    np.testing.assert_array_equal(data.u, [1, 3])
+    path = _write(tmp_path, 'time;"flow, m3/h";y\n0;1;2\n1;3;4\n')
+    np.testing.assert_array_equal(load_csv(path, time="time", input="flow, m3/h", output="y").u, [1, 3])
+
+
+def test_a_windows_1252_file_is_read_and_noted(tmp_path):
+    path = _write(tmp_path, "time,u,T [°C]\n0,1,20.5\n1,1,21\n", encoding="cp1252")
+    data = load_csv(path, time="time", input="u", output="T [°C]")
+    np.testing.assert_array_equal(data.y, [20.5, 21])
+    assert data.notes == (f"read {path} as Windows-1252 text, since it is not valid UTF-8",)
+
+
+@pytest.mark.parametrize("token", ["", " ", "NaN", "nan", "NA", "na", "null", "NULL", "Null"])
+def test_missing_values_fill_the_input_and_stay_nan_in_the_output(tmp_path, token):
+    path = _write(tmp_path, f"time,u,y\n0,{token},{token}\n1,1,1\n2,{token},{token}\n3,3,3\n4,{token},4\n")
+    data = _load(path)
+    np.testing.assert_array_equal(data.u, [1, 1, 2, 3, 3])  # ends held, the middle interpolated
+    np.testing.assert_array_equal(data.y, [np.nan, 1, np.nan, 3, 4])
+    assert data.notes == ("filled 3 missing input values by linear interpolation between the nearest present values",
+                          "2 output values missing, left as NaN in y")
+
+
+def test_a_row_shorter_than_the_header_misses_its_last_cells(tmp_path):
+    data = _load(_write(tmp_path, "time,u,y\n0,1,2\n1,2\n2,3,4\n"))
+    np.testing.assert_array_equal(data.y, [2, np.nan, 4])
+
+
+def test_input_missing_between_irregular_rows_is_interpolated_in_time(tmp_path):
+    data = _load(_write(tmp_path, "time,u,y\n0,0,0\n1,,0\n4,4,0\n5,5,0\n"), dt=1)
+    np.testing.assert_allclose(data.u, np.arange(6.0))
+
+
+def test_output_gaps_on_a_resampled_grid(tmp_path):
+    # rows at 0..10 s, the output missing at 4 s: with dt 0.5 the grid points
+    # from 3.5 to 4.5 would interpolate with it; 3 and 5 are present rows
+    rows = "".join(f"{t},{t},{'' if t == 4 else 2 * t}\n" for t in range(11))
+    data = _load(_write(tmp_path, "time,u,y\n" + rows), dt=0.5)
+    nan = np.isnan(data.y)
+    np.testing.assert_array_equal(data.time[nan], [3.5, 4.0, 4.5])
+    np.testing.assert_allclose(data.y[~nan], 2 * data.time[~nan])
+    assert data.notes[-1] == "1 output value missing, leaving 3 grid points NaN in y"
+    # a grid too coarse to land in the gap keeps every point
+    data = _load(_write(tmp_path, "time,u,y\n" + rows), dt=3)
+    assert not np.isnan(data.y).any()
+    assert data.notes[-1] == "1 output value missing, leaving 0 grid points NaN in y"
+
+
+def test_missing_output_at_the_ends_of_irregular_rows(tmp_path):
+    data = _load(_write(tmp_path, "time,u,y\n0,0,\n1,1,1\n3,3,3\n4,4,\n"), dt=0.5)
+    expected_nan = (data.time < 1) | (data.time > 3)
+    np.testing.assert_array_equal(np.isnan(data.y), expected_nan)
+    np.testing.assert_allclose(data.y[~expected_nan], data.time[~expected_nan])
+
+
+def test_a_long_stretch_without_records_is_no_gap(tmp_path):
+    # exception logging: nothing stored for 100 s while the output was steady
+    data = _load(_write(tmp_path, "time,u,y\n0,1,5\n1,1,5\n101,1,5\n102,2,6\n"), dt=1)
+    assert data.time.size == 103
+    assert not np.isnan(data.y).any()
+
+
+def test_two_files_are_two_event_logs_on_their_common_span(tmp_path):
+    inputs = _write(tmp_path, "time,valve\n0,0\n4,4\n9,9\n20,20\n", name="valve.csv")
+    outputs = _write(tmp_path, "time,level\n2,4\n3,6\n6,12\n12,24\n", name="level.csv")
+    data = load_csv(inputs, time="time", input="valve", output="level", output_path=outputs)
+    # time zero is the first record of either log; the grid starts where both have data
+    np.testing.assert_allclose(data.time, np.arange(2.0, 13.0, 2.0))
+    np.testing.assert_allclose(data.u, data.time)
+    np.testing.assert_allclose(data.y, 2 * data.time)
+    assert data.dt == 2.0  # median spacing of the union 2, 3, 4, 6, 9, 12 inside [2, 12]
+    assert data.start == 0.0
+    assert data.notes == (
+        f"resampled the input log (column 'valve' of {inputs}, 4 rows) and the output log (column 'level' of "
+        f"{outputs}, 4 rows) onto a common 2 s grid from 2 s to 12 s by linear interpolation "
+        "(dt inferred: the median spacing of both logs' timestamps)",)
+
+
+def test_two_files_with_timestamps_count_from_the_earlier_first_record(tmp_path):
+    inputs = _write(tmp_path, "time,u\n2024-05-01T00:00:10,1\n2024-05-01T00:01:10,1\n", name="u.csv")
+    outputs = _write(tmp_path, "time,y\n2024-05-01T00:00:00,2\n2024-05-01T00:00:20,4\n2024-05-01T00:00:40,\n"
+                               "2024-05-01T00:01:00,8\n", name="y.csv")
+    data = load_csv(inputs, time="time", input="u", output="y", output_path=outputs, dt=10)
+    assert data.start == datetime.datetime(2024, 5, 1)
+    np.testing.assert_allclose(data.time, [10, 20, 30, 40, 50, 60])
+    # the gap runs from the last present value before the missing one to the first after it
+    np.testing.assert_array_equal(data.y, [3, 4, np.nan, np.nan, np.nan, 8])
+    assert data.notes[-1] == "1 output value missing, leaving 3 grid points NaN in y"
+    assert "(dt given)" in data.notes[0]
+
+
+def test_long_format_reads_each_tag_as_a_log(tmp_path):
+    path = _write(tmp_path, "time,tag,value,unit\n"
+                            "2024-05-01T00:00:00Z,FIC101,1,%\n"
+                            "2024-05-01T00:00:00Z,TI204,20,degC\n"
+                            "2024-05-01T00:00:05Z,PI300,abc,bar\n"  # another tag: never parsed
+                            "2024-05-01T00:00:10Z,FIC101,3,%\n"
+                            "2024-05-01T00:00:20Z,TI204,22,degC\n"
+                            "2024-05-01T00:00:30Z,TI204,NA,degC\n"
+                            "2024-05-01T00:00:40Z,FIC101,,%\n"
+                            "2024-05-01T00:00:40Z,TI204,24,degC\n")
+    data = load_csv(path, time="time", input="FIC101", output="TI204", long_format=True)
+    assert data.dt == 10.0
+    np.testing.assert_allclose(data.time, [0, 10, 20, 30, 40])
+    np.testing.assert_allclose(data.u, [1, 3, 3, 3, 3])  # the missing last value is held
+    np.testing.assert_allclose(data.y, [20, 21, 22, np.nan, 24])
+    assert data.start == datetime.datetime(2024, 5, 1, tzinfo=datetime.timezone.utc)
+    assert data.notes[0] == "filled 1 missing input value by linear interpolation between the nearest present values"
+    assert data.notes[1].startswith(f"resampled the input log (tag 'FIC101' of {path}, 3 rows) and the output log "
+                                    f"(tag 'TI204' of {path}, 4 rows) onto a common 10 s grid")
+
+
+def test_long_format_with_other_column_names(tmp_path):
+    path = _write(tmp_path, "t;name;v\n0;a;1\n0;b;2\n1;a;3\n2;b;6\n")
+    data = load_csv(path, time="t", input="a", output="b", long_format=True,
+                    tag_column="name", value_column="v", dt=1)
+    np.testing.assert_allclose(data.u, [1, 3])
+    np.testing.assert_allclose(data.y, [2, 4])
+
+
+def test_long_format_and_output_path_exclude_each_other(tmp_path):
+    path = _write(tmp_path, "time,tag,value\n0,a,1\n1,a,2\n")
+    with pytest.raises(ValueError, match="do not give output_path"):
+        load_csv(path, time="time", input="a", output="a", long_format=True, output_path=path)
+
+
+@pytest.mark.skipif(not HEATING_SYSTEM.exists(), reason="the DaISy heating-system record is not available")
+def test_the_daisy_heating_system_record(tmp_path):
+    rows = [line.split() for line in HEATING_SYSTEM.read_text().splitlines() if line.strip()]
+    path = _write(tmp_path, "time,voltage,temperature\n" + "".join(",".join(row) + "\n" for row in rows))
+    data = load_csv(path, time="time", input="voltage", output="temperature")
+    assert data.time.size == 801
+    assert data.dt == 2.0
+    assert data.u[0] == 9.0
+    assert data.notes == () and not np.isnan(data.y).any()
+
+
+_ROWS = "time,u,y\n0,1,2\n1,1,2\n"
+_SIXTEEN_ROWS = "time,u,y\n" + "".join(f"{t},1,2\n" for t in range(15))
+_LONG = {"long_format": True, "input": "a", "output": "b"}
+
+
+@pytest.mark.parametrize("text, kwargs, message", [
+    ("", {}, r"data\.csv: the file is empty; expected a header row and at least 2 data rows$"),
+    ("  \n\n \n", {}, r"data\.csv: the file is empty"),
+    ("time,u,y\n", {}, r"data\.csv: the file has a header \(row 1\) but no data rows; expected at least 2$"),
+    ("time,u,y\n\n,,\n", {}, r"the file has a header \(row 1\) but no data rows"),
+    ("time,u,y\n0,1,2\n", {}, r"data\.csv: the file has only one data row \(row 2\); expected at least 2"),
+    (_ROWS, {"output": "T"}, r"data\.csv: row 1 \(the header\) has no column 'T' \(given as output\); "
+                             r"available columns: 'time', 'u', 'y'$"),
+    (_ROWS, {"time": "t"}, r"no column 't' \(given as time\); available columns: 'time', 'u', 'y'$"),
+    ("0,1,2\n1,1,2\n2,1,2\n", {}, r"row 1 \(the header\) has no column 'time' .* available columns: '0', '1', '2' "
+                                  r"\(they are numbers: the file seems to lack a header row naming the columns\)$"),
+    ("time,u,y,y\n0,1,2,3\n1,1,2,3\n", {}, r"row 1 \(the header\) names 2 columns 'y'; expected one"),
+    (_SIXTEEN_ROWS + "15,1,abc\n", {}, r"data\.csv: row 17, column 'y': 'abc' is not a number; expected a number, "
+                                       r"or an empty cell, NaN, NA or null where the value is missing$"),
+    ("time;u;y\n0;1,5;2\n1;1;2\n", {}, r"row 2, column 'u': '1,5' is not a number \(decimals need a point"),
+    ("time,u,y\n0,1,2\n1,inf,2\n", {}, r"row 3, column 'u': 'inf' is not a finite number"),
+    ("time,u,y\n0,1,2\n1,1,2\n1.0,1,2\n", {}, r"row 4, column 'time': duplicate timestamp '1\.0', already on row 3; "
+                                              r"expected strictly increasing times$"),
+    ("time,u,y\n2024-01-01T00:00:01,1,2\n2024-01-01T00:00:01.000,1,2\n", {},
+     r"row 3, column 'time': duplicate timestamp"),
+    ("time,u,y\n0,1,2\n\n5,1,2\n3,1,2\n", {}, r"row 5, column 'time': '3' is earlier than '5' on row 4; "
+                                              r"expected strictly increasing times$"),
+    ("time,u,y\n0,1,2\ninf,1,2\n", {}, r"row 3, column 'time': 'inf' is not a finite time"),
+    ("time,u,y\n-1e308,1,2\n1e308,1,2\n", {}, r"row 3, column 'time': '1e308' is so far from '-1e308' on row 2 "
+                                                r"that the seconds between them overflow"),
+    ("time,u,y\n0,1,2\n1,1," + "9" * 200_000 + "\n", {}, r"data\.csv: row 3 cannot be read as CSV \(field larger"),
+    ("time,u,y\n0,1,2\n,1,2\n", {}, r"row 3, column 'time': the time is missing \(''\); expected a number of seconds "
+                                    r"or an ISO 8601 timestamp$"),
+    ("time,u,y\n0,1,2\nNaN,1,2\n", {}, r"row 3, column 'time': the time is missing \('NaN'\)"),
+    ("time,u,y\n0,1,2\n01.02.2024 10:00,1,2\n", {}, r"row 3, column 'time': '01\.02\.2024 10:00' is neither a "
+                                                    r"number of seconds nor an ISO 8601 timestamp"),
+    ("time,u,y\n0,1,2\n2024-01-01T00:00:00,1,2\n", {},
+     r"row 3, column 'time': '2024-01-01T00:00:00' is a timestamp without UTC offset, but row 2 holds a number "
+     r"of seconds \('0'\); expected one kind of time throughout$"),
+    ("time,u,y\n2024-01-01T00:00:00,1,2\n2024-01-01T00:00:01Z,1,2\n", {},
+     r"row 3, column 'time': '2024-01-01T00:00:01Z' is a timestamp with UTC offset, but row 2 holds a "
+     r"timestamp without UTC offset"),
+    ("time,u,y\n0,,2\n1,NA,2\n", {}, r"data\.csv: column 'u' has no value in rows 2 to 3; expected at least one "
+                                     r"number for the input$"),
+    ("time,u,y\n0,1,\n1,1,null\n", {}, r"column 'y' has no value in rows 2 to 3; expected at least one number "
+                                       r"for the output$"),
+    ("time,u,y\n0,1,2\n1,1,2,5\n", {}, r"data\.csv: row 3 has 4 cells but the header \(row 1\) names 3 columns; "
+                                       r"expected one cell per column"),
+    (_ROWS, {"dt": 5}, r"data\.csv: dt = 5 s is longer than the 1 s the data span; expected a dt that leaves at least "
+                       r"2 grid points$"),
+    (_ROWS, {"dt": 1e-8}, r"data\.csv: dt = 1e-08 s would put 1e\+08 points on the 1 s the data span; "
+                          r"expected at most 10,000,000: give a larger dt"),
+    ("time,tag,value\n0,a,1\n1,b,2\n2,a,3\n3,b,4\n", {**_LONG, "output": "c"},
+     r"data\.csv: column 'tag' holds no tag 'c' \(given as output\) in rows 2 to 5; tags present: 'a', 'b'$"),
+    ("time,tag,value\n0,a,1\n1,b,2\n2,a,3\n", _LONG, r"data\.csv: tag 'b' has only one data row \(row 3\)"),
+    ("time,tag,value\n0,a,1\n1,b,2\n2,a,3\n1,b,x\n", _LONG, r"row 5, column 'time': duplicate timestamp '1', "
+                                                            r"already on row 3"),
+    ("time,tag,value\n0,a,1\n1,b,2\n3,a,3\n2,a,4\n", _LONG, r"row 5, column 'time': '2' is earlier than '3' on row 4"),
+    ("time,tag,value\n0,a,1\n1,b,2\n2,a,3\n3,b,x\n", _LONG, r"row 5, column 'value': 'x' is not a number"),
+    ("time,tag,value\n0,a,1\n1,a,2\n5,b,2\n6,b,4\n", _LONG,
+     r"the output log \(tag 'b', 5 to 6\) does not overlap the input log \(tag 'a', 0 to 1\) of .*data\.csv in "
+     r"time; expected a stretch where both have data$"),
+    ("time,tag,value\n0,a,1\n1,a,2\n2024-01-01T00:00:00,b,2\n2024-01-01T00:00:01,b,4\n", _LONG,
+     r"row 4, column 'time': '2024-01-01T00:00:00' is a timestamp without UTC offset, but row 2 of .*data\.csv "
+     r"\(tag 'a'\) holds a number of seconds \('0'\); expected one kind of time for both signals$"),
+])
+def test_bad_input_is_one_line_naming_file_row_and_column(tmp_path, text, kwargs, message):
+    path = _write(tmp_path, text)
+    with pytest.raises(DataError, match=message) as caught:
+        _load(path, **kwargs)
+    assert str(caught.value).startswith(f"{path}: ")
+    assert "\n" not in str(caught.value)
+
+
+def test_a_missing_file_is_named(tmp_path):
+    with pytest.raises(DataError, match=r"nowhere\.csv: no such file; expected a CSV file with a header row$"):
+        _load(tmp_path / "nowhere.csv")
+    with pytest.raises(DataError, match=r"nowhere\.csv: no such file"):
+        _load(_write(tmp_path, _ROWS), output_path=tmp_path / "nowhere.csv")
+
+
+def test_a_folder_is_not_a_file(tmp_path):
+    with pytest.raises(DataError, match=r": cannot be read \(.*\); expected a CSV file$"):
+        _load(tmp_path)
+
+
+@pytest.mark.parametrize("dt", [0, -1.0, math.nan, math.inf, "2", True])
+def test_dt_must_be_a_finite_number_above_zero(tmp_path, dt):
+    with pytest.raises(DataError, match=r"^dt must be a finite number of seconds > 0; got "):
+        _load(_write(tmp_path, _ROWS), dt=dt)
+
+
+def test_errors_in_the_output_file_name_that_file(tmp_path):
+    inputs = _write(tmp_path, "time,u\n0,1\n1,2\n", name="u.csv")
+    outputs = _write(tmp_path, "stamp,y\n0,1\n1,2\n", name="y.csv")
+    with pytest.raises(DataError, match=r"y\.csv: row 1 \(the header\) has no column 'time' \(given as time\); "
+                                        r"available columns: 'stamp', 'y'$"):
+        _load(inputs, output_path=outputs)
+    outputs = _write(tmp_path, "time,y\n2024-01-01T00:00:00Z,1\n2024-01-01T00:00:01Z,2\n", name="y.csv")
+    with pytest.raises(DataError, match=r"y\.csv: row 2, column 'time': '2024-01-01T00:00:00Z' is a timestamp with "
+                                        r"UTC offset, but row 2 of .*u\.csv \(column 'u'\) holds a number of seconds"):
+        _load(inputs, output_path=outputs)
+    outputs = _write(tmp_path, "time,y\n0,1\n", name="y.csv")
+    with pytest.raises(DataError, match=r"y\.csv: column 'y' has only one data row \(row 2\)"):
+        _load(inputs, output_path=outputs)
+
+
+# --- load_csv, properties -----------------------------------------------------
+
+_FINITE = st.floats(-1e6, 1e6, allow_nan=False, allow_infinity=False)
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(start=st.floats(-1e4, 1e4), spacing=st.floats(1e-3, 1e3),
+       values=st.lists(st.tuples(_FINITE, st.none() | _FINITE), min_size=2, max_size=40)
+       .filter(lambda rows: any(output is not None for _, output in rows)))
+def test_a_uniform_numeric_csv_round_trips_exactly(tmp_path, start, spacing, values):
+    u = np.array([value for value, _ in values])
+    y = np.array([np.nan if value is None else value for _, value in values])
+    times = start + spacing * np.arange(u.size)
+    rows = "".join(f"{float(t)!r},{a!r},{'' if b is None else repr(b)}\n" for t, (a, b) in zip(times, values))
+    data = _load(_write(tmp_path, "time,u,y\n" + rows))
+    np.testing.assert_array_equal(data.u, u)
+    np.testing.assert_array_equal(data.y, y)
+    np.testing.assert_allclose(data.dt, spacing, rtol=1e-6)
+    np.testing.assert_array_equal(data.time, data.dt * np.arange(u.size))
+    missing = int(np.isnan(y).sum())
+    assert data.notes == ((f"{missing} output value{'s' * (missing != 1)} missing, left as NaN in y",)
+                          if missing else ())
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(gaps=st.lists(st.integers(1, 5_000_000), min_size=1, max_size=30),  # microseconds, up to 5 s
+       slopes=st.tuples(st.floats(-10, 10), st.floats(-10, 10)), offsets=st.tuples(_FINITE, _FINITE),
+       dt=st.floats(0.01, 2.0), zone=st.sampled_from(["", "Z", "+05:30", "-08:00"]))
+def test_irregular_timestamps_of_a_linear_signal_resample_exactly(tmp_path, gaps, slopes, offsets, dt, zone):
+    first = datetime.datetime(2024, 5, 1, 12, 0, 0)
+    seconds = np.r_[0, np.cumsum(gaps)] / 1e6
+    stamps = [(first + datetime.timedelta(microseconds=int(micro))).isoformat(timespec="microseconds") + zone
+              for micro in np.r_[0, np.cumsum(gaps)]]
+    (slope_u, slope_y), (offset_u, offset_y) = slopes, offsets
+    rows = "".join(f"{stamp},{float(offset_u + slope_u * t)!r},{float(offset_y + slope_y * t)!r}\n"
+                   for stamp, t in zip(stamps, seconds))
+    if seconds[-1] < dt:
+        dt = seconds[-1]  # the grid needs two points
+    data = _load(_write(tmp_path, "time,u,y\n" + rows), dt=dt)
+    assert data.time[0] == 0 and data.time[-1] <= seconds[-1]
+    np.testing.assert_allclose(np.diff(data.time), dt, rtol=1e-9)
+    scale = 1 + abs(offset_u) + abs(offset_y)
+    np.testing.assert_allclose(data.u, offset_u + slope_u * data.time, rtol=1e-12, atol=1e-9 * scale)
+    np.testing.assert_allclose(data.y, offset_y + slope_y * data.time, rtol=1e-12, atol=1e-9 * scale)
+    assert data.start.replace(tzinfo=None) == first
+    assert (data.start.utcoffset() is None) == (zone == "")
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(missing=st.lists(st.booleans(), min_size=2, max_size=30).filter(lambda flags: not all(flags)))
+def test_halving_the_spacing_puts_nan_next_to_every_missing_output(tmp_path, missing):
+    missing = np.array(missing)
+    rows = "".join(f"{2 * k},{k},{'' if gone else k}\n" for k, gone in enumerate(missing))
+    data = _load(_write(tmp_path, "time,u,y\n" + rows), dt=1)
+    on_rows, between = np.isnan(data.y[0::2]), np.isnan(data.y[1::2])
+    np.testing.assert_array_equal(on_rows, missing)
+    np.testing.assert_array_equal(between, missing[:-1] | missing[1:])
+    present = ~np.isnan(data.y)
+    np.testing.assert_allclose(data.y[present], data.time[present] / 2)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(data=st.data())
+def test_a_long_table_reads_as_the_same_two_logs_in_two_files(tmp_path, data):
+    times_u = np.cumsum(data.draw(st.lists(st.integers(1, 9), min_size=2, max_size=15)))
+    times_y = np.cumsum(data.draw(st.lists(st.integers(1, 9), min_size=2, max_size=15)))
+    if max(times_u[0], times_y[0]) >= min(times_u[-1], times_y[-1]):
+        times_y = times_y - times_y[0] + times_u[0]
+    records = ([(t, "in", float(k)) for k, t in enumerate(times_u)]
+               + [(t, "out", -3.0 * k) for k, t in enumerate(times_y)])
+    order = data.draw(st.permutations(range(len(records))))
+    by_time = sorted(order, key=lambda index: records[index][0])  # sorted by time, ties in random tag order
+    long = _write(tmp_path, "time,tag,value\n" + "".join("{},{},{}\n".format(*records[i]) for i in by_time), "long.csv")
+    inputs = _write(tmp_path, "time,u\n" + "".join(f"{t},{k}\n" for k, t in enumerate(times_u)), "u.csv")
+    outputs = _write(tmp_path, "time,y\n" + "".join(f"{t},{-3.0 * k}\n" for k, t in enumerate(times_y)), "y.csv")
+    from_long = load_csv(long, time="time", input="in", output="out", long_format=True)
+    from_files = _load(inputs, output_path=outputs)
+    for name in ("time", "u", "y"):
+        np.testing.assert_array_equal(getattr(from_long, name), getattr(from_files, name))
+    assert from_long.dt == from_files.dt
