@@ -1,0 +1,211 @@
+"""The dynia command line: end to end on the DaISy heating system, settings files, bad input."""
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, strategies as st
+
+from dynia import __version__
+from dynia.cli import UsageError, _bounds, main
+from dynia.models import FirstOrder
+
+ROOT = Path(__file__).resolve().parent.parent
+HEATING = ROOT / "data" / "heating_system" / "heating_system.csv"
+HEATING_ARGS = ["--time", "time", "--input", "u", "--output", "y", "--model", "first-order",
+                "--param", "K=0:40", "--param", "T=0:200", "--input-offset", "6", "--offset", "first",
+                "--samples", "400", "--seed", "1"]
+
+
+def _analyse(capsys, *args):
+    status = main(["analyse", *map(str, args)])
+    return status, capsys.readouterr().err
+
+
+def _read_csv(path):
+    lines = Path(path).read_text().splitlines()
+    header = lines[0].split(",")
+    rows = [[float(cell) if cell else np.nan for cell in line.split(",")] for line in lines[1:]]
+    return header, np.array(rows)
+
+
+@pytest.fixture(scope="module")
+def heating_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("runs") / "heating"
+    assert main(["analyse", str(HEATING), *HEATING_ARGS, "--out", str(out)]) == 0
+    return out
+
+
+def test_heating_system_end_to_end(heating_run):
+    out = heating_run
+    expected = {"ic.csv", "limits.csv", "samples.csv", "summary.json", "data.png", "ic_K.png",
+                "ic_T.png", "identifiability_K.png", "identifiability_T.png"}
+    assert expected <= {path.name for path in out.iterdir()}
+    header, ic = _read_csv(out / "ic.csv")
+    assert header == ["time", "K", "T"] and ic.shape == (801, 3)
+    np.testing.assert_allclose(ic[:3, 0], [0, 2, 4])
+    header, limits = _read_csv(out / "limits.csv")
+    assert header == ["time", "K_lower", "K_upper", "T_lower", "T_upper"]
+    assert (limits[:, 1] <= limits[:, 2]).all()
+    header, samples = _read_csv(out / "samples.csv")
+    assert header == ["K", "T"] and samples.shape == (400, 2)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["version"] == __version__
+    for name in ("K", "T"):
+        entry = summary["parameters"][name]
+        assert set(entry) == {"max_ic", "time_of_max_ic", "band", "estimate"}
+        assert entry["band"][0] <= entry["estimate"] <= entry["band"][1]
+        column = header.index(name)
+        assert entry["max_ic"] == pytest.approx(np.nanmax(ic[:, 1 + column]))
+    settings = summary["settings"]
+    assert settings["seed"] == 1 and settings["samples"] == 400 and settings["n"] == 10
+    assert settings["bounds"] == {"K": [0.0, 40.0], "T": [0.0, 200.0]}
+    assert settings["offset_value"] == pytest.approx(129.32) and settings["input_offset_value"] == 6
+    assert settings["n_dropped"] == 0
+
+
+def test_heating_system_gain_is_found_among_the_static_gains(heating_run):
+    # The settled levels give 17-21 C per volt around the 6 V operating point
+    # (9 V -> 192, 4 V -> 86.4, 8 V -> 163.5, 3 V -> 76.9, from 129.3 at 6 V);
+    # the plant is not linear, so a first-order model's gain varies with the window.
+    summary = json.loads((heating_run / "summary.json").read_text())
+    assert 10 < summary["parameters"]["K"]["estimate"] < 25
+    assert summary["parameters"]["K"]["max_ic"] > 0.7
+    _, ic = _read_csv(heating_run / "ic.csv")
+    assert np.nanmedian(ic[:, 1]) > np.nanmedian(ic[:, 2])  # settled levels inform K most of the time
+
+
+def test_config_file_gives_the_same_run(tmp_path, capsys, heating_run):
+    config = tmp_path / "run.toml"
+    config.write_text(
+        f'data = "{HEATING}"\ntime = "time"\ninput = "u"\noutput = "y"\nmodel = "first-order"\n'
+        'param = ["K=0:40", "T=0:200"]\ninput-offset = "6"\noffset = "first"\nsamples = 400\nseed = 1\n'
+        f'out = "{tmp_path / "from-config"}"\n')
+    status, err = _analyse(capsys, "--config", config)
+    assert status == 0, err
+    assert (tmp_path / "from-config" / "ic.csv").read_text() == (heating_run / "ic.csv").read_text()
+
+
+def test_the_command_is_installed_and_answers_version_and_help():
+    # The console script sits beside the interpreter of the environment dynia is installed in.
+    script = Path(sys.executable).parent / "dynia"
+    done = subprocess.run([str(script), "--version"], capture_output=True, text=True)
+    assert done.returncode == 0 and done.stdout.strip() == f"dynia {__version__}"
+    done = subprocess.run([sys.executable, "-m", "dynia.cli", "analyse", "--help"], capture_output=True, text=True)
+    assert done.returncode == 0
+    assert "--param NAME=LOW:HIGH" in done.stdout and "heating_system.csv" in done.stdout
+
+
+def _write(path, text):
+    path.write_text(text)
+    return path
+
+
+GOOD = "time,u,y\n" + "".join(f"{t},{1.0 if t > 5 else 0.0},{2.0 if t > 6 else 0.0}\n" for t in range(40))
+BASE = ["--time", "time", "--input", "u", "--output", "y", "--model", "first-order",
+        "--param", "K=0:5", "--param", "T=0:5", "--samples", "100", "--n", "3", "--seed", "2"]
+
+
+def _with(extra):
+    """BASE with the model and the K range replaced where ``extra`` gives its own."""
+    args = list(BASE)
+    if "--model" in extra:
+        del args[args.index("--model"):args.index("--model") + 2]
+    if any(value.startswith("K=") for value in extra):
+        del args[args.index("K=0:5") - 1:args.index("K=0:5") + 1]
+    return args + extra
+
+
+@pytest.mark.parametrize("content, extra, message", [
+    (None, [], "no such file"),
+    ("", [], "empty"),
+    ("time,u,y\n", [], ""),
+    (GOOD.replace("time,u,y", "time,u,z"), [], "'y'"),
+    (GOOD.replace("7,1.0,2.0", "7,1.0,abc"), [], "abc"),
+    (GOOD.replace("8,1.0", "6.5,1.0"), [], "increasing"),
+    ("time,u,y\n" + "".join(f"{t},1,2\n" for t in range(5)), [], "fewer than one window"),
+    (GOOD, ["--param", "K=5:0"], "lower bound"),
+    (GOOD, ["--param", "tau=0:1"], "tau"),
+    (GOOD, ["--model", "third-order"], "--model"),
+    (GOOD, ["--flavour", "glue"], "--flavour"),
+    (GOOD, ["--percentage", "1"], "at least 2"),
+    (GOOD, ["--conf-level", "100"], "--conf-level"),
+    (GOOD, ["--param", "K=0-5"], "NAME=LOW:HIGH"),
+    (GOOD, ["--offset", "warm"], "--offset"),
+])
+def test_bad_input_is_one_line_exit_2_and_no_output(tmp_path, capsys, content, extra, message):
+    data = tmp_path / "data.csv"
+    if content is not None:
+        _write(data, content)
+    out = tmp_path / "out"
+    status, err = _analyse(capsys, data, *_with(extra), "--out", out)
+    assert status == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("dynia: error:"), err
+    assert message in lines[0]
+    assert "Traceback" not in err
+    assert not out.exists()
+    assert not list(tmp_path.glob(".out.*"))
+
+
+def test_an_existing_output_directory_is_kept_unless_overwrite(tmp_path, capsys):
+    data = _write(tmp_path / "data.csv", GOOD)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "keep.txt").write_text("mine")
+    status, err = _analyse(capsys, data, *BASE, "--out", out)
+    assert status == 2 and "exists" in err and (out / "keep.txt").exists()
+    status, err = _analyse(capsys, data, *BASE, "--out", out, "--overwrite")
+    assert status == 0, err
+    assert (out / "summary.json").exists() and not (out / "keep.txt").exists()
+
+
+def test_an_interrupted_run_leaves_nothing_behind(tmp_path, capsys, monkeypatch):
+    import dynia.cli
+
+    def interrupted(*args, **kwargs):
+        (args[0] / "ic.csv").write_text("half")
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(dynia.cli, "_write_figures", interrupted)
+    data = _write(tmp_path / "data.csv", GOOD)
+    status, err = _analyse(capsys, data, *BASE, "--out", tmp_path / "out")
+    assert status == 130 and "nothing was written" in err
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["data.csv"]
+
+
+def test_missing_output_values_give_missing_ic(tmp_path, capsys):
+    lines = GOOD.splitlines()
+    for row in range(20, 30):  # rows of times 19..28: output missing
+        time, u, _ = lines[row].split(",")
+        lines[row] = f"{time},{u},"
+    data = _write(tmp_path / "data.csv", "\n".join(lines) + "\n")
+    status, err = _analyse(capsys, data, *BASE, "--n", "1", "--min-points", "2", "--out", tmp_path / "out")
+    assert status == 0, err
+    _, ic = _read_csv(tmp_path / "out" / "ic.csv")
+    assert np.isnan(ic[20:28, 1]).all() and np.isfinite(ic[:18, 1]).all()
+
+finite = st.floats(allow_nan=False, allow_infinity=False, min_value=-1e12, max_value=1e12)
+
+
+@given(low=finite, width=st.floats(min_value=1e-6, max_value=1e12))
+def test_param_ranges_round_trip(low, width):
+    high = low + width
+    if not low < high:  # width lost to rounding at this magnitude
+        return
+    bounds = _bounds([f"T={low!r}:{high!r}", f"K={low!r}:{high!r}"], FirstOrder())
+    assert bounds == {"T": (low, high), "K": (low, high)}
+    assert list(bounds) == ["T", "K"]  # the order given is the order of the results
+
+
+@given(text=st.text(max_size=12))
+def test_malformed_param_ranges_are_usage_errors(text):
+    try:
+        bounds = _bounds([f"K={text}", "T=0:1"], FirstOrder())
+    except UsageError as error:
+        assert "\n" not in str(error)
+    else:  # only well-formed increasing ranges get through
+        low, high = bounds["K"]
+        assert low < high
