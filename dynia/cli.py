@@ -269,7 +269,8 @@ def _analyse(settings):
     finally:
         if staging.exists():
             shutil.rmtree(staging)
-    print(f"dynia: wrote {out}", file=sys.stderr)
+    if sys.stderr.isatty():  # quiet in scripts and pipelines
+        print(f"dynia: wrote {out}", file=sys.stderr)
     return 0
 
 
