@@ -74,7 +74,7 @@ _CHUNK_VALUES = 250_000
 
 def moving_window(y, sims, params, bounds, *, n=10, percentage=10, bins=40, conf_level=90,
                   flavour="thesis", names=None, time=None, min_points=1, chunk_steps=None,
-                  workers=None, progress=False):
+                  workers=None, progress=False, weights=None):
     """Moving-window DYNIA of every parameter at once.
 
     Parameters
@@ -112,6 +112,13 @@ def moving_window(y, sims, params, bounds, *, n=10, percentage=10, bins=40, conf
         do not depend on it.
     progress : bool, default False
         Show a tqdm progress bar.
+    weights : array_like, shape (n_samples,), optional
+        Importance weights against the uniform prior (prior density over the
+        density the samples were drawn from), for samples not drawn
+        uniformly; see :mod:`dynia.adaptive`. The behavioural set of a window
+        is then the lowest costs holding ``percentage`` % of the weight, and
+        the limits are weighted quantiles ("thesis") or quantiles of
+        likelihood x weight ("weighted"). Not for ``"mcat"``.
 
     Returns
     -------
@@ -146,7 +153,7 @@ def moving_window(y, sims, params, bounds, *, n=10, percentage=10, bins=40, conf
     return _analyse(y, _ArrayErrors(y, sims), params, bounds, n=n, percentage=percentage, bins=bins,
                     conf_level=conf_level, flavour=flavour, names=names, time=time,
                     min_points=min_points, chunk_steps=chunk_steps, workers=workers,
-                    progress=progress)
+                    progress=progress, weights=weights)
 
 
 def default_chunk_steps(n_samples, halo):
@@ -160,7 +167,7 @@ def default_chunk_steps(n_samples, halo):
 
 def analyse_stream(y, sim_chunks, params, bounds, *, n, percentage, bins, conf_level, flavour,
                    names=None, time=None, min_points=1, chunk_steps=None, workers=None,
-                   progress=False, settings=None):
+                   progress=False, settings=None, weights=None):
     """Moving-window DYNIA fed by simulated output in consecutive time chunks.
 
     ``sim_chunks`` yields (n_samples, m) arrays in time order that together
@@ -171,11 +178,11 @@ def analyse_stream(y, sim_chunks, params, bounds, *, n, percentage, bins, conf_l
     return _analyse(y, _StreamedErrors(y, sim_chunks, params.shape[0]), params, bounds, n=n,
                     percentage=percentage, bins=bins, conf_level=conf_level, flavour=flavour,
                     names=names, time=time, min_points=min_points, chunk_steps=chunk_steps,
-                    workers=workers, progress=progress, settings=settings)
+                    workers=workers, progress=progress, settings=settings, weights=weights)
 
 
 def _analyse(y, errors, params, bounds, *, n, percentage, bins, conf_level, flavour, names,
-             time, min_points, chunk_steps, progress, workers=None, settings=None):
+             time, min_points, chunk_steps, progress, workers=None, settings=None, weights=None):
     n_samples, n_params = params.shape
     bounds = _checks.bounds_array(bounds, n_params)
     outside = (params < bounds[:, 0]) | (params > bounds[:, 1])
@@ -202,8 +209,15 @@ def _analyse(y, errors, params, bounds, *, n, percentage, bins, conf_level, flav
         workers = os.cpu_count() or 1
     workers = 1 if flavour == "mcat" else _checks.whole_number(workers, "workers", minimum=1)
 
-    flavour_impl = {"thesis": _ThesisFlavour, "weighted": _WeightedFlavour,
-                    "mcat": _McatFlavour}[flavour](params, bounds, percentage, bins, conf_level)
+    if weights is None:
+        flavour_impl = {"thesis": _ThesisFlavour, "weighted": _WeightedFlavour,
+                        "mcat": _McatFlavour}[flavour](params, bounds, percentage, bins, conf_level)
+    else:
+        if flavour == "mcat":
+            raise ValueError("weights are not supported by the mcat flavour, whose behavioural set "
+                             "is a block of the sorted population; use 'thesis' or 'weighted'")
+        flavour_impl = _ImportanceFlavour(params, bounds, percentage, bins, conf_level,
+                                          _importance_weights(weights, n_samples), flavour)
     n_steps = y.size
     ic = np.full((n_params, n_steps), np.nan)
     ci = np.full((n_params, n_steps, 2), np.nan)
@@ -447,6 +461,102 @@ class _WeightedFlavour(_ThesisFlavour):
 
     def _limits(self, values, weights):
         return cld.weighted_limits(values, weights, self.conf_level)
+
+
+def lowest_weighted(cost, prior_weights, fraction):
+    """Each row's lowest costs up to the first that brings their prior weight to ``fraction``.
+
+    Parameters
+    ----------
+    cost : ndarray (rows, n_samples)
+    prior_weights : ndarray (n_samples,), summing to 1
+    fraction : float in (0, 1]
+
+    Returns
+    -------
+    order : ndarray (rows, n_samples)
+        Each row's samples by ascending cost (stable).
+    behavioural : ndarray of bool (rows, n_samples)
+        In ``order``'s positions: True for the behavioural samples.
+    """
+    order = np.argsort(cost, axis=1, kind="stable")
+    reached = (np.cumsum(prior_weights[order], axis=1) < fraction).sum(axis=1, keepdims=True)
+    return order, np.arange(order.shape[1]) <= np.minimum(reached, order.shape[1] - 1)
+
+
+def window_costs(y, sims, n, start, stop):
+    """Thesis costs (window MAE squared) of every sample for the windows centred on [start, stop).
+
+    Returns (stop - start, n_samples); windows without a measured point are NaN.
+    """
+    errors = _ArrayErrors(_checks.as_1d_float(y, "y", allow_nan=True), np.asarray(sims, dtype=float))
+    mae, _ = _window_mean(*_window_inputs(errors, start, stop, n, errors.y.size), stop - start, n)
+    with np.errstate(over="ignore"):
+        return mae ** 2
+
+
+def _importance_weights(weights, n_samples):
+    weights = _checks.as_1d_float(weights, "weights")
+    if weights.size != n_samples:
+        raise ValueError(f"weights has {weights.size} values but there are {n_samples} samples")
+    if (weights <= 0).any():
+        raise ValueError(f"weights must be positive; weights[{int(np.argmax(weights <= 0))}] is not")
+    return weights / weights.sum()
+
+
+class _ImportanceFlavour:
+    """The thesis and weighted flavours for samples drawn from another density than the prior.
+
+    Each sample carries its importance weight (prior over proposal density),
+    normalised to sum to 1. The behavioural set of a window is its lowest
+    costs up to and including the first that brings their weight to
+    ``percentage`` %: the estimate of the prior's lowest-cost fraction. Its
+    values are weighted by importance for the limits ("thesis": weighted
+    quantiles at (100 -/+ conf_level)/200) and by importance x likelihood for
+    the gradient and, in "weighted", for the limits too. With equal weights
+    this is the uniform analysis up to the quantile convention.
+    """
+
+    def __init__(self, params, bounds, percentage, bins, conf_level, prior_weights, flavour):
+        self.prior_weights = prior_weights
+        self.fraction = percentage / 100
+        self.count = None  # the behavioural set's size varies from window to window
+        self.columns = np.ascontiguousarray(params.T)
+        self.bounds = bounds
+        self.bins = bins
+        self.n_bins = bins
+        self.conf_level = conf_level
+        self.likelihood_limits = flavour == "weighted"
+        edges = np.linspace(bounds[:, 0], bounds[:, 1], bins + 1, axis=1)
+        self.bin_centres = (edges[:, :-1] + edges[:, 1:]) / 2
+
+    def analyse(self, mae, usable):
+        with np.errstate(over="ignore"):
+            cost = mae ** 2
+        cost[~usable] = 0.0
+        order, behavioural = lowest_weighted(cost, self.prior_weights, self.fraction)
+        prior = np.where(behavioural, self.prior_weights[order], 0.0)
+        prior /= prior.sum(axis=1, keepdims=True)
+        likelihood = 1 - np.take_along_axis(cost, order, axis=1)
+        lowest = np.where(behavioural, likelihood, np.inf).min(axis=1, keepdims=True)
+        likelihood = np.where(behavioural, np.where(lowest < 0, likelihood - lowest, likelihood), 0.0)
+        mass = likelihood * prior
+        total = mass.sum(axis=1, keepdims=True)
+        mass = np.where(total > 0, mass / np.where(total > 0, total, 1), prior)  # all-equal costs >= 1
+        rows = order.shape[0]
+        ic = np.empty((self.columns.shape[0], rows))
+        ci = np.empty((self.columns.shape[0], rows, 2))
+        gradient = np.empty((self.columns.shape[0], self.n_bins, rows))
+        for p, column in enumerate(self.columns):
+            values = column[order]
+            low, high = self.bounds[p]
+            ci[p] = cld.weighted_limits(values, mass if self.likelihood_limits else prior, self.conf_level)
+            ic[p] = 1 - (ci[p, :, 1] - ci[p, :, 0]) / (high - low)
+            gradient[p] = cld.binned_mass(values, mass, low, high, self.bins).T
+        ic[:, ~usable] = np.nan
+        ci[:, ~usable] = np.nan
+        gradient[:, :, ~usable] = np.nan
+        return ic, ci, gradient
 
 
 class _McatFlavour:

@@ -4,6 +4,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from . import _checks
+from .adaptive import SCHEMES, adaptive_run
 from .analysis import analyse_stream, default_chunk_steps
 from .sampling import sample
 
@@ -35,8 +36,12 @@ def run(u, y, model, bounds, *, dt=1.0, n_samples=2000, sampler="uniform", n=10,
         Sample time.
     n_samples : int, default 2000
         Number of parameter sets (model evaluations).
-    sampler : {"uniform", "lhs", "sobol"}
-        How the box is sampled (see :mod:`dynia.sampling`).
+    sampler : {"uniform", "lhs", "sobol", "iis", "de"}
+        How the box is sampled: :mod:`dynia.sampling`, or the adaptive
+        schemes of :mod:`dynia.adaptive`, which concentrate the
+        ``n_samples`` evaluations in the windows' low-cost regions and
+        weight them back to the uniform prior (they hold every simulation
+        in memory, so keep n_samples x n_steps moderate).
     n, percentage, bins, conf_level, flavour
         As :func:`dynia.analysis.moving_window`.
     x0 : {"zero", "steady"}
@@ -70,6 +75,10 @@ def run(u, y, model, bounds, *, dt=1.0, n_samples=2000, sampler="uniform", n=10,
     if u.size != y.size:
         raise ValueError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
     names, box = _ordered_bounds(bounds, model)
+    if sampler in SCHEMES:
+        return adaptive_run(u, y, model, dict(zip(names, map(tuple, box))), scheme=sampler, dt=dt,
+                            n_samples=n_samples, n=n, percentage=percentage, bins=bins,
+                            conf_level=conf_level, flavour=flavour, x0=x0, rng=rng)
     n_samples = _checks.whole_number(n_samples, "n_samples", minimum=1)
     n = _checks.whole_number(n, "n", minimum=0)
     samples = sample(sampler, n_samples, box, np.random.default_rng(rng))

@@ -1,0 +1,257 @@
+"""Adaptive sampling for DYNIA: spend model evaluations where windows have low cost.
+
+Uniform Monte Carlo wastes most evaluations when the behavioural set is a
+small fraction of the prior (thesis 4.2, 5.2). The samplers here concentrate
+evaluations in the low-cost regions of the windows and correct for it, so
+that the target stays the thesis's uniform-prior definition: the behavioural
+set of a window is the lowest-cost ``percentage`` % of the prior.
+
+The correction
+--------------
+Every sample used for estimation is drawn from a known mixture: a uniform
+stage over the whole prior box, then uniform draws inside boxes placed around
+the low-cost regions found so far. The mixture density is
+
+    g(theta) = sum_c (n_c / N) * 1[theta in box_c] / volume(box_c),
+
+with the prior box among the components, so g > 0 wherever the prior is.
+Each sample gets the importance weight prior(theta) / g(theta) ("deterministic
+mixture" weights), and :func:`dynia.analysis.moving_window` with these
+weights estimates, per window, the prior's lowest-cost fraction and the
+weighted quantiles of each parameter inside it: the uniform analysis, with
+far more samples where it matters. Every estimation sample serves every
+window.
+
+Two schemes place the boxes:
+
+``"iis"`` (iterated importance sampling, global)
+    After the uniform stage, each block of consecutive windows gets a box
+    around the union of its current behavioural sets (enlarged by a margin);
+    the next stage draws uniformly inside the boxes; repeat.
+``"de"`` (differential evolution)
+    Each block of windows runs a short scipy differential evolution on the
+    block's mean cost, started from the previous block's final population;
+    the box is set around the population's best members. Its evaluations
+    only locate the regions (their density is unknown, so they cannot be
+    weighted); they count towards the budget. The estimation stage then
+    draws inside the boxes.
+
+``n_samples`` counts model evaluations for every sampler, so budgets compare.
+
+Status (measured on thesis example 1 at percentage 0.1, against uniform
+Monte Carlo with 400 000 samples; RMSE of IC over time and both
+parameters): uniform 10 000 gives 0.116, uniform 100 000 0.022, "iis"
+10 000 0.055-0.06 and "de" 10 000 0.17-0.19. "iis" matches or beats uniform
+100 000 before the final settling (steps 0-400) but not after it, where the
+behavioural region is L-shaped (small T with any K, or small K with any T)
+and one bounding box per block covers the whole prior. Boxes that follow
+the shape of a region (several per block, or one around each behavioural
+sample) are the next step; the "de" boxes are built from too few points.
+"""
+import math
+
+import numpy as np
+from scipy.optimize import differential_evolution
+
+from . import _checks
+from .analysis import lowest_weighted, moving_window, window_costs
+
+__all__ = ["BoxMixture", "adaptive_run", "SCHEMES"]
+
+SCHEMES = ("iis", "de")
+
+
+class BoxMixture:
+    """A mixture of uniform distributions on boxes, with an exact density.
+
+    Parameters
+    ----------
+    prior : array_like (n_params, 2)
+        The prior box, [low, high] per parameter: the first component.
+
+    Examples
+    --------
+    >>> mixture = BoxMixture([[0, 4], [0, 1]])
+    >>> mixture.add([[1, 2], [0, 1]], count=3)
+    >>> mixture.counts
+    [0, 3]
+    >>> float(mixture.density([[1.5, 0.5]])[0] * 1)  # all weight on the inner box, volume 1
+    1.0
+    """
+
+    def __init__(self, prior):
+        self.prior = _checks.bounds_array(prior, np.asarray(prior).shape[0])
+        self.boxes = [self.prior]
+        self.counts = [0]
+
+    def add(self, box, count):
+        """Add a box (clipped to the prior) that ``count`` samples will be drawn from."""
+        box = np.asarray(box, dtype=float).copy()
+        box[:, 0] = np.maximum(box[:, 0], self.prior[:, 0])
+        box[:, 1] = np.minimum(box[:, 1], self.prior[:, 1])
+        self.boxes.append(box)
+        self.counts.append(int(count))
+
+    def density(self, points):
+        """Mixture density at ``points`` (n, n_params), weighting each box by its count."""
+        points = np.atleast_2d(np.asarray(points, dtype=float))
+        total = sum(self.counts)
+        density = np.zeros(points.shape[0])
+        for box, count in zip(self.boxes, self.counts):
+            if count == 0:
+                continue
+            inside = ((points >= box[:, 0]) & (points <= box[:, 1])).all(axis=1)
+            density += inside * (count / total) / np.prod(box[:, 1] - box[:, 0])
+        return density
+
+    def importance_weights(self, points):
+        """Prior density over mixture density: uniform prior, so 1/volume(prior) / g."""
+        return (1 / np.prod(self.prior[:, 1] - self.prior[:, 0])) / self.density(points)
+
+
+def adaptive_run(u, y, model, bounds, *, scheme="iis", dt=1.0, n_samples=10_000, n=10, percentage=1,
+                 bins=40, conf_level=90, flavour="thesis", x0="zero", rng=None, blocks=None,
+                 initial_share=0.25, stages=3, margin=0.25, de_share=0.3):
+    """DYNIA with evaluations concentrated in the windows' low-cost regions.
+
+    Parameters
+    ----------
+    u, y, model, bounds, dt, n, percentage, bins, conf_level, flavour, x0, rng
+        As :func:`dynia.run`; ``bounds`` is a mapping name -> (low, high).
+    scheme : {"iis", "de"}
+        How the boxes are placed (see the module documentation).
+    n_samples : int
+        Model evaluations in all, for every scheme.
+    blocks : int, optional
+        Number of blocks of consecutive windows that get their own box
+        (default: one per 2n+1 steps, at most 50).
+    initial_share : float
+        Share of the evaluations drawn uniformly over the prior first.
+    stages : int
+        "iis": number of box stages after the uniform one.
+    margin : float
+        Boxes are enlarged by this share of their width on each side, so
+        that the edges of a region are not cut off (and are at least 2 % of
+        the prior's width).
+    de_share : float
+        "de": share of the evaluations given to the differential evolution.
+
+    Returns
+    -------
+    DyniaResult
+        With ``settings["weights"]`` holding the importance weights of
+        ``.samples`` and ``settings["n_evaluations"]`` the evaluations spent.
+    """
+    if scheme not in SCHEMES:
+        raise ValueError(f"scheme must be one of {SCHEMES}; got {scheme!r}")
+    u = _checks.as_1d_float(u, "u")
+    y = _checks.as_1d_float(y, "y", allow_nan=True)
+    names = list(bounds)
+    box = np.array([bounds[name] for name in names], dtype=float)
+    prior = _checks.bounds_array(box, len(names))
+    order = [names.index(name) for name in model.names]
+    rng = np.random.default_rng(rng)
+    n_samples = _checks.whole_number(n_samples, "n_samples", minimum=10)
+    fraction = _checks.percentage_value(percentage) / 100
+    n = _checks.whole_number(n, "n", minimum=0)
+    n_blocks = blocks or max(1, min(50, y.size // (2 * n + 1)))
+    edges = np.linspace(0, y.size, n_blocks + 1).astype(int)
+
+    def simulate(points):
+        return model.simulate(points[:, order], u, dt=dt, x0=x0)
+
+    mixture = BoxMixture(prior)
+    initial = max(10, int(n_samples * initial_share))
+    samples = _uniform_in(prior, initial, rng)
+    sims = simulate(samples)
+    mixture.counts[0] = initial
+    spent = initial
+    if scheme == "iis":
+        per_stage = (n_samples - spent) // max(stages, 1)
+        for _ in range(stages):
+            weights = mixture.importance_weights(samples)
+            regions = _behavioural_boxes(y, sims, samples, weights / weights.sum(), fraction, n, edges,
+                                         prior, margin)
+            new_samples = _draw_in_boxes(mixture, regions, per_stage, rng)
+            samples = np.r_[samples, new_samples]
+            sims = np.r_[sims, simulate(new_samples)]
+            spent += new_samples.shape[0]
+    else:
+        budget = int(n_samples * de_share)
+        regions, used = _evolved_boxes(y, simulate, prior, fraction, n, edges, budget, margin, rng)
+        spent += used
+        new_samples = _draw_in_boxes(mixture, regions, n_samples - spent, rng)
+        samples = np.r_[samples, new_samples]
+        sims = np.r_[sims, simulate(new_samples)]
+        spent += new_samples.shape[0]
+    weights = mixture.importance_weights(samples)
+    result = moving_window(y, sims, samples, prior, n=n, percentage=percentage, bins=bins,
+                           conf_level=conf_level, flavour=flavour, names=names,
+                           time=np.arange(y.size) * float(dt), weights=weights)
+    result.settings.update(sampler=scheme, n_evaluations=spent, weights=weights, dt=dt, x0=x0,
+                           model=type(model).__name__, n_blocks=n_blocks)
+    return result
+
+
+def _uniform_in(box, count, rng):
+    return rng.random((count, box.shape[0])) * (box[:, 1] - box[:, 0]) + box[:, 0]
+
+
+def _draw_in_boxes(mixture, regions, count, rng):
+    """``count`` draws shared equally among ``regions``, each registered with the mixture."""
+    shares = np.full(len(regions), count // len(regions))
+    shares[:count - shares.sum()] += 1
+    drawn = []
+    for region, share in zip(regions, shares):
+        mixture.add(region, share)
+        drawn.append(_uniform_in(mixture.boxes[-1], share, rng))
+    return np.concatenate(drawn)
+
+
+def _enlarged(low, high, prior, margin):
+    # A region seen through one or two samples has no width yet: give it a little of the prior's.
+    width = np.maximum(high - low, 0.02 * (prior[:, 1] - prior[:, 0]))
+    centre = (low + high) / 2
+    return np.stack([np.maximum(centre - width / 2 - margin * width, prior[:, 0]),
+                     np.minimum(centre + width / 2 + margin * width, prior[:, 1])], axis=1)
+
+
+def _behavioural_boxes(y, sims, samples, prior_weights, fraction, n, edges, prior, margin):
+    """One box per block of windows, around the union of the block's behavioural samples."""
+    boxes = []
+    for start, stop in zip(edges[:-1], edges[1:]):
+        cost = window_costs(y, sims, n, start, stop)
+        order, behavioural = lowest_weighted(np.nan_to_num(cost, nan=np.inf), prior_weights, fraction)
+        chosen = np.unique(order[behavioural])
+        boxes.append(_enlarged(samples[chosen].min(axis=0), samples[chosen].max(axis=0), prior, margin))
+    return boxes
+
+
+def _evolved_boxes(y, simulate, prior, fraction, n, edges, budget, margin, rng):
+    """Differential evolution per block, each started from the last block's population."""
+    n_params = prior.shape[0]
+    population_size = max(5 * n_params, 10)
+    per_block = max(budget // len(edges[:-1]), 2 * population_size)
+    generations = max(1, per_block // population_size - 1)
+    population = _uniform_in(prior, population_size, rng)
+    boxes, used = [], 0
+    for start, stop in zip(edges[:-1], edges[1:]):
+        evaluated = []
+
+        def block_cost(points):
+            sims = simulate(points.T)
+            cost = np.nanmean(window_costs(y, sims, n, start, stop), axis=0)
+            evaluated.append((points.T.copy(), cost))
+            return cost
+
+        found = differential_evolution(block_cost, prior, init=population, maxiter=generations,
+                                       popsize=1, polish=False, vectorized=True, updating="deferred",
+                                       tol=0, rng=rng)
+        points = np.concatenate([points for points, _ in evaluated])
+        costs = np.concatenate([cost for _, cost in evaluated])
+        used += points.shape[0]
+        # The best few evaluated points outline the block's low-cost region.
+        best = points[np.argsort(costs)[:max(n_params + 1, math.ceil(0.2 * population_size))]]
+        boxes.append(_enlarged(best.min(axis=0), best.max(axis=0), prior, margin))
+        population = found.population
+    return boxes, used
