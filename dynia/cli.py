@@ -24,6 +24,7 @@ from . import __version__, models
 from .analysis import FLAVOURS
 from .data import DataError, load_csv
 from .pipeline import run
+from .refine import narrowed_bounds
 from .sampling import SAMPLERS
 
 __all__ = ["main"]
@@ -110,6 +111,14 @@ def _parser():
     method.add_argument("--flavour", choices=FLAVOURS, help="thesis (default), mcat or weighted")
     method.add_argument("--min-points", type=int, metavar="N",
                         help="windows with fewer measured output points report a missing IC (default 1)")
+    method.add_argument("--second-run", action="store_true",
+                        help="narrow the range of every parameter whose highest IC reaches "
+                             "--narrow-threshold to its band there, and analyse again (thesis 3.1): "
+                             "results in DIR/second_run/")
+    method.add_argument("--narrow-threshold", type=float, metavar="IC",
+                        help="highest IC from which a parameter counts as identified (default 0.75)")
+    method.add_argument("--narrow-margin", type=float, metavar="M",
+                        help="the band is widened by M times its width on each side (default 0.5)")
     method.add_argument("--seed", type=int, metavar="S",
                         help="seed of every random draw (default: drawn at random and recorded)")
     output = analyse.add_argument_group("output")
@@ -121,7 +130,8 @@ def _parser():
 
 DEFAULTS = dict(samples=2000, sampler="uniform", n=10, percentage=10.0, bins=40, conf_level=90.0,
                 flavour="thesis", x0="zero", offset="none", input_offset="none", min_points=1, tag_column="tag",
-                value_column="value", overwrite=False, long=False)
+                value_column="value", overwrite=False, long=False, second_run=False,
+                narrow_threshold=0.75, narrow_margin=0.5)
 
 
 def main(argv=None):
@@ -169,6 +179,10 @@ def _settings(args):
             raise UsageError(f"--{key.replace('_', '-')} must be a whole number >= {minimum}; got {settings[key]!r}")
     if not 0 < settings["conf_level"] < 100:
         raise UsageError(f"--conf-level must lie strictly between 0 and 100; got {settings['conf_level']}")
+    if not 0 < settings["narrow_threshold"] < 1:
+        raise UsageError(f"--narrow-threshold must lie strictly between 0 and 1; got {settings['narrow_threshold']}")
+    if not settings["narrow_margin"] >= 0:
+        raise UsageError(f"--narrow-margin must be >= 0; got {settings['narrow_margin']}")
     if not 0 < settings["percentage"] <= 100:
         raise UsageError(f"--percentage must lie in (0, 100]; got {settings['percentage']}")
     behavioural = math.floor(settings["samples"] * settings["percentage"] / 100)
@@ -255,16 +269,26 @@ def _analyse(settings):
     offset = _offset_value(settings["offset"], data.y, settings["data"], "--offset")
     input_offset = _offset_value(settings["input_offset"], data.u, settings["data"], "--input-offset")
     model = MODELS[settings["model"]]()
-    result = run(data.u - input_offset, data.y - offset, model, settings["bounds"], dt=data.dt,
-                 n_samples=settings["samples"], sampler=settings["sampler"], n=settings["n"],
-                 percentage=settings["percentage"], bins=settings["bins"],
-                 conf_level=settings["conf_level"], flavour=settings["flavour"], x0=settings["x0"],
-                 rng=settings["seed"], progress=sys.stderr.isatty(), min_points=settings["min_points"])
+
+    def analyse(bounds):
+        return run(data.u - input_offset, data.y - offset, model, bounds, dt=data.dt,
+                   n_samples=settings["samples"], sampler=settings["sampler"], n=settings["n"],
+                   percentage=settings["percentage"], bins=settings["bins"],
+                   conf_level=settings["conf_level"], flavour=settings["flavour"], x0=settings["x0"],
+                   rng=settings["seed"], progress=sys.stderr.isatty(), min_points=settings["min_points"])
+
+    result = analyse(settings["bounds"])
     out = Path(settings["out"])
     out.parent.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
     try:
         _write_results(staging, result, data, settings, offset, input_offset)
+        if settings["second_run"]:
+            bounds, narrowed = narrowed_bounds(result, settings["bounds"], threshold=settings["narrow_threshold"],
+                                               margin=settings["narrow_margin"])
+            (staging / "second_run").mkdir()
+            _write_results(staging / "second_run", analyse(bounds), data, dict(settings, bounds=bounds),
+                           offset, input_offset, narrowed=narrowed)
         _move_into_place(staging, out)
     finally:
         if staging.exists():
@@ -303,7 +327,7 @@ def _file_times(data, seconds):
     return [data.start + float(value) for value in seconds]
 
 
-def _write_results(directory, result, data, settings, offset, input_offset):
+def _write_results(directory, result, data, settings, offset, input_offset, narrowed=None):
     names = list(result.names)
     times = _file_times(data, data.time)
     _write_csv(directory / "ic.csv", ["time"] + names, result.ic.T, times)
@@ -322,6 +346,8 @@ def _write_results(directory, result, data, settings, offset, input_offset):
     recorded["input_offset_value"] = input_offset
     recorded["n_dropped"] = result.settings["n_dropped"]
     recorded["n_behavioural"] = result.settings["n_behavioural"]
+    if narrowed is not None:
+        recorded["narrowed"] = narrowed
     summary = dict(parameters=parameters, settings=recorded, version=__version__,
                    data=dict(n_steps=int(data.time.size), dt=data.dt, start=_file_times(data, [0.0])[0],
                              notes=list(data.notes)))

@@ -209,3 +209,23 @@ def test_malformed_param_ranges_are_usage_errors(text):
     else:  # only well-formed increasing ranges get through
         low, high = bounds["K"]
         assert low < high
+
+
+def test_second_run_writes_its_own_results(tmp_path, capsys):
+    import dynia
+    u = dynia.synthetic.example_firstorder_input()
+    y = FirstOrder().simulate([[2.0, 3.0]], u)[0] + np.random.default_rng(4).normal(0, 0.5, u.size)
+    data = _write(tmp_path / "example1.csv",
+                  "time,u,y\n" + "".join(f"{k},{float(a)!r},{float(b)!r}\n" for k, (a, b) in enumerate(zip(u, y))))
+    out = tmp_path / "twice"
+    status, err = _analyse(capsys, data, "--time", "time", "--input", "u", "--output", "y", "--model",
+                           "first-order", "--param", "K=0:7", "--param", "T=0:7", "--seed", "1",
+                           "--second-run", "--out", out)
+    assert status == 0, err
+    first = json.loads((out / "summary.json").read_text())
+    second = json.loads((out / "second_run" / "summary.json").read_text())
+    assert second["settings"]["narrowed"] == ["K"]  # T's high IC after the last step is noise-fitting
+    low, high = second["settings"]["bounds"]["K"]
+    assert 0 < low < 2 < high < 7 and second["settings"]["bounds"]["T"] == [0.0, 7.0]
+    assert first["settings"]["bounds"] == {"K": [0.0, 7.0], "T": [0.0, 7.0]}
+    assert (out / "second_run" / "ic.csv").exists() and (out / "second_run" / "identifiability_T.png").exists()

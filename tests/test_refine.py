@@ -1,0 +1,47 @@
+"""The automatic second run of the thesis (3.1.1-3.1.3)."""
+import numpy as np
+import pytest
+
+import dynia
+from dynia.models import FirstOrder
+from dynia.refine import narrowed_bounds, second_run
+
+
+@pytest.fixture(scope="module")
+def example1_twice():
+    u = dynia.synthetic.example_firstorder_input()
+    y = FirstOrder().simulate([[2.0, 3.0]], u)[0] + np.random.default_rng(4).normal(0, 0.5, u.size)
+    return second_run(u, y, FirstOrder(), {"K": (0, 7), "T": (0, 7)}, n_samples=2000, n=10, rng=1)
+
+
+def test_the_gain_is_narrowed_around_its_band_and_the_time_constant_sharpens(example1_twice):
+    first, second, narrowed = example1_twice
+    # T's highest IC (0.92 at step 424, band near 0) comes from windows that
+    # fit only noise; their bands disagree, so T keeps its range.
+    assert first.ic[1].max() > 0.75
+    assert narrowed == ["K"]
+    low, high = second.settings["bounds"]["K"]
+    informative = first.ic[0] >= 0.75
+    lower, upper = first.ci[0, informative, 0].max(), first.ci[0, informative, 1].min()
+    assert low == pytest.approx(max(lower - 0.5 * (upper - lower), 0))
+    assert high == pytest.approx(min(upper + 0.5 * (upper - lower), 7))
+    assert low < 2 < high and high - low < 1.5
+    assert second.settings["bounds"]["T"] == (0.0, 7.0)
+    dips = np.r_[139:175, 329:345]  # the thesis's spikes of T (Figures 3.5 and 3.7)
+    assert second.ic[1, dips].mean() > first.ic[1, dips].mean() + 0.2
+    assert second.settings["narrowed"] == ["K"]
+
+
+def test_nothing_identified_nothing_narrowed(example1_twice):
+    first = example1_twice[0]
+    new, narrowed = narrowed_bounds(first, {"K": (0, 7), "T": (0, 7)}, threshold=0.99)
+    assert narrowed == [] and new == {"K": (0.0, 7.0), "T": (0.0, 7.0)}
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(threshold=1.5), "threshold must lie strictly between"),
+    (dict(margin=-1), "margin must be >= 0"),
+])
+def test_bad_narrowing_options(example1_twice, kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        narrowed_bounds(example1_twice[0], {"K": (0, 7), "T": (0, 7)}, **kwargs)
