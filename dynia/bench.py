@@ -9,6 +9,9 @@ process so that its peak resident memory (``ru_maxrss``) is its own.
 2. The engine on 20 000 samples x 2 000 steps (simulations held in memory).
 3. :func:`dynia.run` (simulate and analyse, streamed) on 20 000 x 2 000 and on
    10^5 samples x 10^4 steps, which never holds the 8 GB simulation matrix.
+4. Samplers at percentage 0.1 on example 1: IC error against a uniform
+   400 000-sample reference for uniform (10^4, 10^5) and the adaptive
+   schemes of :mod:`dynia.adaptive` (10^4).
 """
 import argparse
 import json
@@ -76,11 +79,27 @@ def _case_run(n_samples, n_steps):
     return dict(seconds=seconds, sample_steps_per_s=n_samples * n_steps / seconds)
 
 
+def _case_sampling():
+    from .pipeline import run
+    u, y, _, model = _example1(1, 500)
+    bounds = {"K": (0, 7), "T": (0, 7)}
+    reference = run(u, y, model, bounds, n_samples=400_000, n=10, percentage=0.1, rng=1)
+    result = {}
+    for sampler, budget in (("uniform", 10_000), ("uniform", 100_000), ("iis", 10_000), ("de", 10_000)):
+        start = time.perf_counter()
+        estimate = run(u, y, model, bounds, sampler=sampler, n_samples=budget, n=10, percentage=0.1, rng=2)
+        seconds = time.perf_counter() - start
+        error = float(np.sqrt(np.nanmean((estimate.ic - reference.ic) ** 2)))
+        result[f"{sampler} {budget}"] = dict(rmse=error, seconds=seconds)
+    return result
+
+
 CASES = {
     "port-vs-engine": _case_port_vs_engine,
     "engine-20000x2000": lambda: _case_engine(20_000, 2_000),
     "run-20000x2000": lambda: _case_run(20_000, 2_000),
     "run-100000x10000": lambda: _case_run(100_000, 10_000),
+    "sampling-example1": _case_sampling,
 }
 
 
@@ -113,6 +132,11 @@ def _describe(name, r):
                 f"engine {r['engine_s'] * 1e3:.1f} ms -> {r['ratio']:.0f}x (target >= 300x); "
                 f"one thread {r['engine_one_thread_s'] * 1e3:.1f} ms -> {r['ratio_one_thread']:.0f}x; "
                 f"peak RSS {r['peak_rss_mb']:.0f} MB")
+    if name == "sampling-example1":
+        runs = ", ".join(f"{key}: RMSE {value['rmse']:.3f} in {value['seconds']:.1f} s"
+                         for key, value in r.items() if key != "peak_rss_mb")
+        return (f"example 1 at percentage 0.1, IC error against uniform 400 000 by sampler and "
+                f"evaluations: {runs} (goal: an adaptive sampler at 10 000 matching uniform at 100 000)")
     return (f"{name}: {r['seconds']:.2f} s, {r['sample_steps_per_s']:.3g} sample-steps/s, "
             f"peak RSS {r['peak_rss_mb']:.0f} MB")
 
