@@ -100,3 +100,9 @@ def test_weights_are_checked():
         dynia.moving_window(y, sims, params, [[0, 1]], n=1, weights=np.r_[np.ones(9), 0])
     with pytest.raises(ValueError, match="not supported by the mcat flavour"):
         dynia.moving_window(y, sims, params, [[0, 1]], n=1, weights=np.ones(10), flavour="mcat")
+
+
+def test_de_says_how_many_evaluations_it_needs(example1):
+    u, y = example1
+    with pytest.raises(ValueError, match=r"needs at least \d+ evaluations for 23 blocks"):
+        dynia.run(u, y, FirstOrder(), {"K": (0, 7), "T": (0, 7)}, sampler="de", n_samples=500, n=10, percentage=1)
