@@ -413,6 +413,25 @@ def _selected_columns(mask, count):
     return np.nonzero(mask)[1].reshape(mask.shape[0], count)
 
 
+def _chunk_arrays(n_params, n_bins, rows):
+    """Uninitialised ic (n_params, rows), ci (n_params, rows, 2), gradient (n_params, n_bins, rows)."""
+    return np.empty((n_params, rows)), np.empty((n_params, rows, 2)), np.empty((n_params, n_bins, rows))
+
+
+def _blank_unusable(ic, ci, gradient, usable):
+    """NaN wherever a window had too few measured points."""
+    ic[:, ~usable] = np.nan
+    ci[:, ~usable] = np.nan
+    gradient[:, :, ~usable] = np.nan
+    return ic, ci, gradient
+
+
+def _bin_centres(bounds, bins):
+    """Centres of ``bins`` equal bins of each parameter's range, (n_params, bins)."""
+    edges = np.linspace(bounds[:, 0], bounds[:, 1], bins + 1, axis=1)
+    return (edges[:, :-1] + edges[:, 1:]) / 2
+
+
 class _ThesisFlavour:
     """Cost MAE^2, lowest-cost behavioural set, likelihood 1-cost, unweighted limits."""
 
@@ -428,8 +447,7 @@ class _ThesisFlavour:
         self.bins = bins
         self.n_bins = bins
         self.conf_level = conf_level
-        edges = np.linspace(bounds[:, 0], bounds[:, 1], bins + 1, axis=1)
-        self.bin_centres = (edges[:, :-1] + edges[:, 1:]) / 2
+        self.bin_centres = _bin_centres(bounds, bins)
 
     def analyse(self, mae, usable):
         with np.errstate(over="ignore"):  # an error beyond 1e154 costs inf: still the worst
@@ -438,19 +456,14 @@ class _ThesisFlavour:
         selected = lowest_stable(cost, self.count)
         weights = cld.likelihood(np.take_along_axis(cost, selected, axis=1))
         rows = selected.shape[0]
-        ic = np.empty((self.columns.shape[0], rows))
-        ci = np.empty((self.columns.shape[0], rows, 2))
-        gradient = np.empty((self.columns.shape[0], self.n_bins, rows))
+        ic, ci, gradient = _chunk_arrays(self.columns.shape[0], self.n_bins, rows)
         for p, column in enumerate(self.columns):
             values = column[selected]
             low, high = self.bounds[p]
             ci[p] = self._limits(values, weights)
             ic[p] = 1 - (ci[p, :, 1] - ci[p, :, 0]) / (high - low)
             gradient[p] = cld.binned_mass(values, weights, low, high, self.bins).T
-        ic[:, ~usable] = np.nan
-        ci[:, ~usable] = np.nan
-        gradient[:, :, ~usable] = np.nan
-        return ic, ci, gradient
+        return _blank_unusable(ic, ci, gradient, usable)
 
     def _limits(self, values, weights):
         return cld.limits(values, self.conf_level)
@@ -527,8 +540,7 @@ class _ImportanceFlavour:
         self.n_bins = bins
         self.conf_level = conf_level
         self.likelihood_limits = flavour == "weighted"
-        edges = np.linspace(bounds[:, 0], bounds[:, 1], bins + 1, axis=1)
-        self.bin_centres = (edges[:, :-1] + edges[:, 1:]) / 2
+        self.bin_centres = _bin_centres(bounds, bins)
 
     def analyse(self, mae, usable):
         with np.errstate(over="ignore"):
@@ -544,19 +556,14 @@ class _ImportanceFlavour:
         total = mass.sum(axis=1, keepdims=True)
         mass = np.where(total > 0, mass / np.where(total > 0, total, 1), prior)  # all-equal costs >= 1
         rows = order.shape[0]
-        ic = np.empty((self.columns.shape[0], rows))
-        ci = np.empty((self.columns.shape[0], rows, 2))
-        gradient = np.empty((self.columns.shape[0], self.n_bins, rows))
+        ic, ci, gradient = _chunk_arrays(self.columns.shape[0], self.n_bins, rows)
         for p, column in enumerate(self.columns):
             values = column[order]
             low, high = self.bounds[p]
             ci[p] = cld.weighted_limits(values, mass if self.likelihood_limits else prior, self.conf_level)
             ic[p] = 1 - (ci[p, :, 1] - ci[p, :, 0]) / (high - low)
             gradient[p] = cld.binned_mass(values, mass, low, high, self.bins).T
-        ic[:, ~usable] = np.nan
-        ci[:, ~usable] = np.nan
-        gradient[:, :, ~usable] = np.nan
-        return ic, ci, gradient
+        return _blank_unusable(ic, ci, gradient, usable)
 
 
 class _McatFlavour:
@@ -598,18 +605,13 @@ class _McatFlavour:
         selected = _selected_columns(stable_rank_mask(likelihood, *self.block), self.count)
         rows = selected.shape[0]
         n_params = self.columns.shape[0]
-        ic = np.empty((n_params, rows))
-        ci = np.empty((n_params, rows, 2))
-        gradient = np.empty((n_params, self.n_bins, rows))
+        ic, ci, gradient = _chunk_arrays(n_params, self.n_bins, rows)
         for p, column in enumerate(self.columns):
             ordered = np.sort(column[selected], axis=1)
             ci[p] = ordered[:, self.limit_index]
             ic[p] = 1 - (ci[p, :, 1] - ci[p, :, 0]) / self.span[p]
             gradient[p] = self._cdf_slope(_nudge_ties(ordered), p).T
-        ic[:, ~usable] = np.nan
-        ci[:, ~usable] = np.nan
-        gradient[:, :, ~usable] = np.nan
-        return ic, ci, gradient
+        return _blank_unusable(ic, ci, gradient, usable)
 
     def _likelihood(self, mae, usable):
         """``1 - mae/max(mae)`` (or ``1 - mae`` once a window had max 0), lifted above 0."""
