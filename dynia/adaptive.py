@@ -113,12 +113,12 @@ class BoxMixture:
 
 def adaptive_run(u, y, model, bounds, *, scheme="iis", dt=1.0, n_samples=10_000, n=10, percentage=1,
                  bins=40, conf_level=90, flavour="thesis", x0="zero", rng=None, blocks=None,
-                 initial_share=0.25, stages=3, margin=0.25, de_share=0.3):
+                 initial_share=0.25, stages=3, margin=0.25, de_share=0.3, window="centred"):
     """DYNIA with evaluations concentrated in the windows' low-cost regions.
 
     Parameters
     ----------
-    u, y, model, bounds, dt, n, percentage, bins, conf_level, flavour, x0, rng
+    u, y, model, bounds, dt, n, percentage, bins, conf_level, flavour, x0, rng, window
         As :func:`dynia.run`; ``bounds`` is a mapping name -> (low, high).
     scheme : {"iis", "de"}
         How the boxes are placed (see the module documentation).
@@ -173,7 +173,7 @@ def adaptive_run(u, y, model, bounds, *, scheme="iis", dt=1.0, n_samples=10_000,
         for _ in range(stages):
             weights = mixture.importance_weights(samples)
             regions = _behavioural_boxes(y, sims, samples, weights / weights.sum(), fraction, n, edges,
-                                         prior, margin)
+                                         prior, margin, window)
             new_samples = _draw_in_boxes(mixture, regions, per_stage, rng)
             samples = np.r_[samples, new_samples]
             sims = np.r_[sims, simulate(new_samples)]
@@ -187,7 +187,7 @@ def adaptive_run(u, y, model, bounds, *, scheme="iis", dt=1.0, n_samples=10_000,
                 f"the 'de' scheme needs at least {needed} evaluations for {n_blocks} blocks of windows "
                 f"(a population of {population_size} evolved twice per block); got n_samples={n_samples}: "
                 "raise n_samples or lower blocks")
-        regions, used = _evolved_boxes(y, simulate, prior, fraction, n, edges, budget, margin, rng)
+        regions, used = _evolved_boxes(y, simulate, prior, fraction, n, edges, budget, margin, rng, window)
         spent += used
         new_samples = _draw_in_boxes(mixture, regions, n_samples - spent, rng)
         samples = np.r_[samples, new_samples]
@@ -196,7 +196,7 @@ def adaptive_run(u, y, model, bounds, *, scheme="iis", dt=1.0, n_samples=10_000,
     weights = mixture.importance_weights(samples)
     result = moving_window(y, sims, samples, prior, n=n, percentage=percentage, bins=bins,
                            conf_level=conf_level, flavour=flavour, names=names,
-                           time=np.arange(y.size) * float(dt), weights=weights)
+                           time=np.arange(y.size) * float(dt), weights=weights, window=window)
     result.settings.update(sampler=scheme, n_evaluations=spent, weights=weights, dt=dt, x0=x0,
                            model=type(model).__name__, n_blocks=n_blocks)
     return result
@@ -225,11 +225,11 @@ def _enlarged(low, high, prior, margin):
                      np.minimum(centre + width / 2 + margin * width, prior[:, 1])], axis=1)
 
 
-def _behavioural_boxes(y, sims, samples, prior_weights, fraction, n, edges, prior, margin):
+def _behavioural_boxes(y, sims, samples, prior_weights, fraction, n, edges, prior, margin, window):
     """One box per block of windows, around the union of the block's behavioural samples."""
     boxes = []
     for start, stop in zip(edges[:-1], edges[1:]):
-        cost = window_costs(y, sims, n, start, stop)
+        cost = window_costs(y, sims, n, start, stop, window)
         order, behavioural = lowest_weighted(np.nan_to_num(cost, nan=np.inf), prior_weights, fraction)
         chosen = np.unique(order[behavioural])
         boxes.append(_enlarged(samples[chosen].min(axis=0), samples[chosen].max(axis=0), prior, margin))
@@ -240,7 +240,7 @@ def _population_size(n_params):
     return max(5 * n_params, 10)
 
 
-def _evolved_boxes(y, simulate, prior, fraction, n, edges, budget, margin, rng):
+def _evolved_boxes(y, simulate, prior, fraction, n, edges, budget, margin, rng, window):
     """Differential evolution per block, each started from the last block's population."""
     n_params = prior.shape[0]
     population_size = _population_size(n_params)
@@ -253,7 +253,7 @@ def _evolved_boxes(y, simulate, prior, fraction, n, edges, budget, margin, rng):
 
         def block_cost(points):
             sims = simulate(points.T)
-            cost = np.nanmean(window_costs(y, sims, n, start, stop), axis=0)
+            cost = np.nanmean(window_costs(y, sims, n, start, stop, window), axis=0)
             evaluated.append((points.T.copy(), cost))
             return cost
 

@@ -12,7 +12,10 @@ Shape convention (used by every function of the package)
 How it works
 ------------
 The window at step ``t`` holds steps ``t-n .. t+n`` clipped to the record (so
-the first and last ``n`` windows are truncated, as in the thesis) and the
+the first and last ``n`` windows are truncated, as in the thesis); with
+``window="trailing"`` it holds ``t-2n .. t`` instead, the same 2n+1 steps
+ending at ``t`` (MCAT's "right boundary" option), so that a window's result
+is known as soon as step ``t`` is logged (see :mod:`dynia.online`). The
 cost of a parameter set is computed from the mean absolute error over the
 points present. A window's behavioural set depends on the costs only, not on
 the parameter analysed, so it is selected once per window and every
@@ -62,9 +65,10 @@ import numpy as np
 from . import _checks, cld
 from .result import DyniaResult
 
-__all__ = ["moving_window", "FLAVOURS"]
+__all__ = ["moving_window", "FLAVOURS", "WINDOWS"]
 
 FLAVOURS = ("thesis", "mcat", "weighted")
+WINDOWS = ("centred", "trailing")
 
 # Values per working array of one time chunk: 2.5e5 float64 = 2 MB, which keeps
 # the dozen passes over a chunk in cache for a few thousand samples; for many
@@ -74,7 +78,7 @@ _CHUNK_VALUES = 250_000
 
 def moving_window(y, sims, params, bounds, *, n=10, percentage=10, bins=40, conf_level=90,
                   flavour="thesis", names=None, time=None, min_points=1, chunk_steps=None,
-                  workers=None, progress=False, weights=None):
+                  workers=None, progress=False, weights=None, window="centred"):
     """Moving-window DYNIA of every parameter at once.
 
     Parameters
@@ -119,6 +123,11 @@ def moving_window(y, sims, params, bounds, *, n=10, percentage=10, bins=40, conf
         is then the lowest costs holding ``percentage`` % of the weight, and
         the limits are weighted quantiles ("thesis") or quantiles of
         likelihood x weight ("weighted"). Not for ``"mcat"``.
+    window : {"centred", "trailing"}, default "centred"
+        Where the 2n+1 steps of the window at step t lie: ``t-n .. t+n``
+        (the thesis) or ``t-2n .. t`` (ending at t, for online use). The
+        trailing result at t equals the centred one at t-n wherever the
+        centred window is not truncated by the end of the record.
 
     Returns
     -------
@@ -153,7 +162,7 @@ def moving_window(y, sims, params, bounds, *, n=10, percentage=10, bins=40, conf
     return _analyse(y, _ArrayErrors(y, sims), params, bounds, n=n, percentage=percentage, bins=bins,
                     conf_level=conf_level, flavour=flavour, names=names, time=time,
                     min_points=min_points, chunk_steps=chunk_steps, workers=workers,
-                    progress=progress, weights=weights)
+                    progress=progress, weights=weights, window=window)
 
 
 def default_chunk_steps(n_samples, halo):
@@ -167,7 +176,7 @@ def default_chunk_steps(n_samples, halo):
 
 def analyse_stream(y, sim_chunks, params, bounds, *, n, percentage, bins, conf_level, flavour,
                    names=None, time=None, min_points=1, chunk_steps=None, workers=None,
-                   progress=False, settings=None, weights=None):
+                   progress=False, settings=None, weights=None, window="centred"):
     """Moving-window DYNIA fed by simulated output in consecutive time chunks.
 
     ``sim_chunks`` yields (n_samples, m) arrays in time order that together
@@ -178,11 +187,20 @@ def analyse_stream(y, sim_chunks, params, bounds, *, n, percentage, bins, conf_l
     return _analyse(y, _StreamedErrors(y, sim_chunks, params.shape[0]), params, bounds, n=n,
                     percentage=percentage, bins=bins, conf_level=conf_level, flavour=flavour,
                     names=names, time=time, min_points=min_points, chunk_steps=chunk_steps,
-                    workers=workers, progress=progress, settings=settings, weights=weights)
+                    workers=workers, progress=progress, settings=settings, weights=weights,
+                    window=window)
+
+
+def window_halos(n, window):
+    """Steps (before, after) the window at t reaches: (n, n) centred, (2n, 0) trailing."""
+    if window not in WINDOWS:
+        raise ValueError(f"window must be one of {WINDOWS}; got {window!r}")
+    return (n, n) if window == "centred" else (2 * n, 0)
 
 
 def _analyse(y, errors, params, bounds, *, n, percentage, bins, conf_level, flavour, names,
-             time, min_points, chunk_steps, progress, workers=None, settings=None, weights=None):
+             time, min_points, chunk_steps, progress, workers=None, settings=None, weights=None,
+             window="centred"):
     n_samples, n_params = params.shape
     bounds = _checks.bounds_array(bounds, n_params)
     outside = (params < bounds[:, 0]) | (params > bounds[:, 1])
@@ -192,6 +210,7 @@ def _analyse(y, errors, params, bounds, *, n, percentage, bins, conf_level, flav
             f"params row {row}, column {col} = {params[row, col]} lies outside its bounds "
             f"[{bounds[col, 0]}, {bounds[col, 1]}]; samples must come from the ranges analysed")
     n = _checks.whole_number(n, "n", minimum=0)
+    before, after = window_halos(n, window)
     bins = _checks.whole_number(bins, "bins", minimum=1)
     min_points = _checks.whole_number(min_points, "min_points", minimum=1)
     conf_level = _checks.open_interval(conf_level, "conf_level", 0, 100)
@@ -224,7 +243,7 @@ def _analyse(y, errors, params, bounds, *, n, percentage, bins, conf_level, flav
     gradient = np.full((n_params, flavour_impl.n_bins, n_steps), np.nan)
 
     def analyse_chunk(start, stop, window_errors, measured):
-        mae, present = _window_mean(window_errors, measured, stop - start, n)
+        mae, present = _window_mean(window_errors, measured, stop - start, before + after + 1)
         return start, stop, flavour_impl.analyse(mae, present >= min_points)
 
     def store(finished):
@@ -245,13 +264,13 @@ def _analyse(y, errors, params, bounds, *, n, percentage, bins, conf_level, flav
         for start in starts:
             stop = min(start + chunk_steps, n_steps)
             pending.append(pool.submit(analyse_chunk, start, stop,
-                                       *_window_inputs(errors, start, stop, n, n_steps)))
+                                       *_window_inputs(errors, start, stop, before, after, n_steps)))
             while len(pending) > workers:  # bounds the chunks held in memory
                 store(pending.popleft())
         while pending:
             store(pending.popleft())
 
-    recorded = dict(n=n, percentage=percentage, bins=bins, conf_level=conf_level,
+    recorded = dict(n=n, window=window, percentage=percentage, bins=bins, conf_level=conf_level,
                     flavour=flavour, min_points=min_points, n_samples=n_samples,
                     n_behavioural=flavour_impl.count)
     recorded.update(settings or {})
@@ -336,29 +355,32 @@ def _absolute_errors(measured, sims, at):
     return errors
 
 
-def _window_inputs(errors, start, stop, n, n_steps):
-    """Errors and measured-point flags for the windows centred on [start, stop).
+def _window_inputs(errors, start, stop, before, after, n_steps):
+    """Errors and measured-point flags for the windows at steps [start, stop).
 
-    Returns (n_samples, m + 2n) errors and (m + 2n,) flags, m = stop - start,
-    where column j belongs to time start - n + j; times outside the record
-    are zero columns, so every window has 2n+1 slots (adding 0.0 changes no sum).
+    The window at t reaches ``before`` steps back and ``after`` ahead (see
+    :func:`window_halos`). Returns (n_samples, m + before + after) errors
+    and (m + before + after,) flags, m = stop - start, where column j
+    belongs to time start - before + j; times outside the record are zero
+    columns, so every window has before+after+1 slots (adding 0.0 changes
+    no sum).
     """
-    lo, hi = max(start - n, 0), min(stop + n, n_steps)
+    lo, hi = max(start - before, 0), min(stop + after, n_steps)
     window_errors = errors.columns(lo, hi)
     measured = (~np.isnan(errors.y[lo:hi])).astype(float)
-    m = stop - start
-    offset = lo - (start - n)
-    if offset or hi - lo < m + 2 * n:
-        padded = np.zeros((window_errors.shape[0], m + 2 * n))
+    width = stop - start + before + after
+    offset = lo - (start - before)
+    if offset or hi - lo < width:
+        padded = np.zeros((window_errors.shape[0], width))
         padded[:, offset:offset + (hi - lo)] = window_errors
-        counts = np.zeros(m + 2 * n)
+        counts = np.zeros(width)
         counts[offset:offset + (hi - lo)] = measured
         return padded, counts
     return window_errors, measured
 
 
-def _window_mean(window_errors, measured, m, n):
-    """Mean absolute error of every sample over each of the m windows.
+def _window_mean(window_errors, measured, m, slots):
+    """Mean absolute error of every sample over each of the m windows of ``slots`` steps.
 
     Returns ``mae`` (m, n_samples) and the number of measured points per
     window (m,). Sums run left to right over each window, the order of
@@ -367,7 +389,7 @@ def _window_mean(window_errors, measured, m, n):
     """
     total = window_errors[:, 0:m].copy()
     present = measured[0:m].copy()
-    for shift in range(1, 2 * n + 1):
+    for shift in range(1, slots):
         total += window_errors[:, shift:shift + m]
         present += measured[shift:shift + m]
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -497,13 +519,15 @@ def lowest_weighted(cost, prior_weights, fraction):
     return order, np.arange(order.shape[1]) <= np.minimum(reached, order.shape[1] - 1)
 
 
-def window_costs(y, sims, n, start, stop):
-    """Thesis costs (window MAE squared) of every sample for the windows centred on [start, stop).
+def window_costs(y, sims, n, start, stop, window="centred"):
+    """Thesis costs (window MAE squared) of every sample for the windows at steps [start, stop).
 
     Returns (stop - start, n_samples); windows without a measured point are NaN.
     """
     errors = _ArrayErrors(_checks.as_1d_float(y, "y", allow_nan=True), np.asarray(sims, dtype=float))
-    mae, _ = _window_mean(*_window_inputs(errors, start, stop, n, errors.y.size), stop - start, n)
+    before, after = window_halos(n, window)
+    mae, _ = _window_mean(*_window_inputs(errors, start, stop, before, after, errors.y.size),
+                          stop - start, before + after + 1)
     with np.errstate(over="ignore"):
         return mae ** 2
 

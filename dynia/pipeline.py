@@ -13,7 +13,7 @@ __all__ = ["run"]
 
 def run(u, y, model, bounds, *, dt=1.0, n_samples=2000, sampler="uniform", n=10, percentage=10,
         bins=40, conf_level=90, flavour="thesis", x0="zero", rng=None, progress=False,
-        min_points=1):
+        min_points=1, window="centred"):
     """Dynamic identifiability analysis of a model against measured data.
 
     Draws ``n_samples`` parameter sets from the box ``bounds``, simulates the
@@ -52,6 +52,9 @@ def run(u, y, model, bounds, *, dt=1.0, n_samples=2000, sampler="uniform", n=10,
         Show a tqdm progress bar.
     min_points : int, default 1
         Windows with fewer measured points get NaN results.
+    window : {"centred", "trailing"}, default "centred"
+        The window at step t holds t-n .. t+n, or t-2n .. t (ending at t,
+        as :class:`dynia.online.OnlineDynia` sees it).
 
     Returns
     -------
@@ -78,7 +81,7 @@ def run(u, y, model, bounds, *, dt=1.0, n_samples=2000, sampler="uniform", n=10,
     if sampler in SCHEMES:
         return adaptive_run(u, y, model, dict(zip(names, map(tuple, box))), scheme=sampler, dt=dt,
                             n_samples=n_samples, n=n, percentage=percentage, bins=bins,
-                            conf_level=conf_level, flavour=flavour, x0=x0, rng=rng)
+                            conf_level=conf_level, flavour=flavour, x0=x0, rng=rng, window=window)
     n_samples = _checks.whole_number(n_samples, "n_samples", minimum=1)
     n = _checks.whole_number(n, "n", minimum=0)
     samples = sample(sampler, n_samples, box, np.random.default_rng(rng))
@@ -96,7 +99,7 @@ def run(u, y, model, bounds, *, dt=1.0, n_samples=2000, sampler="uniform", n=10,
     return analyse_stream(y, sim_chunks, samples, box, n=n, percentage=percentage, bins=bins,
                           conf_level=conf_level, flavour=flavour, names=names,
                           time=np.arange(y.size) * float(dt), chunk_steps=chunk_steps,
-                          progress=progress, min_points=min_points, settings=settings)
+                          progress=progress, min_points=min_points, settings=settings, window=window)
 
 
 def _ordered_bounds(bounds, model):

@@ -63,13 +63,16 @@ def test_mcat_flavour_equals_the_id_time_port_exactly(seed, n, bins, samples):
         np.testing.assert_array_equal(res.bin_centres[p], grid)
 
 
-def _weighted_reference(y, sims, params, bounds, n, percentage, conf_level):
+def _weighted_reference(y, sims, params, bounds, n, percentage, conf_level, window="centred"):
     """Plain loops: the likelihood-weighted limits of Wagener et al. (2003)."""
     steps, (samples, n_params) = y.size, params.shape
     count = math.floor(samples * percentage / 100)
     ic = np.zeros((n_params, steps))
     for t in range(steps):
-        lo, hi = max(t - n, 0), min(t + n + 1, steps)
+        if window == "centred":
+            lo, hi = max(t - n, 0), min(t + n + 1, steps)
+        else:
+            lo, hi = max(t - 2 * n, 0), t + 1
         cost = np.array([np.cumsum(np.abs(y[lo:hi] - sims[k, lo:hi]))[-1] / (hi - lo)
                          for k in range(samples)]) ** 2
         best = np.argsort(cost, kind="stable")[:count]
@@ -91,6 +94,27 @@ def test_weighted_flavour_equals_a_loop_reference():
     res = moving_window(y, sims, params, [[0, 7], [0, 7]], n=4, flavour="weighted", conf_level=80)
     # Same order of every sum as the reference, so agreement is to the last bit.
     np.testing.assert_array_equal(res.ic, _weighted_reference(y, sims, params, [[0, 7], [0, 7]], 4, 10, 80))
+
+
+def test_trailing_window_equals_a_loop_reference():
+    y, sims, params = _small_example(6, steps=60, samples=200, zero_start=0)
+    res = moving_window(y, sims, params, [[0, 7], [0, 7]], n=4, flavour="weighted", conf_level=80,
+                        window="trailing", chunk_steps=7)
+    np.testing.assert_array_equal(
+        res.ic, _weighted_reference(y, sims, params, [[0, 7], [0, 7]], 4, 10, 80, window="trailing"))
+    assert res.settings["window"] == "trailing"
+
+
+@pytest.mark.parametrize("flavour", ["thesis", "weighted", "mcat"])
+def test_trailing_window_is_the_centred_one_shifted_by_n(flavour):
+    y, sims, params = _small_example(7)
+    n = 6
+    centred = moving_window(y, sims, params, [[0, 7], [0, 7]], n=n, flavour=flavour)
+    trailing = moving_window(y, sims, params, [[0, 7], [0, 7]], n=n, flavour=flavour, window="trailing",
+                             chunk_steps=11)
+    np.testing.assert_array_equal(trailing.ic[:, n:], centred.ic[:, :-n])
+    np.testing.assert_array_equal(trailing.ci[:, n:], centred.ci[:, :-n])
+    np.testing.assert_array_equal(trailing.gradient[:, :, n:], centred.gradient[:, :, :-n])
 
 
 def _hand_case():
@@ -183,6 +207,7 @@ def test_missing_measurements_use_the_points_present():
     (dict(bounds=[[9, 0]]), "lower bound 9.0 must be below"),
     (dict(bounds=[[0, 5]]), "outside its bounds"),
     (dict(flavour="glue"), "flavour must be one of"),
+    (dict(window="left"), "window must be one of"),
     (dict(percentage=10), "leaves 1 behavioural"),
     (dict(percentage=0), r"percentage must lie in \(0, 100\]"),
     (dict(percentage=100.5), r"percentage must lie in \(0, 100\]"),

@@ -56,12 +56,14 @@ def test_same_seed_same_result_bit_for_bit():
     np.testing.assert_array_equal(runs[0].gradient, runs[1].gradient)
 
 
-def test_run_equals_moving_window_on_the_same_samples():
+@pytest.mark.parametrize("window", ["centred", "trailing"])
+def test_run_equals_moving_window_on_the_same_samples(window):
     u = np.r_[np.zeros(10), np.ones(50)]
     y = FirstOrder().simulate([[2.0, 3.0]], u, dt=0.5)[0] + 0.05
-    res = dynia.run(u, y, FirstOrder(), {"T": (0, 7), "K": (0, 7)}, dt=0.5, n_samples=400, n=4, rng=2)
+    res = dynia.run(u, y, FirstOrder(), {"T": (0, 7), "K": (0, 7)}, dt=0.5, n_samples=400, n=4, rng=2,
+                    window=window)
     sims = FirstOrder().simulate(res.samples[:, [1, 0]], u, dt=0.5)
-    direct = dynia.moving_window(y, sims, res.samples, res.bounds, n=4)
+    direct = dynia.moving_window(y, sims, res.samples, res.bounds, n=4, window=window)
     np.testing.assert_array_equal(res.ic, direct.ic)
     np.testing.assert_array_equal(res.gradient, direct.gradient)
     np.testing.assert_array_equal(res.time, np.arange(60) * 0.5)
