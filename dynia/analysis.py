@@ -62,13 +62,14 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from . import _checks, cld
+from . import _checks, _fast, cld
 from .result import DyniaResult
 
 __all__ = ["moving_window", "FLAVOURS", "WINDOWS"]
 
 FLAVOURS = ("thesis", "mcat", "weighted")
 WINDOWS = ("centred", "trailing")
+ENGINES = ("auto", "numba", "numpy")
 
 # Values per working array of one time chunk: 2.5e5 float64 = 2 MB, which keeps
 # the dozen passes over a chunk in cache for a few thousand samples; for many
@@ -78,7 +79,7 @@ _CHUNK_VALUES = 250_000
 
 def moving_window(y, sims, params, bounds, *, n=10, percentage=10, bins=40, conf_level=90,
                   flavour="thesis", names=None, time=None, min_points=1, chunk_steps=None,
-                  workers=None, progress=False, weights=None, window="centred"):
+                  workers=None, progress=False, weights=None, window="centred", engine="auto"):
     """Moving-window DYNIA of every parameter at once.
 
     Parameters
@@ -128,6 +129,11 @@ def moving_window(y, sims, params, bounds, *, n=10, percentage=10, bins=40, conf
         (the thesis) or ``t-2n .. t`` (ending at t, for online use). The
         trailing result at t equals the centred one at t-n wherever the
         centred window is not truncated by the end of the record.
+    engine : {"auto", "numba", "numpy"}, default "auto"
+        The compiled kernels of :mod:`dynia._fast` or plain numpy; both give
+        bit-identical results. "auto" takes numba when it is installed and
+        the flavour is "thesis" or "weighted" without ``weights`` (the
+        other cases always run on numpy).
 
     Returns
     -------
@@ -162,7 +168,7 @@ def moving_window(y, sims, params, bounds, *, n=10, percentage=10, bins=40, conf
     return _analyse(y, _ArrayErrors(y, sims), params, bounds, n=n, percentage=percentage, bins=bins,
                     conf_level=conf_level, flavour=flavour, names=names, time=time,
                     min_points=min_points, chunk_steps=chunk_steps, workers=workers,
-                    progress=progress, weights=weights, window=window)
+                    progress=progress, weights=weights, window=window, engine=engine)
 
 
 def default_chunk_steps(n_samples, halo):
@@ -176,19 +182,36 @@ def default_chunk_steps(n_samples, halo):
 
 def analyse_stream(y, sim_chunks, params, bounds, *, n, percentage, bins, conf_level, flavour,
                    names=None, time=None, min_points=1, chunk_steps=None, workers=None,
-                   progress=False, settings=None, weights=None, window="centred"):
+                   progress=False, settings=None, weights=None, window="centred", engine="auto"):
     """Moving-window DYNIA fed by simulated output in consecutive time chunks.
 
     ``sim_chunks`` yields (n_samples, m) arrays in time order that together
     cover ``y``; otherwise as :func:`moving_window`, which wraps this.
+    ``sim_chunks`` may instead be a source of absolute errors with a
+    ``rows(start, stop)`` method, such as :class:`dynia._fast.CompiledErrors`.
     """
     y = _checks.as_1d_float(y, "y", allow_nan=True)
     params = _checks.as_2d_float(params, "params")
-    return _analyse(y, _StreamedErrors(y, sim_chunks, params.shape[0]), params, bounds, n=n,
+    errors = sim_chunks if hasattr(sim_chunks, "rows") else _StreamedErrors(y, sim_chunks, params.shape[0])
+    return _analyse(y, errors, params, bounds, n=n,
                     percentage=percentage, bins=bins, conf_level=conf_level, flavour=flavour,
                     names=names, time=time, min_points=min_points, chunk_steps=chunk_steps,
                     workers=workers, progress=progress, settings=settings, weights=weights,
-                    window=window)
+                    window=window, engine=engine)
+
+
+def compiled_engine(engine, flavour, weights=None):
+    """Whether ``engine`` ("auto", "numba" or "numpy") runs the compiled kernels for this analysis."""
+    if engine not in ENGINES:
+        raise ValueError(f"engine must be one of {ENGINES}; got {engine!r}")
+    supported = flavour in ("thesis", "weighted") and weights is None
+    if engine == "numba":
+        if not _fast.AVAILABLE:
+            raise ValueError("engine='numba' needs numba, which is not installed (pip install numba)")
+        if not supported:
+            raise ValueError("engine='numba' covers the 'thesis' and 'weighted' flavours without "
+                             "importance weights; use engine='numpy' or 'auto' for this analysis")
+    return engine != "numpy" and supported and _fast.AVAILABLE
 
 
 def window_halos(n, window):
@@ -200,7 +223,7 @@ def window_halos(n, window):
 
 def _analyse(y, errors, params, bounds, *, n, percentage, bins, conf_level, flavour, names,
              time, min_points, chunk_steps, progress, workers=None, settings=None, weights=None,
-             window="centred"):
+             window="centred", engine="auto"):
     n_samples, n_params = params.shape
     bounds = _checks.bounds_array(bounds, n_params)
     outside = (params < bounds[:, 0]) | (params > bounds[:, 1])
@@ -228,7 +251,10 @@ def _analyse(y, errors, params, bounds, *, n, percentage, bins, conf_level, flav
         workers = os.cpu_count() or 1
     workers = 1 if flavour == "mcat" else _checks.whole_number(workers, "workers", minimum=1)
 
-    if weights is None:
+    compiled = compiled_engine(engine, flavour, weights)
+    if compiled:
+        flavour_impl = _CompiledFlavour(params, bounds, percentage, bins, conf_level, flavour, min_points)
+    elif weights is None:
         flavour_impl = {"thesis": _ThesisFlavour, "weighted": _WeightedFlavour,
                         "mcat": _McatFlavour}[flavour](params, bounds, percentage, bins, conf_level)
     else:
@@ -242,8 +268,12 @@ def _analyse(y, errors, params, bounds, *, n, percentage, bins, conf_level, flav
     ci = np.full((n_params, n_steps, 2), np.nan)
     gradient = np.full((n_params, flavour_impl.n_bins, n_steps), np.nan)
 
+    slots = before + after + 1
+
     def analyse_chunk(start, stop, window_errors, measured):
-        mae, present = _window_mean(window_errors, measured, stop - start, before + after + 1)
+        if compiled:
+            return start, stop, flavour_impl.analyse_rows(window_errors, measured, stop - start, slots)
+        mae, present = _window_mean(window_errors, measured, stop - start, slots)
         return start, stop, flavour_impl.analyse(mae, present >= min_points)
 
     def store(finished):
@@ -264,7 +294,8 @@ def _analyse(y, errors, params, bounds, *, n, percentage, bins, conf_level, flav
         for start in starts:
             stop = min(start + chunk_steps, n_steps)
             pending.append(pool.submit(analyse_chunk, start, stop,
-                                       *_window_inputs(errors, start, stop, before, after, n_steps)))
+                                       *_window_inputs(errors, start, stop, before, after, n_steps,
+                                                       time_major=compiled)))
             while len(pending) > workers:  # bounds the chunks held in memory
                 store(pending.popleft())
         while pending:
@@ -272,7 +303,7 @@ def _analyse(y, errors, params, bounds, *, n, percentage, bins, conf_level, flav
 
     recorded = dict(n=n, window=window, percentage=percentage, bins=bins, conf_level=conf_level,
                     flavour=flavour, min_points=min_points, n_samples=n_samples,
-                    n_behavioural=flavour_impl.count)
+                    n_behavioural=flavour_impl.count, engine="numba" if compiled else "numpy")
     recorded.update(settings or {})
     return DyniaResult(names=names, samples=params, bounds=bounds, time=time, ic=ic, ci=ci,
                        gradient=gradient, bin_centres=flavour_impl.bin_centres, settings=recorded)
@@ -317,6 +348,10 @@ class _StreamedErrors:
             self._buffer = np.concatenate(pieces, axis=1)
         return self._buffer[:, :stop - start]
 
+    def rows(self, start, stop):
+        """Errors for times [start, stop), time-major: shape (stop - start, n_samples)."""
+        return np.ascontiguousarray(self.columns(start, stop).T)
+
     def _next_chunk(self, at):
         try:
             sims = np.asarray(next(self._chunks), dtype=float)
@@ -340,6 +375,9 @@ class _ArrayErrors:
     def columns(self, start, stop):
         return _absolute_errors(self.y[start:stop], self._sims[:, start:stop], start)
 
+    def rows(self, start, stop):
+        return np.ascontiguousarray(self.columns(start, stop).T)
+
 
 def _absolute_errors(measured, sims, at):
     """|measured - sims| with missing measurements (NaN) giving 0; rejects non-finite sims."""
@@ -355,18 +393,18 @@ def _absolute_errors(measured, sims, at):
     return errors
 
 
-def _window_inputs(errors, start, stop, before, after, n_steps):
+def _window_inputs(errors, start, stop, before, after, n_steps, time_major=False):
     """Errors and measured-point flags for the windows at steps [start, stop).
 
     The window at t reaches ``before`` steps back and ``after`` ahead (see
     :func:`window_halos`). Returns (n_samples, m + before + after) errors
-    and (m + before + after,) flags, m = stop - start, where column j
-    belongs to time start - before + j; times outside the record are zero
-    columns, so every window has before+after+1 slots (adding 0.0 changes
-    no sum).
+    (transposed if ``time_major``) and (m + before + after,) flags,
+    m = stop - start, where column j belongs to time start - before + j;
+    times outside the record are zero columns, so every window has
+    before+after+1 slots (adding 0.0 changes no sum).
     """
     lo, hi = max(start - before, 0), min(stop + after, n_steps)
-    window_errors = errors.columns(lo, hi)
+    window_errors = errors.rows(lo, hi).T if time_major else errors.columns(lo, hi)
     measured = (~np.isnan(errors.y[lo:hi])).astype(float)
     width = stop - start + before + after
     offset = lo - (start - before)
@@ -375,8 +413,8 @@ def _window_inputs(errors, start, stop, before, after, n_steps):
         padded[:, offset:offset + (hi - lo)] = window_errors
         counts = np.zeros(width)
         counts[offset:offset + (hi - lo)] = measured
-        return padded, counts
-    return window_errors, measured
+        window_errors, measured = padded, counts
+    return (np.ascontiguousarray(window_errors.T) if time_major else window_errors), measured
 
 
 def _window_mean(window_errors, measured, m, slots):
@@ -496,6 +534,32 @@ class _WeightedFlavour(_ThesisFlavour):
 
     def _limits(self, values, weights):
         return cld.weighted_limits(values, weights, self.conf_level)
+
+
+class _CompiledFlavour:
+    """The thesis and weighted flavours on the compiled kernel :func:`dynia._fast.analyse_windows`."""
+
+    def __init__(self, params, bounds, percentage, bins, conf_level, flavour, min_points):
+        reference = _ThesisFlavour(params, bounds, percentage, bins, conf_level)
+        self.count = reference.count
+        self.columns = reference.columns
+        self.n_bins = bins
+        self.bin_centres = reference.bin_centres
+        self.lows = np.ascontiguousarray(bounds[:, 0])
+        self.highs = np.ascontiguousarray(bounds[:, 1])
+        lower_share = (1 - conf_level / 100) / 2
+        self.positions = np.array([math.floor(lower_share * (self.count - 1)),
+                                   math.floor((1 - lower_share) * (self.count - 1))], dtype=np.int64)
+        self.levels = np.array([(100 - conf_level) / 200, (100 + conf_level) / 200])
+        self.weighted = flavour == "weighted"
+        self.min_points = float(min_points)
+
+    def analyse_rows(self, window_errors, measured, m, slots):
+        ic, ci, gradient = _chunk_arrays(self.columns.shape[0], self.n_bins, m)
+        _fast.analyse_windows(window_errors, measured, m, slots, self.count, self.columns, self.lows,
+                              self.highs, self.n_bins, self.positions, self.levels, self.weighted,
+                              self.min_points, ic, ci, gradient)
+        return ic, ci, gradient
 
 
 def lowest_weighted(cost, prior_weights, fraction):

@@ -9,7 +9,13 @@ process so that its peak resident memory (``ru_maxrss``) is its own.
 2. The engine on 20 000 samples x 2 000 steps (simulations held in memory).
 3. :func:`dynia.run` (simulate and analyse, streamed) on 20 000 x 2 000 and on
    10^5 samples x 10^4 steps, which never holds the 8 GB simulation matrix.
-4. Samplers at percentage 0.1 on example 1: IC error against a uniform
+4. Throughput of the complete analysis (simulate and analyse both
+   parameters, flavour "thesis") at 20 000 samples x 20 000 steps, compiled
+   engine and numpy engine, with the ratio to the port's sample-steps per
+   second measured in the same case; target >= 10^8 sample-steps/s.
+5. Memory: :func:`dynia.run` on 10^5 samples x 10^5 steps; target peak
+   resident memory <= 2 GB.
+6. Samplers at percentage 0.1 on example 1: IC error against a uniform
    400 000-sample reference for uniform (10^4, 10^5) and the adaptive
    schemes of :mod:`dynia.adaptive` (10^4).
 """
@@ -70,13 +76,34 @@ def _case_engine(n_samples, n_steps):
     return dict(seconds=seconds, sample_steps_per_s=n_samples * n_steps / seconds)
 
 
-def _case_run(n_samples, n_steps):
+def _case_run(n_samples, n_steps, engine="auto"):
     from .pipeline import run
     u, y, _, model = _example1(1, n_steps)
     start = time.perf_counter()
-    run(u, y, model, {"K": (0, 7), "T": (0, 7)}, n_samples=n_samples, n=10, rng=1)
+    result = run(u, y, model, {"K": (0, 7), "T": (0, 7)}, n_samples=n_samples, n=10, rng=1, engine=engine)
     seconds = time.perf_counter() - start
-    return dict(seconds=seconds, sample_steps_per_s=n_samples * n_steps / seconds)
+    return dict(seconds=seconds, sample_steps_per_s=n_samples * n_steps / seconds,
+                engine=result.settings["engine"])
+
+
+def _case_throughput():
+    from . import thesis
+    from .pipeline import run
+    u, y, params, model = _example1(2000, 500)
+    sims = model.simulate(params, u)
+    start = time.perf_counter()
+    for p in range(2):
+        thesis.moving_window_calcs(500, params[:, p], 0, 7, 2000, sims, y, 40, 10, 10)
+    port_rate = 2000 * 500 / (time.perf_counter() - start)
+    u, y, _, model = _example1(1, 20_000)
+    run(u, y, model, {"K": (0, 7), "T": (0, 7)}, n_samples=200, n=10, rng=1, engine="numba")  # compile
+    result = dict(port_sample_steps_per_s=port_rate)
+    for engine, repeats in (("numba", 3), ("numpy", 1)):
+        seconds = best_of(lambda: run(u, y, model, {"K": (0, 7), "T": (0, 7)}, n_samples=20_000, n=10,
+                                      rng=1, engine=engine), repeats)
+        result[engine] = dict(seconds=seconds, sample_steps_per_s=20_000 * 20_000 / seconds,
+                              ratio_to_port=20_000 * 20_000 / seconds / port_rate)
+    return result
 
 
 def _case_sampling():
@@ -99,6 +126,8 @@ CASES = {
     "engine-20000x2000": lambda: _case_engine(20_000, 2_000),
     "run-20000x2000": lambda: _case_run(20_000, 2_000),
     "run-100000x10000": lambda: _case_run(100_000, 10_000),
+    "throughput-20000x20000": _case_throughput,
+    "memory-100000x100000": lambda: _case_run(100_000, 100_000),
     "sampling-example1": _case_sampling,
 }
 
@@ -132,6 +161,18 @@ def _describe(name, r):
                 f"engine {r['engine_s'] * 1e3:.1f} ms -> {r['ratio']:.0f}x (target >= 300x); "
                 f"one thread {r['engine_one_thread_s'] * 1e3:.1f} ms -> {r['ratio_one_thread']:.0f}x; "
                 f"peak RSS {r['peak_rss_mb']:.0f} MB")
+    if name == "throughput-20000x20000":
+        engines = "; ".join(
+            f"{engine} engine {r[engine]['seconds']:.2f} s = {r[engine]['sample_steps_per_s']:.3g} "
+            f"sample-steps/s, {r[engine]['ratio_to_port']:.0f}x the port"
+            for engine in ("numba", "numpy"))
+        return (f"complete analysis (simulate + K and T, thesis flavour), 20 000 samples x 20 000 steps: "
+                f"{engines} (port {r['port_sample_steps_per_s']:.3g} sample-steps/s on example 1; "
+                f"target >= 1e8); peak RSS {r['peak_rss_mb']:.0f} MB")
+    if name == "memory-100000x100000":
+        return (f"dynia.run, 10^5 samples x 10^5 steps ({r['engine']} engine): {r['seconds']:.0f} s, "
+                f"{r['sample_steps_per_s']:.3g} sample-steps/s, peak RSS {r['peak_rss_mb']:.0f} MB "
+                "(target <= 2048 MB)")
     if name == "sampling-example1":
         runs = ", ".join(f"{key}: RMSE {value['rmse']:.3f} in {value['seconds']:.1f} s"
                          for key, value in r.items() if key != "peak_rss_mb")

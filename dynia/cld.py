@@ -42,7 +42,9 @@ def likelihood(cost):
     value = 1 - np.asarray(cost, dtype=float)
     lowest = value.min(axis=-1, keepdims=True)
     value = np.where(lowest < 0, value - lowest, value)
-    total = value.sum(axis=-1, keepdims=True)
+    # Summed in index order (not numpy's pairwise order), the order the
+    # compiled engine (dynia._fast) uses, so both give the same bits.
+    total = np.cumsum(value, axis=-1)[..., -1:]
     degenerate = total[..., 0] == 0
     value[degenerate] = 1.0
     total[degenerate] = value.shape[-1]

@@ -1,11 +1,13 @@
 """``dynia.run``: sample, simulate and analyse in one call, streaming over time."""
+import os
 from collections.abc import Mapping
 
 import numpy as np
 
 from . import _checks
 from .adaptive import SCHEMES, adaptive_run
-from .analysis import analyse_stream, default_chunk_steps
+from ._fast import CompiledErrors
+from .analysis import analyse_stream, compiled_engine, default_chunk_steps
 from .sampling import sample
 
 __all__ = ["run"]
@@ -13,7 +15,7 @@ __all__ = ["run"]
 
 def run(u, y, model, bounds, *, dt=1.0, n_samples=2000, sampler="uniform", n=10, percentage=10,
         bins=40, conf_level=90, flavour="thesis", x0="zero", rng=None, progress=False,
-        min_points=1, window="centred"):
+        min_points=1, window="centred", engine="auto", workers=None):
     """Dynamic identifiability analysis of a model against measured data.
 
     Draws ``n_samples`` parameter sets from the box ``bounds``, simulates the
@@ -55,6 +57,11 @@ def run(u, y, model, bounds, *, dt=1.0, n_samples=2000, sampler="uniform", n=10,
     window : {"centred", "trailing"}, default "centred"
         The window at step t holds t-n .. t+n, or t-2n .. t (ending at t,
         as :class:`dynia.online.OnlineDynia` sees it).
+    engine : {"auto", "numba", "numpy"}, default "auto"
+        As :func:`dynia.analysis.moving_window`; the compiled engine also
+        simulates the model in compiled code. Results are bit-identical.
+    workers : int, optional
+        Threads (default: every core). Results do not depend on it.
 
     Returns
     -------
@@ -92,14 +99,25 @@ def run(u, y, model, bounds, *, dt=1.0, n_samples=2000, sampler="uniform", n=10,
                          "check the model and the parameter ranges")
     samples = samples[finite]
     chunk_steps = default_chunk_steps(samples.shape[0], 2 * n)
-    sim_chunks = model.simulate_chunks(samples[:, model_order], u, dt=dt, x0=x0, chunk_steps=chunk_steps)
+    if workers is None:
+        workers = os.cpu_count() or 1
+    workers = _checks.whole_number(workers, "workers", minimum=1)
+    if compiled_engine(engine, flavour):
+        errors = CompiledErrors(model, samples[:, model_order], u, y, dt=dt, x0=x0, workers=workers)
+    else:
+        errors = model.simulate_chunks(samples[:, model_order], u, dt=dt, x0=x0, chunk_steps=chunk_steps)
     settings = dict(dt=dt, sampler=sampler, x0=x0, model=type(model).__name__,
                     bounds={name: tuple(map(float, row)) for name, row in zip(names, box)},
                     n_sampled=n_samples, n_dropped=int(n_samples - samples.shape[0]))
-    return analyse_stream(y, sim_chunks, samples, box, n=n, percentage=percentage, bins=bins,
-                          conf_level=conf_level, flavour=flavour, names=names,
-                          time=np.arange(y.size) * float(dt), chunk_steps=chunk_steps,
-                          progress=progress, min_points=min_points, settings=settings, window=window)
+    try:
+        return analyse_stream(y, errors, samples, box, n=n, percentage=percentage, bins=bins,
+                              conf_level=conf_level, flavour=flavour, names=names,
+                              time=np.arange(y.size) * float(dt), chunk_steps=chunk_steps,
+                              progress=progress, min_points=min_points, settings=settings,
+                              window=window, engine=engine, workers=workers)
+    finally:
+        if isinstance(errors, CompiledErrors):
+            errors.close()
 
 
 def _ordered_bounds(bounds, model):

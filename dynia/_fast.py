@@ -1,0 +1,478 @@
+"""Compiled (numba) kernels of the engine: the same arithmetic as the numpy path, faster.
+
+Two kernels cover the work of a :func:`dynia.run` with the ``"thesis"`` or
+``"weighted"`` flavour:
+
+- :func:`simulate_errors` advances every sample's discretised model (the
+  recursion of :class:`dynia.models._DiscreteSystem`) through a block of
+  steps and writes the absolute errors against the measurement, time-major;
+- :func:`analyse_windows` forms each window's costs, selects its behavioural
+  set and reads off limits, IC and gradient.
+
+Each floating-point operation is the one the numpy path performs, in the same
+order, so the results are bit-identical (tests compare with tolerance 0):
+products and sums of the recursion term by term (LLVM does not fuse them
+into FMAs without fast-math, which stays off), window sums left to right,
+the behavioural set as the first ``count`` of a stable sort, the likelihood
+total summed in index order (as :func:`dynia.cld.likelihood` does with
+``cumsum``) and the gradient accumulated in index order (as ``bincount``).
+Only the order statistics are found differently (selection instead of
+sorting), which cannot change their value.
+
+The kernels release the GIL, so the engine's thread pool runs them on every
+core. This module needs numba; :data:`AVAILABLE` says whether it imported.
+"""
+import numpy as np
+
+try:
+    import numba
+except ImportError:  # the numpy path serves
+    numba = None
+
+AVAILABLE = numba is not None
+
+__all__ = ["AVAILABLE", "simulate_errors", "analyse_windows"]
+
+
+def _jit(function):
+    return numba.njit(nogil=True, cache=True)(function) if AVAILABLE else function
+
+
+@_jit
+def _add_term(target, coefficient, source, first, start, stop):
+    """target = coefficient*source (first term) or target += coefficient*source, over [start, stop)."""
+    if first:
+        for s in range(start, stop):
+            target[s] = coefficient[s] * source[s]
+    else:
+        for s in range(start, stop):
+            target[s] = target[s] + coefficient[s] * source[s]
+
+
+@_jit
+def _combine(target, coefficients, used, sources, start, stop):
+    """target = sum of coefficients[term] * sources[term] over the used terms, in term order."""
+    first = True
+    for term in range(used.shape[0]):
+        if used[term]:
+            _add_term(target, coefficients[term], sources[term], first, start, stop)
+            first = False
+    if first:
+        target[start:stop] = 0.0
+
+
+@_jit
+def simulate_errors(phi, gamma_now, gamma_prev, c, feed_now, feed_prev, delays, state_terms,
+                    output_terms, padded_input, measured, first_step, last_step, state, errors,
+                    sample_start, sample_stop):
+    """Advance samples [sample_start, sample_stop) through steps [first_step, first_step + m).
+
+    ``state`` (n_states, n_samples) holds the state at ``first_step`` and is
+    left at the state of the step after the block (not advanced past
+    ``last_step``, the record's last step, where it could only overflow).
+    ``errors`` (m, n_samples) receives ``|sim - measured|``, 0 where the
+    measurement is NaN. ``state_terms`` (n_states, n_states + 2) and
+    ``output_terms`` (n_states + 2,) flag the terms the numpy path keeps
+    (sources: the states, then u[k-d], then u[k-d-1]). The loop runs over
+    time outside and samples inside, as the numpy path does, so each pass
+    is a contiguous vector loop. Returns the first (step, sample) whose
+    output is not finite, or (-1, -1).
+    """
+    n_states, n_samples = c.shape
+    m = errors.shape[0]
+    lo, hi = sample_start, sample_stop
+    sources = np.empty((n_states + 2, n_samples))
+    upcoming = np.empty((n_states, n_samples))
+    output = np.empty(n_samples)
+    for i in range(n_states):
+        sources[i, lo:hi] = state[i, lo:hi]
+    output_coefficients = np.empty((n_states + 2, n_samples))
+    for i in range(n_states):
+        output_coefficients[i] = c[i]
+    output_coefficients[n_states] = feed_now
+    output_coefficients[n_states + 1] = feed_prev
+    state_coefficients = np.empty((n_states, n_states + 2, n_samples))
+    for i in range(n_states):
+        for j in range(n_states):
+            state_coefficients[i, j] = phi[i, j]
+        state_coefficients[i, n_states] = gamma_now[i]
+        state_coefficients[i, n_states + 1] = gamma_prev[i]
+    common_delay = delays.shape[0] == 1
+    if n_states == 1 and common_delay:
+        return _simulate_lag(phi[0, 0], gamma_now[0], gamma_prev[0], c[0], feed_now, feed_prev,
+                             delays[0], state_terms[0], output_terms, padded_input, measured,
+                             first_step, last_step, state[0], errors, lo, hi)
+    bad_step, bad_sample = -1, -1
+    for j in range(m):
+        k = first_step + j
+        if common_delay:
+            sources[n_states, lo:hi] = padded_input[max(k - delays[0], -1) + 1]
+            sources[n_states + 1, lo:hi] = padded_input[max(k - delays[0] - 1, -1) + 1]
+        else:
+            for s in range(lo, hi):
+                sources[n_states, s] = padded_input[max(k - delays[s], -1) + 1]
+                sources[n_states + 1, s] = padded_input[max(k - delays[s] - 1, -1) + 1]
+        _combine(output, output_coefficients, output_terms, sources, lo, hi)
+        y = measured[j]
+        row = errors[j]
+        if np.isnan(y):
+            row[lo:hi] = 0.0
+        else:
+            for s in range(lo, hi):
+                row[s] = abs(output[s] - y)
+        if bad_step < 0:
+            for s in range(lo, hi):
+                if not np.isfinite(output[s]):
+                    bad_step, bad_sample = k, s
+                    break
+        if k == last_step:
+            break
+        for i in range(n_states):
+            _combine(upcoming[i], state_coefficients[i], state_terms[i], sources, lo, hi)
+        for i in range(n_states):
+            sources[i, lo:hi] = upcoming[i, lo:hi]
+    for i in range(n_states):
+        state[i, lo:hi] = sources[i, lo:hi]
+    return bad_step, bad_sample
+
+
+@_jit
+def _simulate_lag(phi, gamma_now, gamma_prev, c, feed_now, feed_prev, delay, state_terms,
+                  output_terms, padded_input, measured, first_step, last_step, state, errors, lo, hi):
+    """:func:`simulate_errors` for one state and one common dead time (the lag models), fused.
+
+    The same products and sums in the same order, with each term present
+    exactly when the general kernel uses it; one pass over the samples per
+    step instead of one per term.
+    """
+    c_used, now_out, prev_out = output_terms[0], output_terms[1], output_terms[2]
+    phi_used, now_state, prev_state = state_terms[0], state_terms[1], state_terms[2]
+    if not (c_used and phi_used):
+        raise ValueError("a lag model without its state term")
+    bad_step, bad_sample = -1, -1
+    for j in range(errors.shape[0]):
+        k = first_step + j
+        now = padded_input[max(k - delay, -1) + 1]
+        previous = padded_input[max(k - delay - 1, -1) + 1]
+        y = measured[j]
+        missing = np.isnan(y)
+        row = errors[j]
+        advance = k != last_step
+        finite = True
+        for s in range(lo, hi):
+            x = state[s]
+            output = c[s] * x
+            if now_out:
+                output = output + feed_now[s] * now
+            if prev_out:
+                output = output + feed_prev[s] * previous
+            finite &= np.isfinite(output)
+            row[s] = 0.0 if missing else abs(output - y)
+            if advance:
+                x = phi[s] * x
+                if now_state:
+                    x = x + gamma_now[s] * now
+                if prev_state:
+                    x = x + gamma_prev[s] * previous
+                state[s] = x
+        if not finite and bad_step < 0:
+            bad_step = k
+            # The row holds |output - y|, non-finite exactly where the output
+            # is, unless y is missing; then the sample is not known (-1).
+            for s in range(lo, hi):
+                if not np.isfinite(row[s]):
+                    bad_sample = s
+                    break
+        if not advance:
+            break
+    return bad_step, bad_sample
+
+
+@_jit
+def _select(values, length, k):
+    """Rearrange ``values[:length]`` so that position k holds its k-th smallest; return it.
+
+    Hoare partitioning around a median of three: equal values are spread
+    over both sides, so long runs of ties (all samples simulating 0) stay
+    O(length).
+    """
+    low, high = 0, length - 1
+    while high > low:
+        middle = (low + high) // 2
+        a, b, d = values[low], values[middle], values[high]
+        pivot = max(min(a, b), min(max(a, b), d))
+        i, j = low, high
+        while i <= j:
+            while values[i] < pivot:
+                i += 1
+            while values[j] > pivot:
+                j -= 1
+            if i <= j:
+                values[i], values[j] = values[j], values[i]
+                i += 1
+                j -= 1
+        if k <= j:
+            high = j
+        elif k >= i:
+            low = i
+        else:
+            break
+    return values[k]
+
+
+@_jit
+def _behavioural(cost, count, bound, candidates, scratch, selected):
+    """Indices (ascending) of the first ``count`` of a stable ascending sort of ``cost``.
+
+    ``bound`` is a guess of the count-th smallest cost (the previous
+    window's): when at least ``count`` costs lie at or below it, only those
+    are searched. Returns the count-th smallest cost.
+    """
+    n = cost.shape[0]
+    found = 0
+    if bound == bound:  # not NaN
+        for s in range(n):
+            if cost[s] <= bound:
+                candidates[found] = s
+                found += 1
+    if found < count:
+        found = n
+        for s in range(n):
+            candidates[s] = s
+    for i in range(found):
+        scratch[i] = cost[candidates[i]]
+    threshold = _select(scratch, found, count - 1)
+    below = 0
+    for i in range(found):
+        if cost[candidates[i]] < threshold:
+            below += 1
+    ties = count - below
+    taken = 0
+    for i in range(found):
+        s = candidates[i]
+        value = cost[s]
+        if value < threshold or (value == threshold and ties > 0):
+            if value == threshold:
+                ties -= 1
+            selected[taken] = s
+            taken += 1
+    return threshold
+
+
+@_jit
+def _stable_argsort(values, length, order, buffer):
+    """``order[:length]`` = stable ascending argsort of ``values[:length]`` (bottom-up merge sort)."""
+    for i in range(length):
+        order[i] = i
+    width = 1
+    source, target = order, buffer
+    while width < length:
+        for start in range(0, length, 2 * width):
+            middle = min(start + width, length)
+            stop = min(start + 2 * width, length)
+            i, j, out = start, middle, start
+            while i < middle and j < stop:
+                if values[source[j]] < values[source[i]]:
+                    target[out] = source[j]
+                    j += 1
+                else:
+                    target[out] = source[i]
+                    i += 1
+                out += 1
+            while i < middle:
+                target[out] = source[i]
+                i += 1
+                out += 1
+            while j < stop:
+                target[out] = source[j]
+                j += 1
+                out += 1
+        source, target = target, source
+        width *= 2
+    if source is not order:
+        for i in range(length):
+            order[i] = source[i]
+
+
+@_jit
+def analyse_windows(errors, measured, m, slots, count, columns, lows, highs, bins, positions,
+                    levels, weighted, min_points, ic, ci, gradient):
+    """Analyse the m windows of a block; see :mod:`dynia.analysis` for the method.
+
+    ``errors`` (m + slots - 1, n_samples) and ``measured`` (m + slots - 1,)
+    come from the window inputs (row j + t belongs to slot j of window t).
+    ``positions`` are the thesis limits' sorted positions, ``levels`` the
+    weighted limits' CLD levels. Writes ``ic`` (n_params, m), ``ci``
+    (n_params, m, 2) and ``gradient`` (n_params, bins, m); windows with
+    fewer than ``min_points`` measured points get NaN.
+    """
+    n_samples = errors.shape[1]
+    n_params = columns.shape[0]
+    total = np.empty(n_samples)
+    candidates = np.empty(n_samples, dtype=np.int64)
+    scratch = np.empty(n_samples)
+    selected = np.empty(count, dtype=np.int64)
+    weights = np.empty(count)
+    values = np.empty(count)
+    order = np.empty(count, dtype=np.int64)
+    buffer = np.empty(count, dtype=np.int64)
+    bound = np.nan
+    for t in range(m):
+        present = measured[t]
+        for s in range(n_samples):
+            total[s] = errors[t, s]
+        for shift in range(1, slots):
+            present += measured[t + shift]
+            row = errors[t + shift]
+            for s in range(n_samples):
+                total[s] += row[s]
+        if present < min_points:
+            ic[:, t] = np.nan
+            ci[:, t, :] = np.nan
+            gradient[:, :, t] = np.nan
+            continue
+        for s in range(n_samples):
+            mae = total[s] / present
+            total[s] = mae * mae
+        threshold = _behavioural(total, count, bound, candidates, scratch, selected)
+        # The next window's count-th cost is usually close: a bound a little
+        # above this one lets most windows search only a few candidates.
+        bound = threshold * 1.25 if threshold > 0 else threshold
+
+        lowest = np.inf
+        for i in range(count):
+            weights[i] = 1.0 - total[selected[i]]
+            lowest = min(lowest, weights[i])
+        if lowest < 0:
+            for i in range(count):
+                weights[i] = weights[i] - lowest
+        weight_total = 0.0
+        for i in range(count):
+            weight_total += weights[i]
+        if weight_total == 0:
+            for i in range(count):
+                weights[i] = 1.0
+            weight_total = float(count)
+        for i in range(count):
+            weights[i] = weights[i] / weight_total
+
+        for p in range(n_params):
+            low, high = lows[p], highs[p]
+            for i in range(count):
+                values[i] = columns[p, selected[i]]
+            for b in range(bins):
+                gradient[p, b, t] = 0.0
+            for i in range(count):
+                which = int((values[i] - low) / (high - low) * bins)
+                which = min(max(which, 0), bins - 1)
+                gradient[p, which, t] += weights[i]
+            if weighted:
+                _stable_argsort(values, count, order, buffer)
+                for side in range(2):
+                    cumulative = 0.0
+                    reached = 0
+                    for i in range(count):
+                        cumulative += weights[order[i]]
+                        if cumulative < levels[side]:
+                            reached += 1
+                    ci[p, t, side] = values[order[min(reached, count - 1)]]
+            else:
+                for side in range(2):
+                    for i in range(count):
+                        scratch[i] = values[i]
+                    ci[p, t, side] = _select(scratch, count, positions[side])
+            ic[p, t] = 1 - (ci[p, t, 1] - ci[p, t, 0]) / (high - low)
+
+
+class CompiledErrors:
+    """Absolute errors of a model's simulations, computed block by block by :func:`simulate_errors`.
+
+    A source for :func:`dynia.analysis.analyse_stream`: ``rows(start,
+    stop)`` returns the time-major errors (stop - start, n_samples);
+    requests must move forward in time, and the rows before a request are
+    dropped, so memory stays at one block. The simulation of each block is
+    split over ``workers`` threads by sample. Its output equals
+    ``model.simulate`` bit for bit (the same recursion, term by term).
+
+    Parameters
+    ----------
+    model : dynia.models.Model
+    params : ndarray (n_samples, n_params), columns in ``model.names`` order
+    u, y : ndarray (n_steps,)
+    dt : float
+    x0 : {"zero", "steady"}
+    workers : int
+    """
+
+    def __init__(self, model, params, u, y, *, dt, x0, workers):
+        from concurrent.futures import ThreadPoolExecutor
+
+        from .models import _check_dt, _check_x0
+
+        params = model._check_params(params)
+        dt, x0 = _check_dt(dt), _check_x0(x0)
+        system = model._discretise(params, dt, u.shape[0], steady=x0 == "steady")
+        self.y = y
+        self._system = system
+        n_states, n_samples = system.c.shape
+        self._n_samples = n_samples
+        coefficients = [[system.phi[i, j] for j in range(n_states)] + [system.gamma_now[i], system.gamma_prev[i]]
+                        for i in range(n_states)]
+        self._state_terms = np.array([[bool(np.any(term != 0)) for term in row] for row in coefficients],
+                                     dtype=np.bool_).reshape(n_states, n_states + 2)
+        self._output_terms = np.array(
+            [bool(np.any(system.c[i] != 0)) for i in range(n_states)]
+            + [bool(np.any(system.feed_now != 0)), bool(np.any(system.feed_prev != 0))], dtype=np.bool_)
+        self._padded_input = np.concatenate(([u[0] if x0 == "steady" else 0.0], u))
+        self._state = (system.steady_state * u[0] if x0 == "steady" else np.zeros((n_states, n_samples)))
+        self._state = np.ascontiguousarray(self._state, dtype=float)
+        delays = system.delay_steps
+        # One common dead time makes the delayed input one value per step, as in the numpy path.
+        self._delays = np.ascontiguousarray(delays[:1] if np.all(delays == delays[0]) else delays,
+                                            dtype=np.int64)
+        self._start = 0
+        self._buffer = np.zeros((0, n_samples))
+        self._workers = max(1, min(workers, n_samples))
+        self._pool = ThreadPoolExecutor(max_workers=self._workers) if self._workers > 1 else None
+        edges = np.linspace(0, n_samples, self._workers + 1).astype(int)
+        self._sample_ranges = list(zip(edges[:-1], edges[1:]))
+
+    def rows(self, start, stop):
+        """Errors for times [start, stop), shape (stop - start, n_samples)."""
+        if start < self._start:
+            raise ValueError(f"rows from step {start} were requested after rows from step {self._start}; "
+                             "requests must move forward in time")
+        self._buffer = self._buffer[start - self._start:]
+        self._start = start
+        computed = self._start + self._buffer.shape[0]
+        if computed < stop:
+            self._buffer = np.concatenate([self._buffer, self._simulate(computed, stop)])
+        return self._buffer[:stop - start]
+
+    def columns(self, start, stop):
+        return self.rows(start, stop).T
+
+    def _simulate(self, first, stop):
+        system = self._system
+        errors = np.empty((stop - first, self._n_samples))
+        measured = np.ascontiguousarray(self.y[first:stop])
+
+        def block(sample_range):
+            return simulate_errors(system.phi, system.gamma_now, system.gamma_prev, system.c,
+                                   system.feed_now, system.feed_prev, self._delays, self._state_terms,
+                                   self._output_terms, self._padded_input, measured, first,
+                                   self.y.shape[0] - 1, self._state, errors, *sample_range)
+
+        if self._pool is None:
+            outcomes = [block(self._sample_ranges[0])]
+        else:
+            outcomes = list(self._pool.map(block, self._sample_ranges))
+        for step, sample in outcomes:
+            if step >= 0:
+                which = f"sample {sample}" if sample >= 0 else "a sample"
+                raise ValueError(f"the simulation of {which} is not finite at step {step}")
+        return errors
+
+    def close(self):
+        if self._pool is not None:
+            self._pool.shutdown()
