@@ -7,7 +7,8 @@ moving-window analysis and :mod:`dynia.result` holds what comes out.
 plain ports of the thesis's MATLAB and of MCAT's ``id_time.m``, kept as the
 oracles the fast engine is tested against.
 """
-from . import adaptive, analysis, baseline, cld, data, mcat, models, refine, sampling, synthetic, thesis
+from . import (adaptive, analysis, baseline, cld, data, mcat, models, online, refine, sampling, segments,
+               synthetic, thesis)
 from .analysis import moving_window
 from .pipeline import run
 from .refine import second_run
@@ -16,4 +17,4 @@ from .result import DyniaResult
 __version__ = "0.1.0"
 
 __all__ = ["run", "second_run", "moving_window", "DyniaResult", "adaptive", "analysis", "cld", "data",
-           "models", "refine", "baseline", "sampling", "synthetic", "thesis", "mcat"]
+           "models", "online", "refine", "baseline", "segments", "sampling", "synthetic", "thesis", "mcat"]

@@ -48,7 +48,7 @@ import control
 import numpy as np
 import scipy.linalg
 
-__all__ = ["Model", "FirstOrder", "FOPDT", "SecondOrderDelay", "TransferFunction"]
+__all__ = ["Model", "Stepper", "FirstOrder", "FOPDT", "SecondOrderDelay", "TransferFunction"]
 
 _X0_CHOICES = ("zero", "steady")
 
@@ -74,6 +74,10 @@ _DELAY_SNAP = 1e-9
 # a blocked copy keeps source and destination in cache and measured about
 # four times faster than a plain transposed copy for 20 000 samples.
 _TRANSPOSE_BLOCK = 256
+
+# Longest dead time, in steps, a Stepper accepts: it keeps that much input
+# history, 80 MB of float64 at this limit.
+_STEPPER_MAX_DELAY_STEPS = 10_000_000
 
 
 @dataclass(frozen=True)
@@ -218,6 +222,49 @@ class Model:
         system = self._discretise(params, dt, u.shape[0], steady=x0 == "steady")
         return _run(system, u, x0, chunk_steps)
 
+    def stepper(self, params, dt: float = 1.0, x0: str = "zero") -> Stepper:
+        """Simulate every parameter set one input sample at a time, as it is logged.
+
+        Parameters
+        ----------
+        params, dt, x0
+            As for `simulate`; ``x0="steady"`` starts in the steady state at
+            the first input stepped.
+
+        Returns
+        -------
+        Stepper
+            ``stepper.step(u_k)`` returns the output of every sample at step
+            k, bit for bit column k of `simulate` on the inputs stepped so far.
+            (One exception: `simulate` caps dead times longer than its record,
+            which only see the input before t=0; with ``x0="steady"`` such a
+            sample's output can then differ in the last bits.)
+
+        Raises
+        ------
+        ValueError
+            As for `simulate`, or for a dead time of more than 10 million steps
+            (the stepper keeps the input history of the longest dead time).
+
+        Examples
+        --------
+        >>> from dynia.models import FOPDT
+        >>> stepper = FOPDT().stepper([[1.0, 0.0, 2.0]])
+        >>> [float(stepper.step(u_k)[0]) for u_k in [1.0, 2.0, 3.0, 4.0]]
+        [0.0, 0.0, 0.0, 1.0]
+        """
+        params = self._check_params(params)
+        dt = _check_dt(dt)
+        x0 = _check_x0(x0)
+        system = self._discretise(params, dt, _STEPPER_MAX_DELAY_STEPS, steady=x0 == "steady")
+        longest = int(system.delay_steps.max())
+        if longest > _STEPPER_MAX_DELAY_STEPS:
+            raise ValueError(
+                f"a dead time of more than {_STEPPER_MAX_DELAY_STEPS} steps of dt={dt} is too long "
+                "for a stepper, which keeps the input history of the longest dead time"
+            )
+        return Stepper(system, x0)
+
     def finite_samples(self, params, u, dt: float = 1.0, x0: str = "zero") -> np.ndarray:
         """Which parameter sets simulate to finite output over the whole record.
 
@@ -282,6 +329,72 @@ class Model:
         self, params: np.ndarray, dt: float, n_steps: int, steady: bool
     ) -> _DiscreteSystem:
         raise NotImplementedError
+
+
+class Stepper:
+    """Every parameter set of a model advanced one input sample at a time.
+
+    Made by `Model.stepper`. The arithmetic is the time loop of `simulate`
+    (both call the same per-step update), so the outputs agree bit for bit.
+    Only the input history of the longest dead time is kept: memory does
+    not grow with the number of steps.
+
+    Attributes
+    ----------
+    steps : int
+        Number of input samples stepped so far (the next one is step
+        ``steps``, at ``t = steps*dt``).
+    """
+
+    def __init__(self, system: _DiscreteSystem, x0: str):
+        self._system = system
+        self._x0 = x0
+        delays = system.delay_steps
+        # With one common delay the delayed input is a scalar, as in _run.
+        self._delays = delays[:1] if np.all(delays == delays[0]) else delays
+        self._history = np.empty(int(delays.max()) + 2)
+        self._index = np.empty(self._delays.shape, dtype=np.int64)
+        self._delayed = [np.empty(self._delays.shape), np.empty(self._delays.shape)]
+        self._output = np.empty(system.c.shape[1])
+        self._view = self._output.view()
+        self._view.flags.writeable = False
+        self._recursion = None
+        self.steps = 0
+
+    def step(self, u_k) -> np.ndarray:
+        """Take the input ``u_k`` of step k and return every sample's output y[k].
+
+        Returns
+        -------
+        ndarray, shape (n_samples,)
+            A read-only view that the next call overwrites; copy it to keep it.
+        """
+        if isinstance(u_k, bool) or not isinstance(u_k, numbers.Real):
+            raise TypeError(f"u_k must be a real number; got {type(u_k).__name__}")
+        u_k = float(u_k)
+        if not np.isfinite(u_k):
+            raise ValueError(f"u_k must be finite; got {u_k} at step {self.steps}")
+        if self._recursion is None:
+            self._recursion = _Recursion(
+                self._system, _initial_state(self._system, self._x0, u_k)
+            )
+            # Slots not yet written stand for the input before t=0.
+            self._history.fill(u_k if self._x0 == "steady" else 0.0)
+        self._history[self.steps % self._history.shape[0]] = u_k
+        inputs = [self._delayed_input(0)]
+        if self._recursion.needs_prev:
+            inputs.append(self._delayed_input(1))
+        self._recursion.step(self._output, inputs)
+        self.steps += 1
+        return self._view
+
+    def _delayed_input(self, extra: int):
+        """u[k - d - extra] per sample (a scalar for one common delay)."""
+        if self._delays.shape[0] == 1:
+            return self._history[(self.steps - int(self._delays[0]) - extra) % self._history.shape[0]]
+        np.subtract(self.steps - extra, self._delays, out=self._index)
+        np.remainder(self._index, self._history.shape[0], out=self._index)
+        return np.take(self._history, self._index, out=self._delayed[extra])
 
 
 class _Lag(Model):
@@ -630,35 +743,12 @@ def _run(
     system: _DiscreteSystem, u: np.ndarray, x0: str, chunk_steps: int
 ) -> Iterator[np.ndarray]:
     """Advance all samples through ``u`` and yield (n_samples, m) output chunks."""
-    n_states, n_samples = system.c.shape
+    n_samples = system.c.shape[1]
     n_steps = u.shape[0]
     # Slot 0 stands for every time before t=0, so clipping indices at -1 and
     # shifting by one gathers the pre-history without padding by the delay.
     padded_input = np.concatenate(([u[0] if x0 == "steady" else 0.0], u))
-
-    # Sources of the linear combinations: the states, then u[k-d], u[k-d-1].
-    now_source, prev_source = n_states, n_states + 1
-    state_terms = [
-        _nonzero_terms(
-            [(system.phi[i, j], j) for j in range(n_states)]
-            + [(system.gamma_now[i], now_source), (system.gamma_prev[i], prev_source)]
-        )
-        for i in range(n_states)
-    ]
-    output_terms = _nonzero_terms(
-        [(system.c[i], i) for i in range(n_states)]
-        + [(system.feed_now, now_source), (system.feed_prev, prev_source)]
-    )
-    needs_prev = any(
-        source == prev_source for terms in [*state_terms, output_terms] for _, source in terms
-    )
-
-    if x0 == "steady":
-        state = system.steady_state * u[0]
-    else:
-        state = np.zeros((n_states, n_samples))
-    current, upcoming = list(state), list(np.empty_like(state))
-    scratch = np.empty(n_samples)
+    recursion = _Recursion(system, _initial_state(system, x0, u[0]))
     time_major = np.empty((min(chunk_steps, n_steps), n_samples))
 
     delays = system.delay_steps
@@ -669,19 +759,66 @@ def _run(
         stop = min(start + chunk_steps, n_steps)
         source_index = np.arange(start, stop)[:, None] - offsets[None, :]
         inputs = [padded_input[np.maximum(source_index, -1) + 1]]
-        if needs_prev:
+        if recursion.needs_prev:
             inputs.append(padded_input[np.maximum(source_index - 1, -1) + 1])
         if offsets.shape[0] == 1:
             inputs = [column[:, 0] for column in inputs]
         for step in range(stop - start):
-            sources = current + [rows[step] for rows in inputs]
-            _combine(time_major[step], output_terms, sources, scratch)
-            if start + step + 1 == n_steps:
-                break  # the state after the record is never output; it could only overflow
-            for row, terms in zip(upcoming, state_terms):
-                _combine(row, terms, sources, scratch)
-            current, upcoming = upcoming, current
+            # The state after the record is never output; advancing to it could only overflow.
+            recursion.step(time_major[step], [rows[step] for rows in inputs],
+                           advance=start + step + 1 < n_steps)
         yield _to_sample_major(time_major[: stop - start])
+
+
+def _initial_state(system: _DiscreteSystem, x0: str, first_input: float) -> np.ndarray:
+    """State at t=0, (n_states, n_samples): zero, or the steady state at the first input."""
+    if x0 == "steady":
+        return system.steady_state * first_input
+    return np.zeros(system.c.shape)
+
+
+class _Recursion:
+    """One time step of a discretised system for every sample at once.
+
+    The single place where outputs and states are computed: the batch loop of
+    `_run` and `Stepper` both call `step`, so they agree bit for bit.
+    """
+
+    def __init__(self, system: _DiscreteSystem, state: np.ndarray):
+        n_states, n_samples = system.c.shape
+        # Sources of the linear combinations: the states, then u[k-d], u[k-d-1].
+        now_source, prev_source = n_states, n_states + 1
+        self._state_terms = [
+            _nonzero_terms(
+                [(system.phi[i, j], j) for j in range(n_states)]
+                + [(system.gamma_now[i], now_source), (system.gamma_prev[i], prev_source)]
+            )
+            for i in range(n_states)
+        ]
+        self._output_terms = _nonzero_terms(
+            [(system.c[i], i) for i in range(n_states)]
+            + [(system.feed_now, now_source), (system.feed_prev, prev_source)]
+        )
+        self.needs_prev = any(
+            source == prev_source
+            for terms in [*self._state_terms, self._output_terms]
+            for _, source in terms
+        )
+        self._current, self._upcoming = list(state), list(np.empty_like(state))
+        self._scratch = np.empty(n_samples)
+
+    def step(self, out: np.ndarray, inputs: list, advance: bool = True) -> None:
+        """Write y[k] into ``out`` and, if ``advance``, move the state to x[k+1].
+
+        ``inputs`` is ``[u[k-d]]``, or ``[u[k-d], u[k-d-1]]`` when
+        `needs_prev`; each a scalar (one common delay) or (n_samples,).
+        """
+        sources = self._current + inputs
+        _combine(out, self._output_terms, sources, self._scratch)
+        if advance:
+            for row, terms in zip(self._upcoming, self._state_terms):
+                _combine(row, terms, sources, self._scratch)
+            self._current, self._upcoming = self._upcoming, self._current
 
 
 def _nonzero_terms(terms):

@@ -1,0 +1,329 @@
+"""Semi-online DYNIA (thesis section 4.3): analyse each sample as the logging system records it.
+
+The thesis proposes to sample the parameters once and then, whenever the
+logging system records a new input/output pair, simulate only that step and
+run one window of the moving-window calculations. :class:`OnlineDynia` does
+this with a window that ends at the newest step: the window at step ``t``
+holds steps ``t-2n .. t`` (clipped to the start of the record), the
+``window="trailing"`` of :func:`dynia.analysis.moving_window`. Its result for
+step ``t`` is therefore final as soon as step ``t`` is logged, and the whole
+history equals the batch analysis ``dynia.run(..., window="trailing")`` on
+the same record and seed, bit for bit.
+
+Shapes follow the package convention (see :mod:`dynia.analysis`); one update
+gives one time step of it: ``ic`` (n_params,), ``ci`` (n_params, 2) as
+[lower, upper], ``gradient`` (n_params, n_bins).
+
+How an update works
+-------------------
+1. Every parameter set's model advances one step (:meth:`dynia.models.Model.stepper`,
+   the same arithmetic as the batch simulation).
+2. Their absolute errors against the new measurement go into a ring buffer
+   of the window's 2n+1 steps (a missing measurement, NaN, is a row of
+   zeros and does not count as a point).
+3. Each sample's window sum is added up oldest to newest, exactly as the
+   batch engine adds it (a running sum would drift by rounding and could
+   reorder near-ties), divided by the number of measured points.
+4. The engine's own flavour code ranks the samples, keeps the behavioural
+   set and reads off the limits, the IC and the gradient.
+
+The cost is O(n_samples x (2n+1)) per update and memory is fixed: nothing
+grows with the number of steps.
+"""
+import numbers
+
+import numpy as np
+
+from . import _checks
+from .analysis import FLAVOURS, _McatFlavour, _ThesisFlavour, _WeightedFlavour
+from .models import Model
+from .pipeline import _ordered_bounds
+from .result import DyniaResult
+from .sampling import SAMPLERS, sample
+
+__all__ = ["OnlineDynia"]
+
+_FLAVOUR_CLASSES = {"thesis": _ThesisFlavour, "weighted": _WeightedFlavour, "mcat": _McatFlavour}
+
+
+class OnlineDynia:
+    """DYNIA updated one logged sample at a time, on a fixed Monte Carlo sample.
+
+    Parameters
+    ----------
+    model : dynia.models.Model
+        For example ``dynia.models.FirstOrder()``.
+    bounds : mapping of str to (low, high)
+        Sampling range of every model parameter; the parameter axis of every
+        result follows this order (as in :func:`dynia.run`).
+    n_samples : int, default 2000
+        Number of parameter sets, drawn once.
+    n : int, default 10
+        Half window: the window at step t holds the 2n+1 steps t-2n .. t.
+    percentage, bins, conf_level, flavour
+        As :func:`dynia.analysis.moving_window`.
+    dt : float, default 1.0
+        Sample time of the log.
+    rng : numpy.random.Generator or int, optional
+        Source of the parameter draw; the same seed draws the same
+        ``.samples`` as :func:`dynia.run`.
+    x0 : {"zero", "steady"}, default "zero"
+        Initial state of every simulation; ``"steady"`` is the steady state
+        at the first input logged.
+    sampler : {"uniform", "lhs", "sobol"}, default "uniform"
+        How the box is sampled (:mod:`dynia.sampling`). The adaptive schemes
+        of :func:`dynia.run` need the whole record and are not available.
+    min_points : int, default 1
+        A window with fewer measured points than this has NaN results, so
+        the first results appear once ``min_points`` measurements are in.
+
+    Attributes
+    ----------
+    names : tuple of str
+        Parameter names, in the order of ``bounds``.
+    samples : ndarray (n_samples, n_params)
+        The parameter sets, fixed for the object's life.
+    bounds : ndarray (n_params, 2)
+    bin_centres : ndarray (n_params, n_bins)
+    steps : int
+        Number of samples fed so far.
+    ic, ci, gradient : ndarray
+        Results of the latest step, (n_params,), (n_params, 2) and
+        (n_params, n_bins); NaN before the first usable window.
+
+    Notes
+    -----
+    Equality with ``dynia.run(u, y, model, bounds, window="trailing", ...)``
+    (same seed, sampler, n_samples and settings) holds whenever that run drops
+    no sample (``settings["n_dropped"] == 0``), which is always the case for
+    the lag models. The batch run leaves out every parameter set whose
+    simulation overflows anywhere in the record; online, the future is
+    unknown, so a set whose simulated output becomes non-finite is marked
+    *diverged* from then on and ranks last in every window: its cost is
+    infinite ("thesis", "weighted"), or its MAE is the window's largest
+    finite MAE ("mcat", whose likelihood divides by that maximum). Windows
+    with fewer finite sets than the behavioural set needs have NaN results.
+    ``.n_diverged`` counts them. With ``x0="steady"``, a dead time longer
+    than the whole record can differ from the batch run in the last bits
+    (see :meth:`dynia.models.Model.stepper`).
+
+    Examples
+    --------
+    >>> import numpy as np, dynia
+    >>> from dynia.online import OnlineDynia
+    >>> u = np.r_[np.zeros(20), np.ones(40)]
+    >>> y = dynia.models.FirstOrder().simulate([[2.0, 3.0]], u)[0]
+    >>> online = OnlineDynia(dynia.models.FirstOrder(), {"K": (0, 7), "T": (0, 7)},
+    ...                      n_samples=500, n=5, rng=1)
+    >>> for u_t, y_t in zip(u, y):
+    ...     ic, ci, gradient = online.update(u_t, y_t)
+    >>> ic.shape, ci.shape, gradient.shape
+    ((2,), (2, 2), (2, 40))
+    >>> batch = dynia.run(u, y, dynia.models.FirstOrder(), {"K": (0, 7), "T": (0, 7)},
+    ...                   n_samples=500, n=5, rng=1, window="trailing")
+    >>> bool(np.array_equal(ic, batch.ic[:, -1]))
+    True
+    """
+
+    def __init__(self, model, bounds, *, n_samples=2000, n=10, percentage=10, bins=40,
+                 conf_level=90, flavour="thesis", dt=1.0, rng=None, x0="zero",
+                 sampler="uniform", min_points=1):
+        if not isinstance(model, Model):
+            raise TypeError(f"model must be a dynia.models.Model, e.g. dynia.models.FirstOrder(); "
+                            f"got {type(model).__name__}")
+        names, box = _ordered_bounds(bounds, model)
+        if sampler not in SAMPLERS:
+            raise ValueError(f"sampler must be one of {tuple(SAMPLERS)} (the adaptive schemes need the "
+                             f"whole record and are not available online); got {sampler!r}")
+        if flavour not in FLAVOURS:
+            raise ValueError(f"flavour must be one of {FLAVOURS}; got {flavour!r}")
+        n_samples = _checks.whole_number(n_samples, "n_samples", minimum=1)
+        self._n = _checks.whole_number(n, "n", minimum=0)
+        self._min_points = _checks.whole_number(min_points, "min_points", minimum=1)
+        bins = _checks.whole_number(bins, "bins", minimum=1)
+        conf_level = _checks.open_interval(conf_level, "conf_level", 0, 100)
+        percentage = _checks.percentage_value(percentage)
+
+        self.names = tuple(names)
+        self.bounds = box
+        self.samples = sample(sampler, n_samples, box, np.random.default_rng(rng))
+        self.samples.flags.writeable = False
+        model_order = [names.index(name) for name in model.names]
+        self._model_params = self.samples[:, model_order]
+        self._model = model
+        self._x0 = x0
+        self._flavour_args = (self.samples, box, percentage, bins, conf_level)
+        # Built once here so that bad settings fail now rather than at the first update.
+        self._flavour = _FLAVOUR_CLASSES[flavour](*self._flavour_args)
+        self._stepper = model.stepper(self._model_params, dt=dt, x0=x0)  # checks dt and x0
+        self._dt = float(dt)
+        self.bin_centres = self._flavour.bin_centres
+        self._settings = dict(
+            n=self._n, window="trailing", percentage=percentage, bins=bins, conf_level=conf_level,
+            flavour=flavour, min_points=self._min_points, n_samples=n_samples,
+            n_behavioural=self._flavour.count, dt=self._dt, sampler=sampler, x0=x0,
+            model=type(model).__name__,
+            bounds={name: tuple(map(float, row)) for name, row in zip(names, box)},
+            n_sampled=n_samples, n_dropped=0)
+
+        width = 2 * self._n + 1
+        self._errors = np.zeros((width, n_samples))  # ring: row t % width holds step t
+        self._measured = np.zeros(width, dtype=bool)
+        self._mae = np.empty((1, n_samples))
+        self._finite = np.empty(n_samples, dtype=bool)
+        self._diverged = np.zeros(n_samples, dtype=bool)
+        self.steps = 0
+        self._blank_results()
+
+    @property
+    def time(self):
+        """Time of the latest step, ``(steps - 1) * dt``; NaN before the first update."""
+        return (self.steps - 1) * self._dt if self.steps else float("nan")
+
+    @property
+    def n_diverged(self):
+        """Parameter sets whose simulated output has become non-finite (see Notes)."""
+        return int(self._diverged.sum())
+
+    def reset(self):
+        """Start again at step 0 with the same samples, as a new object would."""
+        self._flavour = _FLAVOUR_CLASSES[self._settings["flavour"]](*self._flavour_args)
+        self._stepper = self._model.stepper(self._model_params, dt=self._dt, x0=self._x0)
+        self._errors.fill(0.0)
+        self._measured.fill(False)
+        self._diverged.fill(False)
+        self.steps = 0
+        self._blank_results()
+
+    def update(self, u_t, y_t):
+        """Feed the input and the measured output logged at the next step.
+
+        Parameters
+        ----------
+        u_t : float
+            Input at step ``steps`` (finite).
+        y_t : float
+            Measured output at that step; NaN marks a missing measurement.
+
+        Returns
+        -------
+        ic : ndarray (n_params,)
+        ci : ndarray (n_params, 2)
+            Lower and upper confidence limit.
+        gradient : ndarray (n_params, n_bins)
+            The results of the window ending at this step, also kept as
+            ``.ic``, ``.ci`` and ``.gradient``; new arrays at every update.
+        """
+        u_t = _scalar(u_t, "u_t", self.steps, allow_nan=False)
+        y_t = _scalar(y_t, "y_t", self.steps, allow_nan=True)
+        width = self._errors.shape[0]
+        slot = self.steps % width
+        errors = self._errors[slot]
+        # An unstable set may overflow; it is caught below, so numpy need not warn.
+        with np.errstate(over="ignore", invalid="ignore"):
+            simulated = self._stepper.step(u_t)
+            np.isfinite(simulated, out=self._finite)
+            if not self._finite.all():
+                self._diverged |= ~self._finite
+            self._measured[slot] = y_t == y_t
+            if self._measured[slot]:
+                np.subtract(simulated, y_t, out=errors)  # |s - y| == |y - s| bit for bit
+                np.abs(errors, out=errors)
+            else:
+                errors.fill(0.0)
+            self.steps += 1
+            usable = self._window_mean()
+        self.ic, self.ci, self.gradient = self._analyse(usable)
+        return self.ic, self.ci, self.gradient
+
+    def replay(self, u, y):
+        """Feed a whole record, step by step as if live, and collect every step's results.
+
+        Continues from the current state (call :meth:`reset` first to start
+        over). Both arrays are checked before anything is fed.
+
+        Parameters
+        ----------
+        u, y : array_like, shape (n_steps,)
+            Input and measured output (NaN marks a missing measurement).
+
+        Returns
+        -------
+        DyniaResult
+            ``.ic`` (n_params, n_steps), ``.ci`` (n_params, n_steps, 2),
+            ``.gradient`` (n_params, n_bins, n_steps), with ``.time`` continuing
+            from the steps fed before; comparable with
+            ``dynia.run(..., window="trailing")`` on the same record.
+        """
+        u = _checks.as_1d_float(u, "u")
+        y = _checks.as_1d_float(y, "y", allow_nan=True)
+        if u.size != y.size:
+            raise ValueError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
+        n_params, n_bins = self.bin_centres.shape
+        ic = np.empty((n_params, u.size))
+        ci = np.empty((n_params, u.size, 2))
+        gradient = np.empty((n_params, n_bins, u.size))
+        first = self.steps
+        for step, (u_t, y_t) in enumerate(zip(u.tolist(), y.tolist())):
+            ic[:, step], ci[:, step], gradient[:, :, step] = self.update(u_t, y_t)
+        settings = dict(self._settings, n_diverged=self.n_diverged)
+        return DyniaResult(names=self.names, samples=np.array(self.samples), bounds=self.bounds.copy(),
+                           time=(first + np.arange(u.size)) * self._dt, ic=ic, ci=ci,
+                           gradient=gradient, bin_centres=self.bin_centres, settings=settings)
+
+    def _window_mean(self):
+        """Each sample's MAE over the window ending at the newest step, into ``_mae``.
+
+        Returns whether the window has ``min_points`` measured points.
+        """
+        width = self._errors.shape[0]
+        oldest = self.steps % width  # the slot after the newest is the oldest
+        total = self._mae[0]
+        # Oldest to newest, the batch engine's order; slots before the record
+        # are zeros, which the engine's padding adds as well.
+        np.copyto(total, self._errors[oldest])
+        for age in range(1, width):
+            total += self._errors[(oldest + age) % width]
+        present = int(self._measured.sum())
+        if present:
+            total /= float(present)
+        return present >= self._min_points
+
+    def _analyse(self, usable):
+        """Rank, select and read off the window's results with the engine's flavour code."""
+        if self._diverged.any():
+            usable = self._rank_diverged_last() and usable
+        ic, ci, gradient = self._flavour.analyse(self._mae, np.array([usable]))
+        return ic[:, 0], ci[:, 0], gradient[:, :, 0]
+
+    def _rank_diverged_last(self):
+        """Give diverged sets the worst MAE; False if too few finite sets remain to analyse."""
+        finite_left = self._diverged.size - int(self._diverged.sum())
+        if finite_left < max(self._flavour.count, 1):
+            return False
+        mae = self._mae[0]
+        if isinstance(self._flavour, _McatFlavour):
+            mae[self._diverged] = mae[~self._diverged].max()
+        else:
+            mae[self._diverged] = np.inf
+        return True
+
+    def _blank_results(self):
+        n_params, n_bins = self.bin_centres.shape
+        self.ic = np.full(n_params, np.nan)
+        self.ci = np.full((n_params, 2), np.nan)
+        self.gradient = np.full((n_params, n_bins), np.nan)
+
+
+def _scalar(value, name, step, *, allow_nan):
+    """``value`` as a float, or a clear TypeError/ValueError naming it and the step."""
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value[()]
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{name} must be a real number (one logged value); got {type(value).__name__} "
+                        f"at step {step}")
+    value = float(value)
+    if np.isinf(value) or (np.isnan(value) and not allow_nan):
+        raise ValueError(f"{name} must be finite at step {step}; got {value}"
+                         + (" (NaN marks a missing measurement; inf is not allowed)" if allow_nan else ""))
+    return value
