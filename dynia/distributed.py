@@ -1,0 +1,377 @@
+"""Parallel and distributed DYNIA on Dask: :func:`dynia.run` over the workers of a cluster.
+
+:func:`run` takes the arguments of :func:`dynia.run` and returns the same
+:class:`~dynia.result.DyniaResult`, bit for bit, but simulates and analyses on
+the workers of a ``dask.distributed`` cluster: the cores of this machine by
+default, or a cluster of many machines. Arrays follow the shape convention of
+:mod:`dynia.analysis`.
+
+How the work is split
+---------------------
+The samples are drawn on the client exactly as :func:`dynia.run` draws them
+(same ``rng``, same samples), then cut into chunks of ``sample_chunks``
+consecutive samples, and time into chunks of ``time_chunks`` steps.
+
+0. One task per sample chunk asks the model which of its samples simulate to
+   finite output (:meth:`dynia.models.Model.finite_samples`); the others are
+   dropped, as :func:`dynia.run` drops them.
+1. One task per chunk of the samples kept simulates it over the whole record
+   (the state is carried through time, so a chunk runs from the first step
+   to the last) and cuts, with the engine's own code, each time chunk's
+   window inputs: the absolute errors over the chunk and its halo for the
+   compiled engine, the window means for the numpy engine (a sample's
+   window mean depends on its own errors only, so those of a sample chunk
+   are the single-process engine's).
+2. One task per time chunk joins these blocks of all sample chunks, in
+   sample order, and runs the flavour's analysis: the behavioural set is
+   selected among all samples of a window at once. MCAT's likelihood carries
+   state from window to window, so for ``flavour="mcat"`` these tasks form a
+   chain, each taking the state the previous one left.
+
+Only the results, (n_params, n_steps) and (n_params, n_bins, n_steps), are
+gathered on the client. The blocks stay on the workers between the stages:
+together 8 x n_samples x n_steps bytes (plus the halos), since a chunk's
+simulation cannot be paused and resumed, and released time chunk by time
+chunk as the windows are analysed (dask spills to disk what does not fit in
+a worker's memory limit).
+
+An existing cluster
+-------------------
+Start a scheduler on one machine and workers on every machine; the workers
+need the same version of dynia and its dependencies installed (``pip install
+'dynia[distributed]'``)::
+
+    dask scheduler                                              # prints tcp://HOST:8786
+    dask worker tcp://HOST:8786 --nworkers 4 --nthreads 1       # on each machine
+
+then connect a client and pass it; :func:`run` uses it and leaves it open:
+
+>>> from distributed import Client                          # doctest: +SKIP
+>>> client = Client("tcp://HOST:8786")                      # doctest: +SKIP
+>>> res = dynia.distributed.run(u, y, model, bounds, client=client,
+...                             n_samples=100_000)           # doctest: +SKIP
+
+The results equal :func:`dynia.run`'s bit for bit when every worker runs the
+same numpy on the same kind of processor: numpy's vectorised ``exp``, which
+discretises the models, may round differently in the last bit on processors
+with other vector instructions. Without ``client``, :func:`run` starts a
+local cluster of one single-threaded worker process per core and closes it
+at the end; worker processes are started afresh, so a script calling it must
+guard its entry point with ``if __name__ == "__main__":``.
+"""
+import copy
+import math
+import operator
+import os
+from contextlib import contextmanager
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import _checks
+from ._fast import CompiledErrors
+from .analysis import (FLAVOURS, _CompiledFlavour, _McatFlavour, _StreamedErrors, _ThesisFlavour,
+                       _WeightedFlavour, _window_inputs, _window_mean, compiled_engine, window_halos)
+from .pipeline import _ordered_bounds
+from .result import DyniaResult
+from .sampling import SAMPLERS, sample
+
+__all__ = ["run"]
+
+_FLAVOUR_CLASSES = {"thesis": _ThesisFlavour, "weighted": _WeightedFlavour, "mcat": _McatFlavour}
+
+# Flavours whose analysis of a window depends on the windows before it.
+_STATEFUL_FLAVOURS = ("mcat",)
+
+# Default ceiling on the values of one time chunk's blocks: 4e6 float64 = 32 MB.
+_BLOCK_VALUES = 4_000_000
+
+
+def run(u, y, model, bounds, *, client=None, sample_chunks=None, time_chunks=None, dt=1.0,
+        n_samples=2000, sampler="uniform", n=10, percentage=10, bins=40, conf_level=90,
+        flavour="thesis", x0="zero", rng=None, progress=False, min_points=1, window="centred",
+        engine="auto"):
+    """:func:`dynia.run` on a ``dask.distributed`` cluster, with the same result.
+
+    Parameters
+    ----------
+    u, y : array_like, shape (n_steps,)
+        Input and measured output; NaN in ``y`` marks a missing measurement.
+    model : dynia.models.Model
+        The model simulated; it is sent to the workers (pickled).
+    bounds : mapping of str to (low, high)
+        Sampling range of every model parameter, as for :func:`dynia.run`.
+    client : distributed.Client, optional
+        The cluster to run on; left open. By default a local cluster of one
+        single-threaded worker process per core is started and closed.
+    sample_chunks : int, optional
+        Samples per simulation task (default: the samples shared evenly
+        among the worker threads).
+    time_chunks : int, optional
+        Time steps per analysis task (default: about four tasks per worker
+        thread, and at most about 4e6 values per task). Any size works,
+        also one below the window's reach ``n``.
+    dt, n_samples, n, percentage, bins, conf_level, flavour, x0, rng, progress, min_points, window
+        As :func:`dynia.run`.
+    engine : {"auto", "numba", "numpy"}, default "auto"
+        As :func:`dynia.run`: the compiled kernels (simulation and windows)
+        or plain numpy on the workers; "auto" takes the compiled ones where
+        they cover the flavour. Results do not depend on it.
+    sampler : {"uniform", "lhs", "sobol"}
+        As :func:`dynia.run`; its adaptive schemes need every simulation at
+        once and run on one machine only.
+
+    Returns
+    -------
+    DyniaResult
+        Equal to ``dynia.run``'s with the same arguments, whatever the chunk
+        sizes: ``ic``, ``ci``, ``gradient``, ``samples`` and ``settings``.
+        (``dynia.run``'s ``workers``, its threads, has no counterpart here:
+        the cluster's workers do the work.)
+
+    Raises
+    ------
+    ImportError
+        If ``dask.distributed`` is not installed.
+    TypeError
+        If ``client`` is not a ``distributed.Client``.
+    ValueError
+        For a bad argument, as :func:`dynia.run`, or a chunk size that is
+        not a whole number >= 1. Errors of a simulation on a worker name the
+        sample chunk, since they count samples from its start.
+
+    Examples
+    --------
+    >>> import numpy as np, dynia, dynia.distributed
+    >>> from distributed import Client, LocalCluster
+    >>> u = np.r_[np.zeros(20), np.full(60, 1.0)]
+    >>> y = dynia.models.FirstOrder().simulate([[2.0, 3.0]], u)[0]
+    >>> bounds = {"K": (0, 7), "T": (0, 7)}
+    >>> with LocalCluster(n_workers=2, processes=False, dashboard_address=None) as cluster, \\
+    ...         Client(cluster) as client:
+    ...     res = dynia.distributed.run(u, y, dynia.models.FirstOrder(), bounds, client=client,
+    ...                                 sample_chunks=700, time_chunks=30, n=5, rng=1)
+    >>> same = dynia.run(u, y, dynia.models.FirstOrder(), bounds, n=5, rng=1)
+    >>> np.array_equal(res.ic, same.ic) and np.array_equal(res.gradient, same.gradient)
+    True
+    """
+    distributed = _import_distributed()
+    if client is not None and not isinstance(client, distributed.Client):
+        raise TypeError(f"client must be a distributed.Client, or None for a local cluster; "
+                        f"got {type(client).__name__}")
+    u = _checks.as_1d_float(u, "u")
+    y = _checks.as_1d_float(y, "y", allow_nan=True)
+    if u.size != y.size:
+        raise ValueError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
+    names, box = _ordered_bounds(bounds, model)
+    if sampler not in SAMPLERS:
+        raise ValueError(f"sampler must be one of {tuple(SAMPLERS)} for the distributed run; got {sampler!r} "
+                         "(the adaptive schemes of dynia.adaptive run on one machine: use dynia.run)")
+    n_samples = _checks.whole_number(n_samples, "n_samples", minimum=1)
+    n = _checks.whole_number(n, "n", minimum=0)
+    before, after = window_halos(n, window)
+    bins = _checks.whole_number(bins, "bins", minimum=1)
+    min_points = _checks.whole_number(min_points, "min_points", minimum=1)
+    conf_level = _checks.open_interval(conf_level, "conf_level", 0, 100)
+    percentage = _checks.percentage_value(percentage)
+    if flavour not in FLAVOURS:
+        raise ValueError(f"flavour must be one of {FLAVOURS}; got {flavour!r}")
+    compiled = compiled_engine(engine, flavour)
+    if sample_chunks is not None:
+        sample_chunks = _checks.whole_number(sample_chunks, "sample_chunks", minimum=1)
+    if time_chunks is not None:
+        time_chunks = _checks.whole_number(time_chunks, "time_chunks", minimum=1)
+
+    samples = sample(sampler, n_samples, box, np.random.default_rng(rng))
+    model_order = [names.index(name) for name in model.names]
+    # simulate_chunks checks u, dt and x0 (and the model's constraints on the
+    # first sample) when called, so mistakes surface here, before any cluster.
+    model.simulate_chunks(samples[:1, model_order], u, dt=dt, x0=x0)
+
+    with _connected(client, distributed) as client:
+        threads = max(1, sum(client.nthreads().values()))
+        if sample_chunks is None:
+            sample_chunks = math.ceil(n_samples / threads)
+        u_data, y_data = client.scatter([u, y], broadcast=True, hash=False)
+        finite = np.concatenate(client.gather([
+            client.submit(_finite_rows, model, rows, u_data, dt, x0, first, pure=False)
+            for first, rows in _scatter_rows(client, samples[:, model_order], sample_chunks)]))
+        if not finite.any():
+            raise ValueError(f"the simulation of every one of the {n_samples} parameter sets overflowed; "
+                             "check the model and the parameter ranges")
+        samples = samples[finite]
+        if compiled:
+            flavour_impl = _CompiledFlavour(samples, box, percentage, bins, conf_level, flavour, min_points)
+        else:
+            flavour_impl = _FLAVOUR_CLASSES[flavour](samples, box, percentage, bins, conf_level)
+        n_steps = y.size
+        if time_chunks is None:
+            time_chunks = max(1, min(math.ceil(n_steps / (4 * threads)), _BLOCK_VALUES // samples.shape[0]))
+        windows = _Windows(before, after, min_points, compiled)
+        chunk_inputs = [client.submit(_chunk_window_inputs, model, rows, u_data, y_data, dt, x0, windows,
+                                      time_chunks, first, pure=False)
+                        for first, rows in _scatter_rows(client, samples[:, model_order], sample_chunks)]
+        ic, ci, gradient = _analyse_on_cluster(client, chunk_inputs, flavour_impl, windows, n_steps,
+                                               time_chunks, stateful=flavour in _STATEFUL_FLAVOURS,
+                                               progress=progress)
+
+    settings = dict(n=n, window=window, percentage=percentage, bins=bins, conf_level=conf_level,
+                    flavour=flavour, min_points=min_points, n_samples=samples.shape[0],
+                    n_behavioural=flavour_impl.count, engine="numba" if compiled else "numpy",
+                    dt=dt, sampler=sampler, x0=x0, model=type(model).__name__,
+                    bounds={name: tuple(map(float, row)) for name, row in zip(names, box)},
+                    n_sampled=n_samples, n_dropped=int(n_samples - samples.shape[0]))
+    return DyniaResult(names=tuple(names), samples=samples, bounds=box,
+                       time=np.arange(n_steps) * float(dt), ic=ic, ci=ci, gradient=gradient,
+                       bin_centres=flavour_impl.bin_centres, settings=settings)
+
+
+def _analyse_on_cluster(client, chunk_inputs, flavour, windows, n_steps, time_chunks, *, stateful,
+                        progress):
+    """Stage 2 from the futures of stage 1: one task per time chunk; ic, ci, gradient on the client.
+
+    ``chunk_inputs`` (the stage-1 futures, in sample order) is emptied, so
+    that each chunk's output is released once split into time blocks. A
+    stateful flavour's tasks form a chain in time order, each starting
+    from the state the one before left.
+    """
+    from distributed import as_completed
+
+    spans = [(start, min(start + time_chunks, n_steps)) for start in range(0, n_steps, time_chunks)]
+    # blocks[s][k]: the window inputs of sample chunk s for time chunk k
+    blocks = [[client.submit(operator.getitem, inputs, k, pure=False) for k in range(len(spans))]
+              for inputs in chunk_inputs]
+    chunk_inputs.clear()
+    state = client.scatter(flavour, hash=False)
+    chunk_spans = {}
+    for k, (start, stop) in enumerate(spans):
+        analysed = client.submit(_analyse_time_chunk, state, windows, [row[k] for row in blocks], stop - start,
+                                 pure=False)
+        chunk_spans[client.submit(operator.getitem, analysed, 0, pure=False)] = (start, stop)
+        if stateful:
+            state = client.submit(operator.getitem, analysed, 1, pure=False)
+    del blocks  # the analysis tasks hold the blocks they need; each goes once they are done
+
+    n_params = flavour.bin_centres.shape[0]
+    ic = np.empty((n_params, n_steps))
+    ci = np.empty((n_params, n_steps, 2))
+    gradient = np.empty((n_params, flavour.n_bins, n_steps))
+    finished = as_completed(chunk_spans, loop=client.loop)
+    if progress:
+        from tqdm.auto import tqdm
+        finished = tqdm(finished, total=len(chunk_spans), desc="DYNIA windows", unit="chunk")
+    for future in finished:
+        start, stop = chunk_spans.pop(future)
+        ic[:, start:stop], ci[:, start:stop], gradient[:, :, start:stop] = future.result()
+    return ic, ci, gradient
+
+
+def _import_distributed():
+    try:
+        import distributed
+    except ImportError:
+        raise ImportError("dynia.distributed needs dask.distributed: pip install 'dynia[distributed]'") from None
+    return distributed
+
+
+@contextmanager
+def _connected(client, distributed):
+    """The client given, left open, or a client of a new local cluster, closed on exit."""
+    if client is not None:
+        yield client
+        return
+    # Port 0: a free port for the scheduler's web server, which otherwise
+    # wants 8787 and warns when another cluster holds it.
+    with distributed.LocalCluster(n_workers=os.cpu_count() or 1, threads_per_worker=1, processes=True,
+                                  dashboard_address=":0") as cluster, \
+            distributed.Client(cluster, set_as_default=False) as own:
+        yield own
+
+
+def _scatter_rows(client, rows, size):
+    """Send consecutive chunks of ``size`` rows to the workers: (first row, future) pairs."""
+    firsts = range(0, rows.shape[0], size)
+    return zip(firsts, client.scatter([rows[first:first + size] for first in firsts], hash=False))
+
+
+@contextmanager
+def _sample_chunk_context(first, count):
+    """Name the sample chunk in a model's error, whose sample numbers count from its start."""
+    try:
+        yield
+    except ValueError as error:
+        raise ValueError(f"in the sample chunk of samples {first} to {first + count - 1} "
+                         f"(sample numbers below count from {first}): {error}") from error
+
+
+def _finite_rows(model, params, u, dt, x0, first):
+    """Stage 0: which samples of one chunk simulate to finite output, (rows,) bool."""
+    with _sample_chunk_context(first, params.shape[0]):
+        return model.finite_samples(params, u, dt=dt, x0=x0)
+
+
+@dataclass(frozen=True)
+class _Windows:
+    """The windows' reach and the engine's path from simulated errors to a flavour's analysis.
+
+    The compiled path hands the analysis the absolute errors of a time
+    chunk and its halo, time-major (m + slots - 1, rows), and forms the
+    window sums inside its kernel; the numpy path hands it the window means
+    (m, rows). Either block has the samples on axis 1, so the blocks of
+    consecutive sample chunks join along it.
+    """
+
+    before: int
+    after: int
+    min_points: int
+    compiled: bool
+
+    @property
+    def slots(self):
+        """Steps per window."""
+        return self.before + self.after + 1
+
+    def errors(self, model, params, u, y, dt, x0, time_chunks):
+        """The absolute errors of simulating ``params``, served in time order."""
+        if self.compiled:
+            # One thread: the cluster's workers are the parallelism (and no pool needs closing).
+            return CompiledErrors(model, params, u, y, dt=dt, x0=x0, workers=1)
+        sims = model.simulate_chunks(params, u, dt=dt, x0=x0, chunk_steps=time_chunks)
+        return _StreamedErrors(y, sims, params.shape[0])
+
+    def block(self, errors, start, stop, n_steps):
+        """One sample chunk's input to the windows at steps [start, stop), with its measured counts."""
+        window_errors, measured = _window_inputs(errors, start, stop, self.before, self.after, n_steps,
+                                                 time_major=self.compiled)
+        if self.compiled:
+            return window_errors, measured
+        return _window_mean(window_errors, measured, stop - start, self.slots)
+
+    def analyse(self, flavour, blocks, m):
+        """The flavour's (ic, ci, gradient) of m windows from the blocks of every sample chunk, in order."""
+        joined = np.concatenate([block for block, _ in blocks], axis=1)
+        counts = blocks[0][1]
+        if self.compiled:
+            return flavour.analyse_rows(joined, counts, m, self.slots)
+        return flavour.analyse(joined, counts >= self.min_points)
+
+
+def _chunk_window_inputs(model, params, u, y, dt, x0, windows, time_chunks, first):
+    """Stage 1: simulate one sample chunk over the record; its window inputs per time chunk."""
+    n_steps = y.size
+    with _sample_chunk_context(first, params.shape[0]):
+        errors = windows.errors(model, params, u, y, dt, x0, time_chunks)
+        return [windows.block(errors, start, min(start + time_chunks, n_steps), n_steps)
+                for start in range(0, n_steps, time_chunks)]
+
+
+def _analyse_time_chunk(flavour, windows, blocks, m):
+    """Stage 2: the analysis of one time chunk's m windows, from the blocks of all sample chunks.
+
+    Returns the chunk's (ic, ci, gradient) and the flavour after it, whose
+    state the next chunk of a stateful flavour starts from.
+    """
+    # A worker hands the same object to every task that needs it; analysing
+    # must not change the state other tasks start from.
+    flavour = copy.deepcopy(flavour)
+    return windows.analyse(flavour, blocks, m), flavour

@@ -1,0 +1,189 @@
+"""dynia.distributed.run against dynia.run: the same result bit for bit, whatever the chunks."""
+import operator
+import sys
+
+import control
+import numpy as np
+import pytest
+from numpy.testing import assert_array_equal
+
+import dynia
+from dynia.models import FOPDT, FirstOrder, TransferFunction
+
+distributed = pytest.importorskip("distributed")
+from dynia.distributed import run  # noqa: E402  (after the skip: needs dask.distributed)
+
+STEPS = 160
+BOUNDS = {"K": (0.0, 7.0), "T": (0.0, 7.0)}
+
+
+@pytest.fixture(scope="module")
+def client():
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        yield client
+
+
+@pytest.fixture(scope="module")
+def record():
+    """Thesis example 1 shortened: K=2, T=3, noise 0.5."""
+    u = dynia.synthetic.example_firstorder_input(STEPS)
+    y = FirstOrder().simulate([[2.0, 3.0]], u)[0] + np.random.default_rng(7).normal(0, 0.5, STEPS)
+    return u, y
+
+
+def assert_same(result, reference):
+    assert result.names == reference.names
+    for attribute in ("samples", "bounds", "time", "ic", "ci", "gradient", "bin_centres"):
+        assert_array_equal(getattr(result, attribute), getattr(reference, attribute), err_msg=attribute)
+    assert result.settings == reference.settings
+
+
+@pytest.mark.parametrize("engine", ["numba", "numpy"])
+@pytest.mark.parametrize("sample_chunks, time_chunks", [
+    (None, None),
+    (300, STEPS),  # one task per stage
+    (64, 37),  # neither divides evenly
+    (101, 3),  # time chunks shorter than the halo n=5
+    (1000, 1),  # a sample chunk larger than the population, one-step time chunks
+])
+def test_first_order_equals_dynia_run(client, record, sample_chunks, time_chunks, engine):
+    u, y = record
+    options = dict(n_samples=300, n=5, rng=11, engine=engine)
+    result = run(u, y, FirstOrder(), BOUNDS, client=client, sample_chunks=sample_chunks,
+                 time_chunks=time_chunks, **options)
+    assert_same(result, dynia.run(u, y, FirstOrder(), BOUNDS, **options))
+
+
+@pytest.mark.parametrize("window", ["centred", "trailing"])
+def test_fopdt_with_fractional_delays_equals_dynia_run(client, window):
+    """Dead times off the sample grid, a steady start, dt != 1 and Latin hypercube samples."""
+    u = np.r_[np.full(30, 1.0), np.full(50, 3.0), np.full(40, 0.5)]
+    y = FOPDT().simulate([[1.5, 4.0, 2.3]], u, dt=0.5, x0="steady")[0]
+    bounds = {"theta": (0.0, 5.0), "K": (0.5, 3.0), "T": (0.1, 8.0)}  # not the model's order
+    options = dict(dt=0.5, x0="steady", sampler="lhs", n_samples=250, n=4, rng=5, window=window,
+                   engine="numba" if window == "centred" else "numpy")
+    result = run(u, y, FOPDT(), bounds, client=client, sample_chunks=90, time_chunks=17, **options)
+    assert_same(result, dynia.run(u, y, FOPDT(), bounds, **options))
+
+
+def test_missing_measurements_equal_dynia_run(client, record):
+    u, y = record
+    y = y.copy()
+    y[40:52] = np.nan
+    y[::9] = np.nan
+    options = dict(n_samples=300, n=4, min_points=5, rng=3)  # engine "auto"
+    result = run(u, y, FirstOrder(), BOUNDS, client=client, sample_chunks=77, time_chunks=10, **options)
+    reference = dynia.run(u, y, FirstOrder(), BOUNDS, **options)
+    assert np.isnan(reference.ic).any() and not np.isnan(reference.ic).all()  # the case is exercised
+    assert_same(result, reference)
+
+
+@pytest.mark.parametrize("engine", ["numba", "numpy"])
+def test_weighted_flavour_equals_dynia_run(client, record, capsys, engine):
+    u, y = record
+    options = dict(n_samples=300, n=5, flavour="weighted", percentage=20, conf_level=80, bins=15, rng=4,
+                   engine=engine)
+    result = run(u, y, FirstOrder(), BOUNDS, client=client, sample_chunks=120, time_chunks=25,
+                 progress=True, **options)
+    assert_same(result, dynia.run(u, y, FirstOrder(), BOUNDS, **options))
+    assert "DYNIA windows" in capsys.readouterr().err
+
+
+def test_mcat_flavour_chains_its_state_like_dynia_run(client, record):
+    """MCAT's windows carry state forward, so its analysis tasks form a chain. Input and output
+    start with 20 exact zeros: every window there fits all samples (max MAE 0), the case that
+    switches MCAT's likelihood from 1 - MAE/max to 1 - MAE for the rest of the record."""
+    u, y = (np.r_[np.zeros(20), signal[20:]] for signal in record)
+    options = dict(n_samples=300, n=3, flavour="mcat", rng=8)
+    result = run(u, y, FirstOrder(), BOUNDS, client=client, sample_chunks=100, time_chunks=11, **options)
+    assert_same(result, dynia.run(u, y, FirstOrder(), BOUNDS, **options))
+
+
+def unstable_model():
+    """1/(s - a): for large a the simulation overflows and the sample must be dropped."""
+    return TransferFunction(lambda p: control.tf([p[0]], [1.0, -p[1]]), names=("K", "a"))
+
+
+def test_unstable_samples_are_dropped_as_dynia_run_drops_them(client):
+    u = np.r_[np.zeros(10), np.ones(90)]
+    y = np.r_[np.zeros(10), 1 - np.exp(-np.arange(90) / 2.0)]
+    bounds = {"K": (0.1, 2.0), "a": (-2.0, 12.0)}
+    options = dict(n_samples=150, n=3, rng=2)
+    result = run(u, y, unstable_model(), bounds, client=client, sample_chunks=45, time_chunks=30, **options)
+    reference = dynia.run(u, y, unstable_model(), bounds, **options)
+    drawn = dynia.sampling.uniform(150, [[0.1, 2.0], [-2.0, 12.0]], rng=2)
+    with np.errstate(over="ignore", invalid="ignore"):
+        finite = np.isfinite(unstable_model().simulate(drawn, u)).all(axis=1)
+    assert 0 < (~finite).sum() < 150  # some, not all, overflow
+    assert_array_equal(result.samples, drawn[finite])
+    assert result.settings["n_dropped"] == (~finite).sum()
+    assert_same(result, reference)
+
+
+def test_every_sample_overflowing_is_a_clear_error(client):
+    u = np.ones(100)
+    with pytest.raises(ValueError, match="every one of the 20 parameter sets overflowed"):
+        run(u, u, unstable_model(), {"K": (0.1, 2.0), "a": (900.0, 1000.0)}, client=client,
+            n_samples=20, n=3, rng=1)
+
+
+def test_a_model_error_on_a_worker_reaches_the_caller_with_its_sample_chunk(client, record):
+    u, y = record
+    bounds = {"K": (0.0, 7.0), "T": (-1.0, 7.0)}  # negative time constants: rejected by the model
+    samples = dynia.sampling.uniform(300, [[0.0, 7.0], [-1.0, 7.0]], rng=6)
+    assert samples[0, 1] >= 0 and (samples[100:, 1] < 0).any()  # the first chunk's samples pass the client check
+    with pytest.raises(ValueError, match=r"sample chunk of samples \d+ to \d+.*T must be >= 0"):
+        run(u, y, FirstOrder(), bounds, client=client, sample_chunks=100, n_samples=300, n=5, rng=6)
+
+
+@pytest.mark.parametrize("name, value, message", [
+    ("sample_chunks", 0, "sample_chunks must be at least 1"),
+    ("time_chunks", -3, "time_chunks must be at least 1"),
+    ("time_chunks", 2.5, "time_chunks must be a whole number"),
+    ("sample_chunks", "10", "sample_chunks must be a whole number"),
+])
+def test_bad_chunk_sizes_are_clear_errors(client, record, name, value, message):
+    u, y = record
+    with pytest.raises(ValueError, match=message):
+        run(u, y, FirstOrder(), BOUNDS, client=client, n_samples=100, **{name: value})
+
+
+def test_other_bad_arguments_are_clear_errors(client, record):
+    u, y = record
+    with pytest.raises(TypeError, match="client must be a distributed.Client"):
+        run(u, y, FirstOrder(), BOUNDS, client="tcp://localhost:8786")
+    with pytest.raises(ValueError, match="adaptive schemes .* use dynia.run"):
+        run(u, y, FirstOrder(), BOUNDS, client=client, sampler="iis")
+    with pytest.raises(ValueError, match="engine must be one of"):
+        run(u, y, FirstOrder(), BOUNDS, client=client, engine="fast")
+    with pytest.raises(ValueError, match="dt must be a finite number > 0"):
+        run(u, y, FirstOrder(), BOUNDS, client=client, dt=0)
+    with pytest.raises(ValueError, match="percentage=1.0 of 100 samples leaves 1 behavioural"):
+        run(u, y, FirstOrder(), BOUNDS, client=client, n_samples=100, percentage=1)
+
+
+def test_a_client_passed_in_stays_open(client, record):
+    u, y = record
+    run(u, y, FirstOrder(), BOUNDS, client=client, n_samples=100, n=5, rng=1)
+    assert client.status == "running"
+    assert client.submit(operator.add, 1, 2).result() == 3
+
+
+def test_without_a_client_a_local_cluster_runs_and_is_closed(record):
+    psutil = pytest.importorskip("psutil")
+    u, y = record
+    before = {child.pid for child in psutil.Process().children(recursive=True)}
+    result = run(u, y, FirstOrder(), BOUNDS, n_samples=200, n=5, rng=9)
+    assert_same(result, dynia.run(u, y, FirstOrder(), BOUNDS, n_samples=200, n=5, rng=9))
+    leftover = [child for child in psutil.Process().children(recursive=True)
+                if child.pid not in before and child.is_running() and child.status() != psutil.STATUS_ZOMBIE
+                and "resource_tracker" not in " ".join(child.cmdline())]
+    assert leftover == []
+
+
+def test_without_dask_the_error_says_what_to_install(record, monkeypatch):
+    monkeypatch.setitem(sys.modules, "distributed", None)  # makes `import distributed` fail
+    u, y = record
+    with pytest.raises(ImportError, match=r"pip install 'dynia\[distributed\]'"):
+        run(u, y, FirstOrder(), BOUNDS)
