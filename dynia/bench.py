@@ -15,7 +15,9 @@ process so that its peak resident memory (``ru_maxrss``) is its own.
    second measured in the same case; target >= 10^8 sample-steps/s.
 5. Memory: :func:`dynia.run` on 10^5 samples x 10^5 steps; target peak
    resident memory <= 2 GB.
-6. Samplers at percentage 0.1 on example 1: IC error against a uniform
+6. Semi-online mode: time per :meth:`dynia.online.OnlineDynia.update` at
+   10 000 samples (first order, n=10); target <= 1 ms.
+7. Samplers at percentage 0.1 on example 1: IC error against a uniform
    400 000-sample reference for uniform (10^4, 10^5) and the adaptive
    schemes of :mod:`dynia.adaptive` (10^4).
 """
@@ -106,6 +108,20 @@ def _case_throughput():
     return result
 
 
+def _case_online():
+    from .online import OnlineDynia
+    u, y, _, model = _example1(1, 2_000)
+    online = OnlineDynia(model, {"K": (0, 7), "T": (0, 7)}, n_samples=10_000, n=10, rng=1)
+    times = []
+    for u_t, y_t in zip(u, y):
+        start = time.perf_counter()
+        online.update(u_t, y_t)
+        times.append(time.perf_counter() - start)
+    times = np.array(times[50:]) * 1e3  # the first updates warm the caches
+    return dict(mean_ms=float(times.mean()), median_ms=float(np.median(times)),
+                p99_ms=float(np.percentile(times, 99)), updates=int(times.size))
+
+
 def _case_sampling():
     from .pipeline import run
     u, y, _, model = _example1(1, 500)
@@ -128,6 +144,7 @@ CASES = {
     "run-100000x10000": lambda: _case_run(100_000, 10_000),
     "throughput-20000x20000": _case_throughput,
     "memory-100000x100000": lambda: _case_run(100_000, 100_000),
+    "online-10000": _case_online,
     "sampling-example1": _case_sampling,
 }
 
@@ -173,6 +190,10 @@ def _describe(name, r):
         return (f"dynia.run, 10^5 samples x 10^5 steps ({r['engine']} engine): {r['seconds']:.0f} s, "
                 f"{r['sample_steps_per_s']:.3g} sample-steps/s, peak RSS {r['peak_rss_mb']:.0f} MB "
                 "(target <= 2048 MB)")
+    if name == "online-10000":
+        return (f"OnlineDynia.update, 10 000 samples, first order, n=10 ({r['updates']} updates): mean "
+                f"{r['mean_ms']:.3f} ms, median {r['median_ms']:.3f} ms, 99th percentile {r['p99_ms']:.3f} ms "
+                f"(target <= 1 ms); peak RSS {r['peak_rss_mb']:.0f} MB")
     if name == "sampling-example1":
         runs = ", ".join(f"{key}: RMSE {value['rmse']:.3f} in {value['seconds']:.1f} s"
                          for key, value in r.items() if key != "peak_rss_mb")
