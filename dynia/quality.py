@@ -1,0 +1,610 @@
+"""Data quality of an input/output record: isolated glitches, outliers and stuck values.
+
+A DYNIA window is only as good as the samples in it. In the thesis's case
+study (section 3.1.3) the highest information content of the time constant
+came from one erroneous reading, where input and output read 0 for one
+sample and then returned to their steady values; the thesis concludes that
+high-IC segments must be checked for erroneous data. :func:`check_quality`
+does that check on the record, :meth:`QualityReport.findings_in` says which
+findings fall inside the informative segments of a result
+(:func:`informative_segments`), and :meth:`QualityReport.exclude` removes the
+flagged samples before a new run.
+
+Shapes follow the package convention (see :mod:`dynia.analysis`): ``time``,
+``u`` and ``y`` are (n_steps,). NaN marks a missing sample: it is never
+flagged, and every test runs on the samples present, so the neighbours of a
+sample are the nearest samples present.
+
+What is detected, per signal (``"u"`` and ``"y"``)
+--------------------------------------------------
+glitch
+    A run of at most ``max_glitch_length`` samples that departs from the
+    local robust trend (a Hampel filter: median and MAD over
+    ``2*half_window + 1`` samples) by more than ``glitch_threshold`` robust
+    standard deviations and from both neighbours of the run by as much, then
+    returns, and whose departure is at least ``glitch_min_size`` times the
+    width of the signal's bulk (see outlier): the thesis's zero reading.
+outlier
+    A value outside the bulk of the whole record: more than
+    ``outlier_fence`` bulk widths below the ``outlier_quantile`` quantile or
+    above the ``1 - outlier_quantile`` quantile (both rounded inwards to a
+    sample, so that even a short record leaves its most extreme value out of
+    the bulk). Consecutive outlying samples form one finding.
+stuck
+    A run of consecutive readings that differ by at most ``stuck_tolerance``,
+    at least ``min_stuck`` long and at least ``stuck_factor`` times as long as
+    the signal's usual runs (the 95th percentile of its run lengths), in a
+    signal that moves from most samples to the next, entered with a step
+    rather than settled into.
+
+The kinds are tested independently; one sample can be in several findings
+(a zero reading in a signal near 72 is a glitch and an outlier).
+
+Tuning parameters
+-----------------
+=====================  ========  ==============================================================
+parameter              default   reasoning
+=====================  ========  ==============================================================
+``half_window``        3         Hampel window of 7 samples: short, so the median follows
+                                 steps and transients, and long enough that a run of up to
+                                 ``max_glitch_length`` bad samples cannot move the median.
+``glitch_threshold``   6.0       Robust standard deviations. The textbook Hampel 3 flags
+                                 0.3 % of Gaussian noise, tens of false glitches in a
+                                 record of thousands; a Gaussian sample departs 6 of them
+                                 with probability 2e-9, and both neighbours must be as far.
+                                 Heavy-tailed noise does reach it now and then.
+``glitch_min_size``    0.1       Gross errors only. A record resampled from an exception
+                                 log is straight between stored readings, so its robust
+                                 scales are tiny and one ordinary stored reading stands
+                                 out by many of them; it moves by a few % of the signal's
+                                 range, the thesis's zero reading by several ranges.
+``max_glitch_length``  2         One erroneous reading (thesis 3.1.3) lands on one grid
+                                 point, or on two at partial depth when resampling falls
+                                 between readings. Longer excursions are real events (the
+                                 3-sample input dip of the thesis's example 1) or outliers.
+``outlier_quantile``   0.01      The bulk of the record is its 1 %-99 % range: a handful
+                                 of bad values cannot move it.
+``outlier_fence``      1.0       A value one bulk width beyond the bulk: about 7 standard
+                                 deviations for Gaussian noise, so only gross errors count.
+``min_stuck``          10        Fewer identical readings happen by chance on a quantised
+                                 sensor.
+``stuck_factor``       4.0       A run counts as stuck only when it is much longer than the
+                                 signal's own usual runs.
+``stuck_tolerance``    0.0       A frozen tag repeats its value exactly.
+=====================  ========  ==============================================================
+
+Every scale has a floor of ``1e-6`` times the signal's size (the larger of
+its bulk width and its median magnitude), so that noise-free signals, whose
+robust scales are 0, are not flagged for rounding dust, while a single
+different value in an otherwise constant signal still is.
+
+Stuck values and legitimate repeats. A constant input during steady
+operation is no fault, and a historian logging by exception, resampled by
+linear interpolation, repeats a value exactly whenever two stored values are
+equal. So a signal is only checked for stuck runs when most of its samples
+differ from the previous one (a noisy or moving signal; a piecewise-constant
+input is not), and a run is only flagged when it is much longer than the
+signal's usual runs. A noise-free output settles into its steady state, the
+steps before the run shrinking to nothing, and reaches exactly repeated
+values; a frozen tag stops at once. So a run is not flagged when the three
+steps before it are all below a thousandth of the signal's median step.
+
+Examples
+--------
+>>> import numpy as np
+>>> from dynia.quality import check_quality
+>>> rng = np.random.default_rng(0)
+>>> u = np.repeat([36.0, 38.0, 36.0], 100)
+>>> y = 2 * u + rng.normal(0, 0.3, u.size)
+>>> u[150], y[151] = 0.0, 0.0                     # one erroneous reading of each
+>>> report = check_quality(np.arange(300.0), u, y)
+>>> [(f.signal, f.kind, f.start) for f in report.findings]
+[('u', 'glitch', 150), ('u', 'outlier', 150), ('y', 'glitch', 151), ('y', 'outlier', 151)]
+>>> clean_y = report.exclude(y, signal="y")     # NaN: missing for dynia.run
+>>> clean_u = report.exclude(u, signal="u")     # interpolated: the model needs an input
+>>> bool(np.isnan(clean_y[151])), float(clean_u[150])
+(True, 38.0)
+"""
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
+
+from . import _checks
+
+__all__ = ["Finding", "QualityReport", "check_quality", "informative_segments", "KINDS", "SIGNALS"]
+
+KINDS = ("glitch", "outlier", "stuck")
+SIGNALS = ("u", "y")
+
+# 1.4826 * MAD estimates the standard deviation of Gaussian noise.
+_MAD_TO_STD = 1.4826
+# Scales never fall below this fraction of a signal's size (see the module docstring).
+_RESOLUTION = 1e-6
+# The usual run length of a signal is this quantile of its run lengths.
+_USUAL_RUN_QUANTILE = 0.95
+# A run entered by _SETTLING_STEPS steps all below _SETTLED_FRACTION of the median step is
+# a steady state reached smoothly, not a tag that froze.
+_SETTLING_STEPS = 3
+_SETTLED_FRACTION = 1e-3
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One suspicious stretch of one signal.
+
+    Attributes
+    ----------
+    signal : {"u", "y"}
+    kind : {"glitch", "outlier", "stuck"}
+    start, stop : int
+        Sample indices ``[start, stop)`` of the stretch (missing samples
+        inside it are not flagged).
+    start_time, end_time : float
+        Time of the first and of the last sample of the stretch.
+    value : float
+        The most deviant value of the stretch (for stuck runs: the value
+        repeated).
+    reason : str
+        One sentence on why it was flagged.
+    """
+
+    signal: str
+    kind: str
+    start: int
+    stop: int
+    start_time: float
+    end_time: float
+    value: float
+    reason: str
+
+
+@dataclass(frozen=True, eq=False)
+class QualityReport:
+    """What :func:`check_quality` found, and how to use it.
+
+    Attributes
+    ----------
+    findings : tuple of Finding
+        Ordered by signal, kind and start.
+    time : ndarray, shape (n_steps,)
+        Time of each sample.
+    missing : dict of str to ndarray of bool
+        Per signal, the samples that were missing (NaN); never flagged.
+    settings : dict
+        The tuning parameters used.
+    """
+
+    findings: tuple
+    time: np.ndarray
+    missing: dict
+    settings: dict = field(default_factory=dict)
+
+    def mask(self, signal, kinds=None):
+        """Boolean array, shape (n_steps,): the flagged samples of ``signal``.
+
+        Parameters
+        ----------
+        signal : {"u", "y"}
+        kinds : sequence of {"glitch", "outlier", "stuck"}, optional
+            Only these kinds (default: all).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from dynia.quality import check_quality
+        >>> y = np.sin(np.arange(50) / 5.0)
+        >>> y[20] = 9.0
+        >>> np.flatnonzero(check_quality(None, np.zeros(50), y).mask("y", ["glitch"])).tolist()
+        [20]
+        """
+        signal = _signal_name(signal)
+        kinds = _kind_names(kinds)
+        flagged = np.zeros(self.time.size, dtype=bool)
+        for finding in self.findings:
+            if finding.signal == signal and finding.kind in kinds:
+                flagged[finding.start:finding.stop] = True
+        return flagged & ~self.missing[signal]
+
+    def exclude(self, values, signal="y", kinds=None):
+        """A copy of ``values`` without the flagged samples of ``signal``.
+
+        For the output, flagged samples become NaN, which :func:`dynia.run`
+        treats as missing: windows use the samples present. The input cannot
+        be missing (the simulation needs an input at every step), so for
+        ``signal="u"`` flagged samples are replaced by linear interpolation
+        in time between the nearest samples that are present and not flagged
+        (the nearest such value before the first or after the last one).
+        Samples missing in ``values`` already are left as they are.
+
+        Parameters
+        ----------
+        values : array_like, shape (n_steps,)
+            The signal checked (``u`` or ``y``).
+        signal : {"u", "y"}, default "y"
+            Which of the two it is.
+        kinds : sequence of {"glitch", "outlier", "stuck"}, optional
+            Exclude only these kinds (default: all).
+
+        Returns
+        -------
+        ndarray, shape (n_steps,)
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from dynia.quality import check_quality
+        >>> u, y = np.linspace(1.0, 3.0, 21), np.full(21, 8.0)
+        >>> u[10], y[11] = 0.0, 0.0
+        >>> report = check_quality(None, u, y)
+        >>> float(report.exclude(u, signal="u")[10]), float(report.exclude(y)[11])
+        (2.0, nan)
+        """
+        flagged = self.mask(signal, kinds)
+        values = _checks.as_1d_float(values, "values", allow_nan=True)
+        if values.size != self.time.size:
+            raise ValueError(
+                f"values has {values.size} samples but the report covers {self.time.size}; "
+                "pass the signal that was checked")
+        cleaned = values.copy()
+        if not flagged.any():
+            return cleaned
+        if _signal_name(signal) == "y":
+            cleaned[flagged] = np.nan
+            return cleaned
+        usable = ~flagged & ~np.isnan(values)
+        if not usable.any():
+            raise ValueError(f"every sample of {signal} that is present is flagged; "
+                             "there is nothing to interpolate from")
+        cleaned[flagged] = np.interp(self.time[flagged], self.time[usable], values[usable])
+        return cleaned
+
+    def findings_in(self, segments):
+        """The findings that overlap each segment, e.g. the high-IC segments of a result.
+
+        Parameters
+        ----------
+        segments : sequence of (start, stop)
+            Sample index ranges ``[start, stop)``, for example from
+            :func:`informative_segments`.
+
+        Returns
+        -------
+        dict
+            ``{(start, stop): [Finding, ...]}`` for every segment, in the order
+            given; an empty list means the segment is clean.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from dynia.quality import check_quality
+        >>> y = np.cos(np.arange(60) / 4.0)
+        >>> y[30] = 0.0 if y[30] > 0.5 else 5.0
+        >>> found = check_quality(None, np.zeros(60), y).findings_in([(0, 20), (25, 40)])
+        >>> {segment: [(f.kind, f.start) for f in hits] for segment, hits in found.items()}
+        {(0, 20): [], (25, 40): [('glitch', 30), ('outlier', 30)]}
+        """
+        checked = {}
+        for pair in _segment_pairs(segments, self.time.size):
+            checked[pair] = [f for f in self.findings if f.start < pair[1] and pair[0] < f.stop]
+        return checked
+
+    def to_dataframe(self):
+        """One row per finding: signal, kind, start, stop, start_time, end_time, value, reason.
+
+        Needs pandas (``pip install dynia[pandas]``).
+        """
+        try:
+            import pandas as pd
+        except ImportError:
+            raise ImportError("to_dataframe needs pandas: pip install 'dynia[pandas]'") from None
+        columns = ["signal", "kind", "start", "stop", "start_time", "end_time", "value", "reason"]
+        return pd.DataFrame([[getattr(f, name) for name in columns] for f in self.findings],
+                            columns=columns)
+
+    def summary(self):
+        """A short text: counts per signal and kind, then one line per finding.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from dynia.quality import check_quality
+        >>> print(check_quality(None, np.ones(30), np.linspace(0, 1, 30)).summary())
+        Data quality of 30 samples: no glitches, outliers or stuck values found.
+        """
+        if not self.findings:
+            return f"Data quality of {self.time.size} samples: no glitches, outliers or stuck values found."
+        count = len(self.findings)
+        lines = [f"Data quality of {self.time.size} samples: {count} finding{'' if count == 1 else 's'}."]
+        for signal in SIGNALS:
+            counts = [f"{sum(f.signal == signal and f.kind == kind for f in self.findings)} {kind}"
+                      for kind in KINDS]
+            flagged = int(self.mask(signal).sum())
+            lines.append(f"  {signal}: " + ", ".join(counts)
+                         + f"; {flagged} flagged sample{'' if flagged == 1 else 's'}")
+        for f in self.findings:
+            when = (f"t={f.start_time:g}" if f.stop - f.start == 1
+                    else f"t={f.start_time:g}..{f.end_time:g}")
+            lines.append(f"  {f.signal} {f.kind:<7} {when} (samples {f.start}-{f.stop - 1}): {f.reason}")
+        return "\n".join(lines)
+
+
+def check_quality(time, u, y, *, half_window=3, glitch_threshold=6.0, glitch_min_size=0.1,
+                  max_glitch_length=2, outlier_quantile=0.01, outlier_fence=1.0, min_stuck=10,
+                  stuck_factor=4.0, stuck_tolerance=0.0):
+    """Find isolated glitches, outliers and stuck values in an input/output record.
+
+    The tests and the reasoning behind every default are in the module
+    documentation.
+
+    Parameters
+    ----------
+    time : array_like, shape (n_steps,), or None
+        Time of each sample, strictly increasing (default 0, 1, ...).
+    u, y : array_like, shape (n_steps,)
+        Input and output. NaN marks a missing sample.
+    half_window : int, default 3
+        Half width of the Hampel window, at least ``max_glitch_length``.
+    glitch_threshold : float, default 6.0
+        Robust standard deviations a glitch departs from its local median
+        and from both neighbours.
+    glitch_min_size : float >= 0, default 0.1
+        Smallest departure of a glitch, in widths of the signal's bulk.
+    max_glitch_length : int, default 2
+        Longest run of samples that counts as a glitch (0: no glitch test).
+    outlier_quantile : float in (0, 0.5), default 0.01
+        The bulk of a signal lies between this quantile and its complement.
+    outlier_fence : float > 0, default 1.0
+        Bulk widths beyond the bulk from which a value is an outlier.
+    min_stuck : int, default 10
+        Shortest run of equal readings that can be stuck.
+    stuck_factor : float > 0, default 4.0
+        A stuck run is at least this many times the signal's usual run length.
+    stuck_tolerance : float >= 0, default 0.0
+        Consecutive readings differing by at most this are equal.
+
+    Returns
+    -------
+    QualityReport
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dynia.quality import check_quality
+    >>> y = 72 + np.random.default_rng(1).normal(0, 0.5, 200)
+    >>> y[80:120] = y[80]                                  # a frozen tag
+    >>> [(f.kind, f.start, f.stop) for f in check_quality(None, np.full(200, 36.0), y).findings]
+    [('stuck', 80, 120)]
+    """
+    u = _checks.as_1d_float(u, "u", allow_nan=True)
+    y = _checks.as_1d_float(y, "y", allow_nan=True)
+    if u.size != y.size:
+        raise ValueError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
+    time = _time_axis(time, y.size)
+    max_glitch_length = _checks.whole_number(max_glitch_length, "max_glitch_length", minimum=0)
+    half_window = _checks.whole_number(half_window, "half_window", minimum=1)
+    if half_window < max_glitch_length:
+        raise ValueError(
+            f"half_window ({half_window}) must be at least max_glitch_length ({max_glitch_length}), "
+            "or a glitch as long as allowed could move the window's median")
+    settings = dict(
+        half_window=half_window,
+        glitch_threshold=_checks.open_interval(glitch_threshold, "glitch_threshold", 0, math.inf),
+        glitch_min_size=_nonnegative(glitch_min_size, "glitch_min_size"),
+        max_glitch_length=max_glitch_length,
+        outlier_quantile=_checks.open_interval(outlier_quantile, "outlier_quantile", 0, 0.5),
+        outlier_fence=_checks.open_interval(outlier_fence, "outlier_fence", 0, math.inf),
+        min_stuck=_checks.whole_number(min_stuck, "min_stuck", minimum=2),
+        stuck_factor=_checks.open_interval(stuck_factor, "stuck_factor", 0, math.inf),
+        stuck_tolerance=_nonnegative(stuck_tolerance, "stuck_tolerance"),
+    )
+    findings = []
+    for signal, values in (("u", u), ("y", y)):
+        findings += _signal_findings(signal, values, time, settings)
+    return QualityReport(findings=tuple(findings), time=time,
+                         missing={"u": np.isnan(u), "y": np.isnan(y)}, settings=settings)
+
+
+def informative_segments(result, *, threshold=0.75, parameter=None):
+    """The stretches of data behind the windows whose IC reaches ``threshold``.
+
+    The window at step ``t`` uses samples ``t-n .. t+n`` (``n`` from
+    ``result.settings``), so an informative window makes those samples
+    informative; overlapping or touching stretches are merged.
+
+    Parameters
+    ----------
+    result : DyniaResult
+    threshold : float in (0, 1), default 0.75
+        IC from which a window counts as informative.
+    parameter : str, optional
+        Only this parameter's IC (default: any parameter's).
+
+    Returns
+    -------
+    list of (int, int)
+        Sample index ranges ``[start, stop)`` in time order.
+
+    Examples
+    --------
+    >>> import numpy as np, dynia
+    >>> u = np.r_[np.zeros(20), np.ones(40)]
+    >>> y = dynia.models.FirstOrder().simulate([[2.0, 3.0]], u)[0]
+    >>> res = dynia.run(u, y, dynia.models.FirstOrder(), {"K": (0, 7), "T": (0, 7)}, n=2, rng=1)
+    >>> informative_segments(res, parameter="K")[0][0] > 15
+    True
+    """
+    threshold = _checks.open_interval(threshold, "threshold", 0, 1)
+    if "n" not in result.settings:
+        raise ValueError("result.settings has no half window 'n'; it is needed to know which "
+                         "samples each window used")
+    n = _checks.whole_number(result.settings["n"], "result.settings['n']", minimum=0)
+    ic = result.ic if parameter is None else result.ic[[result.index(parameter)]]
+    with np.errstate(invalid="ignore"):
+        informative = (ic >= threshold).any(axis=0)
+    steps = ic.shape[1]
+    covered = np.zeros(steps + 1, dtype=int)
+    # Each informative window adds +1 at its first sample and -1 after its last; a
+    # running sum above 0 marks every sample some informative window uses.
+    centres = np.flatnonzero(informative)
+    np.add.at(covered, np.maximum(centres - n, 0), 1)
+    np.add.at(covered, np.minimum(centres + n + 1, steps), -1)
+    return _runs(np.cumsum(covered[:-1]) > 0)
+
+
+def _signal_findings(signal, values, time, settings):
+    """Every finding of one signal, tests run on its present samples."""
+    where = np.flatnonzero(~np.isnan(values))
+    if where.size == 0:
+        return []
+    x = values[where]
+    # Rounded inwards, the quantiles leave out at least the most extreme value at
+    # each end even in a record shorter than 1/outlier_quantile samples.
+    low = np.quantile(x, settings["outlier_quantile"], method="higher")
+    high = np.quantile(x, 1 - settings["outlier_quantile"], method="lower")
+    floor = _RESOLUTION * max(high - low, abs(float(np.median(x))))
+
+    def finding(kind, start, stop, value, reason):
+        first, last = where[start], where[stop - 1]
+        return Finding(signal=signal, kind=kind, start=int(first), stop=int(last) + 1,
+                       start_time=float(time[first]), end_time=float(time[last]),
+                       value=float(value), reason=reason)
+
+    found = [finding("glitch", *run) for run in _glitches(x, high - low, floor, settings)]
+    found += [finding("outlier", *run) for run in _outliers(x, low, high, floor, settings)]
+    found += [finding("stuck", *run) for run in _stuck_runs(x, settings)]
+    return found
+
+
+def _glitches(x, bulk_width, floor, settings):
+    """(start, stop, value, reason) of every glitch, in present-sample indices."""
+    longest = settings["max_glitch_length"]
+    if longest == 0 or x.size < 3:
+        return []
+    half, threshold = settings["half_window"], settings["glitch_threshold"]
+    windows = sliding_window_view(np.pad(x, half, constant_values=np.nan), 2 * half + 1)
+    local = np.nanmedian(windows, axis=1)
+    local_mad = np.nanmedian(np.abs(windows - local[:, None]), axis=1)
+    # The record's own noise level (from sample-to-sample steps) is a floor for the
+    # local scale: in a short window that happens to be smooth the MAD is near 0.
+    noise = _MAD_TO_STD * float(np.median(np.abs(np.diff(x)))) / math.sqrt(2)
+    scale = np.maximum(np.maximum(_MAD_TO_STD * local_mad, noise), floor)
+    departure = np.abs(x - local)
+    far = (departure > threshold * scale) & (departure >= settings["glitch_min_size"] * bulk_width)
+    found = []
+    for start, stop in _runs(far):
+        if stop - start > longest:
+            continue
+        run, run_scale = x[start:stop], scale[start:stop]
+        neighbours = [x[i] for i in (start - 1, stop) if 0 <= i < x.size]
+        if not all((np.abs(run - neighbour) > threshold * run_scale).all() for neighbour in neighbours):
+            continue
+        worst = start + int(np.argmax(departure[start:stop] / run_scale))
+        size = float(departure[worst] / scale[worst])
+        found.append((start, stop, x[worst], (
+            f"{stop - start} sample{'s' if stop - start > 1 else ''} at {x[worst]:.6g} "
+            f"{size:.3g} robust standard deviations from the local median {local[worst]:.6g} "
+            "and far from both neighbours: an isolated erroneous reading")))
+    return found
+
+
+def _outliers(x, low, high, floor, settings):
+    """(start, stop, value, reason) of every run of values outside the fenced bulk."""
+    margin = max(settings["outlier_fence"] * (high - low), floor)
+    below, above = low - margin, high + margin
+    found = []
+    for start, stop in _runs((x < below) | (x > above)):
+        run = x[start:stop]
+        worst = run[np.argmax(np.maximum(below - run, run - above))]
+        found.append((start, stop, worst, (
+            f"{worst:.6g} lies outside [{below:.6g}, {above:.6g}], the record's bulk "
+            f"[{low:.6g}, {high:.6g}] widened by {settings['outlier_fence']:g} times its width")))
+    return found
+
+
+def _stuck_runs(x, settings):
+    """(start, stop, value, reason) of every run of equal readings much longer than usual."""
+    if x.size < 2:
+        return []
+    steps = np.abs(np.diff(x))
+    equal = steps <= settings["stuck_tolerance"]
+    if equal.mean() >= 0.5:
+        return []  # the signal is flat more often than not: a repeat is its normal behaviour
+    changes = np.flatnonzero(~equal) + 1
+    starts = np.r_[0, changes]
+    stops = np.r_[changes, x.size]
+    usual = float(np.quantile(stops - starts, _USUAL_RUN_QUANTILE))
+    shortest = max(settings["min_stuck"], settings["stuck_factor"] * usual)
+    settled = _SETTLED_FRACTION * float(np.median(steps))
+    tolerance = settings["stuck_tolerance"]
+    found = []
+    for start, stop in zip(starts.tolist(), stops.tolist()):
+        approach = steps[max(start - _SETTLING_STEPS, 0):start]
+        if stop - start < shortest or (approach.size and (approach <= settled).all()):
+            continue
+        found.append((start, stop, x[start], (
+            f"{stop - start} consecutive readings equal to {x[start]:.6g}"
+            + (f" within {tolerance:g}" if tolerance else "")
+            + f", where this signal's runs of equal readings are usually at most {usual:g} long: "
+            "a frozen sensor or tag")))
+    return found
+
+
+def _runs(flags):
+    """[start, stop) of every run of True in a 1-D boolean array."""
+    edges = np.diff(np.r_[0, flags.astype(np.int8), 0])
+    return list(zip(np.flatnonzero(edges == 1).tolist(), np.flatnonzero(edges == -1).tolist()))
+
+
+def _time_axis(time, n_steps):
+    if time is None:
+        return np.arange(n_steps, dtype=float)
+    time = _checks.as_1d_float(time, "time")
+    if time.size != n_steps:
+        raise ValueError(f"time has {time.size} values but u and y have {n_steps}; they must match")
+    steps = np.diff(time)
+    if (steps <= 0).any():
+        at = int(np.argmax(steps <= 0)) + 1
+        raise ValueError(f"time must increase strictly; time[{at}] = {time[at]} follows {time[at - 1]}")
+    return time
+
+
+def _nonnegative(value, name):
+    return 0.0 if value == 0 else _checks.open_interval(value, name, 0, math.inf)
+
+
+def _signal_name(signal):
+    if signal not in SIGNALS:
+        raise ValueError(f"signal must be one of {SIGNALS}; got {signal!r}")
+    return signal
+
+
+def _kind_names(kinds):
+    if kinds is None:
+        return KINDS
+    if isinstance(kinds, str):
+        raise ValueError(f"kinds must be a sequence of kinds, e.g. ['glitch']; got the string {kinds!r}")
+    unknown = [kind for kind in kinds if kind not in KINDS]
+    if unknown:
+        raise ValueError(f"unknown kinds {unknown}; choose from {KINDS}")
+    return tuple(kinds)
+
+
+def _segment_pairs(segments, n_steps):
+    """Check ``segments`` as [start, stop) index pairs inside the record."""
+    try:
+        pairs = [tuple(pair) for pair in segments]
+    except TypeError:
+        raise ValueError(f"segments must be a sequence of (start, stop) pairs; got {segments!r}") from None
+    checked = []
+    for position, pair in enumerate(pairs):
+        if len(pair) != 2:
+            raise ValueError(f"segments[{position}] must be a (start, stop) pair; got {pair!r}")
+        start = _checks.whole_number(pair[0], f"segments[{position}] start", minimum=0)
+        stop = _checks.whole_number(pair[1], f"segments[{position}] stop", minimum=0)
+        if not start < stop <= n_steps:
+            raise ValueError(
+                f"segments[{position}] = {pair!r} must satisfy 0 <= start < stop <= {n_steps} (n_steps)")
+        checked.append((start, stop))
+    return checked

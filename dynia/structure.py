@@ -1,0 +1,281 @@
+"""Model-structure warnings: a constant parameter whose estimate moves over time.
+
+The thesis (section 4.4) names an asset of DYNIA in system identification:
+if the CLD gradient of a parameter, the measure of where the parameter lies,
+varies with time, the model structure may not represent the system, unless
+the parameter really describes something time-varying. Its case study
+(3.1.3) shows the kind of finding: the gain's CLD gradient is darkest at
+1.7-1.9 rather than at the 2 its band points to, which the thesis traces to
+a change of operating mode late in the record. :func:`structure_warnings`
+makes that check for every parameter of a :class:`~dynia.result.DyniaResult`.
+
+Shapes follow the package convention (see :mod:`dynia.analysis`): ``ic``
+(n_params, n_steps), ``ci`` (n_params, n_steps, 2), ``gradient`` (n_params,
+n_bins, n_steps), ``bin_centres`` (n_params, n_bins).
+
+The rule
+--------
+1. Informative windows: IC at least ``ic_threshold``, leaving out
+
+   - the first and last ``n`` windows, which are truncated (thesis 4.1);
+   - windows that use a sample marked in ``ignore`` (for instance the
+     glitches found by :func:`dynia.quality.check_quality`: the thesis's
+     highest IC of the time constant sat on one erroneous reading);
+   - windows whose band leans on a bound of the range: it comes closer to
+     the bound than a quarter of its own width, or than one gradient bin.
+     Such a band bounds the parameter from one side only, and it is what
+     windows whose output carries only noise produce: the parameter sets
+     whose simulations come closest to a flat line there (a time constant
+     near 0, long settled, or near its maximum, hardly moving) fit the
+     noise best, with a narrow band at the bound and a high IC (thesis
+     example 1 after its last step does exactly this).
+
+2. Consecutive informative windows form runs; runs shorter than
+   ``min_windows`` are dropped and longer ones are cut into blocks of
+   ``2n + 1`` windows or a little more (at least ``min_windows``), so that
+   each block stands for its own stretch of about ``4n + 1`` samples.
+3. Each block's location is the bin centre of the largest summed CLD
+   gradient of its windows (the aggregated identifiability of thesis
+   2.2.3.2); its band is the median of its windows' limits.
+4. With k = max(2, a fifth of the blocks rounded up), compare the k-th
+   lowest and the k-th highest location: k blocks must agree on each, since
+   one stretch of data can always rank oddly, and the outermost of many
+   blocks would move apart with their number even where the parameter does
+   not (at a tenth, the Monte Carlo jitter of a well-identified gain in a
+   narrow second-run range reached past the tolerance; a fifth still sees a
+   change that holds for the last quarter of a record). Warn when the two
+   are more than ``drift_tolerance`` times the parameter's range apart and
+   each lies outside the median band of the blocks on the other side: two
+   groups of stretches of data that each pin the parameter down, at values
+   the other group rules out.
+
+What it cannot tell apart. DYNIA keeps a fixed share of the parameter sets in
+every window, however little their costs differ. Where the output carries
+only noise (a long stretch at zero input, or long after the last step) but
+the simulations still differ a little, noise can pick a narrow band away
+from the bounds, and a correct model can draw a warning. Pass those
+stretches in ``ignore`` when you know them.
+
+Examples
+--------
+>>> import numpy as np
+>>> from dynia.result import DyniaResult
+>>> from dynia.structure import structure_warnings
+>>> steps, centres = 60, np.linspace(0.05, 0.95, 10)
+>>> peak = np.where(np.arange(steps) < 30, 2, 7)          # bin 2, then bin 7
+>>> gradient = (np.arange(10)[:, None] == peak).astype(float)[None]
+>>> band = np.stack([centres[peak] - 0.1, centres[peak] + 0.1], axis=-1)[None]
+>>> result = DyniaResult(names=("T",), samples=np.zeros((1, 1)), bounds=np.array([[0.0, 1.0]]),
+...                      time=np.arange(steps, dtype=float), ic=np.full((1, steps), 0.8), ci=band,
+...                      gradient=gradient, bin_centres=centres[None], settings={"n": 2})
+>>> print(structure_warnings(result)[0])  # doctest: +NORMALIZE_WHITESPACE
+the location of the CLD-gradient maximum of T moves from 0.25 (t=13-17) to 0.75 (t=43-47),
+50 % of its range [0, 1], rising over time (11 informative segments); a constant
+parameter should not move: the model structure may be wrong (thesis 4.4), unless T really
+varies over time
+"""
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.stats
+
+from . import _checks
+from .result import DyniaResult
+
+__all__ = ["StructureWarning", "structure_warnings"]
+
+# A band closer to a bound than this fraction of its width (or one gradient bin)
+# leans on the bound. Behavioural values spread evenly from some value up to
+# the bound put the upper limit of a 90 % band 1/18 of the band's width below it.
+_CLEARANCE = 0.25
+
+# The k of rule 4: at least _CONFIRMING_BLOCKS, and _CONFIRMING_SHARE of the blocks.
+_CONFIRMING_BLOCKS = 2
+_CONFIRMING_SHARE = 0.2
+
+# A rank correlation of the block locations with time beyond this says
+# "rising" or "falling" instead of "back and forth".
+_TREND = 0.5
+
+
+@dataclass(frozen=True, eq=False)
+class StructureWarning:
+    """A parameter whose CLD-gradient maximum moves between informative segments.
+
+    Attributes
+    ----------
+    parameter : str
+    segments : tuple of (int, int)
+        Step index ranges ``[start, stop)`` of the informative blocks of
+        windows, in time order.
+    times : ndarray, shape (n_blocks, 2)
+        Time of the first and of the last window of each block.
+    locations : ndarray, shape (n_blocks,)
+        Location of the gradient maximum in each block.
+    bands : ndarray, shape (n_blocks, 2)
+        Median lower and upper limit of each block.
+    compared : (int, int)
+        Positions in ``segments`` of the block with the k-th lowest and the
+        block with the k-th highest location (rule 4 of :mod:`dynia.structure`).
+    spread : float
+        Distance between those two locations, as a fraction of the
+        parameter's range.
+    trend : float
+        Spearman rank correlation of the locations with time: near +1 or -1
+        a drift in one direction, near 0 a parameter that goes back and
+        forth (for instance with the operating point).
+    message : str
+        The warning in one sentence; also ``str(warning)``.
+    """
+
+    parameter: str
+    segments: tuple
+    times: np.ndarray
+    locations: np.ndarray
+    bands: np.ndarray
+    compared: tuple
+    spread: float
+    trend: float
+    message: str
+
+    def __str__(self):
+        return self.message
+
+
+def structure_warnings(result, *, ic_threshold=0.75, min_windows=3, drift_tolerance=0.1, ignore=None):
+    """Warn about every parameter whose CLD-gradient maximum drifts over time.
+
+    See the module documentation for the rule and what it cannot tell apart.
+
+    Parameters
+    ----------
+    result : DyniaResult
+        With the half window ``n`` in ``result.settings`` (as every run of
+        :func:`dynia.run` and :func:`dynia.moving_window` records it).
+    ic_threshold : float in (0, 1), default 0.75
+        IC from which a window counts as informative (the default of
+        :func:`dynia.refine.narrowed_bounds`).
+    min_windows : int, default 3
+        Fewest consecutive informative windows that make a block; shorter
+        runs are single windows that happened to rank well and are ignored.
+    drift_tolerance : float in (0, 1), default 0.1
+        Smallest distance between the compared locations that counts, as a
+        fraction of the parameter's range: more than four bins of the
+        default 40, beyond the jitter of the gradient maximum that the
+        Monte Carlo sampling alone causes (about two bins). Smaller moves
+        (the thesis's case study: 0.2 in a gain range of 6, 3 %) need a
+        narrower range, as in the thesis's second run, before they stand
+        out of that jitter.
+    ignore : array_like of bool, shape (n_steps,), optional
+        Samples not to trust; every window that uses one is left out. For
+        example ``report.mask("u") | report.mask("y")`` of a
+        :class:`dynia.quality.QualityReport`.
+
+    Returns
+    -------
+    list of StructureWarning
+        One per parameter that drifts, in parameter order; empty when none does.
+
+    Examples
+    --------
+    A first-order model of first-order data:
+
+    >>> import numpy as np, dynia
+    >>> u = np.repeat(np.random.default_rng(0).choice([5.0, 15.0, 25.0], 10), 40)
+    >>> y = dynia.models.FirstOrder().simulate([[2.0, 4.0]], u)[0]
+    >>> y = y + np.random.default_rng(1).normal(0, 0.2, y.size)
+    >>> res = dynia.run(u, y, dynia.models.FirstOrder(), {"K": (0, 5), "T": (0, 10)}, n=5, rng=2)
+    >>> structure_warnings(res)
+    []
+    """
+    if not isinstance(result, DyniaResult):
+        raise TypeError(f"result must be a DyniaResult; got {type(result).__name__}")
+    ic_threshold = _checks.open_interval(ic_threshold, "ic_threshold", 0, 1)
+    min_windows = _checks.whole_number(min_windows, "min_windows", minimum=1)
+    drift_tolerance = _checks.open_interval(drift_tolerance, "drift_tolerance", 0, 1)
+    if "n" not in result.settings:
+        raise ValueError("result.settings has no half window 'n'; it is needed to leave out the "
+                         "truncated windows at the ends and to size the blocks")
+    n = _checks.whole_number(result.settings["n"], "result.settings['n']", minimum=0)
+    usable = _trusted_windows(ignore, n, result.time.size)
+    usable[:n] = False
+    usable[usable.size - n:] = False
+    block = max(2 * n + 1, min_windows)
+    warnings = []
+    for p in range(len(result.names)):
+        blocks = _informative_blocks(result, p, ic_threshold, usable, min_windows, block)
+        warning = _drift(result, p, blocks, drift_tolerance)
+        if warning is not None:
+            warnings.append(warning)
+    return warnings
+
+
+def _trusted_windows(ignore, n, n_steps):
+    """Windows that use no ignored sample, shape (n_steps,)."""
+    if ignore is None:
+        return np.ones(n_steps, dtype=bool)
+    ignore = np.asarray(ignore)
+    if ignore.dtype != bool or ignore.shape != (n_steps,):
+        raise ValueError(f"ignore must be a boolean array of shape ({n_steps},), one flag per step; "
+                         f"got dtype {ignore.dtype} and shape {ignore.shape}")
+    touched = np.convolve(ignore.astype(float), np.ones(2 * n + 1), mode="same")
+    return touched == 0
+
+
+def _informative_blocks(result, p, ic_threshold, usable, min_windows, block):
+    """Blocks of informative windows of parameter ``p``: a list of step index arrays."""
+    low, high = result.bounds[p]
+    lower, upper = result.ci[p, :, 0], result.ci[p, :, 1]
+    clearance = np.maximum(_CLEARANCE * (upper - lower), (high - low) / result.gradient.shape[1])
+    with np.errstate(invalid="ignore"):
+        informative = usable & (result.ic[p] >= ic_threshold)
+        informative &= (lower - low > clearance) & (high - upper > clearance)
+    edges = np.diff(np.r_[0, informative.astype(np.int8), 0])
+    blocks = []
+    for start, stop in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
+        if stop - start >= min_windows:
+            blocks += np.array_split(np.arange(start, stop), max(1, (stop - start) // block))
+    return blocks
+
+
+def _drift(result, p, blocks, drift_tolerance):
+    """A StructureWarning if the blocks of parameter ``p`` locate it apart, else None."""
+    if len(blocks) < 2 * _CONFIRMING_BLOCKS:
+        return None
+    name = result.names[p]
+    low, high = result.bounds[p]
+    centres = result.bin_centres[p]
+    locations = np.array([centres[np.argmax(result.gradient[p][:, steps].sum(axis=1))] for steps in blocks])
+    bands = np.array([np.median(result.ci[p, steps], axis=0) for steps in blocks])
+    k = max(_CONFIRMING_BLOCKS, math.ceil(_CONFIRMING_SHARE * len(blocks)))
+    order = np.argsort(locations, kind="stable")
+    lowest, highest = int(order[k - 1]), int(order[-k])
+    spread = float((locations[highest] - locations[lowest]) / (high - low))
+    low_band = np.median(bands[locations <= locations[lowest]], axis=0)
+    high_band = np.median(bands[locations >= locations[highest]], axis=0)
+    separated = locations[highest] > low_band[1] and locations[lowest] < high_band[0]
+    # Locations are bin centres, so the spread is a whole number of bins; the
+    # relative margin keeps a spread of exactly the tolerance from passing by rounding.
+    if spread <= drift_tolerance * (1 + 1e-9) or not separated:
+        return None
+    times = np.array([[result.time[steps[0]], result.time[steps[-1]]] for steps in blocks])
+    trend = float(scipy.stats.spearmanr(np.arange(len(blocks)), locations)[0])
+
+    def at(block):
+        return f"{locations[block]:.3g} (t={times[block, 0]:g}-{times[block, 1]:g})"
+
+    if abs(trend) >= _TREND:
+        first, last = sorted((lowest, highest))
+        course = (f"moves from {at(first)} to {at(last)}, {100 * spread:.0f} % of its range "
+                  f"[{low:g}, {high:g}], {'rising' if trend > 0 else 'falling'} over time")
+    else:
+        course = (f"goes back and forth between {at(lowest)} and {at(highest)}, "
+                  f"{100 * spread:.0f} % of its range [{low:g}, {high:g}]")
+    message = (f"the location of the CLD-gradient maximum of {name} {course} ({len(blocks)} "
+               f"informative segments); a constant parameter should not move: the model structure "
+               f"may be wrong (thesis 4.4), unless {name} really varies over time")
+    return StructureWarning(
+        parameter=name, segments=tuple((int(s[0]), int(s[-1]) + 1) for s in blocks), times=times,
+        locations=locations, bands=bands, compared=(lowest, highest), spread=spread, trend=trend,
+        message=message)
