@@ -6,9 +6,18 @@ moving-window analysis and :mod:`dynia.result` holds what comes out.
 :func:`dynia.run` chains them. :mod:`dynia.thesis` and :mod:`dynia.mcat` are
 plain ports of the thesis's MATLAB and of MCAT's ``id_time.m``, kept as the
 oracles the fast engine is tested against.
+
+After the analysis: :mod:`dynia.segments` turns IC curves into data segments
+and fits the model on them by least squares, :mod:`dynia.baseline` is the
+interval search of Bittencourt et al. (2015) to compare with,
+:mod:`dynia.quality` flags glitches, outliers and stuck values,
+:mod:`dynia.structure` warns when a constant parameter's estimate drifts, and
+:mod:`dynia.identify` chains them (``dynia identify`` on the command line).
+:mod:`dynia.online` updates the analysis one logged sample at a time, and
+:mod:`dynia.distributed` runs it on a Dask cluster.
 """
-from . import (adaptive, analysis, baseline, cld, data, mcat, models, online, refine, sampling, segments,
-               synthetic, thesis)
+from . import (adaptive, analysis, baseline, cld, data, identify, mcat, models, online, quality, refine, sampling,
+               segments, structure, synthetic, thesis)
 from .analysis import moving_window
 from .pipeline import run
 from .refine import second_run
@@ -16,5 +25,6 @@ from .result import DyniaResult
 
 __version__ = "0.1.0"
 
-__all__ = ["run", "second_run", "moving_window", "DyniaResult", "adaptive", "analysis", "cld", "data",
-           "models", "online", "refine", "baseline", "segments", "sampling", "synthetic", "thesis", "mcat"]
+__all__ = ["run", "second_run", "moving_window", "DyniaResult", "adaptive", "analysis", "baseline", "cld",
+           "data", "identify", "mcat", "models", "online", "quality", "refine", "sampling", "segments",
+           "structure", "synthetic", "thesis"]

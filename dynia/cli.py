@@ -4,6 +4,10 @@
 --param NAME=LOW:HIGH ... --out DIR`` loads the data (:mod:`dynia.data`),
 runs :func:`dynia.run` and writes tables, a JSON summary and figures to DIR.
 ``dynia analyse --config run.toml`` takes the same settings from a file.
+``dynia identify DATA.csv`` with the same data and model options, and
+``--method {dynia,baseline,whole}``, fits the model by least squares on the
+data the method selects and validates it on the held-out end of the record
+(:mod:`dynia.identify`), writing ``identified.json`` and ``fit.png``.
 Bad input ends the command with one line on stderr and exit status 2.
 """
 import argparse
@@ -23,11 +27,14 @@ import numpy as np
 from . import __version__, models
 from .analysis import FLAVOURS
 from .data import DataError, load_csv
+from .identify import identify
 from .pipeline import run
 from .refine import narrowed_bounds
 from .sampling import SAMPLERS
 
 __all__ = ["main"]
+
+IDENTIFY_METHODS = ("dynia", "baseline", "whole")
 
 MODELS = {"first-order": models.FirstOrder, "fopdt": models.FOPDT,
           "second-order-delay": models.SecondOrderDelay}
@@ -44,6 +51,17 @@ at an input of 6 V, so the model works in deviations from that operating point):
   identifiability plot). All settings can also come from a TOML file:
   dynia analyse --config run.toml (keys as the long options, e.g. samples = 5000,
   and param = ["K=0:30", "T=0:300"]); options given on the command line win.
+"""
+
+
+IDENTIFY_EXAMPLE = """\
+example (the heating-system record; the last 30 % of it is held out for validation):
+  dynia identify data/heating_system/heating_system.csv --time time --input u --output y \\
+      --model first-order --param K=0:40 --param T=0:200 \\
+      --input-offset 6 --offset first --x0 zero --method dynia --seed 1 --out results/heating-fit
+
+  writes results/heating-fit/identified.json (parameters, std_errors, segments as
+  [start_time, end_time] pairs, validation_error, settings) and fit.png.
 """
 
 
@@ -69,36 +87,7 @@ def _parser():
                     "at every time step, rank the samples over a moving window: the information "
                     "content IC(t) of each parameter, its confidence band and the CLD gradient.",
         epilog=EXAMPLE, formatter_class=argparse.RawDescriptionHelpFormatter)
-    data = analyse.add_argument_group("data")
-    data.add_argument("data", nargs="?", metavar="DATA.csv",
-                      help="CSV file with a header row: time, input and output columns")
-    data.add_argument("--time", help="name of the time column: seconds, or ISO 8601 timestamps")
-    data.add_argument("--input", help="name of the input column (in long format: the input's tag)")
-    data.add_argument("--output", help="name of the output column (in long format: the output's tag)")
-    data.add_argument("--output-file", metavar="FILE",
-                      help="the output is logged in this second file, with its own time column of the "
-                           "same name: both logs are resampled onto a common grid")
-    data.add_argument("--long", action="store_true",
-                      help="DATA.csv is a long-format event log: columns time, tag, value")
-    data.add_argument("--tag-column", help="long format: the tag column (default: tag)")
-    data.add_argument("--value-column", help="long format: the value column (default: value)")
-    data.add_argument("--dt", type=float, metavar="SECONDS",
-                      help="grid spacing for irregular or event-based data (default: inferred)")
-    data.add_argument("--offset", metavar="{none,first,VALUE}",
-                      help="subtract an output offset before fitting: none (default), first (the first "
-                           "measured output) or a number")
-    data.add_argument("--input-offset", metavar="{none,first,VALUE}",
-                      help="subtract an input offset before simulating: none (default), first or a "
-                           "number; with --offset and --x0 zero this makes a deviation model around "
-                           "an operating point")
-    model = analyse.add_argument_group("model")
-    model.add_argument("--model", choices=sorted(MODELS),
-                       help="first-order: K/(T s+1); fopdt: K e^(-theta s)/(T s+1); "
-                            "second-order-delay: K e^(-theta s)/((T1 s+1)(T2 s+1))")
-    model.add_argument("--param", action="append", metavar="NAME=LOW:HIGH",
-                       help="sampling range of a model parameter; give one per parameter")
-    model.add_argument("--x0", choices=["zero", "steady"],
-                       help="initial state of every simulation: zero (default) or steady at the first input")
+    _add_data_and_model_options(analyse)
     method = analyse.add_argument_group("method")
     method.add_argument("--samples", type=int, metavar="N", help="Monte Carlo parameter sets (default 2000)")
     method.add_argument("--sampler", choices=sorted(SAMPLERS), help="uniform (default), lhs or sobol")
@@ -121,17 +110,90 @@ def _parser():
                         help="the band is widened by M times its width on each side (default 0.5)")
     method.add_argument("--seed", type=int, metavar="S",
                         help="seed of every random draw (default: drawn at random and recorded)")
-    output = analyse.add_argument_group("output")
+    _add_output_options(analyse)
+
+    identify = commands.add_parser(
+        "identify", help="re-identify the model by least squares on selected data and validate it",
+        description="Choose the data to fit on (DYNIA's high-IC segments, the intervals of the "
+                    "Bittencourt et al. 2015 search, or the whole record), estimate the parameters "
+                    "by least squares with standard errors, and score the model on the held-out end "
+                    "of the record. Writes DIR/identified.json and DIR/fit.png.",
+        epilog=IDENTIFY_EXAMPLE, formatter_class=argparse.RawDescriptionHelpFormatter)
+    _add_data_and_model_options(identify)
+    selection = identify.add_argument_group("selection and fit")
+    selection.add_argument("--method", choices=IDENTIFY_METHODS,
+                           help="dynia (default): segments where the IC reaches --ic-threshold; baseline: "
+                                "the accepted intervals of the Bittencourt et al. (2015) search; whole: "
+                                "the whole record before the held-out part")
+    selection.add_argument("--ic-threshold", type=float, metavar="IC",
+                           help="dynia: IC from which a step is informative (default 0.5)")
+    selection.add_argument("--mode", choices=("any", "joint"),
+                           help="dynia: a step is informative when any parameter's IC reaches the "
+                                "threshold (default) or when all do")
+    selection.add_argument("--held-out", type=float, metavar="FRACTION",
+                           help="share of the record, at its end, kept for validation (default 0.3)")
+    selection.add_argument("--quality", action="store_true",
+                           help="check the data for glitches, outliers and stuck values and report them")
+    selection.add_argument("--exclude-flagged", action="store_true",
+                           help="check the data and leave out what is flagged (output as missing, "
+                                "input interpolated)")
+    selection.add_argument("--starts", type=int, metavar="N",
+                           help="least-squares starting points: the middle of the ranges, then random (default 1)")
+    selection.add_argument("--samples", type=int, metavar="N", help="dynia: Monte Carlo parameter sets (default 2000)")
+    selection.add_argument("--n", type=int, help="dynia: half window, each window holds 2n+1 steps (default 10)")
+    selection.add_argument("--percentage", type=float, metavar="P",
+                           help="dynia: behavioural share of the samples in percent (default 10)")
+    selection.add_argument("--seed", type=int, metavar="S",
+                           help="seed of every random draw (default: drawn at random and recorded)")
+    _add_output_options(identify)
+    return parser
+
+
+def _add_output_options(command):
+    output = command.add_argument_group("output")
     output.add_argument("--out", metavar="DIR", help="directory for the results (must not exist)")
     output.add_argument("--overwrite", action="store_true", help="replace DIR if it exists")
     output.add_argument("--config", metavar="FILE.toml", help="read the settings from a TOML file")
-    return parser
+
+
+def _add_data_and_model_options(command):
+    data = command.add_argument_group("data")
+    data.add_argument("data", nargs="?", metavar="DATA.csv",
+                      help="CSV file with a header row: time, input and output columns")
+    data.add_argument("--time", help="name of the time column: seconds, or ISO 8601 timestamps")
+    data.add_argument("--input", help="name of the input column (in long format: the input's tag)")
+    data.add_argument("--output", help="name of the output column (in long format: the output's tag)")
+    data.add_argument("--output-file", metavar="FILE",
+                      help="the output is logged in this second file, with its own time column of the "
+                           "same name: both logs are resampled onto a common grid")
+    data.add_argument("--long", action="store_true",
+                      help="DATA.csv is a long-format event log: columns time, tag, value")
+    data.add_argument("--tag-column", help="long format: the tag column (default: tag)")
+    data.add_argument("--value-column", help="long format: the value column (default: value)")
+    data.add_argument("--dt", type=float, metavar="SECONDS",
+                      help="grid spacing for irregular or event-based data (default: inferred)")
+    data.add_argument("--offset", metavar="{none,first,VALUE}",
+                      help="subtract an output offset before fitting: none (default), first (the first "
+                           "measured output) or a number")
+    data.add_argument("--input-offset", metavar="{none,first,VALUE}",
+                      help="subtract an input offset before simulating: none (default), first or a "
+                           "number; with --offset and --x0 zero this makes a deviation model around "
+                           "an operating point")
+    model = command.add_argument_group("model")
+    model.add_argument("--model", choices=sorted(MODELS),
+                       help="first-order: K/(T s+1); fopdt: K e^(-theta s)/(T s+1); "
+                            "second-order-delay: K e^(-theta s)/((T1 s+1)(T2 s+1))")
+    model.add_argument("--param", action="append", metavar="NAME=LOW:HIGH",
+                       help="sampling range of a model parameter; give one per parameter")
+    model.add_argument("--x0", choices=["zero", "steady"],
+                       help="initial state of every simulation: zero (default) or steady at the first input")
 
 
 DEFAULTS = dict(samples=2000, sampler="uniform", n=10, percentage=10.0, bins=40, conf_level=90.0,
                 flavour="thesis", x0="zero", offset="none", input_offset="none", min_points=1, tag_column="tag",
                 value_column="value", overwrite=False, long=False, second_run=False,
-                narrow_threshold=0.75, narrow_margin=0.5)
+                narrow_threshold=0.75, narrow_margin=0.5, method="dynia", ic_threshold=0.5, mode="any",
+                held_out=0.3, quality=False, exclude_flagged=False, starts=1)
 
 
 def main(argv=None):
@@ -142,7 +204,8 @@ def main(argv=None):
         if args.command is None:
             parser.print_help()
             return 2
-        return _analyse(_settings(args))
+        settings = _settings(args)
+        return _identify(settings) if args.command == "identify" else _analyse(settings)
     except (UsageError, DataError, ValueError, OSError) as error:
         print(f"dynia: error: {_one_line(error)}", file=sys.stderr)
         return 2
@@ -174,7 +237,7 @@ def _settings(args):
     if settings["model"] not in MODELS:
         raise UsageError(f"--model must be one of {', '.join(sorted(MODELS))}; got {settings['model']!r}")
     settings["bounds"] = _bounds(settings["param"], MODELS[settings["model"]]())
-    for key, minimum in (("samples", 1), ("n", 0), ("bins", 1), ("min_points", 1)):
+    for key, minimum in (("samples", 1), ("n", 0), ("bins", 1), ("min_points", 1), ("starts", 1)):
         if not isinstance(settings[key], int) or isinstance(settings[key], bool) or settings[key] < minimum:
             raise UsageError(f"--{key.replace('_', '-')} must be a whole number >= {minimum}; got {settings[key]!r}")
     if not 0 < settings["conf_level"] < 100:
@@ -189,7 +252,12 @@ def _settings(args):
     if behavioural < 2:
         raise UsageError(f"--percentage {settings['percentage']:g} of --samples {settings['samples']} keeps "
                          f"{behavioural} parameter sets per window; at least 2 are needed")
-    for key, choices in (("sampler", SAMPLERS), ("flavour", FLAVOURS), ("x0", ("zero", "steady"))):
+    if not 0 < settings["ic_threshold"] <= 1:
+        raise UsageError(f"--ic-threshold must lie in (0, 1]; got {settings['ic_threshold']}")
+    if not 0 < settings["held_out"] < 1:
+        raise UsageError(f"--held-out must lie strictly between 0 and 1; got {settings['held_out']}")
+    for key, choices in (("sampler", SAMPLERS), ("flavour", FLAVOURS), ("x0", ("zero", "steady")),
+                         ("method", IDENTIFY_METHODS), ("mode", ("any", "joint"))):
         if settings[key] not in choices:
             raise UsageError(f"--{key} must be one of {', '.join(choices)}; got {settings[key]!r}")
     settings["offset"] = _offset(settings["offset"], "--offset")
@@ -257,7 +325,8 @@ def _offset(value, option):
     return number
 
 
-def _analyse(settings):
+def _load(settings):
+    """The data, checked against the window, and the output and input offsets."""
     data = load_csv(settings["data"], time=settings["time"], input=settings["input"],
                     output=settings["output"], output_path=settings.get("output_file"),
                     long_format=settings["long"], tag_column=settings["tag_column"],
@@ -268,6 +337,27 @@ def _analyse(settings):
                          f"2n+1 = {window} (--n {settings['n']})")
     offset = _offset_value(settings["offset"], data.y, settings["data"], "--offset")
     input_offset = _offset_value(settings["input_offset"], data.u, settings["data"], "--input-offset")
+    return data, offset, input_offset
+
+
+def _write_atomically(out, write):
+    """Call ``write(staging_dir)``, then move the finished directory to ``out``."""
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
+    try:
+        write(staging)
+        _move_into_place(staging, out)
+    finally:
+        if staging.exists():
+            shutil.rmtree(staging)
+    if sys.stderr.isatty():  # quiet in scripts and pipelines
+        print(f"dynia: wrote {out}", file=sys.stderr)
+    return 0
+
+
+def _analyse(settings):
+    data, offset, input_offset = _load(settings)
     model = MODELS[settings["model"]]()
 
     def analyse(bounds):
@@ -278,10 +368,8 @@ def _analyse(settings):
                    rng=settings["seed"], progress=sys.stderr.isatty(), min_points=settings["min_points"])
 
     result = analyse(settings["bounds"])
-    out = Path(settings["out"])
-    out.parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
-    try:
+
+    def write(staging):
         _write_results(staging, result, data, settings, offset, input_offset)
         if settings["second_run"]:
             bounds, narrowed = narrowed_bounds(result, settings["bounds"], threshold=settings["narrow_threshold"],
@@ -289,13 +377,43 @@ def _analyse(settings):
             (staging / "second_run").mkdir()
             _write_results(staging / "second_run", analyse(bounds), data, dict(settings, bounds=bounds),
                            offset, input_offset, narrowed=narrowed)
-        _move_into_place(staging, out)
-    finally:
-        if staging.exists():
-            shutil.rmtree(staging)
-    if sys.stderr.isatty():  # quiet in scripts and pipelines
-        print(f"dynia: wrote {out}", file=sys.stderr)
-    return 0
+
+    return _write_atomically(settings["out"], write)
+
+
+def _identify(settings):
+    data, offset, input_offset = _load(settings)
+    model = MODELS[settings["model"]]()
+    u, y = data.u - input_offset, data.y - offset
+    found = identify(u, y, model, settings["bounds"], method=settings["method"], dt=data.dt,
+                     x0=settings["x0"], held_out=settings["held_out"], n_samples=settings["samples"],
+                     sampler=settings["sampler"], n=settings["n"], percentage=settings["percentage"],
+                     flavour=settings["flavour"], ic_threshold=settings["ic_threshold"], mode=settings["mode"],
+                     quality=settings["quality"], exclude_flagged=settings["exclude_flagged"],
+                     n_starts=settings["starts"], rng=settings["seed"])
+    summary = found.to_dict(data.time)
+
+    def file_time(index):
+        return _file_times(data, [data.time[index]])[0]
+
+    for key, pairs in (("segments", found.segments), ("validation_segments", found.validation)):
+        summary[key] = [[file_time(start), file_time(stop - 1)] for start, stop in pairs]
+    for finding, entry in zip(found.quality.findings if found.quality else (), summary.get("data_quality", [])):
+        entry.update(start_time=file_time(finding.start), end_time=file_time(finding.stop - 1))
+    recorded = {key: settings[key] for key in sorted(settings)
+                if key not in ("param", "bounds", "second_run", "narrow_threshold", "narrow_margin")}
+    recorded.update(summary.pop("settings"))
+    recorded["offset_value"] = offset
+    recorded["input_offset_value"] = input_offset
+    summary.update(settings=recorded, version=__version__,
+                   data=dict(n_steps=int(data.time.size), dt=data.dt, start=_file_times(data, [0.0])[0],
+                             notes=list(data.notes)))
+
+    def write(staging):
+        (staging / "identified.json").write_text(json.dumps(summary, indent=2, default=_plain) + "\n")
+        _write_fit_figure(staging / "fit.png", found, data, u, y, offset)
+
+    return _write_atomically(settings["out"], write)
 
 
 def _offset_value(offset, values, path, option):
@@ -394,6 +512,32 @@ def _write_figures(directory, result, data, offset):
             ax.set_xlabel("time (s from the first grid point)")
             fig.savefig(directory / f"{kind}_{name}.png", dpi=110, bbox_inches="tight")
             plt.close(fig)
+
+
+def _write_fit_figure(path, found, data, u, y, offset):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    grid_time = data.time - data.time[0]
+    fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(9, 5))
+    top.plot(grid_time, data.u, color="tab:blue")
+    top.set_ylabel("input")
+    bottom.plot(grid_time, y, color="tab:orange", label="measured")
+    bottom.plot(grid_time, found.fit.simulate(u), color="k", linewidth=1, label="fitted model")
+    for number, (start, stop) in enumerate(found.segments):
+        for ax in (top, bottom):
+            ax.axvspan(grid_time[start], grid_time[stop - 1], color="tab:green", alpha=0.15,
+                       label="fitted on" if number == 0 and ax is bottom else None)
+    start, stop = found.validation[0]
+    bottom.axvspan(grid_time[start], grid_time[-1], color="0.5", alpha=0.15, label="held out")
+    estimates = ", ".join(f"{name} = {value:.4g} \u00b1 {found.std_errors[name]:.2g}"
+                          for name, value in found.parameters.items())
+    top.set_title(f"{found.method}: {estimates}; validation RMSE {found.validation_error:.3g}")
+    bottom.set_ylabel("output" + (f" (minus {offset:g})" if offset else ""))
+    bottom.set_xlabel("time (s from the first grid point)")
+    bottom.legend(loc="best", fontsize=8)
+    fig.savefig(path, dpi=110, bbox_inches="tight")
+    plt.close(fig)
 
 
 if __name__ == "__main__":

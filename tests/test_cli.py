@@ -229,3 +229,70 @@ def test_second_run_writes_its_own_results(tmp_path, capsys):
     assert 0 < low < 2 < high < 7 and second["settings"]["bounds"]["T"] == [0.0, 7.0]
     assert first["settings"]["bounds"] == {"K": [0.0, 7.0], "T": [0.0, 7.0]}
     assert (out / "second_run" / "ic.csv").exists() and (out / "second_run" / "identifiability_T.png").exists()
+
+
+# ------------------------------------------------------------------ dynia identify
+
+@pytest.fixture(scope="module")
+def heating_identified(tmp_path_factory):
+    runs = tmp_path_factory.mktemp("identify")
+    for method in ("dynia", "baseline", "whole"):
+        assert main(["identify", str(HEATING), *HEATING_ARGS, "--method", method, "--out",
+                     str(runs / method)]) == 0
+    return {method: json.loads((runs / method / "identified.json").read_text())
+            for method in ("dynia", "baseline", "whole")} | {"dir": runs}
+
+
+def test_identify_writes_the_checked_schema(heating_identified):
+    for method in ("dynia", "baseline", "whole"):
+        found = heating_identified[method]
+        assert set(found["parameters"]) == set(found["std_errors"]) == {"K", "T"}
+        assert found["settings"]["method"] == method
+        assert np.isfinite(found["validation_error"]) and found["validation_error"] > 0
+        segments = np.array(found["segments"], dtype=float)
+        assert segments.ndim == 2 and segments.shape[1] == 2 and (segments[:, 1] >= segments[:, 0]).all()
+        # The last 30 % of the 801 steps (0 to 1600 s, dt 2 s) is held out, untouched by the fit.
+        [(held_start, held_end)] = found["validation_segments"]
+        assert held_end == 1600.0 and abs(held_start - 0.7 * 1600) <= 2 and segments.max() < held_start
+        assert (heating_identified["dir"] / method / "fit.png").stat().st_size > 10_000
+    assert heating_identified["whole"]["segments"] == [[0.0, 1120.0]]
+
+
+def test_every_selection_finds_the_heating_gain_near_the_static_gains(heating_identified):
+    # The record's steady levels give static gains of about 19-21 degC/V (see the analyse test).
+    for method in ("dynia", "baseline", "whole"):
+        assert 17 < heating_identified[method]["parameters"]["K"] < 23
+        assert 40 < heating_identified[method]["parameters"]["T"] < 100
+
+
+def test_identify_recovers_a_known_model_with_a_glitch_excluded(tmp_path, capsys):
+    rng = np.random.default_rng(3)
+    u = np.repeat(rng.choice([0.0, 1.0, 2.0], 12), 50)
+    y = FirstOrder().simulate([[1.5, 8.0]], u)[0] + rng.normal(0, 0.02, u.size)
+    y[130] = 40.0  # one erroneous reading
+    _write(tmp_path / "data.csv", "time,u,y\n" + "".join(f"{k},{float(a)!r},{float(b)!r}\n" for k, (a, b) in enumerate(zip(u, y))))
+    common = ["--time", "time", "--input", "u", "--output", "y", "--model", "first-order",
+              "--param", "K=0:5", "--param", "T=0:30", "--method", "whole", "--seed", "2"]
+    assert main(["identify", str(tmp_path / "data.csv"), *common, "--out", str(tmp_path / "raw")]) == 0
+    assert main(["identify", str(tmp_path / "data.csv"), *common, "--exclude-flagged",
+                 "--out", str(tmp_path / "clean")]) == 0
+    raw, clean = (json.loads((tmp_path / name / "identified.json").read_text()) for name in ("raw", "clean"))
+    # The reading is both a glitch (off its neighbours) and an outlier (off the record's range).
+    assert {(entry["start_time"], entry["end_time"]) for entry in clean["data_quality"]} == {(130.0, 130.0)}
+    assert all(entry["inside_fitted_segments"] for entry in clean["data_quality"])
+    for name, truth in (("K", 1.5), ("T", 8.0)):
+        assert abs(clean["parameters"][name] - truth) < 3 * clean["std_errors"][name]
+    assert clean["fit_rmse"] < raw["fit_rmse"] / 5
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--method", "random"], "--method"),
+    (["--ic-threshold", "1.5"], "--ic-threshold"),
+    (["--held-out", "1"], "--held-out"),
+    (["--starts", "0"], "--starts"),
+])
+def test_identify_bad_options_are_one_line_errors(tmp_path, capsys, extra, message):
+    status = main(["identify", str(HEATING), *HEATING_ARGS, *extra, "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert status == 2 and len(err) == 1 and message in err[0]
+    assert not (tmp_path / "out").exists()

@@ -1,0 +1,244 @@
+"""Re-identify a model from selected data: DYNIA segments, a baseline's intervals or the whole record.
+
+The thesis's closing loop (sections 4.3-4.4): hold out the end of the
+record for validation, choose the data to fit on, fit the model there by
+least squares (:func:`dynia.segments.fit_segments`) and score it on the
+held-out part. :func:`identify` does this for one selection method, so that
+the methods can be compared on equal terms:
+
+``"dynia"``
+    :func:`dynia.run` on the fitting part (the held-out output blanked),
+    then :func:`dynia.segments.segments_from_ic`: the stretches where the
+    information content of a parameter (``mode="any"``) or of all
+    (``"joint"``) reaches ``ic_threshold``. Also reports the model-structure
+    warnings of :func:`dynia.structure.structure_warnings`.
+``"baseline"``
+    The accepted intervals of :func:`dynia.baseline.find_intervals`
+    (Bittencourt et al., 2015) on the fitting part.
+``"whole"``
+    The whole fitting part.
+``"given"``
+    Segments the caller chooses (``segments=``), e.g. random segments of the
+    same total length as another method's (:func:`dynia.segments.random_segments`).
+
+With ``quality=True`` the data are checked first (:func:`dynia.quality.check_quality`)
+and, with ``exclude_flagged=True``, flagged output samples are treated as
+missing and flagged input samples interpolated before anything else.
+
+Shapes follow :mod:`dynia.analysis`: ``u`` and ``y`` are (n_steps,).
+
+Examples
+--------
+>>> import numpy as np
+>>> from dynia.identify import identify
+>>> from dynia.models import FirstOrder
+>>> u = np.repeat([0.0, 1.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0], 30)
+>>> y = FirstOrder().simulate([[2.0, 5.0]], u)[0]
+>>> found = identify(u, y, FirstOrder(), {"K": (0, 7), "T": (0, 20)}, method="whole", rng=1)
+>>> {name: round(value, 4) for name, value in found.parameters.items()}
+{'K': 2.0, 'T': 5.0}
+>>> found.segments, found.validation
+([(0, 210)], [(210, 300)])
+"""
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import _checks
+from .baseline import find_intervals
+from .pipeline import _ordered_bounds, run
+from .quality import check_quality
+from .segments import (check_segments, fit_segments, holdout_split, intersect_segments, segments_from_ic,
+                       segments_to_mask, segments_to_times)
+from .structure import structure_warnings
+
+__all__ = ["Identification", "identify", "METHODS"]
+
+METHODS = ("dynia", "baseline", "whole", "given")
+
+
+@dataclass(frozen=True, eq=False)
+class Identification:
+    """What :func:`identify` found.
+
+    Attributes
+    ----------
+    method : str
+    parameters, std_errors : dict of str to float
+        Least-squares estimates and their standard errors (inf where the
+        segments do not determine a parameter).
+    segments : list of (start, stop)
+        The steps fitted on (stop exclusive).
+    validation : list of (start, stop)
+        The held-out steps the validation error is computed on.
+    validation_error : float
+        RMS of the simulation error on ``validation``.
+    fit : dynia.segments.FitResult
+    dynia_result : DyniaResult or None
+        The DYNIA run ("dynia" only).
+    baseline_result : dynia.baseline.BaselineResult or None
+        The interval search ("baseline" only).
+    quality : dynia.quality.QualityReport or None
+    warnings : list of str
+        Model-structure warnings and notes on the selection.
+    settings : dict
+    """
+
+    method: str
+    parameters: dict
+    std_errors: dict
+    segments: list
+    validation: list
+    validation_error: float
+    fit: object = field(repr=False)
+    dynia_result: object = field(default=None, repr=False)
+    baseline_result: object = field(default=None, repr=False)
+    quality: object = field(default=None, repr=False)
+    warnings: list = field(default_factory=list)
+    settings: dict = field(default_factory=dict)
+
+    def to_dict(self, time):
+        """JSON-ready summary; segments as [start_time, end_time] on ``time`` (n_steps,)."""
+        fit = self.fit.to_dict()
+        summary = dict(
+            method=self.method,
+            parameters=fit["parameters"],
+            std_errors=fit["std_errors"],
+            segments=segments_to_times(self.segments, time),
+            validation_segments=segments_to_times(self.validation, time),
+            validation_error=_json_number(self.validation_error),
+            fit_rmse=fit["rmse"],
+            n_points=fit["n_points"],
+            identifiable=fit["identifiable"],
+            at_bound=fit["at_bound"],
+            warnings=list(self.warnings),
+            settings=self.settings,
+        )
+        if self.quality is not None:
+            summary["data_quality"] = [
+                dict(signal=f.signal, kind=f.kind, start_time=_json_number(time[f.start]),
+                     end_time=_json_number(time[f.stop - 1]), value=_json_number(f.value),
+                     reason=f.reason, inside_fitted_segments=any(
+                         f.start < stop and start < f.stop for start, stop in self.segments))
+                for f in self.quality.findings]
+        return summary
+
+
+def identify(u, y, model, bounds, *, method="dynia", dt=1.0, x0="zero", held_out=0.3, segments=None,
+             n_samples=2000, sampler="uniform", n=10, percentage=10, flavour="thesis", ic_threshold=0.5,
+             mode="any", min_length=None, merge_gap=None, baseline_options=None, quality=False,
+             exclude_flagged=False, quality_options=None, n_starts=1, rng=None):
+    """Select data by ``method``, fit the model there and validate it on held-out data.
+
+    Parameters
+    ----------
+    u, y : array_like, shape (n_steps,)
+        Input and output, deviation variables around the operating point
+        (as ``dynia analyse --offset/--input-offset`` prepares them). NaN in
+        ``y`` marks a missing sample.
+    model : dynia.models.Model
+    bounds : mapping of str to (low, high)
+        Every model parameter's range: DYNIA's prior and the fit's bounds.
+    method : {"dynia", "baseline", "whole", "given"}
+        How the fitting data are chosen (see the module documentation).
+    dt : float, default 1.0
+    x0 : {"zero", "steady"}, default "zero"
+        Initial state of every simulation, in DYNIA and in the fit.
+    held_out : float or list of (start, stop), default 0.3
+        Validation data, never used to select or fit: that share of the
+        record at its end, or explicit segments
+        (:func:`dynia.segments.holdout_split`).
+    segments : list of (start, stop), optional
+        The segments to fit on, for ``method="given"``.
+    n_samples, sampler, n, percentage, flavour
+        The DYNIA run, as :func:`dynia.run`.
+    ic_threshold, mode, min_length, merge_gap
+        From IC to segments, as :func:`dynia.segments.segments_from_ic`.
+    baseline_options : dict, optional
+        Tuning of :func:`dynia.baseline.find_intervals`.
+    quality : bool, default False
+        Check the data with :func:`dynia.quality.check_quality` first.
+    exclude_flagged : bool, default False
+        Exclude what the check flags (implies ``quality``).
+    quality_options : dict, optional
+        Tuning of :func:`dynia.quality.check_quality`.
+    n_starts : int, default 1
+        Starting points of the least-squares fit (the middle of the bounds,
+        then random ones).
+    rng : numpy.random.Generator or int, optional
+        Every random draw (the DYNIA samples, the extra fit starts).
+
+    Returns
+    -------
+    Identification
+    """
+    u = _checks.as_1d_float(u, "u")
+    y = _checks.as_1d_float(y, "y", allow_nan=True)
+    if u.size != y.size:
+        raise ValueError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}; got {method!r}")
+    if (segments is None) != (method != "given"):
+        raise ValueError("segments are given exactly when method='given'")
+    names, box = _ordered_bounds(bounds, model)
+    bounds = {name: tuple(map(float, row)) for name, row in zip(names, box)}
+    rng = np.random.default_rng(rng)
+    time = np.arange(u.size) * float(dt)
+
+    report = None
+    if quality or exclude_flagged:
+        report = check_quality(time, u, y, **(quality_options or {}))
+        if exclude_flagged:
+            u, y = report.exclude(u, signal="u"), report.exclude(y, signal="y")
+
+    fit_part, validation = holdout_split(u.size, held_out)
+    y_fit = np.where(segments_to_mask(validation, u.size), np.nan, y)
+    notes = []
+    dynia_result = baseline_result = None
+    if method == "dynia":
+        dynia_result = run(u, y_fit, model, bounds, dt=dt, n_samples=n_samples, sampler=sampler, n=n,
+                           percentage=percentage, flavour=flavour, x0=x0, rng=rng)
+        chosen = intersect_segments(segments_from_ic(dynia_result, threshold=ic_threshold, mode=mode,
+                                                     min_length=min_length, merge_gap=merge_gap), fit_part)
+        notes += [str(warning) for warning in structure_warnings(dynia_result)]
+    elif method == "baseline":
+        fitting = segments_to_mask(fit_part, u.size)
+        baseline_result = find_intervals(np.where(fitting, u, np.nan), y_fit, dt=dt,
+                                         **(baseline_options or {}))
+        chosen = intersect_segments([tuple(map(int, pair)) for pair in baseline_result.accepted], fit_part)
+    elif method == "whole":
+        chosen = list(fit_part)
+    else:
+        chosen = intersect_segments(check_segments(segments, u.size), fit_part)
+    if not chosen:
+        raise ValueError(f"method {method!r} selected no data to fit on"
+                         + (f" (no window reached IC {ic_threshold}; lower ic_threshold)"
+                            if method == "dynia" else ""))
+    if report is not None:
+        inside = sum(len(found) for found in report.findings_in(chosen).values())
+        if inside:
+            notes.append(f"{inside} data-quality finding(s) lie inside the fitted segments"
+                         + ("" if exclude_flagged else "; exclude them with exclude_flagged=True"))
+
+    fit = fit_segments(u, y_fit, model, chosen, bounds=bounds, dt=dt, x0=x0, n_starts=n_starts, rng=rng)
+    settings = dict(method=method, dt=float(dt), x0=x0, held_out_steps=int(sum(b - a for a, b in validation)),
+                    bounds={name: list(pair) for name, pair in bounds.items()}, n_starts=n_starts,
+                    quality=bool(quality or exclude_flagged), exclude_flagged=bool(exclude_flagged))
+    if method == "dynia":
+        settings.update(n_samples=n_samples, sampler=sampler, n=n, percentage=percentage, flavour=flavour,
+                        ic_threshold=ic_threshold, mode=mode,
+                        min_length=min_length, merge_gap=merge_gap)
+    if method == "baseline":
+        settings["baseline"] = {key: _json_number(value) if isinstance(value, float) else value
+                                for key, value in baseline_result.settings.items()
+                                if isinstance(value, (int, float, str, bool))}
+    return Identification(method=method, parameters=dict(fit.parameters), std_errors=dict(fit.std_errors),
+                          segments=list(fit.segments), validation=list(validation),
+                          validation_error=fit.validation_error(u, y, validation), fit=fit,
+                          dynia_result=dynia_result, baseline_result=baseline_result, quality=report,
+                          warnings=notes, settings=settings)
+
+
+def _json_number(value):
+    value = float(value)
+    return value if np.isfinite(value) else None

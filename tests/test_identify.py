@@ -1,0 +1,81 @@
+"""dynia.identify: select, fit and validate, on data with a known model."""
+import numpy as np
+import pytest
+
+from dynia.identify import identify
+from dynia.models import FirstOrder, SecondOrderDelay
+from dynia.segments import random_segments
+
+BOUNDS = {"K": (0, 7), "T": (0, 20)}
+
+
+def _record(seed=0, steps=600, glitch=None):
+    """Long steady stretches with a few setpoint changes, noise 0.05, K=2, T=5."""
+    rng = np.random.default_rng(seed)
+    u = np.zeros(steps)
+    for start, level in ((60, 1.0), (200, 3.0), (330, 2.0), (470, 0.5)):
+        u[start:] = level
+    y = FirstOrder().simulate([[2.0, 5.0]], u)[0] + rng.normal(0, 0.05, steps)
+    if glitch is not None:
+        y[glitch] = 0.0
+    return u, y
+
+
+@pytest.mark.parametrize("method", ["dynia", "baseline", "whole"])
+def test_every_method_recovers_the_model_within_its_standard_errors(method):
+    u, y = _record()
+    found = identify(u, y, FirstOrder(), BOUNDS, method=method, n_samples=2000, rng=1)
+    for name, truth in (("K", 2.0), ("T", 5.0)):
+        assert abs(found.parameters[name] - truth) < 4 * found.std_errors[name]
+    # The validation error of a correct model is the noise level.
+    assert 0.04 < found.validation_error < 0.07
+    held_start = found.validation[0][0]
+    assert held_start == 420 and all(stop <= held_start for _, stop in found.segments)
+
+
+def test_dynia_fits_on_fewer_points_than_the_whole_record():
+    u, y = _record()
+    dynia_fit = identify(u, y, FirstOrder(), BOUNDS, method="dynia", rng=1)
+    whole = identify(u, y, FirstOrder(), BOUNDS, method="whole", rng=1)
+    assert dynia_fit.fit.n_points < whole.fit.n_points
+    assert dynia_fit.dynia_result is not None and whole.dynia_result is None
+
+
+def test_given_segments_are_fitted_as_given():
+    u, y = _record()
+    chosen = random_segments([40, 40], 420, rng=3)
+    found = identify(u, y, FirstOrder(), BOUNDS, method="given", segments=chosen)
+    assert found.segments == chosen
+
+
+def test_a_glitch_is_reported_and_excluded_on_request():
+    u, y = _record(glitch=300)
+    kept = identify(u, y, FirstOrder(), BOUNDS, method="whole", quality=True)
+    excluded = identify(u, y, FirstOrder(), BOUNDS, method="whole", exclude_flagged=True)
+    assert {finding.start for finding in kept.quality.findings} == {300}
+    assert any("inside the fitted segments" in note for note in kept.warnings)
+    assert excluded.fit.rmse < kept.fit.rmse / 2
+    assert abs(excluded.parameters["K"] - 2.0) < abs(kept.parameters["K"] - 2.0) + 1e-3
+
+
+def test_to_dict_has_the_checked_keys():
+    u, y = _record()
+    summary = identify(u, y, FirstOrder(), BOUNDS, method="whole").to_dict(np.arange(u.size) * 2.0)
+    assert {"parameters", "std_errors", "segments", "validation_error", "settings"} <= set(summary)
+    assert summary["segments"] == [[0.0, 838.0]]
+
+
+@pytest.mark.parametrize("options, message", [
+    (dict(method="random"), "method must be one of"),
+    (dict(method="given"), "segments are given exactly when"),
+    (dict(segments=[(0, 10)]), "segments are given exactly when"),
+    (dict(bounds={"K": (0, 7)}), r"missing: \['T'\]"),
+    (dict(model=SecondOrderDelay()), "unknown"),
+    (dict(ic_threshold=1.0, n_samples=200), "selected no data"),
+])
+def test_bad_requests_get_clear_errors(options, message):
+    u, y = _record(steps=200)
+    arguments = dict(model=FirstOrder(), bounds=BOUNDS)
+    arguments.update({key: options.pop(key) for key in ("model", "bounds") if key in options})
+    with pytest.raises(ValueError, match=message):
+        identify(u, y, arguments["model"], arguments["bounds"], **options)
