@@ -57,9 +57,10 @@ closed loop the first from the setpoint and the second from the input:
   at the median of the first 1/(1-lam) samples of each finite stretch.
 - *Noise level.* ``s`` is estimated from the first differences, robustly
   (1.4826 x median absolute deviation / sqrt 2), so the few steps of a
-  record do not inflate it. It is floored at 1 % of the signal's range, so
-  a noise-free setpoint or input is excited at each change larger than about
-  2 % of its range and settles again within about 4/(1-lam) samples.
+  record do not inflate it. It is floored at 1 % of the signal's range
+  between its 1 % and 99 % quantiles (so that a glitch does not raise it),
+  so a noise-free setpoint or input is excited at each change larger than
+  about 2 % of that range and settles again within about 4/(1-lam) samples.
   ``noise_std`` overrides the estimate.
 - *Interval bounds.* Excited runs (input or output) at most
   ``max(merge_gap, margin)`` samples apart are joined; each joined run
@@ -542,7 +543,11 @@ def _laguerre_tests(u, y, order, pole, setpoint=None):
 def _noise_std(x):
     """Robust noise level from the first differences, floored at a small fraction of the range."""
     finite = x[np.isfinite(x)]
-    spread = float(np.ptp(finite)) if finite.size else 0.0
+    # The range between the 1 % and 99 % quantiles, so that one glitch does not
+    # raise the floor (the full range where the signal rarely leaves one level).
+    spread = float(np.subtract(*np.quantile(finite, [0.99, 0.01]))) if finite.size else 0.0
+    if spread == 0 and finite.size:
+        spread = float(np.ptp(finite))
     floor = _NOISE_FLOOR * spread if spread > 0 else 1.0
     steps = np.diff(x)
     steps = steps[np.isfinite(steps)]

@@ -6,24 +6,31 @@ a second run, with the same number of samples, sees the other parameters
 far more sharply. :func:`narrowed_bounds` makes that choice from the first
 result and :func:`second_run` does both runs.
 
-The rule: a parameter is identified when its IC reaches ``threshold`` and
-the bands of all the windows where it does overlap, i.e. the informative
-windows agree on where the parameter lies. Its new range is that common
+The rule: a window is informative about a parameter when its IC reaches
+``threshold``, its band keeps clear of the range's bounds
+(:func:`dynia.structure.clear_of_bounds`) and it belongs to a run of at
+least ``min_windows`` such windows in a row. A parameter is identified when
+it has informative windows and all their bands overlap, i.e. they agree on
+where the parameter lies. Its new range is that common
 part of the bands, widened by ``margin`` times its width on each side and
-clipped to the old range. The agreement test matters: windows where the output is only
+clipped to the old range. The tests matter: windows where the output is only
 noise rank samples by sub-noise differences and can show a high IC with a
-band anywhere (thesis example 1 after the final step puts the time constant
-near 0 that way), and a parameter whose band drifts between informative
-windows points to a model-structure problem (thesis 4.4); neither should
-narrow a range.
+band anywhere, most often pressed against a bound (thesis example 1 after
+the final step puts the time constant near 0 that way); a lone window, or a
+few next to missing data, can be sharp by chance; and a parameter whose band
+drifts between informative windows points to a model-structure problem
+(thesis 4.4). None of them should narrow a range.
 """
+import numpy as np
+
 from . import _checks
 from .pipeline import run
+from .structure import clear_of_bounds
 
 __all__ = ["narrowed_bounds", "second_run"]
 
 
-def narrowed_bounds(result, bounds, *, threshold=0.75, margin=0.5):
+def narrowed_bounds(result, bounds, *, threshold=0.75, margin=0.5, min_windows=3):
     """New ranges from a first run: the agreed band of each identified parameter.
 
     Parameters
@@ -36,6 +43,8 @@ def narrowed_bounds(result, bounds, *, threshold=0.75, margin=0.5):
         IC from which a window counts as informative about a parameter.
     margin : float >= 0
         Share of the width of the bands' common part added on each side.
+    min_windows : int >= 1
+        Informative windows must come in runs of at least this many.
 
     Returns
     -------
@@ -57,6 +66,7 @@ def narrowed_bounds(result, bounds, *, threshold=0.75, margin=0.5):
     True
     """
     threshold = _checks.open_interval(threshold, "threshold", 0, 1)
+    min_windows = _checks.whole_number(min_windows, "min_windows", minimum=1)
     if not margin >= 0:
         raise ValueError(f"margin must be >= 0; got {margin!r}")
     if set(bounds) != set(result.names):
@@ -64,7 +74,8 @@ def narrowed_bounds(result, bounds, *, threshold=0.75, margin=0.5):
     new_bounds, narrowed = {}, []
     for name, (low, high) in bounds.items():
         p = result.index(name)
-        informative = result.ic[p] >= threshold  # NaN compares False
+        with np.errstate(invalid="ignore"):  # NaN compares False
+            informative = _in_long_runs((result.ic[p] >= threshold) & clear_of_bounds(result, p), min_windows)
         lowers, uppers = result.ci[p, informative, 0], result.ci[p, informative, 1]
         if not informative.any() or lowers.max() > uppers.min():
             new_bounds[name] = (float(low), float(high))
@@ -78,6 +89,16 @@ def narrowed_bounds(result, bounds, *, threshold=0.75, margin=0.5):
         new_bounds[name] = (new_low, new_high)
         narrowed.append(name)
     return new_bounds, narrowed
+
+
+def _in_long_runs(flags, min_length):
+    """``flags`` without the runs of True shorter than ``min_length``."""
+    edges = np.diff(np.r_[0, flags.astype(np.int8), 0])
+    kept = np.zeros_like(flags)
+    for start, stop in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
+        if stop - start >= min_length:
+            kept[start:stop] = True
+    return kept
 
 
 def second_run(u, y, model, bounds, *, threshold=0.75, margin=0.5, **options):

@@ -83,7 +83,7 @@ import scipy.stats
 from . import _checks
 from .result import DyniaResult
 
-__all__ = ["StructureWarning", "structure_warnings"]
+__all__ = ["StructureWarning", "structure_warnings", "clear_of_bounds"]
 
 # A band closer to a bound than this fraction of its width (or one gradient bin)
 # leans on the bound. Behavioural values spread evenly from some value up to
@@ -223,14 +223,25 @@ def _trusted_windows(ignore, n, n_steps):
     return touched == 0
 
 
-def _informative_blocks(result, p, ic_threshold, usable, min_windows, block):
-    """Blocks of informative windows of parameter ``p``: a list of step index arrays."""
+def clear_of_bounds(result, p):
+    """Windows whose band of parameter ``p`` keeps clear of both bounds of its range, (n_steps,) bool.
+
+    A band closer to a bound than a quarter of its own width, or than one
+    gradient bin, leans on the bound: it limits the parameter from one side
+    only, and it is what windows holding only noise produce. NaN bands are
+    not clear.
+    """
     low, high = result.bounds[p]
     lower, upper = result.ci[p, :, 0], result.ci[p, :, 1]
     clearance = np.maximum(_CLEARANCE * (upper - lower), (high - low) / result.gradient.shape[1])
     with np.errstate(invalid="ignore"):
-        informative = usable & (result.ic[p] >= ic_threshold)
-        informative &= (lower - low > clearance) & (high - upper > clearance)
+        return (lower - low > clearance) & (high - upper > clearance)
+
+
+def _informative_blocks(result, p, ic_threshold, usable, min_windows, block):
+    """Blocks of informative windows of parameter ``p``: a list of step index arrays."""
+    with np.errstate(invalid="ignore"):
+        informative = usable & (result.ic[p] >= ic_threshold) & clear_of_bounds(result, p)
     edges = np.diff(np.r_[0, informative.astype(np.int8), 0])
     blocks = []
     for start, stop in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
