@@ -126,7 +126,7 @@ class Identification:
 
 def identify(u, y, model, bounds, *, method="dynia", dt=1.0, x0="zero", held_out=0.3, segments=None,
              n_samples=2000, sampler="uniform", n=10, percentage=10, flavour="thesis", ic_threshold=0.5,
-             mode="any", min_length=None, merge_gap=None, baseline_options=None, quality=False,
+             mode="any", min_length=None, merge_gap=None, min_points=1, baseline_options=None, quality=False,
              exclude_flagged=False, quality_options=None, n_starts=1, rng=None):
     """Select data by ``method``, fit the model there and validate it on held-out data.
 
@@ -154,6 +154,10 @@ def identify(u, y, model, bounds, *, method="dynia", dt=1.0, x0="zero", held_out
         The DYNIA run, as :func:`dynia.run`.
     ic_threshold, mode, min_length, merge_gap
         From IC to segments, as :func:`dynia.segments.segments_from_ic`.
+    min_points : int, default 1
+        Windows with fewer measured points get no IC (:func:`dynia.run`);
+        ``2n+1`` keeps windows that reach into missing or excluded data
+        from selecting segments.
     baseline_options : dict, optional
         Tuning of :func:`dynia.baseline.find_intervals`.
     quality : bool, default False
@@ -197,7 +201,7 @@ def identify(u, y, model, bounds, *, method="dynia", dt=1.0, x0="zero", held_out
     dynia_result = baseline_result = None
     if method == "dynia":
         dynia_result = run(u, y_fit, model, bounds, dt=dt, n_samples=n_samples, sampler=sampler, n=n,
-                           percentage=percentage, flavour=flavour, x0=x0, rng=rng)
+                           percentage=percentage, flavour=flavour, x0=x0, rng=rng, min_points=min_points)
         chosen = intersect_segments(segments_from_ic(dynia_result, threshold=ic_threshold, mode=mode,
                                                      min_length=min_length, merge_gap=merge_gap), fit_part)
         notes += [str(warning) for warning in structure_warnings(dynia_result)]
@@ -226,8 +230,8 @@ def identify(u, y, model, bounds, *, method="dynia", dt=1.0, x0="zero", held_out
                     quality=bool(quality or exclude_flagged), exclude_flagged=bool(exclude_flagged))
     if method == "dynia":
         settings.update(n_samples=n_samples, sampler=sampler, n=n, percentage=percentage, flavour=flavour,
-                        ic_threshold=ic_threshold, mode=mode,
-                        min_length=min_length, merge_gap=merge_gap)
+                        ic_threshold=ic_threshold, mode=mode, min_length=min_length, merge_gap=merge_gap,
+                        min_points=min_points)
     if method == "baseline":
         settings["baseline"] = {key: _json_number(value) if isinstance(value, float) else value
                                 for key, value in baseline_result.settings.items()
