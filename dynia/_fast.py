@@ -449,9 +449,6 @@ class CompiledErrors:
             self._buffer = np.concatenate([self._buffer, self._simulate(computed, stop)])
         return self._buffer[:stop - start]
 
-    def columns(self, start, stop):
-        return self.rows(start, stop).T
-
     def _simulate(self, first, stop):
         system = self._system
         errors = np.empty((stop - first, self._n_samples))

@@ -214,6 +214,18 @@ def compiled_engine(engine, flavour, weights=None):
     return engine != "numpy" and supported and _fast.AVAILABLE
 
 
+def flavour_analysis(flavour, compiled, params, bounds, percentage, bins, conf_level, min_points):
+    """The object that analyses windows for ``flavour``, on the compiled kernels or on numpy.
+
+    Compiled, it has ``analyse_rows(window_errors, measured, m, slots)``;
+    otherwise ``analyse(mae, usable)``. Either has ``count``, ``n_bins`` and
+    ``bin_centres``.
+    """
+    if compiled:
+        return _CompiledFlavour(params, bounds, percentage, bins, conf_level, flavour, min_points)
+    return _FLAVOUR_CLASSES[flavour](params, bounds, percentage, bins, conf_level)
+
+
 def window_halos(n, window):
     """Steps (before, after) the window at t reaches: (n, n) centred, (2n, 0) trailing."""
     if window not in WINDOWS:
@@ -252,11 +264,9 @@ def _analyse(y, errors, params, bounds, *, n, percentage, bins, conf_level, flav
     workers = 1 if flavour == "mcat" else _checks.whole_number(workers, "workers", minimum=1)
 
     compiled = compiled_engine(engine, flavour, weights)
-    if compiled:
-        flavour_impl = _CompiledFlavour(params, bounds, percentage, bins, conf_level, flavour, min_points)
-    elif weights is None:
-        flavour_impl = {"thesis": _ThesisFlavour, "weighted": _WeightedFlavour,
-                        "mcat": _McatFlavour}[flavour](params, bounds, percentage, bins, conf_level)
+    if weights is None:
+        flavour_impl = flavour_analysis(flavour, compiled, params, bounds, percentage, bins, conf_level,
+                                        min_points)
     else:
         if flavour == "mcat":
             raise ValueError("weights are not supported by the mcat flavour, whose behavioural set "
@@ -724,6 +734,9 @@ class _McatFlavour:
         if self.n_bins < 2:
             return np.zeros_like(cdf)
         return np.nan_to_num(np.gradient(cdf, axis=1), nan=0.0)
+
+
+_FLAVOUR_CLASSES = {"thesis": _ThesisFlavour, "weighted": _WeightedFlavour, "mcat": _McatFlavour}
 
 
 def _nudge_ties(ordered):

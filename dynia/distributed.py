@@ -70,15 +70,14 @@ import numpy as np
 
 from . import _checks
 from ._fast import CompiledErrors
-from .analysis import (FLAVOURS, _CompiledFlavour, _McatFlavour, _StreamedErrors, _ThesisFlavour,
-                       _WeightedFlavour, _window_inputs, _window_mean, compiled_engine, window_halos)
+from .analysis import (FLAVOURS, _StreamedErrors, _window_inputs, _window_mean, compiled_engine,
+                       flavour_analysis, window_halos)
 from .pipeline import _ordered_bounds
 from .result import DyniaResult
 from .sampling import SAMPLERS, sample
 
 __all__ = ["run"]
 
-_FLAVOUR_CLASSES = {"thesis": _ThesisFlavour, "weighted": _WeightedFlavour, "mcat": _McatFlavour}
 
 # Flavours whose analysis of a window depends on the windows before it.
 _STATEFUL_FLAVOURS = ("mcat",)
@@ -200,10 +199,8 @@ def run(u, y, model, bounds, *, client=None, sample_chunks=None, time_chunks=Non
             raise ValueError(f"the simulation of every one of the {n_samples} parameter sets overflowed; "
                              "check the model and the parameter ranges")
         samples = samples[finite]
-        if compiled:
-            flavour_impl = _CompiledFlavour(samples, box, percentage, bins, conf_level, flavour, min_points)
-        else:
-            flavour_impl = _FLAVOUR_CLASSES[flavour](samples, box, percentage, bins, conf_level)
+        flavour_impl = flavour_analysis(flavour, compiled, samples, box, percentage, bins, conf_level,
+                                        min_points)
         n_steps = y.size
         if time_chunks is None:
             time_chunks = max(1, min(math.ceil(n_steps / (4 * threads)), _BLOCK_VALUES // samples.shape[0]))

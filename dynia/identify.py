@@ -48,8 +48,8 @@ from . import _checks
 from .baseline import find_intervals
 from .pipeline import _ordered_bounds, run
 from .quality import check_quality
-from .segments import (check_segments, fit_segments, holdout_split, intersect_segments, segments_from_ic,
-                       segments_to_mask, segments_to_times)
+from .segments import (_json_number, check_segments, fit_segments, holdout_split, intersect_segments,
+                       segments_from_ic, segments_to_mask, segments_to_times)
 from .structure import structure_warnings
 
 __all__ = ["Identification", "identify", "METHODS"]
@@ -241,8 +241,3 @@ def identify(u, y, model, bounds, *, method="dynia", dt=1.0, x0="zero", held_out
                           validation_error=fit.validation_error(u, y, validation), fit=fit,
                           dynia_result=dynia_result, baseline_result=baseline_result, quality=report,
                           warnings=notes, settings=settings)
-
-
-def _json_number(value):
-    value = float(value)
-    return value if np.isfinite(value) else None

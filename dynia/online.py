@@ -35,7 +35,7 @@ import numbers
 import numpy as np
 
 from . import _checks
-from .analysis import FLAVOURS, _McatFlavour, _ThesisFlavour, _WeightedFlavour
+from .analysis import _FLAVOUR_CLASSES, FLAVOURS, _McatFlavour
 from .models import Model
 from .pipeline import _ordered_bounds
 from .result import DyniaResult
@@ -43,7 +43,6 @@ from .sampling import SAMPLERS, sample
 
 __all__ = ["OnlineDynia"]
 
-_FLAVOUR_CLASSES = {"thesis": _ThesisFlavour, "weighted": _WeightedFlavour, "mcat": _McatFlavour}
 
 
 class OnlineDynia:

@@ -25,6 +25,7 @@ import numpy as np
 
 from . import _checks
 from .pipeline import run
+from .segments import mask_to_segments
 from .structure import clear_of_bounds
 
 __all__ = ["narrowed_bounds", "second_run"]
@@ -93,9 +94,8 @@ def narrowed_bounds(result, bounds, *, threshold=0.75, margin=0.5, min_windows=3
 
 def _in_long_runs(flags, min_length):
     """``flags`` without the runs of True shorter than ``min_length``."""
-    edges = np.diff(np.r_[0, flags.astype(np.int8), 0])
     kept = np.zeros_like(flags)
-    for start, stop in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
+    for start, stop in mask_to_segments(flags):
         if stop - start >= min_length:
             kept[start:stop] = True
     return kept

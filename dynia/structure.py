@@ -82,6 +82,7 @@ import scipy.stats
 
 from . import _checks
 from .result import DyniaResult
+from .segments import mask_to_segments
 
 __all__ = ["StructureWarning", "structure_warnings", "clear_of_bounds"]
 
@@ -242,9 +243,8 @@ def _informative_blocks(result, p, ic_threshold, usable, min_windows, block):
     """Blocks of informative windows of parameter ``p``: a list of step index arrays."""
     with np.errstate(invalid="ignore"):
         informative = usable & (result.ic[p] >= ic_threshold) & clear_of_bounds(result, p)
-    edges = np.diff(np.r_[0, informative.astype(np.int8), 0])
     blocks = []
-    for start, stop in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
+    for start, stop in mask_to_segments(informative):
         if stop - start >= min_windows:
             blocks += np.array_split(np.arange(start, stop), max(1, (stop - start) // block))
     return blocks
