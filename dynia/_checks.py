@@ -1,8 +1,11 @@
 """Argument checks shared by the public functions: one clear message per mistake."""
 import math
 import numbers
+import os
 
 import numpy as np
+
+from .errors import DataError, SettingsError
 
 
 def as_1d_float(value, name, *, allow_nan=False):
@@ -10,14 +13,14 @@ def as_1d_float(value, name, *, allow_nan=False):
     try:
         array = np.asarray(value, dtype=float)
     except (TypeError, ValueError) as error:
-        raise ValueError(f"{name} must be a 1-D array of numbers: {error}") from None
+        raise DataError(f"{name} must be a 1-D array of numbers: {error}") from None
     if array.ndim != 1:
-        raise ValueError(f"{name} must be 1-D (n_steps,); got shape {array.shape}")
+        raise DataError(f"{name} must be 1-D (n_steps,); got shape {array.shape}")
     if array.size == 0:
-        raise ValueError(f"{name} is empty; expected at least one value")
+        raise DataError(f"{name} is empty; expected at least one value")
     bad = np.isinf(array) if allow_nan else ~np.isfinite(array)
     if bad.any():
-        raise ValueError(
+        raise DataError(
             f"{name} holds a non-finite value at index {int(np.argmax(bad))}"
             + (" (NaN marks a missing value; inf is not allowed)" if allow_nan else ""))
     return array
@@ -28,15 +31,15 @@ def as_2d_float(value, name, *, columns=None):
     try:
         array = np.asarray(value, dtype=float)
     except (TypeError, ValueError) as error:
-        raise ValueError(f"{name} must be a 2-D array of numbers: {error}") from None
+        raise DataError(f"{name} must be a 2-D array of numbers: {error}") from None
     if array.ndim != 2:
-        raise ValueError(f"{name} must be 2-D; got shape {array.shape}")
+        raise DataError(f"{name} must be 2-D; got shape {array.shape}")
     if columns is not None and array.shape[1] != columns:
-        raise ValueError(f"{name} must have {columns} columns; got shape {array.shape}")
+        raise DataError(f"{name} must have {columns} columns; got shape {array.shape}")
     bad = ~np.isfinite(array)
     if bad.any():
         row, col = np.argwhere(bad)[0]
-        raise ValueError(f"{name} holds a non-finite value at row {row}, column {col}")
+        raise DataError(f"{name} holds a non-finite value at row {row}, column {col}")
     return array
 
 
@@ -46,27 +49,27 @@ def whole_number(value, name, *, minimum):
         if isinstance(value, numbers.Real) and float(value).is_integer():
             value = int(value)
         else:
-            raise ValueError(f"{name} must be a whole number; got {value!r}")
+            raise SettingsError(f"{name} must be a whole number; got {value!r}")
     if value < minimum:
-        raise ValueError(f"{name} must be at least {minimum}; got {value}")
+        raise SettingsError(f"{name} must be at least {minimum}; got {value}")
     return int(value)
 
 
 def open_interval(value, name, low, high):
     """Return ``value`` as a float strictly inside (low, high), or raise naming ``name``."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
-        raise ValueError(f"{name} must be a finite number; got {value!r}")
+        raise SettingsError(f"{name} must be a finite number; got {value!r}")
     if not low < value < high:
-        raise ValueError(f"{name} must lie strictly between {low} and {high}; got {value}")
+        raise SettingsError(f"{name} must lie strictly between {low} and {high}; got {value}")
     return float(value)
 
 
 def percentage_value(value):
     """Return the behavioural percentage as a float in (0, 100], or raise."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
-        raise ValueError(f"percentage must be a finite number; got {value!r}")
+        raise SettingsError(f"percentage must be a finite number; got {value!r}")
     if not 0 < value <= 100:
-        raise ValueError(f"percentage must lie in (0, 100]; got {value}")
+        raise SettingsError(f"percentage must lie in (0, 100]; got {value}")
     return float(value)
 
 
@@ -74,9 +77,14 @@ def bounds_array(bounds, n_params):
     """Check an (n_params, 2) array of [low, high] rows with low < high."""
     array = as_2d_float(bounds, "bounds", columns=2)
     if array.shape[0] != n_params:
-        raise ValueError(
+        raise SettingsError(
             f"bounds must have one [low, high] row per parameter ({n_params}); got {array.shape[0]}")
     for row, (low, high) in enumerate(array):
         if not low < high:
-            raise ValueError(f"bounds row {row}: the lower bound {low} must be below the upper bound {high}")
+            raise SettingsError(f"bounds row {row}: the lower bound {low} must be below the upper bound {high}")
     return array
+
+
+def default_workers():
+    """Threads to use when none are asked for: every core."""
+    return os.cpu_count() or 1

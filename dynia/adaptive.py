@@ -56,7 +56,10 @@ import numpy as np
 from scipy.optimize import differential_evolution
 
 from . import _checks
-from .analysis import lowest_weighted, moving_window, window_costs
+from .engine.selection import lowest_weighted
+from .engine.windows import moving_window, window_costs
+from .errors import DataError, SettingsError
+from .settings import AnalysisSettings, parameter_box
 
 __all__ = ["BoxMixture", "adaptive_run", "SCHEMES"]
 
@@ -111,19 +114,29 @@ class BoxMixture:
         return (1 / np.prod(self.prior[:, 1] - self.prior[:, 0])) / self.density(points)
 
 
-def adaptive_run(u, y, model, bounds, *, scheme="iis", dt=1.0, n_samples=10_000, n=10, percentage=1,
-                 bins=40, conf_level=90, flavour="thesis", x0="zero", rng=None, blocks=None,
-                 initial_share=0.25, stages=3, margin=0.25, de_share=0.3, window="centred"):
+def adaptive_run(u, y, model, bounds, *, scheme=None, settings=None, rng=None, blocks=None, initial_share=0.25,
+                 stages=3, margin=0.25, de_share=0.3, dt=None, n_samples=None, n=None, percentage=None, bins=None,
+                 conf_level=None, flavour=None, x0=None, min_points=None, window=None, engine=None, workers=None,
+                 progress=False):
     """DYNIA with evaluations concentrated in the windows' low-cost regions.
 
     Parameters
     ----------
-    u, y, model, bounds, dt, n, percentage, bins, conf_level, flavour, x0, rng, window
+    u, y, model, bounds, dt, n, percentage, bins, conf_level, flavour, x0, rng, min_points, window, workers, progress
         As :func:`dynia.run`; ``bounds`` is a mapping name -> (low, high).
-    scheme : {"iis", "de"}
-        How the boxes are placed (see the module documentation).
+    scheme : {"iis", "de"}, optional
+        How the boxes are placed (see the module documentation); the
+        settings' ``sampler``. Default "iis".
+    settings : dynia.settings.AnalysisSettings, optional
+        Every analysis setting at once, as for :func:`dynia.run`; its
+        ``sampler`` must be "iis" or "de". Without it the defaults are those
+        of :class:`~dynia.settings.AnalysisSettings` except
+        ``n_samples=10_000`` and ``percentage=1``, where the adaptive
+        schemes pay off.
     n_samples : int
         Model evaluations in all, for every scheme.
+    engine : {"auto", "numpy"}
+        The weighted analysis runs on numpy; "numba" is an error.
     blocks : int, optional
         Number of blocks of consecutive windows that get their own box
         (default: one per 2n+1 steps, at most 50).
@@ -144,18 +157,23 @@ def adaptive_run(u, y, model, bounds, *, scheme="iis", dt=1.0, n_samples=10_000,
         With ``settings["weights"]`` holding the importance weights of
         ``.samples`` and ``settings["n_evaluations"]`` the evaluations spent.
     """
-    if scheme not in SCHEMES:
-        raise ValueError(f"scheme must be one of {SCHEMES}; got {scheme!r}")
+    if settings is None:
+        settings = AnalysisSettings(n_samples=10_000, percentage=1, sampler=scheme or "iis")
+    settings = AnalysisSettings.build(settings, sampler=scheme, dt=dt, n_samples=n_samples, n=n,
+                                      percentage=percentage, bins=bins, conf_level=conf_level, flavour=flavour,
+                                      x0=x0, min_points=min_points, window=window, engine=engine, workers=workers)
+    if settings.sampler not in SCHEMES:
+        raise SettingsError(f"adaptive_run takes sampler (scheme) 'iis' or 'de'; got {settings.sampler!r}")
+    scheme, dt, x0, window, n = settings.sampler, settings.dt, settings.x0, settings.window, settings.n
     u = _checks.as_1d_float(u, "u")
     y = _checks.as_1d_float(y, "y", allow_nan=True)
-    names = list(bounds)
-    box = np.array([bounds[name] for name in names], dtype=float)
-    prior = _checks.bounds_array(box, len(names))
+    if u.size != y.size:
+        raise DataError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
+    names, prior = parameter_box(bounds, model.names, type(model).__name__)
     order = [names.index(name) for name in model.names]
     rng = np.random.default_rng(rng)
-    n_samples = _checks.whole_number(n_samples, "n_samples", minimum=10)
-    fraction = _checks.percentage_value(percentage) / 100
-    n = _checks.whole_number(n, "n", minimum=0)
+    n_samples = settings.n_samples
+    fraction = settings.percentage / 100
     n_blocks = blocks or max(1, min(50, y.size // (2 * n + 1)))
     edges = np.linspace(0, y.size, n_blocks + 1).astype(int)
 
@@ -183,7 +201,7 @@ def adaptive_run(u, y, model, bounds, *, scheme="iis", dt=1.0, n_samples=10_000,
         population_size = _population_size(prior.shape[0])
         needed = spent + n_blocks * (2 * population_size + 1)
         if n_samples < needed:
-            raise ValueError(
+            raise SettingsError(
                 f"the 'de' scheme needs at least {needed} evaluations for {n_blocks} blocks of windows "
                 f"(a population of {population_size} evolved twice per block); got n_samples={n_samples}: "
                 "raise n_samples or lower blocks")
@@ -194,11 +212,17 @@ def adaptive_run(u, y, model, bounds, *, scheme="iis", dt=1.0, n_samples=10_000,
         sims = np.r_[sims, simulate(new_samples)]
         spent += new_samples.shape[0]
     weights = mixture.importance_weights(samples)
-    result = moving_window(y, sims, samples, prior, n=n, percentage=percentage, bins=bins,
-                           conf_level=conf_level, flavour=flavour, names=names,
-                           time=np.arange(y.size) * float(dt), weights=weights, window=window)
-    result.settings.update(sampler=scheme, n_evaluations=spent, weights=weights, dt=dt, x0=x0,
-                           model=type(model).__name__, n_blocks=n_blocks)
+    result = moving_window(y, sims, samples, prior, n=n, percentage=settings.percentage, bins=settings.bins,
+                           conf_level=settings.conf_level, flavour=settings.flavour, names=names,
+                           time=np.arange(y.size) * dt, weights=weights, window=window,
+                           min_points=settings.min_points, engine=settings.engine, workers=settings.workers,
+                           progress=progress)
+    analysed = dict(result.settings)
+    result.settings.clear()
+    result.settings.update(settings.to_dict(), model=type(model).__name__,
+                           bounds={name: tuple(map(float, row)) for name, row in zip(names, prior)},
+                           n_sampled=spent, n_dropped=0)
+    result.settings.update(analysed, sampler=scheme, n_evaluations=spent, weights=weights, n_blocks=n_blocks)
     return result
 
 

@@ -190,6 +190,7 @@ import scipy.signal
 import scipy.stats
 
 from . import _checks
+from .errors import DataError, SettingsError
 
 __all__ = ["find_intervals", "BaselineResult", "CandidateInterval", "REASONS"]
 
@@ -326,7 +327,7 @@ class BaselineResult:
             return np.arange(n_steps) * self.dt
         time = _checks.as_1d_float(time, "time")
         if time.size != n_steps:
-            raise ValueError(f"time has {time.size} values but the record has {n_steps} samples")
+            raise SettingsError(f"time has {time.size} values but the record has {n_steps} samples")
         return time
 
 
@@ -400,11 +401,11 @@ def find_intervals(u, y, *, dt=1.0, setpoint=None, mean_forgetting=0.95, varianc
     u = _checks.as_1d_float(u, "u", allow_nan=True)
     y = _checks.as_1d_float(y, "y", allow_nan=True)
     if u.size != y.size:
-        raise ValueError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
+        raise DataError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
     if setpoint is not None:
         setpoint = _checks.as_1d_float(setpoint, "setpoint", allow_nan=True)
         if setpoint.size != u.size:
-            raise ValueError(f"setpoint has {setpoint.size} samples but u has {u.size}; they must match")
+            raise SettingsError(f"setpoint has {setpoint.size} samples but u has {u.size}; they must match")
     dt = _positive(dt, "dt")
     mean_forgetting = _checks.open_interval(mean_forgetting, "mean_forgetting", 0, 1)
     variance_forgetting = _checks.open_interval(variance_forgetting, "variance_forgetting", 0, 1)
@@ -563,25 +564,25 @@ def _noise_pair(noise_std):
     try:
         pair = tuple(noise_std)
     except TypeError:
-        raise ValueError(f"{expected}; got {noise_std!r}") from None
+        raise SettingsError(f"{expected}; got {noise_std!r}") from None
     if len(pair) != 2:
-        raise ValueError(f"{expected}; got {len(pair)} values")
+        raise SettingsError(f"{expected}; got {len(pair)} values")
     return (_positive(pair[0], "noise_std[0]"), _positive(pair[1], "noise_std[1]"))
 
 
 def _positive(value, name, *, above=0.0):
     """Return ``value`` as a finite float greater than ``above``, or raise naming ``name``."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
-        raise ValueError(f"{name} must be a finite number; got {value!r}")
+        raise SettingsError(f"{name} must be a finite number; got {value!r}")
     if not value > above:
-        raise ValueError(f"{name} must be greater than {above}; got {value}")
+        raise SettingsError(f"{name} must be greater than {above}; got {value}")
     return float(value)
 
 
 def _pole(value):
     """Return the Laguerre pole as a float in [0, 1), or raise."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
-        raise ValueError(f"laguerre_pole must be a finite number; got {value!r}")
+        raise SettingsError(f"laguerre_pole must be a finite number; got {value!r}")
     if not 0 <= value < 1:
-        raise ValueError(f"laguerre_pole must lie in [0, 1) (a stable, non-oscillating filter); got {value}")
+        raise SettingsError(f"laguerre_pole must lie in [0, 1) (a stable, non-oscillating filter); got {value}")
     return float(value)

@@ -69,12 +69,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _checks
-from ._fast import CompiledErrors
-from .analysis import (FLAVOURS, _StreamedErrors, _window_inputs, _window_mean, compiled_engine,
-                       flavour_analysis, window_halos)
-from .pipeline import _ordered_bounds
+from .engine.flavours import compiled_engine, flavour_analysis
+from .engine.kernels import CompiledErrors
+from .engine.windows import StreamedErrors, window_halos, window_inputs, window_mean
+from .errors import DataError, DyniaError, ModelError
+from .pipeline import warn_dropped
 from .result import DyniaResult
-from .sampling import SAMPLERS, sample
+from .sampling import sample
+from .settings import SAMPLERS, AnalysisSettings, parameter_box
 
 __all__ = ["run"]
 
@@ -86,10 +88,9 @@ _STATEFUL_FLAVOURS = ("mcat",)
 _BLOCK_VALUES = 4_000_000
 
 
-def run(u, y, model, bounds, *, client=None, sample_chunks=None, time_chunks=None, dt=1.0,
-        n_samples=2000, sampler="uniform", n=10, percentage=10, bins=40, conf_level=90,
-        flavour="thesis", x0="zero", rng=None, progress=False, min_points=1, window="centred",
-        engine="auto"):
+def run(u, y, model, bounds, *, client=None, sample_chunks=None, time_chunks=None, settings=None, dt=None,
+        n_samples=None, sampler=None, n=None, percentage=None, bins=None, conf_level=None, flavour=None, x0=None,
+        rng=None, progress=False, min_points=None, window=None, engine=None):
     """:func:`dynia.run` on a ``dask.distributed`` cluster, with the same result.
 
     Parameters
@@ -110,8 +111,9 @@ def run(u, y, model, bounds, *, client=None, sample_chunks=None, time_chunks=Non
         Time steps per analysis task (default: about four tasks per worker
         thread, and at most about 4e6 values per task). Any size works,
         also one below the window's reach ``n``.
-    dt, n_samples, n, percentage, bins, conf_level, flavour, x0, rng, progress, min_points, window
-        As :func:`dynia.run`.
+    settings, dt, n_samples, n, percentage, bins, conf_level, flavour, x0, rng, progress, min_points, window
+        As :func:`dynia.run`; ``settings.workers`` must be None (the
+        cluster's workers do the work).
     engine : {"auto", "numba", "numpy"}, default "auto"
         As :func:`dynia.run`: the compiled kernels (simulation and windows)
         or plain numpy on the workers; "auto" takes the compiled ones where
@@ -161,27 +163,22 @@ def run(u, y, model, bounds, *, client=None, sample_chunks=None, time_chunks=Non
     u = _checks.as_1d_float(u, "u")
     y = _checks.as_1d_float(y, "y", allow_nan=True)
     if u.size != y.size:
-        raise ValueError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
-    names, box = _ordered_bounds(bounds, model)
-    if sampler not in SAMPLERS:
-        raise ValueError(f"sampler must be one of {tuple(SAMPLERS)} for the distributed run; got {sampler!r} "
-                         "(the adaptive schemes of dynia.adaptive run on one machine: use dynia.run)")
-    n_samples = _checks.whole_number(n_samples, "n_samples", minimum=1)
-    n = _checks.whole_number(n, "n", minimum=0)
-    before, after = window_halos(n, window)
-    bins = _checks.whole_number(bins, "bins", minimum=1)
-    min_points = _checks.whole_number(min_points, "min_points", minimum=1)
-    conf_level = _checks.open_interval(conf_level, "conf_level", 0, 100)
-    percentage = _checks.percentage_value(percentage)
-    if flavour not in FLAVOURS:
-        raise ValueError(f"flavour must be one of {FLAVOURS}; got {flavour!r}")
-    compiled = compiled_engine(engine, flavour)
+        raise DataError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
+    settings = AnalysisSettings.build(settings, dt=dt, n_samples=n_samples, sampler=sampler, n=n,
+                                      percentage=percentage, bins=bins, conf_level=conf_level, flavour=flavour,
+                                      x0=x0, min_points=min_points, window=window, engine=engine)
+    settings.require("dynia.distributed.run", sampler=SAMPLERS, workers=(None,),
+                     why="the adaptive schemes run on one machine: use dynia.run; the cluster's workers are its threads")
+    names, box = parameter_box(bounds, model.names, type(model).__name__)
+    n_samples, dt, x0, flavour = settings.n_samples, settings.dt, settings.x0, settings.flavour
+    before, after = window_halos(settings.n, settings.window)
+    compiled = compiled_engine(settings.engine, flavour)
     if sample_chunks is not None:
         sample_chunks = _checks.whole_number(sample_chunks, "sample_chunks", minimum=1)
     if time_chunks is not None:
         time_chunks = _checks.whole_number(time_chunks, "time_chunks", minimum=1)
 
-    samples = sample(sampler, n_samples, box, np.random.default_rng(rng))
+    samples = sample(settings.sampler, n_samples, box, np.random.default_rng(rng))
     model_order = [names.index(name) for name in model.names]
     # simulate_chunks checks u, dt and x0 (and the model's constraints on the
     # first sample) when called, so mistakes surface here, before any cluster.
@@ -196,15 +193,16 @@ def run(u, y, model, bounds, *, client=None, sample_chunks=None, time_chunks=Non
             client.submit(_finite_rows, model, rows, u_data, dt, x0, first, pure=False)
             for first, rows in _scatter_rows(client, samples[:, model_order], sample_chunks)]))
         if not finite.any():
-            raise ValueError(f"the simulation of every one of the {n_samples} parameter sets overflowed; "
+            raise ModelError(f"the simulation of every one of the {n_samples} parameter sets overflowed; "
                              "check the model and the parameter ranges")
         samples = samples[finite]
-        flavour_impl = flavour_analysis(flavour, compiled, samples, box, percentage, bins, conf_level,
-                                        min_points)
+        warn_dropped(int(n_samples - samples.shape[0]), n_samples)
+        flavour_impl = flavour_analysis(flavour, compiled, samples, box, settings.percentage, settings.bins,
+                                        settings.conf_level, settings.min_points)
         n_steps = y.size
         if time_chunks is None:
             time_chunks = max(1, min(math.ceil(n_steps / (4 * threads)), _BLOCK_VALUES // samples.shape[0]))
-        windows = _Windows(before, after, min_points, compiled)
+        windows = _Windows(before, after, settings.min_points, compiled)
         chunk_inputs = [client.submit(_chunk_window_inputs, model, rows, u_data, y_data, dt, x0, windows,
                                       time_chunks, first, pure=False)
                         for first, rows in _scatter_rows(client, samples[:, model_order], sample_chunks)]
@@ -212,15 +210,15 @@ def run(u, y, model, bounds, *, client=None, sample_chunks=None, time_chunks=Non
                                                time_chunks, stateful=flavour in _STATEFUL_FLAVOURS,
                                                progress=progress)
 
-    settings = dict(n=n, window=window, percentage=percentage, bins=bins, conf_level=conf_level,
-                    flavour=flavour, min_points=min_points, n_samples=samples.shape[0],
-                    n_behavioural=flavour_impl.count, engine="numba" if compiled else "numpy",
-                    dt=dt, sampler=sampler, x0=x0, model=type(model).__name__,
+    # The same record as dynia.run's: the settings asked for, then what the analysis did.
+    recorded = dict(settings.to_dict(), model=type(model).__name__,
                     bounds={name: tuple(map(float, row)) for name, row in zip(names, box)},
                     n_sampled=n_samples, n_dropped=int(n_samples - samples.shape[0]))
+    recorded.update(n_samples=samples.shape[0], n_behavioural=flavour_impl.count,
+                    engine="numba" if compiled else "numpy")
     return DyniaResult(names=tuple(names), samples=samples, bounds=box,
                        time=np.arange(n_steps) * float(dt), ic=ic, ci=ci, gradient=gradient,
-                       bin_centres=flavour_impl.bin_centres, settings=settings)
+                       bin_centres=flavour_impl.bin_centres, settings=recorded)
 
 
 def _analyse_on_cluster(client, chunk_inputs, flavour, windows, n_steps, time_chunks, *, stateful,
@@ -296,9 +294,9 @@ def _sample_chunk_context(first, count):
     """Name the sample chunk in a model's error, whose sample numbers count from its start."""
     try:
         yield
-    except ValueError as error:
-        raise ValueError(f"in the sample chunk of samples {first} to {first + count - 1} "
-                         f"(sample numbers below count from {first}): {error}") from error
+    except DyniaError as error:
+        raise type(error)(f"in the sample chunk of samples {first} to {first + count - 1} "
+                          f"(sample numbers below count from {first}): {error}") from error
 
 
 def _finite_rows(model, params, u, dt, x0, first):
@@ -334,15 +332,15 @@ class _Windows:
             # One thread: the cluster's workers are the parallelism (and no pool needs closing).
             return CompiledErrors(model, params, u, y, dt=dt, x0=x0, workers=1)
         sims = model.simulate_chunks(params, u, dt=dt, x0=x0, chunk_steps=time_chunks)
-        return _StreamedErrors(y, sims, params.shape[0])
+        return StreamedErrors(y, sims, params.shape[0])
 
     def block(self, errors, start, stop, n_steps):
         """One sample chunk's input to the windows at steps [start, stop), with its measured counts."""
-        window_errors, measured = _window_inputs(errors, start, stop, self.before, self.after, n_steps,
+        window_errors, measured = window_inputs(errors, start, stop, self.before, self.after, n_steps,
                                                  time_major=self.compiled)
         if self.compiled:
             return window_errors, measured
-        return _window_mean(window_errors, measured, stop - start, self.slots)
+        return window_mean(window_errors, measured, stop - start, self.slots)
 
     def analyse(self, flavour, blocks, m):
         """The flavour's (ic, ci, gradient) of m windows from the blocks of every sample chunk, in order."""

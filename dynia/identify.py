@@ -46,10 +46,14 @@ import numpy as np
 
 from . import _checks
 from .baseline import find_intervals
-from .pipeline import _ordered_bounds, run
+from .errors import DataError, SettingsError
+from .fit import fit_segments
+from .pipeline import run
 from .quality import check_quality
-from .segments import (_json_number, check_segments, fit_segments, holdout_split, intersect_segments,
-                       segments_from_ic, segments_to_mask, segments_to_times)
+from .segments import (check_segments, holdout_split, intersect_segments, segments_from_ic, segments_to_mask,
+                       segments_to_times)
+from .serial import json_number
+from .settings import AnalysisSettings, parameter_box
 from .structure import structure_warnings
 
 __all__ = ["Identification", "identify", "METHODS"]
@@ -106,7 +110,7 @@ class Identification:
             std_errors=fit["std_errors"],
             segments=segments_to_times(self.segments, time),
             validation_segments=segments_to_times(self.validation, time),
-            validation_error=_json_number(self.validation_error),
+            validation_error=json_number(self.validation_error),
             fit_rmse=fit["rmse"],
             n_points=fit["n_points"],
             identifiable=fit["identifiable"],
@@ -116,17 +120,17 @@ class Identification:
         )
         if self.quality is not None:
             summary["data_quality"] = [
-                dict(signal=f.signal, kind=f.kind, start_time=_json_number(time[f.start]),
-                     end_time=_json_number(time[f.stop - 1]), value=_json_number(f.value),
+                dict(signal=f.signal, kind=f.kind, start_time=json_number(time[f.start]),
+                     end_time=json_number(time[f.stop - 1]), value=json_number(f.value),
                      reason=f.reason, inside_fitted_segments=any(
                          f.start < stop and start < f.stop for start, stop in self.segments))
                 for f in self.quality.findings]
         return summary
 
 
-def identify(u, y, model, bounds, *, method="dynia", dt=1.0, x0="zero", held_out=0.3, segments=None,
-             n_samples=2000, sampler="uniform", n=10, percentage=10, flavour="thesis", ic_threshold=0.5,
-             mode="any", min_length=None, merge_gap=None, min_points=1, baseline_options=None, quality=False,
+def identify(u, y, model, bounds, *, method="dynia", settings=None, dt=None, x0=None, held_out=0.3, segments=None,
+             n_samples=None, sampler=None, n=None, percentage=None, flavour=None, ic_threshold=0.5,
+             mode="any", min_length=None, merge_gap=None, min_points=None, baseline_options=None, quality=False,
              exclude_flagged=False, quality_options=None, n_starts=1, rng=None):
     """Select data by ``method``, fit the model there and validate it on held-out data.
 
@@ -150,8 +154,11 @@ def identify(u, y, model, bounds, *, method="dynia", dt=1.0, x0="zero", held_out
         (:func:`dynia.segments.holdout_split`).
     segments : list of (start, stop), optional
         The segments to fit on, for ``method="given"``.
+    settings : dynia.settings.AnalysisSettings, optional
+        The DYNIA run's settings, as for :func:`dynia.run`; its ``dt`` and
+        ``x0`` serve the fit too.
     n_samples, sampler, n, percentage, flavour
-        The DYNIA run, as :func:`dynia.run`.
+        The DYNIA run, as :func:`dynia.run` (override ``settings``).
     ic_threshold, mode, min_length, merge_gap
         From IC to segments, as :func:`dynia.segments.segments_from_ic`.
     min_points : int, default 1
@@ -179,15 +186,18 @@ def identify(u, y, model, bounds, *, method="dynia", dt=1.0, x0="zero", held_out
     u = _checks.as_1d_float(u, "u")
     y = _checks.as_1d_float(y, "y", allow_nan=True)
     if u.size != y.size:
-        raise ValueError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
+        raise DataError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
     if method not in METHODS:
-        raise ValueError(f"method must be one of {METHODS}; got {method!r}")
+        raise SettingsError(f"method must be one of {METHODS}; got {method!r}")
     if (segments is None) != (method != "given"):
-        raise ValueError("segments are given exactly when method='given'")
-    names, box = _ordered_bounds(bounds, model)
+        raise SettingsError("segments are given exactly when method='given'")
+    analysis = AnalysisSettings.build(settings, dt=dt, x0=x0, n_samples=n_samples, sampler=sampler, n=n,
+                                      percentage=percentage, flavour=flavour, min_points=min_points)
+    dt, x0 = analysis.dt, analysis.x0
+    names, box = parameter_box(bounds, model.names, type(model).__name__)
     bounds = {name: tuple(map(float, row)) for name, row in zip(names, box)}
     rng = np.random.default_rng(rng)
-    time = np.arange(u.size) * float(dt)
+    time = np.arange(u.size) * dt
 
     report = None
     if quality or exclude_flagged:
@@ -200,8 +210,7 @@ def identify(u, y, model, bounds, *, method="dynia", dt=1.0, x0="zero", held_out
     notes = []
     dynia_result = baseline_result = None
     if method == "dynia":
-        dynia_result = run(u, y_fit, model, bounds, dt=dt, n_samples=n_samples, sampler=sampler, n=n,
-                           percentage=percentage, flavour=flavour, x0=x0, rng=rng, min_points=min_points)
+        dynia_result = run(u, y_fit, model, bounds, settings=analysis, rng=rng)
         chosen = intersect_segments(segments_from_ic(dynia_result, threshold=ic_threshold, mode=mode,
                                                      min_length=min_length, merge_gap=merge_gap), fit_part)
         notes += [str(warning) for warning in structure_warnings(dynia_result)]
@@ -215,7 +224,7 @@ def identify(u, y, model, bounds, *, method="dynia", dt=1.0, x0="zero", held_out
     else:
         chosen = intersect_segments(check_segments(segments, u.size), fit_part)
     if not chosen:
-        raise ValueError(f"method {method!r} selected no data to fit on"
+        raise SettingsError(f"method {method!r} selected no data to fit on"
                          + (f" (no window reached IC {ic_threshold}; lower ic_threshold)"
                             if method == "dynia" else ""))
     if report is not None:
@@ -225,19 +234,18 @@ def identify(u, y, model, bounds, *, method="dynia", dt=1.0, x0="zero", held_out
                          + ("" if exclude_flagged else "; exclude them with exclude_flagged=True"))
 
     fit = fit_segments(u, y_fit, model, chosen, bounds=bounds, dt=dt, x0=x0, n_starts=n_starts, rng=rng)
-    settings = dict(method=method, dt=float(dt), x0=x0, held_out_steps=int(sum(b - a for a, b in validation)),
+    recorded = dict(method=method, dt=dt, x0=x0, held_out_steps=int(sum(b - a for a, b in validation)),
                     bounds={name: list(pair) for name, pair in bounds.items()}, n_starts=n_starts,
                     quality=bool(quality or exclude_flagged), exclude_flagged=bool(exclude_flagged))
     if method == "dynia":
-        settings.update(n_samples=n_samples, sampler=sampler, n=n, percentage=percentage, flavour=flavour,
-                        ic_threshold=ic_threshold, mode=mode, min_length=min_length, merge_gap=merge_gap,
-                        min_points=min_points)
+        recorded.update(analysis.to_dict(), ic_threshold=ic_threshold, mode=mode, min_length=min_length,
+                        merge_gap=merge_gap)
     if method == "baseline":
-        settings["baseline"] = {key: _json_number(value) if isinstance(value, float) else value
+        recorded["baseline"] = {key: json_number(value) if isinstance(value, float) else value
                                 for key, value in baseline_result.settings.items()
                                 if isinstance(value, (int, float, str, bool))}
     return Identification(method=method, parameters=dict(fit.parameters), std_errors=dict(fit.std_errors),
                           segments=list(fit.segments), validation=list(validation),
                           validation_error=fit.validation_error(u, y, validation), fit=fit,
                           dynia_result=dynia_result, baseline_result=baseline_result, quality=report,
-                          warnings=notes, settings=settings)
+                          warnings=notes, settings=recorded)

@@ -48,9 +48,11 @@ import control
 import numpy as np
 import scipy.linalg
 
+from .errors import DataError, ModelError
+from .settings import check_dt, check_x0
+
 __all__ = ["Model", "Stepper", "FirstOrder", "FOPDT", "SecondOrderDelay", "TransferFunction"]
 
-_X0_CHOICES = ("zero", "steady")
 
 # Default chunk size: 4e6 float64 values are 32 MB per output chunk, large
 # enough that the per-chunk overhead is negligible and small enough that the
@@ -106,7 +108,7 @@ class _DiscreteSystem:
 class Model:
     """Base class of the batched models.
 
-    Subclasses set the parameter names and implement ``_discretise``; the
+    Subclasses set the parameter names and implement ``discretise``; the
     validation, the chunking and the time loop live here, shared by all.
 
     Parameters
@@ -210,16 +212,16 @@ class Model:
         >>> [chunk.shape for chunk in chunks]
         [(1, 2), (1, 2), (1, 1)]
         """
-        params = self._check_params(params)
+        params = self.check_params(params)
         u = _check_input(u)
-        dt = _check_dt(dt)
-        x0 = _check_x0(x0)
+        dt = check_dt(dt)
+        x0 = check_x0(x0)
         n_samples = params.shape[0]
         if chunk_steps is None:
             chunk_steps = max(1, _VALUES_PER_CHUNK // n_samples)
         else:
             chunk_steps = _check_chunk_steps(chunk_steps)
-        system = self._discretise(params, dt, u.shape[0], steady=x0 == "steady")
+        system = self.discretise(params, dt, u.shape[0], steady=x0 == "steady")
         return _run(system, u, x0, chunk_steps)
 
     def stepper(self, params, dt: float = 1.0, x0: str = "zero") -> Stepper:
@@ -253,13 +255,13 @@ class Model:
         >>> [float(stepper.step(u_k)[0]) for u_k in [1.0, 2.0, 3.0, 4.0]]
         [0.0, 0.0, 0.0, 1.0]
         """
-        params = self._check_params(params)
-        dt = _check_dt(dt)
-        x0 = _check_x0(x0)
-        system = self._discretise(params, dt, _STEPPER_MAX_DELAY_STEPS, steady=x0 == "steady")
+        params = self.check_params(params)
+        dt = check_dt(dt)
+        x0 = check_x0(x0)
+        system = self.discretise(params, dt, _STEPPER_MAX_DELAY_STEPS, steady=x0 == "steady")
         longest = int(system.delay_steps.max())
         if longest > _STEPPER_MAX_DELAY_STEPS:
-            raise ValueError(
+            raise ModelError(
                 f"a dead time of more than {_STEPPER_MAX_DELAY_STEPS} steps of dt={dt} is too long "
                 "for a stepper, which keeps the input history of the longest dead time"
             )
@@ -286,29 +288,29 @@ class Model:
         >>> unstable.finite_samples([[0.5], [800.0]], [1.0] * 5).tolist()
         [True, False]
         """
-        finite = np.ones(self._check_params(params).shape[0], dtype=bool)
+        finite = np.ones(self.check_params(params).shape[0], dtype=bool)
         with np.errstate(over="ignore", invalid="ignore"):
             for chunk in self.simulate_chunks(params, u, dt=dt, x0=x0):
                 finite &= np.isfinite(chunk).all(axis=1)
         return finite
 
-    def _check_params(self, params) -> np.ndarray:
+    def check_params(self, params) -> np.ndarray:
         """Return ``params`` as a finite float (n_samples, n_params) array."""
         expected = f"(n_samples, {self.n_params}) with columns {self.names}"
         try:
             params = np.asarray(params, dtype=float)
         except (TypeError, ValueError):
-            raise ValueError(f"params must be a numeric array of shape {expected}") from None
+            raise ModelError(f"params must be a numeric array of shape {expected}") from None
         if params.ndim == 1 and params.shape[0] == self.n_params:
             params = params.reshape(1, -1)
         if params.ndim != 2 or params.shape[1] != self.n_params:
-            raise ValueError(f"params must have shape {expected}; got shape {params.shape}")
+            raise ModelError(f"params must have shape {expected}; got shape {params.shape}")
         if params.shape[0] == 0:
-            raise ValueError("params must contain at least one sample (row)")
+            raise ModelError("params must contain at least one sample (row)")
         bad = ~np.isfinite(params)
         if bad.any():
             sample, column = np.argwhere(bad)[0]
-            raise ValueError(
+            raise DataError(
                 f"params must be finite; sample {sample} has "
                 f"{self.names[column]} = {params[sample, column]}"
             )
@@ -321,11 +323,11 @@ class Model:
             negative = np.flatnonzero(column < 0)
             if negative.size:
                 sample = negative[0]
-                raise ValueError(
+                raise ModelError(
                     f"{name} must be >= 0; sample {sample} has {name} = {column[sample]}"
                 )
 
-    def _discretise(
+    def discretise(
         self, params: np.ndarray, dt: float, n_steps: int, steady: bool
     ) -> _DiscreteSystem:
         raise NotImplementedError
@@ -373,7 +375,7 @@ class Stepper:
             raise TypeError(f"u_k must be a real number; got {type(u_k).__name__}")
         u_k = float(u_k)
         if not np.isfinite(u_k):
-            raise ValueError(f"u_k must be finite; got {u_k} at step {self.steps}")
+            raise DataError(f"u_k must be finite; got {u_k} at step {self.steps}")
         if self._recursion is None:
             self._recursion = _Recursion(
                 self._system, _initial_state(self._system, self._x0, u_k)
@@ -405,7 +407,7 @@ class _Lag(Model):
     """
 
     def finite_samples(self, params, u, dt: float = 1.0, x0: str = "zero") -> np.ndarray:
-        params = self._check_params(params)
+        params = self.check_params(params)
         peak = np.abs(_check_input(u)).max()
         with np.errstate(over="ignore"):
             return np.isfinite(np.abs(params[:, self.names.index("K")]) * peak * 2.0)
@@ -427,7 +429,7 @@ class FirstOrder(_Lag):
     def __init__(self):
         super().__init__(("K", "T"))
 
-    def _discretise(self, params, dt, n_steps, steady):
+    def discretise(self, params, dt, n_steps, steady):
         self._require_nonnegative(params, ("T",))
         gain, time_constant = params.T
         return _first_order_system(gain, time_constant, np.zeros_like(gain), dt, n_steps)
@@ -450,7 +452,7 @@ class FOPDT(_Lag):
     def __init__(self):
         super().__init__(("K", "T", "theta"))
 
-    def _discretise(self, params, dt, n_steps, steady):
+    def discretise(self, params, dt, n_steps, steady):
         self._require_nonnegative(params, ("T", "theta"))
         gain, time_constant, delay = params.T
         return _first_order_system(gain, time_constant, delay, dt, n_steps)
@@ -476,7 +478,7 @@ class SecondOrderDelay(_Lag):
     def __init__(self):
         super().__init__(("K", "T1", "T2", "theta"))
 
-    def _discretise(self, params, dt, n_steps, steady):
+    def discretise(self, params, dt, n_steps, steady):
         self._require_nonnegative(params, ("T1", "T2", "theta"))
         gain, lag1, lag2, delay = params.T
         delay_steps, fraction = _split_delay(delay, dt, n_steps)
@@ -571,7 +573,7 @@ class TransferFunction(Model):
         if not callable(factory):
             raise TypeError(f"factory must be callable; got {type(factory).__name__}")
         if delay is not None and delay not in self.names:
-            raise ValueError(f"delay must be None or one of names {self.names}; got {delay!r}")
+            raise ModelError(f"delay must be None or one of names {self.names}; got {delay!r}")
         self._factory = factory
         self._delay = delay
 
@@ -584,7 +586,7 @@ class TransferFunction(Model):
         factory = getattr(self._factory, "__name__", repr(self._factory))
         return f"TransferFunction({factory}, names={self.names}, delay={self._delay!r})"
 
-    def _discretise(self, params, dt, n_steps, steady):
+    def discretise(self, params, dt, n_steps, steady):
         if self._delay is None:
             delay = np.zeros(params.shape[0])
         else:
@@ -640,23 +642,23 @@ class TransferFunction(Model):
                     f"got {type(system).__name__} for sample {sample}"
                 )
             if not system.isctime():
-                raise ValueError(
+                raise ModelError(
                     f"factory must return a continuous-time system; sample {sample} "
                     f"gave dt={system.dt}"
                 )
             if system.ninputs != 1 or system.noutputs != 1:
-                raise ValueError(
+                raise ModelError(
                     f"factory must return a single-input single-output system; sample "
                     f"{sample} has {system.ninputs} inputs and {system.noutputs} outputs"
                 )
             try:
                 system = control.ss(system)
             except ValueError as error:
-                raise ValueError(
+                raise ModelError(
                     f"the system of sample {sample} cannot be converted to state space: {error}"
                 ) from error
             if matrices and system.nstates != matrices[0][0].shape[0]:
-                raise ValueError(
+                raise ModelError(
                     f"all samples must have the same state dimension; sample {sample} has "
                     f"{system.nstates} states, sample 0 has {matrices[0][0].shape[0]}"
                 )
@@ -732,7 +734,7 @@ def _steady_state(a, b):
         return np.zeros((0, n_samples))
     singular = np.linalg.matrix_rank(a) < n_states
     if singular.any():
-        raise ValueError(
+        raise ModelError(
             f'x0="steady" needs a steady state, but A of sample {np.flatnonzero(singular)[0]} '
             f"is singular (the model has an integrator or a pole at 0)"
         )
@@ -849,10 +851,10 @@ def _to_sample_major(time_major: np.ndarray) -> np.ndarray:
 
 def _check_names(names) -> tuple[str, ...]:
     if isinstance(names, str) or not all(isinstance(name, str) for name in names):
-        raise ValueError(f"names must be a sequence of strings; got {names!r}")
+        raise ModelError(f"names must be a sequence of strings; got {names!r}")
     names = tuple(names)
     if not names or len(set(names)) != len(names):
-        raise ValueError(f"names must be non-empty and unique; got {names}")
+        raise ModelError(f"names must be non-empty and unique; got {names}")
     return names
 
 
@@ -860,32 +862,15 @@ def _check_input(u) -> np.ndarray:
     try:
         u = np.asarray(u, dtype=float)
     except (TypeError, ValueError):
-        raise ValueError("u must be a 1-D sequence of numbers, shape (n_steps,)") from None
+        raise DataError("u must be a 1-D sequence of numbers, shape (n_steps,)") from None
     if u.ndim != 1:
-        raise ValueError(f"u must be 1-D with shape (n_steps,); got shape {u.shape}")
+        raise DataError(f"u must be 1-D with shape (n_steps,); got shape {u.shape}")
     if u.shape[0] == 0:
-        raise ValueError("u must contain at least one step; got an empty array")
+        raise DataError("u must contain at least one step; got an empty array")
     bad = np.flatnonzero(~np.isfinite(u))
     if bad.size:
-        raise ValueError(f"u must be finite; u[{bad[0]}] = {u[bad[0]]}")
+        raise DataError(f"u must be finite; u[{bad[0]}] = {u[bad[0]]}")
     return u
-
-
-def _check_dt(dt) -> float:
-    try:
-        value = float(dt) if np.ndim(dt) == 0 else None
-    except (TypeError, ValueError):
-        value = None
-    if value is None or not np.isfinite(value) or value <= 0:
-        raise ValueError(f"dt must be a finite number > 0; got {dt!r}")
-    return value
-
-
-def _check_x0(x0) -> str:
-    if not (isinstance(x0, str) and x0 in _X0_CHOICES):
-        choices = ", ".join(repr(choice) for choice in _X0_CHOICES)
-        raise ValueError(f"x0 must be one of {choices}; got {x0!r}")
-    return x0
 
 
 def _check_chunk_steps(chunk_steps) -> int:
@@ -894,5 +879,5 @@ def _check_chunk_steps(chunk_steps) -> int:
         or not isinstance(chunk_steps, numbers.Integral)
         or chunk_steps < 1
     ):
-        raise ValueError(f"chunk_steps must be None or an integer >= 1; got {chunk_steps!r}")
+        raise ModelError(f"chunk_steps must be None or an integer >= 1; got {chunk_steps!r}")
     return int(chunk_steps)

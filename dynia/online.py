@@ -35,11 +35,12 @@ import numbers
 import numpy as np
 
 from . import _checks
-from .analysis import _FLAVOUR_CLASSES, FLAVOURS, _McatFlavour
+from .engine.flavours import FLAVOUR_CLASSES, McatFlavour
+from .errors import DataError
 from .models import Model
-from .pipeline import _ordered_bounds
 from .result import DyniaResult
-from .sampling import SAMPLERS, sample
+from .sampling import sample
+from .settings import SAMPLERS, AnalysisSettings, parameter_box
 
 __all__ = ["OnlineDynia"]
 
@@ -124,28 +125,26 @@ class OnlineDynia:
     True
     """
 
-    def __init__(self, model, bounds, *, n_samples=2000, n=10, percentage=10, bins=40,
-                 conf_level=90, flavour="thesis", dt=1.0, rng=None, x0="zero",
-                 sampler="uniform", min_points=1):
+    def __init__(self, model, bounds, *, settings=None, n_samples=None, n=None, percentage=None, bins=None,
+                 conf_level=None, flavour=None, dt=None, rng=None, x0=None, sampler=None, min_points=None):
         if not isinstance(model, Model):
             raise TypeError(f"model must be a dynia.models.Model, e.g. dynia.models.FirstOrder(); "
                             f"got {type(model).__name__}")
-        names, box = _ordered_bounds(bounds, model)
-        if sampler not in SAMPLERS:
-            raise ValueError(f"sampler must be one of {tuple(SAMPLERS)} (the adaptive schemes need the "
-                             f"whole record and are not available online); got {sampler!r}")
-        if flavour not in FLAVOURS:
-            raise ValueError(f"flavour must be one of {FLAVOURS}; got {flavour!r}")
-        n_samples = _checks.whole_number(n_samples, "n_samples", minimum=1)
-        self._n = _checks.whole_number(n, "n", minimum=0)
-        self._min_points = _checks.whole_number(min_points, "min_points", minimum=1)
-        bins = _checks.whole_number(bins, "bins", minimum=1)
-        conf_level = _checks.open_interval(conf_level, "conf_level", 0, 100)
-        percentage = _checks.percentage_value(percentage)
+        settings = AnalysisSettings.build(settings or AnalysisSettings(window="trailing"), n_samples=n_samples, n=n,
+                                          percentage=percentage, bins=bins, conf_level=conf_level, flavour=flavour,
+                                          dt=dt, x0=x0, sampler=sampler, min_points=min_points)
+        settings.require("OnlineDynia", window=("trailing",), sampler=SAMPLERS, engine=("auto", "numpy"),
+                         workers=(None,), why="the adaptive schemes need the whole record; an update is one "
+                         "trailing window, analysed on numpy in the calling thread")
+        names, box = parameter_box(bounds, model.names, type(model).__name__)
+        n_samples, dt, x0 = settings.n_samples, settings.dt, settings.x0
+        self._n = settings.n
+        self._min_points = settings.min_points
+        percentage, bins, conf_level, flavour = settings.percentage, settings.bins, settings.conf_level, settings.flavour
 
         self.names = tuple(names)
         self.bounds = box
-        self.samples = sample(sampler, n_samples, box, np.random.default_rng(rng))
+        self.samples = sample(settings.sampler, n_samples, box, np.random.default_rng(rng))
         self.samples.flags.writeable = False
         model_order = [names.index(name) for name in model.names]
         self._model_params = self.samples[:, model_order]
@@ -153,17 +152,13 @@ class OnlineDynia:
         self._x0 = x0
         self._flavour_args = (self.samples, box, percentage, bins, conf_level)
         # Built once here so that bad settings fail now rather than at the first update.
-        self._flavour = _FLAVOUR_CLASSES[flavour](*self._flavour_args)
+        self._flavour = FLAVOUR_CLASSES[flavour](*self._flavour_args)
         self._stepper = model.stepper(self._model_params, dt=dt, x0=x0)  # checks dt and x0
         self._dt = float(dt)
         self.bin_centres = self._flavour.bin_centres
-        self._settings = dict(
-            n=self._n, window="trailing", percentage=percentage, bins=bins, conf_level=conf_level,
-            flavour=flavour, min_points=self._min_points, n_samples=n_samples,
-            n_behavioural=self._flavour.count, dt=self._dt, sampler=sampler, x0=x0,
-            model=type(model).__name__,
-            bounds={name: tuple(map(float, row)) for name, row in zip(names, box)},
-            n_sampled=n_samples, n_dropped=0)
+        self._settings = dict(settings.to_dict(), model=type(model).__name__,
+                              bounds={name: tuple(map(float, row)) for name, row in zip(names, box)},
+                              n_sampled=n_samples, n_dropped=0, n_behavioural=self._flavour.count, engine="numpy")
 
         width = 2 * self._n + 1
         self._errors = np.zeros((width, n_samples))  # ring: row t % width holds step t
@@ -186,7 +181,7 @@ class OnlineDynia:
 
     def reset(self):
         """Start again at step 0 with the same samples, as a new object would."""
-        self._flavour = _FLAVOUR_CLASSES[self._settings["flavour"]](*self._flavour_args)
+        self._flavour = FLAVOUR_CLASSES[self._settings["flavour"]](*self._flavour_args)
         self._stepper = self._model.stepper(self._model_params, dt=self._dt, x0=self._x0)
         self._errors.fill(0.0)
         self._measured.fill(False)
@@ -257,7 +252,7 @@ class OnlineDynia:
         u = _checks.as_1d_float(u, "u")
         y = _checks.as_1d_float(y, "y", allow_nan=True)
         if u.size != y.size:
-            raise ValueError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
+            raise DataError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
         n_params, n_bins = self.bin_centres.shape
         ic = np.empty((n_params, u.size))
         ci = np.empty((n_params, u.size, 2))
@@ -301,7 +296,7 @@ class OnlineDynia:
         if finite_left < max(self._flavour.count, 1):
             return False
         mae = self._mae[0]
-        if isinstance(self._flavour, _McatFlavour):
+        if isinstance(self._flavour, McatFlavour):
             mae[self._diverged] = mae[~self._diverged].max()
         else:
             mae[self._diverged] = np.inf
@@ -323,6 +318,6 @@ def _scalar(value, name, step, *, allow_nan):
                         f"at step {step}")
     value = float(value)
     if np.isinf(value) or (np.isnan(value) and not allow_nan):
-        raise ValueError(f"{name} must be finite at step {step}; got {value}"
-                         + (" (NaN marks a missing measurement; inf is not allowed)" if allow_nan else ""))
+        raise DataError(f"{name} must be finite at step {step}; got {value}"
+                        + (" (NaN marks a missing measurement; inf is not allowed)" if allow_nan else ""))
     return value

@@ -1,21 +1,31 @@
 """``dynia.run``: sample, simulate and analyse in one call, streaming over time."""
-import os
-from collections.abc import Mapping
+import warnings
 
 import numpy as np
 
 from . import _checks
-from .adaptive import SCHEMES, adaptive_run
-from ._fast import CompiledErrors
-from .analysis import analyse_stream, compiled_engine, default_chunk_steps
+from .adaptive import adaptive_run
+from .engine.flavours import compiled_engine
+from .engine.kernels import CompiledErrors
+from .engine.windows import analyse_stream, default_chunk_steps
+from .errors import DataError, ModelError
 from .sampling import sample
+from .settings import ADAPTIVE_SAMPLERS, AnalysisSettings, parameter_box
 
-__all__ = ["run"]
+__all__ = ["run", "DROPPED_WARNING_SHARE", "DroppedSamplesWarning"]
+
+# Above this share of dropped (non-finite) parameter sets the analysis no longer
+# covers the box it claims to, so the run says so.
+DROPPED_WARNING_SHARE = 0.01
 
 
-def run(u, y, model, bounds, *, dt=1.0, n_samples=2000, sampler="uniform", n=10, percentage=10,
-        bins=40, conf_level=90, flavour="thesis", x0="zero", rng=None, progress=False,
-        min_points=1, window="centred", engine="auto", workers=None):
+class DroppedSamplesWarning(UserWarning):
+    """More than 1 % of the parameter sets were dropped because their simulation was not finite."""
+
+
+def run(u, y, model, bounds, *, settings=None, dt=None, n_samples=None, sampler=None, n=None, percentage=None,
+        bins=None, conf_level=None, flavour=None, x0=None, min_points=None, window=None, engine=None,
+        workers=None, rng=None, progress=False):
     """Dynamic identifiability analysis of a model against measured data.
 
     Draws ``n_samples`` parameter sets from the box ``bounds``, simulates the
@@ -23,6 +33,11 @@ def run(u, y, model, bounds, *, dt=1.0, n_samples=2000, sampler="uniform", n=10,
     :func:`dynia.analysis.moving_window` on all parameters at once. The
     simulation is streamed into the analysis in time chunks, so memory does
     not grow with n_samples x n_steps.
+
+    Every setting may come in a :class:`dynia.settings.AnalysisSettings`
+    (``settings=``), as a keyword, or both: a keyword overrides the object, and
+    the result's ``settings`` record what was used. Defaults are those of
+    :class:`~dynia.settings.AnalysisSettings`.
 
     Parameters
     ----------
@@ -62,6 +77,8 @@ def run(u, y, model, bounds, *, dt=1.0, n_samples=2000, sampler="uniform", n=10,
         simulates the model in compiled code. Results are bit-identical.
     workers : int, optional
         Threads (default: every core). Results do not depend on it.
+    settings : dynia.settings.AnalysisSettings, optional
+        All of the above in one checked object.
 
     Returns
     -------
@@ -69,7 +86,9 @@ def run(u, y, model, bounds, *, dt=1.0, n_samples=2000, sampler="uniform", n=10,
         Parameter sets whose simulation is not finite over the record
         (an unstable model overflowing) are left out of the analysis, never
         ranked; ``settings["n_dropped"]`` counts them and ``.samples`` holds
-        the sets analysed.
+        the sets analysed. When more than 1 % are dropped a
+        :class:`DroppedSamplesWarning` says so: the analysis then covers less
+        than the box it was given.
 
     Examples
     --------
@@ -80,68 +99,50 @@ def run(u, y, model, bounds, *, dt=1.0, n_samples=2000, sampler="uniform", n=10,
     >>> res.ic.shape
     (2, 80)
     """
+    settings = AnalysisSettings.build(settings, dt=dt, n_samples=n_samples, sampler=sampler, n=n,
+                                     percentage=percentage, bins=bins, conf_level=conf_level, flavour=flavour,
+                                     x0=x0, min_points=min_points, window=window, engine=engine, workers=workers)
     u = _checks.as_1d_float(u, "u")
     y = _checks.as_1d_float(y, "y", allow_nan=True)
     if u.size != y.size:
-        raise ValueError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
-    names, box = _ordered_bounds(bounds, model)
-    if sampler in SCHEMES:
-        return adaptive_run(u, y, model, dict(zip(names, map(tuple, box))), scheme=sampler, dt=dt,
-                            n_samples=n_samples, n=n, percentage=percentage, bins=bins,
-                            conf_level=conf_level, flavour=flavour, x0=x0, rng=rng, window=window)
-    n_samples = _checks.whole_number(n_samples, "n_samples", minimum=1)
-    n = _checks.whole_number(n, "n", minimum=0)
-    samples = sample(sampler, n_samples, box, np.random.default_rng(rng))
+        raise DataError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
+    names, box = parameter_box(bounds, model.names, type(model).__name__)
+    if settings.sampler in ADAPTIVE_SAMPLERS:
+        return adaptive_run(u, y, model, dict(zip(names, map(tuple, box))), scheme=settings.sampler,
+                            settings=settings, rng=rng)
+    samples = sample(settings.sampler, settings.n_samples, box, np.random.default_rng(rng))
     model_order = [names.index(name) for name in model.names]
-    finite = model.finite_samples(samples[:, model_order], u, dt=dt, x0=x0)
+    finite = model.finite_samples(samples[:, model_order], u, dt=settings.dt, x0=settings.x0)
     if not finite.any():
-        raise ValueError(f"the simulation of every one of the {n_samples} parameter sets overflowed; "
+        raise ModelError(f"the simulation of every one of the {settings.n_samples} parameter sets overflowed; "
                          "check the model and the parameter ranges")
     samples = samples[finite]
-    chunk_steps = default_chunk_steps(samples.shape[0], 2 * n)
-    if workers is None:
-        workers = os.cpu_count() or 1
-    workers = _checks.whole_number(workers, "workers", minimum=1)
-    if compiled_engine(engine, flavour):
-        errors = CompiledErrors(model, samples[:, model_order], u, y, dt=dt, x0=x0, workers=workers)
+    n_dropped = int(settings.n_samples - samples.shape[0])
+    warn_dropped(n_dropped, settings.n_samples)
+    chunk_steps = default_chunk_steps(samples.shape[0], 2 * settings.n)
+    workers = settings.workers or _checks.default_workers()
+    if compiled_engine(settings.engine, settings.flavour):
+        errors = CompiledErrors(model, samples[:, model_order], u, y, dt=settings.dt, x0=settings.x0, workers=workers)
     else:
-        errors = model.simulate_chunks(samples[:, model_order], u, dt=dt, x0=x0, chunk_steps=chunk_steps)
-    settings = dict(dt=dt, sampler=sampler, x0=x0, model=type(model).__name__,
+        errors = model.simulate_chunks(samples[:, model_order], u, dt=settings.dt, x0=settings.x0,
+                                       chunk_steps=chunk_steps)
+    recorded = dict(settings.to_dict(), model=type(model).__name__,
                     bounds={name: tuple(map(float, row)) for name, row in zip(names, box)},
-                    n_sampled=n_samples, n_dropped=int(n_samples - samples.shape[0]))
+                    n_sampled=settings.n_samples, n_dropped=n_dropped)
     try:
-        return analyse_stream(y, errors, samples, box, n=n, percentage=percentage, bins=bins,
-                              conf_level=conf_level, flavour=flavour, names=names,
-                              time=np.arange(y.size) * float(dt), chunk_steps=chunk_steps,
-                              progress=progress, min_points=min_points, settings=settings,
-                              window=window, engine=engine, workers=workers)
+        return analyse_stream(y, errors, samples, box, n=settings.n, percentage=settings.percentage,
+                              bins=settings.bins, conf_level=settings.conf_level, flavour=settings.flavour,
+                              names=names, time=np.arange(y.size) * settings.dt, chunk_steps=chunk_steps,
+                              progress=progress, min_points=settings.min_points, settings=recorded,
+                              window=settings.window, engine=settings.engine, workers=workers)
     finally:
         if isinstance(errors, CompiledErrors):
             errors.close()
 
 
-def _ordered_bounds(bounds, model):
-    """Names in the order given and an (n_params, 2) box; every model parameter exactly once."""
-    if not isinstance(bounds, Mapping):
-        raise ValueError(
-            f"bounds must map each parameter name to (low, high), e.g. {{'K': (0, 7)}}; got {type(bounds).__name__}")
-    names = [str(name) for name in bounds]
-    unknown = [name for name in names if name not in model.names]
-    missing = [name for name in model.names if name not in names]
-    if unknown or missing:
-        raise ValueError(
-            f"bounds must name every parameter of {type(model).__name__} {list(model.names)} once"
-            + (f"; unknown: {unknown}" if unknown else "") + (f"; missing: {missing}" if missing else ""))
-    rows = []
-    for name in names:
-        pair = bounds[name]
-        try:
-            if isinstance(pair, (str, bytes)):
-                raise TypeError
-            low, high = (float(value) for value in pair)
-        except (TypeError, ValueError):
-            raise ValueError(f"bounds[{name!r}] must be a (low, high) pair of numbers; got {pair!r}") from None
-        if not (np.isfinite(low) and np.isfinite(high) and low < high):
-            raise ValueError(f"bounds[{name!r}]: need finite low < high; got ({low}, {high})")
-        rows.append((low, high))
-    return names, np.array(rows)
+def warn_dropped(n_dropped, n_sampled):
+    """Warn (:class:`DroppedSamplesWarning`) when more than 1 % of the sampled sets were dropped."""
+    if n_dropped > DROPPED_WARNING_SHARE * n_sampled:
+        warnings.warn(f"{n_dropped} of {n_sampled} parameter sets ({100 * n_dropped / n_sampled:.1f} %) were dropped "
+                      "because their simulation is not finite (an unstable model overflowing); the analysis covers "
+                      "only the rest of the box", DroppedSamplesWarning, stacklevel=3)

@@ -112,6 +112,7 @@ import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
 from . import _checks
+from .segments import mask_to_segments
 
 __all__ = ["Finding", "QualityReport", "check_quality", "informative_segments", "KINDS", "SIGNALS"]
 
@@ -409,9 +410,10 @@ def check_quality(time, u, y, *, half_window=3, glitch_threshold=6.0, glitch_min
 def informative_segments(result, *, threshold=0.75, parameter=None):
     """The stretches of data behind the windows whose IC reaches ``threshold``.
 
-    The window at step ``t`` uses samples ``t-n .. t+n`` (``n`` from
-    ``result.settings``), so an informative window makes those samples
-    informative; overlapping or touching stretches are merged.
+    An informative window makes every sample it used informative
+    (:meth:`DyniaResult.window_cover`: ``t-n .. t+n`` for a centred window,
+    ``t-2n .. t`` for a trailing one); overlapping or touching stretches are
+    merged.
 
     Parameters
     ----------
@@ -436,21 +438,8 @@ def informative_segments(result, *, threshold=0.75, parameter=None):
     True
     """
     threshold = _checks.open_interval(threshold, "threshold", 0, 1)
-    if "n" not in result.settings:
-        raise ValueError("result.settings has no half window 'n'; it is needed to know which "
-                         "samples each window used")
-    n = _checks.whole_number(result.settings["n"], "result.settings['n']", minimum=0)
-    ic = result.ic if parameter is None else result.ic[[result.index(parameter)]]
-    with np.errstate(invalid="ignore"):
-        informative = (ic >= threshold).any(axis=0)
-    steps = ic.shape[1]
-    covered = np.zeros(steps + 1, dtype=int)
-    # Each informative window adds +1 at its first sample and -1 after its last; a
-    # running sum above 0 marks every sample some informative window uses.
-    centres = np.flatnonzero(informative)
-    np.add.at(covered, np.maximum(centres - n, 0), 1)
-    np.add.at(covered, np.minimum(centres + n + 1, steps), -1)
-    return _runs(np.cumsum(covered[:-1]) > 0)
+    informative = result.informative(threshold, parameter)
+    return mask_to_segments(result.window_cover(informative))
 
 
 def _signal_findings(signal, values, time, settings):

@@ -27,6 +27,7 @@ from . import _checks
 from .pipeline import run
 from .segments import mask_to_segments
 from .structure import clear_of_bounds
+from .errors import SettingsError
 
 __all__ = ["narrowed_bounds", "second_run"]
 
@@ -69,9 +70,9 @@ def narrowed_bounds(result, bounds, *, threshold=0.75, margin=0.5, min_windows=3
     threshold = _checks.open_interval(threshold, "threshold", 0, 1)
     min_windows = _checks.whole_number(min_windows, "min_windows", minimum=1)
     if not margin >= 0:
-        raise ValueError(f"margin must be >= 0; got {margin!r}")
+        raise SettingsError(f"margin must be >= 0; got {margin!r}")
     if set(bounds) != set(result.names):
-        raise ValueError(f"bounds name {sorted(bounds)} but the result has {sorted(result.names)}")
+        raise SettingsError(f"bounds name {sorted(bounds)} but the result has {sorted(result.names)}")
     new_bounds, narrowed = {}, []
     for name, (low, high) in bounds.items():
         p = result.index(name)

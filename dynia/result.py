@@ -9,6 +9,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .errors import SettingsError
+from .plotting import decimated_columns, envelope
+
 __all__ = ["DyniaResult"]
 
 
@@ -54,7 +57,115 @@ class DyniaResult:
         try:
             return self.names.index(name)
         except ValueError:
-            raise ValueError(f"unknown parameter {name!r}; this result has {list(self.names)}") from None
+            raise SettingsError(f"unknown parameter {name!r}; this result has {list(self.names)}") from None
+
+    @property
+    def window_halos(self):
+        """Steps (before, after) the window at step t reaches: (n, n) centred, (2n, 0) trailing.
+
+        Read from ``settings["n"]`` and ``settings["window"]`` (default
+        "centred"); a result built without them has no known geometry.
+        """
+        if "n" not in self.settings:
+            raise SettingsError("this result's settings have no half window 'n', so which samples each "
+                                "window used is unknown")
+        n = int(self.settings["n"])
+        window = self.settings.get("window", "centred")
+        if window not in ("centred", "trailing"):
+            raise SettingsError(f"result.settings['window'] must be 'centred' or 'trailing'; got {window!r}")
+        return (n, n) if window == "centred" else (2 * n, 0)
+
+    def window_range(self, step):
+        """Sample range ``[start, stop)`` the window at ``step`` used, clipped to the record.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> res = DyniaResult(names=("K",), samples=np.zeros((2, 1)), bounds=np.array([[0.0, 1.0]]),
+        ...                   time=np.arange(50.0), ic=np.zeros((1, 50)), ci=np.zeros((1, 50, 2)),
+        ...                   gradient=np.zeros((1, 1, 50)), bin_centres=np.zeros((1, 1)),
+        ...                   settings=dict(n=5, window="trailing"))
+        >>> res.window_range(30), res.window_range(3)
+        ((20, 31), (0, 4))
+        """
+        before, after = self.window_halos
+        n_steps = self.time.size
+        step = int(step)
+        if not 0 <= step < n_steps:
+            raise SettingsError(f"step {step} is outside the record's {n_steps} steps")
+        return max(step - before, 0), min(step + after + 1, n_steps)
+
+    def informative(self, threshold, parameters=None, mode="any"):
+        """Steps whose window is informative: IC at least ``threshold`` (NaN never is), (n_steps,) bool.
+
+        ``parameters`` (default all) are the parameters considered; ``mode``
+        "any" needs one of them to reach the threshold, "joint" all. For one
+        parameter's mask pass its name alone.
+        """
+        names = self.names if parameters is None else ((parameters,) if isinstance(parameters, str) else parameters)
+        rows = self.ic[[self.index(name) for name in names]]
+        if mode not in ("any", "joint"):
+            raise SettingsError(f"mode must be 'any' or 'joint'; got {mode!r}")
+        with np.errstate(invalid="ignore"):
+            reached = rows >= threshold
+        return reached.any(axis=0) if mode == "any" else reached.all(axis=0)
+
+    def window_cover(self, steps):
+        """Which samples the windows at the marked ``steps`` used, as a boolean mask (n_steps,).
+
+        ``steps`` is a boolean mask over the steps (n_steps,); a sample is True when
+        any marked window holds it. With :meth:`window_centres` and
+        :meth:`windows_using` this is the one place that maps windows to the
+        samples they analysed, for centred and trailing windows alike.
+        """
+        steps = self._step_mask(steps, "steps")
+        before, after = self.window_halos
+        n_steps = steps.size
+        covered = np.zeros(n_steps + 1, dtype=np.int64)
+        # +1 where a window starts, -1 after it ends: a running sum above 0 marks covered samples.
+        centres = np.flatnonzero(steps)
+        np.add.at(covered, np.maximum(centres - before, 0), 1)
+        np.add.at(covered, np.minimum(centres + after + 1, n_steps), -1)
+        return np.cumsum(covered[:-1]) > 0
+
+    def window_centres(self, steps):
+        """The sample at the centre of each marked window, as a mask (n_steps,).
+
+        A centred window's centre is its own step; a trailing window's IC at t
+        describes samples t-2n .. t, centred on t-n.
+        """
+        steps = self._step_mask(steps, "steps")
+        before, after = self.window_halos
+        shift = (before - after) // 2
+        centres = np.zeros_like(steps)
+        centres[:steps.size - shift] = steps[shift:]
+        return centres
+
+    def windows_using(self, samples):
+        """Windows that use at least one of the marked ``samples``, as a mask over the steps (n_steps,)."""
+        samples = self._step_mask(samples, "samples")
+        before, after = self.window_halos
+        # Window t holds samples t-before .. t+after: it uses a marked sample when
+        # the count of marked samples in that range is above 0.
+        counts = np.concatenate(([0], np.cumsum(samples)))
+        steps = np.arange(samples.size)
+        first = np.maximum(steps - before, 0)
+        last = np.minimum(steps + after + 1, samples.size)
+        return counts[last] - counts[first] > 0
+
+    @property
+    def full_windows(self):
+        """Steps whose window holds all 2n+1 steps (not cut by the record's ends), (n_steps,) bool."""
+        before, after = self.window_halos
+        steps = np.arange(self.time.size)
+        return (steps - before >= 0) & (steps + after < self.time.size)
+
+    def _step_mask(self, mask, name):
+        mask = np.asarray(mask)
+        if mask.dtype != bool or mask.shape != self.time.shape:
+            raise SettingsError(f"{name} must be a boolean mask of shape {self.time.shape}, one flag per step; "
+                                f"got dtype {mask.dtype}, shape {mask.shape}")
+        return mask
 
     def summary(self):
         """Per parameter: the highest IC, when it occurs, the band and the estimate there.
@@ -104,12 +215,13 @@ class DyniaResult:
     def plot_information_content(self, name, ax=None):
         """Information content of ``name`` over time (thesis Figures 2.8, 3.3, ...).
 
-        Returns the matplotlib Axes.
+        Returns the matplotlib Axes. A long record is drawn through
+        :func:`dynia.plotting.envelope`, so its memory does not grow with it.
         """
         import matplotlib.pyplot as plt
         p = self.index(name)
         ax = ax if ax is not None else plt.figure().add_subplot()
-        ax.plot(self.time, self.ic[p], color="k", linewidth=1)
+        ax.plot(*envelope(self.time, self.ic[p]), color="k", linewidth=1)
         ax.set_ylim(0, 1)
         ax.set_xlim(self.time[0], self.time[-1])
         ax.set_xlabel("time")
@@ -121,15 +233,19 @@ class DyniaResult:
         """Confidence band over time with the CLD gradient in grey (darker = larger).
 
         The thesis's parameter identifiability plot (Figures 2.9, 3.4, ...).
-        ``true_value`` draws a dashed line. Returns the matplotlib Axes.
+        ``true_value`` draws a dashed line. Returns the matplotlib Axes. A long
+        record is drawn through :mod:`dynia.plotting` (each time bucket's
+        largest gradient and the envelope of the limits), so its memory does
+        not grow with it.
         """
         import matplotlib.pyplot as plt
         p = self.index(name)
         ax = ax if ax is not None else plt.figure().add_subplot()
-        ax.pcolormesh(self.time, self.bin_centres[p], self.gradient[p], cmap="Greys",
+        columns_time, columns = decimated_columns(self.time, self.gradient[p])
+        ax.pcolormesh(columns_time, self.bin_centres[p], columns, cmap="Greys",
                       shading="nearest", vmin=0, rasterized=True)
-        ax.plot(self.time, self.ci[p, :, 0], color="tab:blue", linewidth=1, label="lower limit")
-        ax.plot(self.time, self.ci[p, :, 1], color="tab:red", linewidth=1, label="upper limit")
+        ax.plot(*envelope(self.time, self.ci[p, :, 0]), color="tab:blue", linewidth=1, label="lower limit")
+        ax.plot(*envelope(self.time, self.ci[p, :, 1]), color="tab:red", linewidth=1, label="upper limit")
         if true_value is not None:
             ax.axhline(true_value, color="k", linestyle="--", linewidth=1, label="true value")
         low, high = self.bounds[p]

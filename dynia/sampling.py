@@ -9,6 +9,7 @@ import numpy as np
 from scipy.stats import qmc
 
 from . import _checks
+from .errors import SettingsError
 
 __all__ = ["sample", "uniform", "latin_hypercube", "sobol", "SAMPLERS"]
 
@@ -62,7 +63,7 @@ SAMPLERS = {"uniform": uniform, "lhs": latin_hypercube, "sobol": sobol}
 def sample(method, n_samples, bounds, rng=None):
     """Draw with the sampler named ``method`` (one of ``SAMPLERS``)."""
     if method not in SAMPLERS:
-        raise ValueError(f"sampler must be one of {tuple(SAMPLERS)}; got {method!r}")
+        raise SettingsError(f"sampler must be one of {tuple(SAMPLERS)}; got {method!r}")
     return SAMPLERS[method](n_samples, bounds, rng)
 
 

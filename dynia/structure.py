@@ -83,6 +83,7 @@ import scipy.stats
 from . import _checks
 from .result import DyniaResult
 from .segments import mask_to_segments
+from .errors import SettingsError
 
 __all__ = ["StructureWarning", "structure_warnings", "clear_of_bounds"]
 
@@ -195,13 +196,8 @@ def structure_warnings(result, *, ic_threshold=0.75, min_windows=3, drift_tolera
     ic_threshold = _checks.open_interval(ic_threshold, "ic_threshold", 0, 1)
     min_windows = _checks.whole_number(min_windows, "min_windows", minimum=1)
     drift_tolerance = _checks.open_interval(drift_tolerance, "drift_tolerance", 0, 1)
-    if "n" not in result.settings:
-        raise ValueError("result.settings has no half window 'n'; it is needed to leave out the "
-                         "truncated windows at the ends and to size the blocks")
+    usable = result.full_windows & ~_ignored_windows(result, ignore)  # raises if the geometry is unknown
     n = _checks.whole_number(result.settings["n"], "result.settings['n']", minimum=0)
-    usable = _trusted_windows(ignore, n, result.time.size)
-    usable[:n] = False
-    usable[usable.size - n:] = False
     block = max(2 * n + 1, min_windows)
     warnings = []
     for p in range(len(result.names)):
@@ -212,16 +208,16 @@ def structure_warnings(result, *, ic_threshold=0.75, min_windows=3, drift_tolera
     return warnings
 
 
-def _trusted_windows(ignore, n, n_steps):
-    """Windows that use no ignored sample, shape (n_steps,)."""
+def _ignored_windows(result, ignore):
+    """Windows that use an ignored sample, shape (n_steps,)."""
+    n_steps = result.time.size
     if ignore is None:
-        return np.ones(n_steps, dtype=bool)
+        return np.zeros(n_steps, dtype=bool)
     ignore = np.asarray(ignore)
     if ignore.dtype != bool or ignore.shape != (n_steps,):
-        raise ValueError(f"ignore must be a boolean array of shape ({n_steps},), one flag per step; "
-                         f"got dtype {ignore.dtype} and shape {ignore.shape}")
-    touched = np.convolve(ignore.astype(float), np.ones(2 * n + 1), mode="same")
-    return touched == 0
+        raise SettingsError(f"ignore must be a boolean array of shape ({n_steps},), one flag per step; "
+                            f"got dtype {ignore.dtype} and shape {ignore.shape}")
+    return result.windows_using(ignore)
 
 
 def clear_of_bounds(result, p):

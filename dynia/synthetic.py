@@ -27,6 +27,7 @@ import numpy as np
 import scipy.signal
 
 from . import _checks
+from .errors import SettingsError
 
 __all__ = ["CoolingWaterTruth", "cooling_water_loop", "example_firstorder_input"]
 
@@ -273,7 +274,7 @@ def cooling_water_loop(rng, *, days=30, gain=2.0, time_constant=2.0, input_level
     steady = (np.abs(minutes[:, None] - step_times[None, :]) > margin).all(axis=1)
     steady &= (minutes < drift_start - margin) | (minutes > drift_end + margin)
     if not steady.any():
-        raise ValueError(
+        raise SettingsError(
             f"days = {days} is too short: no steady minute at least {margin} minutes from the steps "
             "and the drift is left for the glitch")
     glitch_time = float(rng.choice(minutes[steady]))
@@ -317,9 +318,9 @@ def _range(pair, name):
     try:
         low, high = (float(value) for value in pair)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a (low, high) pair of numbers; got {pair!r}") from None
+        raise SettingsError(f"{name} must be a (low, high) pair of numbers; got {pair!r}") from None
     if not (math.isfinite(low) and math.isfinite(high) and 0 <= low <= high):
-        raise ValueError(f"{name} must satisfy 0 <= low <= high; got {pair!r}")
+        raise SettingsError(f"{name} must satisfy 0 <= low <= high; got {pair!r}")
     return low, high
 
 

@@ -98,7 +98,7 @@ def test_weights_are_checked():
         dynia.moving_window(y, sims, params, [[0, 1]], n=1, weights=np.ones(3))
     with pytest.raises(ValueError, match="weights must be positive"):
         dynia.moving_window(y, sims, params, [[0, 1]], n=1, weights=np.r_[np.ones(9), 0])
-    with pytest.raises(ValueError, match="not supported by the mcat flavour"):
+    with pytest.raises(ValueError, match="which the mcat flavour cannot use"):
         dynia.moving_window(y, sims, params, [[0, 1]], n=1, weights=np.ones(10), flavour="mcat")
 
 

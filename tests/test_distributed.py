@@ -159,7 +159,7 @@ def test_other_bad_arguments_are_clear_errors(client, record):
         run(u, y, FirstOrder(), BOUNDS, client=client, engine="fast")
     with pytest.raises(ValueError, match="dt must be a finite number > 0"):
         run(u, y, FirstOrder(), BOUNDS, client=client, dt=0)
-    with pytest.raises(ValueError, match="percentage=1.0 of 100 samples leaves 1 behavioural"):
+    with pytest.raises(ValueError, match="percentage 1 of n_samples 100 keeps 1 parameter sets per window"):
         run(u, y, FirstOrder(), BOUNDS, client=client, n_samples=100, percentage=1)
 
 

@@ -24,6 +24,9 @@ core. This module needs numba; :data:`AVAILABLE` says whether it imported.
 """
 import numpy as np
 
+from ..errors import ModelError, SettingsError
+from ..settings import check_dt, check_x0
+
 try:
     import numba
 except ImportError:  # the numpy path serves
@@ -98,7 +101,10 @@ def simulate_errors(phi, gamma_now, gamma_prev, c, feed_now, feed_prev, delays, 
         state_coefficients[i, n_states] = gamma_now[i]
         state_coefficients[i, n_states + 1] = gamma_prev[i]
     common_delay = delays.shape[0] == 1
-    if n_states == 1 and common_delay:
+    # The fused lag loop assumes the state carries over; when every sample's pole
+    # underflows to 0 (a time constant far below dt) the general loop, which
+    # skips unused terms as the numpy path does, gives the same numbers.
+    if n_states == 1 and common_delay and state_terms[0, 0] and output_terms[0]:
         return _simulate_lag(phi[0, 0], gamma_now[0], gamma_prev[0], c[0], feed_now, feed_prev,
                              delays[0], state_terms[0], output_terms, padded_input, measured,
                              first_step, last_step, state[0], errors, lo, hi)
@@ -145,10 +151,8 @@ def _simulate_lag(phi, gamma_now, gamma_prev, c, feed_now, feed_prev, delay, sta
     exactly when the general kernel uses it; one pass over the samples per
     step instead of one per term.
     """
-    c_used, now_out, prev_out = output_terms[0], output_terms[1], output_terms[2]
-    phi_used, now_state, prev_state = state_terms[0], state_terms[1], state_terms[2]
-    if not (c_used and phi_used):
-        raise ValueError("a lag model without its state term")
+    now_out, prev_out = output_terms[1], output_terms[2]
+    now_state, prev_state = state_terms[1], state_terms[2]
     bad_step, bad_sample = -1, -1
     for j in range(errors.shape[0]):
         k = first_step + j
@@ -407,11 +411,10 @@ class CompiledErrors:
     def __init__(self, model, params, u, y, *, dt, x0, workers):
         from concurrent.futures import ThreadPoolExecutor
 
-        from .models import _check_dt, _check_x0
 
-        params = model._check_params(params)
-        dt, x0 = _check_dt(dt), _check_x0(x0)
-        system = model._discretise(params, dt, u.shape[0], steady=x0 == "steady")
+        params = model.check_params(params)
+        dt, x0 = check_dt(dt), check_x0(x0)
+        system = model.discretise(params, dt, u.shape[0], steady=x0 == "steady")
         self.y = y
         self._system = system
         n_states, n_samples = system.c.shape
@@ -440,7 +443,7 @@ class CompiledErrors:
     def rows(self, start, stop):
         """Errors for times [start, stop), shape (stop - start, n_samples)."""
         if start < self._start:
-            raise ValueError(f"rows from step {start} were requested after rows from step {self._start}; "
+            raise SettingsError(f"rows from step {start} were requested after rows from step {self._start}; "
                              "requests must move forward in time")
         self._buffer = self._buffer[start - self._start:]
         self._start = start
@@ -467,7 +470,7 @@ class CompiledErrors:
         for step, sample in outcomes:
             if step >= 0:
                 which = f"sample {sample}" if sample >= 0 else "a sample"
-                raise ValueError(f"the simulation of {which} is not finite at step {step}")
+                raise ModelError(f"the simulation of {which} is not finite at step {step}")
         return errors
 
     def close(self):

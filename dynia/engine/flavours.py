@@ -1,0 +1,309 @@
+"""The flavours of the moving window: how a window's behavioural set becomes limits, IC and gradient.
+
+``"thesis"`` and ``"weighted"`` run on numpy (:class:`ThesisFlavour`,
+:class:`WeightedFlavour`) or on the compiled kernels of
+:mod:`dynia.engine.kernels` (:class:`CompiledFlavour`), bit for bit alike;
+importance-weighted samples take :class:`ImportanceFlavour`; ``"mcat"`` is
+:class:`McatFlavour`. See :mod:`dynia.engine.windows` for what each computes.
+"""
+import math
+
+import numpy as np
+
+from .. import _checks
+from ..errors import SettingsError
+from . import cld, kernels
+from .selection import (
+    lowest_stable,
+    lowest_weighted,
+    selected_columns,
+    stable_rank_mask,
+)
+
+__all__ = ["FLAVOURS", "ENGINES", "FLAVOUR_CLASSES", "compiled_engine", "flavour_analysis", "bin_centres_of",
+           "importance_weights", "ThesisFlavour", "WeightedFlavour", "CompiledFlavour", "ImportanceFlavour",
+           "McatFlavour"]
+
+FLAVOURS = ("thesis", "mcat", "weighted")
+ENGINES = ("auto", "numba", "numpy")
+
+
+def compiled_engine(engine, flavour, weights=None):
+    """Whether ``engine`` ("auto", "numba" or "numpy") runs the compiled kernels for this analysis."""
+    if engine not in ENGINES:
+        raise SettingsError(f"engine must be one of {ENGINES}; got {engine!r}")
+    supported = flavour in ("thesis", "weighted") and weights is None
+    if engine == "numba":
+        if not kernels.AVAILABLE:
+            raise SettingsError("engine='numba' needs numba, which is not installed (pip install numba)")
+        if not supported:
+            raise SettingsError("engine='numba' covers the 'thesis' and 'weighted' flavours without "
+                             "importance weights; use engine='numpy' or 'auto' for this analysis")
+    return engine != "numpy" and supported and kernels.AVAILABLE
+
+
+def flavour_analysis(flavour, compiled, params, bounds, percentage, bins, conf_level, min_points, weights=None):
+    """The object that analyses windows for ``flavour``, on the compiled kernels or on numpy.
+
+    Compiled, it has ``analyse_rows(window_errors, measured, m, slots)``;
+    otherwise ``analyse(mae, usable)``. Either has ``count``, ``n_bins`` and
+    ``bin_centres``. With importance ``weights`` (n_samples,) it is an
+    :class:`ImportanceFlavour`.
+    """
+    if weights is not None:
+        if flavour == "mcat":
+            raise SettingsError("weights are not supported by the mcat flavour, whose behavioural set "
+                                "is a block of the sorted population; use 'thesis' or 'weighted'")
+        return ImportanceFlavour(params, bounds, percentage, bins, conf_level,
+                                 importance_weights(weights, params.shape[0]), flavour)
+    if compiled:
+        return CompiledFlavour(params, bounds, percentage, bins, conf_level, flavour, min_points)
+    return FLAVOUR_CLASSES[flavour](params, bounds, percentage, bins, conf_level)
+
+
+def _chunk_arrays(n_params, n_bins, rows):
+    """Uninitialised ic (n_params, rows), ci (n_params, rows, 2), gradient (n_params, n_bins, rows)."""
+    return np.empty((n_params, rows)), np.empty((n_params, rows, 2)), np.empty((n_params, n_bins, rows))
+
+
+def _blank_unusable(ic, ci, gradient, usable):
+    """NaN wherever a window had too few measured points."""
+    ic[:, ~usable] = np.nan
+    ci[:, ~usable] = np.nan
+    gradient[:, :, ~usable] = np.nan
+    return ic, ci, gradient
+
+
+def bin_centres_of(bounds, bins):
+    """Centres of ``bins`` equal bins of each parameter's range, (n_params, bins)."""
+    edges = np.linspace(bounds[:, 0], bounds[:, 1], bins + 1, axis=1)
+    return (edges[:, :-1] + edges[:, 1:]) / 2
+
+
+class ThesisFlavour:
+    """Cost MAE^2, lowest-cost behavioural set, likelihood 1-cost, unweighted limits."""
+
+    def __init__(self, params, bounds, percentage, bins, conf_level):
+        n_samples = params.shape[0]
+        self.count = math.floor(n_samples * (percentage / 100))
+        if self.count < 2:
+            raise SettingsError(
+                f"percentage={percentage} of {n_samples} samples leaves {self.count} behavioural "
+                "sets per window; at least 2 are needed (raise percentage or the number of samples)")
+        self.columns = np.ascontiguousarray(params.T)
+        self.bounds = bounds
+        self.bins = bins
+        self.n_bins = bins
+        self.conf_level = conf_level
+        self.bin_centres = bin_centres_of(bounds, bins)
+
+    def analyse(self, mae, usable):
+        with np.errstate(over="ignore"):  # an error beyond 1e154 costs inf: still the worst
+            cost = mae ** 2
+        cost[~usable] = 0.0  # any finite value: these windows are blanked below
+        selected = lowest_stable(cost, self.count)
+        weights = cld.likelihood(np.take_along_axis(cost, selected, axis=1))
+        rows = selected.shape[0]
+        ic, ci, gradient = _chunk_arrays(self.columns.shape[0], self.n_bins, rows)
+        for p, column in enumerate(self.columns):
+            values = column[selected]
+            low, high = self.bounds[p]
+            ci[p] = self._limits(values, weights)
+            ic[p] = 1 - (ci[p, :, 1] - ci[p, :, 0]) / (high - low)
+            gradient[p] = cld.binned_mass(values, weights, low, high, self.bins).T
+        return _blank_unusable(ic, ci, gradient, usable)
+
+    def _limits(self, values, weights):
+        return cld.limits(values, self.conf_level)
+
+
+class WeightedFlavour(ThesisFlavour):
+    """As the thesis, but limits where the cumulative likelihood reaches the levels."""
+
+    def _limits(self, values, weights):
+        return cld.weighted_limits(values, weights, self.conf_level)
+
+
+class CompiledFlavour:
+    """The thesis and weighted flavours on the compiled kernel :func:`dynia.kernels.analyse_windows`."""
+
+    def __init__(self, params, bounds, percentage, bins, conf_level, flavour, min_points):
+        reference = ThesisFlavour(params, bounds, percentage, bins, conf_level)
+        self.count = reference.count
+        self.columns = reference.columns
+        self.n_bins = bins
+        self.bin_centres = reference.bin_centres
+        self.lows = np.ascontiguousarray(bounds[:, 0])
+        self.highs = np.ascontiguousarray(bounds[:, 1])
+        lower_share = (1 - conf_level / 100) / 2
+        self.positions = np.array([math.floor(lower_share * (self.count - 1)),
+                                   math.floor((1 - lower_share) * (self.count - 1))], dtype=np.int64)
+        self.levels = np.array([(100 - conf_level) / 200, (100 + conf_level) / 200])
+        self.weighted = flavour == "weighted"
+        self.min_points = float(min_points)
+
+    def analyse_rows(self, window_errors, measured, m, slots):
+        ic, ci, gradient = _chunk_arrays(self.columns.shape[0], self.n_bins, m)
+        kernels.analyse_windows(window_errors, measured, m, slots, self.count, self.columns, self.lows,
+                              self.highs, self.n_bins, self.positions, self.levels, self.weighted,
+                              self.min_points, ic, ci, gradient)
+        return ic, ci, gradient
+
+
+def importance_weights(weights, n_samples):
+    weights = _checks.as_1d_float(weights, "weights")
+    if weights.size != n_samples:
+        raise SettingsError(f"weights has {weights.size} values but there are {n_samples} samples")
+    if (weights <= 0).any():
+        raise SettingsError(f"weights must be positive; weights[{int(np.argmax(weights <= 0))}] is not")
+    return weights / weights.sum()
+
+
+class ImportanceFlavour:
+    """The thesis and weighted flavours for samples drawn from another density than the prior.
+
+    Each sample carries its importance weight (prior over proposal density),
+    normalised to sum to 1. The behavioural set of a window is its lowest
+    costs up to and including the first that brings their weight to
+    ``percentage`` %: the estimate of the prior's lowest-cost fraction. Its
+    values are weighted by importance for the limits ("thesis": weighted
+    quantiles at (100 -/+ conf_level)/200) and by importance x likelihood for
+    the gradient and, in "weighted", for the limits too. With equal weights
+    this is the uniform analysis up to the quantile convention.
+    """
+
+    def __init__(self, params, bounds, percentage, bins, conf_level, prior_weights, flavour):
+        self.prior_weights = prior_weights
+        self.fraction = percentage / 100
+        self.count = None  # the behavioural set's size varies from window to window
+        self.columns = np.ascontiguousarray(params.T)
+        self.bounds = bounds
+        self.bins = bins
+        self.n_bins = bins
+        self.conf_level = conf_level
+        self.likelihood_limits = flavour == "weighted"
+        self.bin_centres = bin_centres_of(bounds, bins)
+
+    def analyse(self, mae, usable):
+        with np.errstate(over="ignore"):
+            cost = mae ** 2
+        cost[~usable] = 0.0
+        order, behavioural = lowest_weighted(cost, self.prior_weights, self.fraction)
+        prior = np.where(behavioural, self.prior_weights[order], 0.0)
+        prior /= prior.sum(axis=1, keepdims=True)
+        likelihood = 1 - np.take_along_axis(cost, order, axis=1)
+        lowest = np.where(behavioural, likelihood, np.inf).min(axis=1, keepdims=True)
+        likelihood = np.where(behavioural, np.where(lowest < 0, likelihood - lowest, likelihood), 0.0)
+        mass = likelihood * prior
+        total = mass.sum(axis=1, keepdims=True)
+        mass = np.where(total > 0, mass / np.where(total > 0, total, 1), prior)  # all-equal costs >= 1
+        rows = order.shape[0]
+        ic, ci, gradient = _chunk_arrays(self.columns.shape[0], self.n_bins, rows)
+        for p, column in enumerate(self.columns):
+            values = column[order]
+            low, high = self.bounds[p]
+            ci[p] = cld.weighted_limits(values, mass if self.likelihood_limits else prior, self.conf_level)
+            ic[p] = 1 - (ci[p, :, 1] - ci[p, :, 0]) / (high - low)
+            gradient[p] = cld.binned_mass(values, mass, low, high, self.bins).T
+        return _blank_unusable(ic, ci, gradient, usable)
+
+
+class McatFlavour:
+    """MCAT 5.1 ``id_time.m``; the plain reference is :func:`dynia.mcat.id_time`."""
+
+    def __init__(self, params, bounds, percentage, bins, conf_level):
+        n_samples = params.shape[0]
+        grouping = 100 / percentage
+        if abs(grouping - round(grouping)) > 1e-9 * grouping:
+            raise SettingsError(
+                "the mcat flavour splits the population into 100/percentage blocks; "
+                f"percentage={percentage} does not divide 100 into a whole number of blocks")
+        grouping = round(grouping)
+        self.count = n_samples // grouping
+        if self.count < 1:
+            raise SettingsError(
+                f"percentage={percentage} of {n_samples} samples leaves no behavioural set "
+                "(raise percentage or the number of samples)")
+        self.block = (self.count * (grouping - 1), self.count * grouping)
+        lowest, highest = params.min(axis=0), params.max(axis=0)
+        if (lowest < 0).any():
+            column = int(np.argmax(lowest < 0))
+            raise SettingsError(
+                f"the mcat flavour needs non-negative parameters (MCAT's CDF knot sits at "
+                f"max(min - 0.001, 0)); parameter column {column} has samples down to {lowest[column]}")
+        self.columns = np.ascontiguousarray(params.T)
+        self.n_bins = bins + 1
+        self.bin_centres = np.linspace(lowest, highest, bins + 1, axis=1)
+        self.outer_knots = np.stack([np.maximum(lowest - 0.001, 0), highest + 0.001], axis=1)
+        self.span = highest - lowest
+        ranks = np.arange(1, self.count + 1) / self.count
+        low_level, high_level = (100 - conf_level) / 200, (100 + conf_level) / 200
+        self.limit_index = [int(np.argmax(ranks > low_level)), int(np.argmax(ranks > high_level))]
+        self.cdf_levels = np.concatenate([[0.0], ranks, [1.0]])
+        self.every_window_nonzero = True
+
+    def analyse(self, mae, usable):
+        likelihood = self._likelihood(mae, usable)
+        selected = selected_columns(stable_rank_mask(likelihood, *self.block), self.count)
+        rows = selected.shape[0]
+        n_params = self.columns.shape[0]
+        ic, ci, gradient = _chunk_arrays(n_params, self.n_bins, rows)
+        for p, column in enumerate(self.columns):
+            ordered = np.sort(column[selected], axis=1)
+            ci[p] = ordered[:, self.limit_index]
+            ic[p] = 1 - (ci[p, :, 1] - ci[p, :, 0]) / self.span[p]
+            gradient[p] = self._cdf_slope(_nudge_ties(ordered), p).T
+        return _blank_unusable(ic, ci, gradient, usable)
+
+    def _likelihood(self, mae, usable):
+        """``1 - mae/max(mae)`` (or ``1 - mae`` once a window had max 0), lifted above 0."""
+        mae = np.where(usable[:, None], mae, 0.0)
+        nonzero = (mae.max(axis=1) != 0) | ~usable
+        # id_time.m divides only while every window so far had a non-zero maximum.
+        divide = np.logical_and.accumulate(nonzero) & self.every_window_nonzero
+        self.every_window_nonzero = bool(divide[-1])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            scaled = np.where(divide[:, None], mae / mae.max(axis=1, keepdims=True), mae)
+        likelihood = 1 - scaled
+        lowest = likelihood.min(axis=1, keepdims=True)
+        return np.where(lowest <= 0, likelihood - lowest + 1000 * np.finfo(float).eps, likelihood)
+
+    def _cdf_slope(self, nudged, p):
+        """Unit-spaced gradient of the interpolated CDF at the grid points, NaN -> 0."""
+        lower_knot, upper_knot = self.outer_knots[p]
+        cdf = np.empty((nudged.shape[0], self.n_bins))
+        for row, values in enumerate(nudged):
+            knots = np.concatenate([[lower_knot], values, [upper_knot]])
+            cdf[row] = np.interp(self.bin_centres[p], knots, self.cdf_levels)
+        if self.n_bins < 2:
+            return np.zeros_like(cdf)
+        return np.nan_to_num(np.gradient(cdf, axis=1), nan=0.0)
+
+
+FLAVOUR_CLASSES = {"thesis": ThesisFlavour, "weighted": WeightedFlavour, "mcat": McatFlavour}
+
+
+def _nudge_ties(ordered):
+    """MCAT's tie nudge on each row of sorted values, scanning left to right.
+
+    For k = 0 .. count-3, a value equal to its predecessor is raised by
+    (value after - predecessor)/1000. Only positions inside runs of equal
+    values can change, so the scan visits just those (and the position after
+    each change), in order, vectorised over rows.
+    """
+    nudged = ordered.copy()
+    last = nudged.shape[1] - 3
+    pending = sorted(set(np.nonzero((nudged[:, :-1] == nudged[:, 1:]).any(axis=0))[0]) & set(range(last + 1)))
+    visited = set()
+    while pending:
+        k = pending.pop(0)
+        if k in visited:
+            continue
+        visited.add(k)
+        tie = nudged[:, k] == nudged[:, k + 1]
+        nudged[:, k + 1] = np.where(tie, nudged[:, k + 1] + (nudged[:, k + 2] - nudged[:, k]) / 1000,
+                                    nudged[:, k + 1])
+        if tie.any() and k + 1 <= last and k + 1 not in visited:
+            pending = sorted(set(pending) | {k + 1})
+    return nudged
+

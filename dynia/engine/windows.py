@@ -1,0 +1,425 @@
+"""The moving window: every parameter of every window in one pass, in time chunks.
+
+Shape convention (used by every function of the package)
+--------------------------------------------------------
+- ``y``: measured output, (n_steps,); NaN marks a missing sample.
+- ``sims``: simulated outputs, (n_samples, n_steps), one row per parameter set.
+- ``params``: sampled parameter sets, (n_samples, n_params).
+- ``bounds``: sampling range of each parameter, (n_params, 2) as [low, high].
+- results: ``ic`` (n_params, n_steps); ``ci`` (n_params, n_steps, 2) as
+  [lower, upper]; ``gradient`` (n_params, n_bins, n_steps).
+
+How it works
+------------
+The window at step ``t`` holds steps ``t-n .. t+n`` clipped to the record (so
+the first and last ``n`` windows are truncated, as in the thesis); with
+``window="trailing"`` it holds ``t-2n .. t`` instead, the same 2n+1 steps
+ending at ``t`` (MCAT's "right boundary" option), so that a window's result
+is known as soon as step ``t`` is logged (see :mod:`dynia.online`). The
+cost of a parameter set is computed from the mean absolute error over the
+points present. A window's behavioural set depends on the costs only, not on
+the parameter analysed, so it is selected once per window and every
+parameter's limits, information content and CLD gradient are read off it.
+Time is processed in chunks, so memory grows with n_samples x chunk, never
+with n_samples x n_steps; :func:`dynia.run` streams the simulation into the
+same chunks, so the (n_samples, n_steps) matrix is never built.
+
+Window sums are accumulated left to right over the window's points, so two
+parameter sets whose errors agree inside a window get bit-identical costs
+(ties stay ties, whatever came before the window), and ties are ranked by
+sample index, exactly as the thesis's stable sort does.
+
+Flavours
+--------
+``"thesis"``
+    The thesis implementation (Appendix B): cost = MAE squared; behavioural
+    set = the ``floor(n_samples*percentage/100)`` lowest costs (stable);
+    likelihood ``1 - cost``, shifted by its minimum when negative,
+    normalised; unweighted limits at sorted positions
+    ``floor(c*(count-1))`` with ``c = (1-conf_level/100)/2`` and ``1-c``;
+    ``IC = 1 - (upper-lower)/(high-low)``. IC and limits equal
+    :func:`dynia.thesis.moving_window_calcs`. The gradient is what the
+    thesis's ``cld_gradient`` sets out to compute, without its quirks: the
+    likelihood mass of the behavioural values in each of ``bins`` equal bins
+    of [low, high] (the CLD increase across the bin). Where every behavioural
+    cost is equal and at least 1 the thesis's likelihood is 0/0; the engine
+    then weights the behavioural sets equally.
+``"mcat"``
+    The DYNIA of Wagener's MCAT toolbox 5.1 (``id_time.m``, centred window):
+    see :mod:`dynia.mcat` for the plain reference and every detail. The
+    gradient has ``bins + 1`` rows, at equally spaced points from the sample
+    minimum to the sample maximum, and IC is normalised by the sample range.
+``"weighted"``
+    The likelihood-weighted CLD of Wagener et al. (2003): as ``"thesis"``,
+    but the limits are the first sorted behavioural values at which the
+    cumulative likelihood reaches ``(100-conf_level)/200`` and
+    ``(100+conf_level)/200``.
+"""
+from collections import deque
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+
+from .. import _checks
+from ..errors import DataError, SettingsError
+from ..result import DyniaResult
+from ..settings import AnalysisSettings
+from .flavours import FLAVOURS, compiled_engine, flavour_analysis
+
+__all__ = ["moving_window", "analyse_stream", "window_costs", "window_halos", "default_chunk_steps",
+           "window_inputs", "window_mean", "StreamedErrors", "ArrayErrors", "FLAVOURS", "WINDOWS"]
+
+WINDOWS = ("centred", "trailing")
+
+# Values per working array of one time chunk: 2.5e5 float64 = 2 MB, which keeps
+# the dozen passes over a chunk in cache for a few thousand samples; for many
+# samples the four-halo floor of default_chunk_steps sets the size instead.
+_CHUNK_VALUES = 250_000
+
+def moving_window(y, sims, params, bounds, *, n=10, percentage=10, bins=40, conf_level=90,
+                  flavour="thesis", names=None, time=None, min_points=1, chunk_steps=None,
+                  workers=None, progress=False, weights=None, window="centred", engine="auto"):
+    """Moving-window DYNIA of every parameter at once.
+
+    Parameters
+    ----------
+    y : array_like, shape (n_steps,)
+        Measured output. NaN marks a missing sample: windows use the points
+        present.
+    sims : array_like, shape (n_samples, n_steps)
+        Simulated output of every parameter set.
+    params : array_like, shape (n_samples, n_params)
+        The parameter sets simulated.
+    bounds : array_like, shape (n_params, 2)
+        [low, high] of the range each parameter was sampled from.
+    n : int, default 10
+        Half window: the window at step t holds steps t-n .. t+n.
+    percentage : float, default 10
+        Percentage of the parameter sets kept as each window's behavioural
+        set (fractions such as 0.1 are fine).
+    bins : int, default 40
+        Number of gradient bins (``"mcat"`` returns ``bins + 1`` points).
+    conf_level : float, default 90
+        Confidence level of the limits, in percent, in (0, 100).
+    flavour : {"thesis", "mcat", "weighted"}
+        See the module documentation.
+    names : sequence of str, optional
+        Parameter names (default ``p0``, ``p1``, ...).
+    time : array_like, shape (n_steps,), optional
+        Time of each step (default 0, 1, ...), used by plots and tables.
+    min_points : int, default 1
+        Windows with fewer measured points than this get NaN results.
+    chunk_steps : int, optional
+        Time steps per chunk (default: see :func:`default_chunk_steps`).
+    workers : int, optional
+        Threads analysing chunks in parallel (default: every core). Results
+        do not depend on it.
+    progress : bool, default False
+        Show a tqdm progress bar.
+    weights : array_like, shape (n_samples,), optional
+        Importance weights against the uniform prior (prior density over the
+        density the samples were drawn from), for samples not drawn
+        uniformly; see :mod:`dynia.adaptive`. The behavioural set of a window
+        is then the lowest costs holding ``percentage`` % of the weight, and
+        the limits are weighted quantiles ("thesis") or quantiles of
+        likelihood x weight ("weighted"). Not for ``"mcat"``.
+    window : {"centred", "trailing"}, default "centred"
+        Where the 2n+1 steps of the window at step t lie: ``t-n .. t+n``
+        (the thesis) or ``t-2n .. t`` (ending at t, for online use). The
+        trailing result at t equals the centred one at t-n wherever the
+        centred window is not truncated by the end of the record.
+    engine : {"auto", "numba", "numpy"}, default "auto"
+        The compiled kernels of :mod:`dynia._fast` or plain numpy; both give
+        bit-identical results. "auto" takes numba when it is installed and
+        the flavour is "thesis" or "weighted" without ``weights`` (the
+        other cases always run on numpy).
+
+    Returns
+    -------
+    DyniaResult
+        ``.ic`` (n_params, n_steps), ``.ci`` (n_params, n_steps, 2),
+        ``.gradient`` (n_params, n_bins, n_steps), ``.bin_centres``
+        (n_params, n_bins) and the settings.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dynia.analysis import moving_window
+    >>> rng = np.random.default_rng(1)
+    >>> gain = rng.uniform(0, 4, 500)
+    >>> u = np.r_[np.zeros(20), np.ones(40)]
+    >>> sims = gain[:, None] * u
+    >>> res = moving_window(2 * u, sims, gain[:, None], [[0, 4]], n=3)
+    >>> float(res.ic[0, :15].max()) < 0.2 < float(res.ic[0, 30:].min())
+    True
+    """
+    sims = np.asarray(sims, dtype=float)
+    if sims.ndim != 2:
+        raise DataError(f"sims must be 2-D (n_samples, n_steps); got shape {sims.shape}")
+    y = _checks.as_1d_float(y, "y", allow_nan=True)
+    if sims.shape[1] != y.size:
+        raise SettingsError(
+            f"sims has {sims.shape[1]} steps (columns) but y has {y.size}; they must match")
+    params = _checks.as_2d_float(params, "params")
+    if params.shape[0] != sims.shape[0]:
+        raise SettingsError(
+            f"params has {params.shape[0]} rows but sims has {sims.shape[0]}; one row per parameter set")
+    return _analyse(y, ArrayErrors(y, sims), params, bounds, n=n, percentage=percentage, bins=bins,
+                    conf_level=conf_level, flavour=flavour, names=names, time=time,
+                    min_points=min_points, chunk_steps=chunk_steps, workers=workers,
+                    progress=progress, weights=weights, window=window, engine=engine)
+
+
+def default_chunk_steps(n_samples, halo):
+    """Time steps per chunk: about ``_CHUNK_VALUES`` values per (n_samples, chunk + halo) array.
+
+    Small enough to stay in cache for a few thousand samples, and at least
+    four halos long so that re-reading the halo never dominates.
+    """
+    return max(1, 4 * halo, _CHUNK_VALUES // max(n_samples, 1) - halo)
+
+
+def analyse_stream(y, sim_chunks, params, bounds, *, n, percentage, bins, conf_level, flavour,
+                   names=None, time=None, min_points=1, chunk_steps=None, workers=None,
+                   progress=False, settings=None, weights=None, window="centred", engine="auto"):
+    """Moving-window DYNIA fed by simulated output in consecutive time chunks.
+
+    ``sim_chunks`` yields (n_samples, m) arrays in time order that together
+    cover ``y``; otherwise as :func:`moving_window`, which wraps this.
+    ``sim_chunks`` may instead be a source of absolute errors with a
+    ``rows(start, stop)`` method, such as :class:`dynia.kernels.CompiledErrors`.
+    """
+    y = _checks.as_1d_float(y, "y", allow_nan=True)
+    params = _checks.as_2d_float(params, "params")
+    errors = sim_chunks if hasattr(sim_chunks, "rows") else StreamedErrors(y, sim_chunks, params.shape[0])
+    return _analyse(y, errors, params, bounds, n=n,
+                    percentage=percentage, bins=bins, conf_level=conf_level, flavour=flavour,
+                    names=names, time=time, min_points=min_points, chunk_steps=chunk_steps,
+                    workers=workers, progress=progress, settings=settings, weights=weights,
+                    window=window, engine=engine)
+
+
+def window_halos(n, window):
+    """Steps (before, after) the window at t reaches: (n, n) centred, (2n, 0) trailing."""
+    if window not in WINDOWS:
+        raise SettingsError(f"window must be one of {WINDOWS}; got {window!r}")
+    return (n, n) if window == "centred" else (2 * n, 0)
+
+
+def _analyse(y, errors, params, bounds, *, n, percentage, bins, conf_level, flavour, names,
+             time, min_points, chunk_steps, progress, workers=None, settings=None, weights=None,
+             window="centred", engine="auto"):
+    n_samples, n_params = params.shape
+    bounds = _checks.bounds_array(bounds, n_params)
+    outside = (params < bounds[:, 0]) | (params > bounds[:, 1])
+    if outside.any():
+        row, col = np.argwhere(outside)[0]
+        raise SettingsError(
+            f"params row {row}, column {col} = {params[row, col]} lies outside its bounds "
+            f"[{bounds[col, 0]}, {bounds[col, 1]}]; samples must come from the ranges analysed")
+    # One place checks every setting; weighted samples are what the adaptive samplers produce.
+    checked = AnalysisSettings(n_samples=n_samples, sampler="uniform" if weights is None else "iis", n=n,
+                               percentage=percentage, bins=bins, conf_level=conf_level, flavour=flavour,
+                               min_points=min_points, window=window, engine=engine, workers=workers)
+    n, percentage, bins, conf_level = checked.n, checked.percentage, checked.bins, checked.conf_level
+    min_points, workers = checked.min_points, checked.workers
+    before, after = window_halos(n, window)
+    names = _parameter_names(names, n_params)
+    time = np.arange(y.size, dtype=float) if time is None else _checks.as_1d_float(time, "time")
+    if time.size != y.size:
+        raise SettingsError(f"time has {time.size} values but y has {y.size}; they must match")
+    if chunk_steps is None:
+        chunk_steps = default_chunk_steps(n_samples, 2 * n)
+    chunk_steps = _checks.whole_number(chunk_steps, "chunk_steps", minimum=1)
+    workers = 1 if flavour == "mcat" else workers or _checks.default_workers()
+
+    compiled = compiled_engine(engine, flavour, weights)
+    flavour_impl = flavour_analysis(flavour, compiled, params, bounds, percentage, bins, conf_level, min_points,
+                                    weights=weights)
+    n_steps = y.size
+    ic = np.full((n_params, n_steps), np.nan)
+    ci = np.full((n_params, n_steps, 2), np.nan)
+    gradient = np.full((n_params, flavour_impl.n_bins, n_steps), np.nan)
+
+    slots = before + after + 1
+
+    def analyse_chunk(start, stop, window_errors, measured):
+        if compiled:
+            return start, stop, flavour_impl.analyse_rows(window_errors, measured, stop - start, slots)
+        mae, present = window_mean(window_errors, measured, stop - start, slots)
+        return start, stop, flavour_impl.analyse(mae, present >= min_points)
+
+    def store(finished):
+        start, stop, (chunk_ic, chunk_ci, chunk_gradient) = finished.result()
+        ic[:, start:stop] = chunk_ic
+        ci[:, start:stop] = chunk_ci
+        gradient[:, :, start:stop] = chunk_gradient
+
+    starts = range(0, n_steps, chunk_steps)
+    if progress:
+        from tqdm.auto import tqdm
+        starts = tqdm(starts, desc="DYNIA windows", unit="chunk")
+    # Errors are pulled in time order (a simulation stream is sequential); the
+    # windows of each chunk are then analysed on a worker. MCAT's likelihood
+    # carries state from window to window, so it stays on one worker.
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        pending = deque()
+        for start in starts:
+            stop = min(start + chunk_steps, n_steps)
+            pending.append(pool.submit(analyse_chunk, start, stop,
+                                       *window_inputs(errors, start, stop, before, after, n_steps,
+                                                       time_major=compiled)))
+            while len(pending) > workers:  # bounds the chunks held in memory
+                store(pending.popleft())
+        while pending:
+            store(pending.popleft())
+
+    # What the engine did wins over what the caller asked: the samples analysed
+    # (after any were dropped) and the engine that ran ("auto" resolved).
+    recorded = dict(settings or {})
+    recorded.update(n=n, window=window, percentage=percentage, bins=bins, conf_level=conf_level,
+                    flavour=flavour, min_points=min_points, n_samples=n_samples,
+                    n_behavioural=flavour_impl.count, engine="numba" if compiled else "numpy")
+    return DyniaResult(names=names, samples=params, bounds=bounds, time=time, ic=ic, ci=ci,
+                       gradient=gradient, bin_centres=flavour_impl.bin_centres, settings=recorded)
+
+
+def _parameter_names(names, n_params):
+    if names is None:
+        return tuple(f"p{i}" for i in range(n_params))
+    names = tuple(str(name) for name in names)
+    if len(names) != n_params:
+        raise SettingsError(f"names has {len(names)} entries but there are {n_params} parameters")
+    if len(set(names)) != len(names):
+        raise SettingsError(f"names must be unique; got {names}")
+    return names
+
+
+class StreamedErrors:
+    """Absolute errors |y - sim| over a sliding range of time, pulled from simulation chunks.
+
+    Missing measurements (NaN in y) give an error of 0. Requests must move
+    forward in time; columns before a request are dropped.
+    """
+
+    def __init__(self, y, sim_chunks, n_samples):
+        self.y = y
+        self._chunks = iter(sim_chunks)
+        self._n_samples = n_samples
+        self._start = 0  # time of the first buffered column
+        self._buffer = np.zeros((n_samples, 0))
+
+    def columns(self, start, stop):
+        """Errors for times [start, stop), shape (n_samples, stop - start)."""
+        self._buffer = self._buffer[:, start - self._start:]
+        self._start = start
+        pieces = [self._buffer]
+        buffered = self._buffer.shape[1]
+        while self._start + buffered < stop:
+            chunk = self._next_chunk(self._start + buffered)
+            pieces.append(chunk)
+            buffered += chunk.shape[1]
+        if len(pieces) > 1:
+            self._buffer = np.concatenate(pieces, axis=1)
+        return self._buffer[:, :stop - start]
+
+    def rows(self, start, stop):
+        """Errors for times [start, stop), time-major: shape (stop - start, n_samples)."""
+        return np.ascontiguousarray(self.columns(start, stop).T)
+
+    def _next_chunk(self, at):
+        try:
+            sims = np.asarray(next(self._chunks), dtype=float)
+        except StopIteration:
+            raise SettingsError(f"the simulation ended at step {at}, before the {self.y.size} steps of y") from None
+        if sims.ndim != 2 or sims.shape[0] != self._n_samples or sims.shape[1] == 0:
+            raise SettingsError(
+                f"a simulation chunk at step {at} has shape {sims.shape}; expected ({self._n_samples}, m>0)")
+        if at + sims.shape[1] > self.y.size:
+            raise SettingsError(f"the simulation runs past the {self.y.size} steps of y")
+        return _absolute_errors(self.y[at:at + sims.shape[1]], sims, at)
+
+
+class ArrayErrors:
+    """The same interface over a whole (n_samples, n_steps) array of simulations."""
+
+    def __init__(self, y, sims):
+        self.y = y
+        self._sims = sims
+
+    def columns(self, start, stop):
+        return _absolute_errors(self.y[start:stop], self._sims[:, start:stop], start)
+
+    def rows(self, start, stop):
+        return np.ascontiguousarray(self.columns(start, stop).T)
+
+
+def _absolute_errors(measured, sims, at):
+    """|measured - sims| with missing measurements (NaN) giving 0; rejects non-finite sims."""
+    bad = ~np.isfinite(sims)
+    if bad.any():
+        row, col = np.argwhere(bad)[0]
+        raise DataError(f"sims holds a non-finite value for sample {row} at step {at + col}")
+    errors = np.subtract(sims, measured)  # |s - y| == |y - s| bit for bit
+    np.abs(errors, out=errors)
+    missing = np.isnan(measured)
+    if missing.any():
+        errors[:, missing] = 0.0
+    return errors
+
+
+def window_inputs(errors, start, stop, before, after, n_steps, time_major=False):
+    """Errors and measured-point flags for the windows at steps [start, stop).
+
+    The window at t reaches ``before`` steps back and ``after`` ahead (see
+    :func:`window_halos`). Returns (n_samples, m + before + after) errors
+    (transposed if ``time_major``) and (m + before + after,) flags,
+    m = stop - start, where column j belongs to time start - before + j;
+    times outside the record are zero columns, so every window has
+    before+after+1 slots (adding 0.0 changes no sum).
+    """
+    lo, hi = max(start - before, 0), min(stop + after, n_steps)
+    window_errors = errors.rows(lo, hi).T if time_major else errors.columns(lo, hi)
+    measured = (~np.isnan(errors.y[lo:hi])).astype(float)
+    width = stop - start + before + after
+    offset = lo - (start - before)
+    if offset or hi - lo < width:
+        padded = np.zeros((window_errors.shape[0], width))
+        padded[:, offset:offset + (hi - lo)] = window_errors
+        counts = np.zeros(width)
+        counts[offset:offset + (hi - lo)] = measured
+        window_errors, measured = padded, counts
+    return (np.ascontiguousarray(window_errors.T) if time_major else window_errors), measured
+
+
+def window_mean(window_errors, measured, m, slots):
+    """Mean absolute error of every sample over each of the m windows of ``slots`` steps.
+
+    Returns ``mae`` (m, n_samples) and the number of measured points per
+    window (m,). Sums run left to right over each window, the order of
+    :func:`dynia.thesis.moving_window_calcs`, so the result depends on the
+    window's own errors only and equals the port's bit for bit.
+    """
+    total = window_errors[:, 0:m].copy()
+    present = measured[0:m].copy()
+    for shift in range(1, slots):
+        total += window_errors[:, shift:shift + m]
+        present += measured[shift:shift + m]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        total /= present
+    return np.ascontiguousarray(total.T), present
+
+
+def window_costs(y, sims, n, start, stop, window="centred"):
+    """Thesis costs (window MAE squared) of every sample for the windows at steps [start, stop).
+
+    Returns (stop - start, n_samples); windows without a measured point are NaN.
+    """
+    errors = ArrayErrors(_checks.as_1d_float(y, "y", allow_nan=True), np.asarray(sims, dtype=float))
+    before, after = window_halos(n, window)
+    mae, _ = window_mean(*window_inputs(errors, start, stop, before, after, errors.y.size),
+                          stop - start, before + after + 1)
+    with np.errstate(over="ignore"):
+        return mae ** 2
+
+

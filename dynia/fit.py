@@ -1,0 +1,661 @@
+"""Least squares on data segments, and the validation of the fitted model.
+
+:func:`fit_segments` fits a model to the measured output inside chosen
+segments (see :mod:`dynia.segments` for what a segment is and how DYNIA
+selects them) and :func:`validation_error` scores a fitted model on held-out
+data.
+
+Initial state of a segment
+--------------------------
+The output in a segment depends on the state at its start, which is not
+measured. Every segment is simulated from an earlier step ``s`` where the
+state is taken as known, on the measured input (the input is known
+everywhere), and only the residuals inside the segment are fitted:
+
+- ``warmup=None`` (default): ``s = 0``, the start of the record, in state
+  ``x0``. The state entering each segment is then exactly the model's
+  response to the whole input history, the model DYNIA analysed, with no
+  truncation error; all segments share one simulation.
+- ``warmup=w``: ``s = max(0, start - w)``. For a record too long to simulate
+  whole, or whose early part is not trusted; the error of assuming state
+  ``x0`` at ``s`` decays like ``exp(-w dt / T)`` for the slowest time
+  constant T, so w should be several of them (in steps).
+
+``x0="steady"`` (default) starts in the steady state for the input at ``s``;
+``x0="zero"`` in the zero state. Both treat ``u`` and ``y`` as deviation
+variables around an operating point where the output is 0 at input 0 (as
+``dynia analyse --offset/--input-offset`` prepares them). When the output
+level drifts between segments (unmeasured disturbances), ``offset="segment"``
+adds one constant output offset per segment as a nuisance parameter; a
+segment then informs about the gain only through the changes of its output
+(responses to input changes in it or shortly before), never through its
+level. ``x0`` should be the one the DYNIA run used (:func:`dynia.run`
+defaults to ``"zero"``), so that the fit sees the model that was analysed.
+Examples
+--------
+>>> import numpy as np
+>>> from dynia.models import FirstOrder
+>>> u = np.r_[np.zeros(20), np.ones(40), np.zeros(40)]
+>>> y = FirstOrder().simulate([[2.0, 3.0]], u)[0]
+>>> fit = fit_segments(u, y, FirstOrder(), [(15, 40), (55, 70)], bounds={"K": (0, 7), "T": (0, 7)})
+>>> {name: round(value, 6) for name, value in fit.parameters.items()}
+{'K': 2.0, 'T': 3.0}
+"""
+import math
+import numbers
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from . import _checks
+from .errors import DataError, ModelError, SettingsError
+from .models import Model
+from .segments import check_segments, mask_to_segments
+from .serial import json_number, json_ready
+
+__all__ = ["FitResult", "fit_segments", "validation_error", "OFFSETS", "X0_CHOICES"]
+
+OFFSETS = ("none", "segment")
+X0_CHOICES = ("steady", "zero")
+
+
+# A fitted parameter's typical scale is the width of its bounds, or
+# max(|start|, 1) when they are infinite; it scales the search (least_squares
+# x_scale), the finite-difference steps and the rank decision, so that none
+# depends on the parameter's units.
+
+# Relative finite-difference steps, times max(|value|, typical scale): about
+# sqrt(eps) for the forward differences that steer the search and eps^(1/3)
+# for the central differences of the reported covariance, the steps that
+# balance truncation against rounding error for each formula.
+_FORWARD_STEP = 1.5e-8
+_CENTRAL_STEP = 6e-6
+
+# Singular values of the Jacobian (columns scaled by the typical scales)
+# below this fraction of the largest are taken as zero. The central
+# differences are accurate to about 1e-10 relative, so this sits well above
+# their noise; a direction this weak would have a standard error 1e7 times
+# the best one, which is no estimate either.
+_RANK_RTOL = 1e-7
+
+# A parameter belongs to an unidentifiable direction when its component in
+# the Jacobian's null space exceeds this (null vectors have unit norm).
+_NULL_COMPONENT = 1e-6
+
+# An estimate closer than this fraction of its typical scale to a bound is
+# reported as lying on it (trf keeps iterates strictly inside the bounds).
+_AT_BOUND_RTOL = 1e-6
+
+# ftol, xtol and gtol of least_squares. Far below scipy's 1e-8: the extra
+# Gauss-Newton iterations are few (convergence is fast near the minimum) and
+# buy estimates whose error is the data's, not the solver's.
+_LSQ_TOLERANCE = 1e-12
+
+# random_segments restarts the placement this often before giving up.
+_PLACEMENT_ATTEMPTS = 1000
+# --------------------------------------------------------------- the fit
+
+
+@dataclass(frozen=True, eq=False)
+class FitResult:
+    """A model fitted by least squares on data segments.
+
+    Attributes
+    ----------
+    parameters : dict of str to float
+        Every model parameter, in ``model.names`` order, fixed ones included.
+    std_errors : dict of str to float
+        Standard error of each fitted parameter, from the linearisation at
+        the solution: the square roots of the diagonal of ``covariance``.
+        ``inf`` for a parameter not identifiable from these segments (see
+        ``identifiable``); ``nan`` when there are no more measured points
+        than fitted quantities.
+    covariance : ndarray (n_fitted, n_fitted)
+        ``s^2 (J^T J)^-1`` over ``fitted_names``, ``s^2 = RSS/dof``; NaN in
+        the rows and columns of unidentifiable parameters (the others are
+        estimable and use the pseudo-inverse).
+    fitted_names : tuple of str
+        The parameters fitted, the order of ``covariance``.
+    identifiable : dict of str to bool
+        False where the Jacobian is singular along a direction that involves
+        the parameter: these segments do not determine it, and its value in
+        ``parameters`` is wherever the search left it, not an estimate.
+    at_bound : tuple of str
+        Fitted parameters whose estimate lies on a bound; their standard
+        errors describe an unconstrained minimum that is not there.
+    offsets : tuple of float
+        The output offset of each segment (zeros unless ``offset="segment"``).
+    segments : tuple of (start, stop)
+        The segments fitted.
+    rmse : float
+        Root mean square of the fitted residuals.
+    sigma : float
+        Residual standard deviation ``s = sqrt(RSS/dof)`` used for the errors.
+    n_points : int
+        Measured points fitted (NaN outputs skipped).
+    dof : int
+        ``n_points`` minus the rank of the Jacobian (the parameter directions
+        the data determine) minus the fitted offsets.
+    success : bool
+        Whether scipy's least_squares reports convergence.
+    message : str
+        Its message.
+    nfev : int
+        Residual evaluations over all starts.
+    fitted : ndarray (n_steps,)
+        Simulated output with offsets inside the segments, NaN elsewhere.
+    model : dynia.models.Model
+    settings : dict
+        dt, x0, warmup, offset, bounds, initial, fixed, n_starts, model.
+    """
+
+    parameters: dict
+    std_errors: dict
+    covariance: np.ndarray
+    fitted_names: tuple
+    identifiable: dict
+    at_bound: tuple
+    offsets: tuple
+    segments: tuple
+    rmse: float
+    sigma: float
+    n_points: int
+    dof: int
+    success: bool
+    message: str
+    nfev: int
+    fitted: np.ndarray = field(repr=False)
+    model: Model
+    settings: dict = field(default_factory=dict)
+
+    def simulate(self, u, segments=None):
+        """Output of the fitted model on the input ``u``, without offsets.
+
+        Without ``segments``, the whole input from its first step in state
+        ``x0``; with them, each segment by the fit's initial-state scheme
+        (``warmup``, ``x0``), NaN outside. Returns shape (n_steps,).
+        """
+        u = _checks.as_1d_float(u, "u")
+        settings = self.settings
+        if segments is None:
+            segments = [(0, u.size)]
+        simulator = _SegmentSimulator(u, np.zeros(u.size), self.model, check_segments(segments, u.size),
+                                      dt=settings["dt"], x0=settings["x0"], warmup=settings["warmup"])
+        output = np.full(u.size, np.nan)
+        output[simulator.steps] = simulator.outputs(self._vector()[None, :])[0]
+        return output
+
+    def validation_error(self, u, y, segments):
+        """:func:`validation_error` of this fit, with its settings, on ``segments`` (or a mask)."""
+        settings = self.settings
+        return validation_error(u, y, self.model, self.parameters, segments, dt=settings["dt"],
+                                x0=settings["x0"], warmup=settings["warmup"], offset=settings["offset"])
+
+    def to_dict(self):
+        """Everything but the arrays ``fitted`` and the model, as JSON-ready Python values.
+
+        Non-finite numbers (infinite standard errors, unbounded ranges)
+        become None, so ``json.dumps(..., allow_nan=False)`` accepts it.
+        """
+        return dict(
+            parameters={name: json_number(value) for name, value in self.parameters.items()},
+            std_errors={name: json_number(value) for name, value in self.std_errors.items()},
+            covariance=[[json_number(value) for value in row] for row in self.covariance],
+            fitted_names=list(self.fitted_names),
+            identifiable=dict(self.identifiable),
+            at_bound=list(self.at_bound),
+            offsets=[json_number(value) for value in self.offsets],
+            segments=[[start, stop] for start, stop in self.segments],
+            rmse=json_number(self.rmse),
+            sigma=json_number(self.sigma),
+            n_points=self.n_points,
+            dof=self.dof,
+            success=self.success,
+            message=self.message,
+            nfev=self.nfev,
+            settings=json_ready(self.settings),
+        )
+
+    def _vector(self):
+        return np.array([self.parameters[name] for name in self.model.names])
+
+
+class _SegmentSimulator:
+    """Simulated output at the measured steps of every segment, for many parameter sets.
+
+    Segments whose simulation starts at the same step share one simulation
+    (with ``warmup=None`` all of them do).
+    """
+
+    def __init__(self, u, y, model, segments, *, dt, x0, warmup):
+        self._u, self._model, self._dt, self._x0 = u, model, dt, x0
+        measured = [start + np.flatnonzero(~np.isnan(y[start:stop])) for start, stop in segments]
+        self.steps = np.concatenate(measured)
+        self.observed = y[self.steps]
+        bounds = np.cumsum([0] + [steps.size for steps in measured])
+        self.parts = [slice(low, high) for low, high in zip(bounds[:-1], bounds[1:])]
+        groups = {}
+        for (start, stop), steps, part in zip(segments, measured, self.parts):
+            origin = 0 if warmup is None else max(0, start - warmup)
+            groups.setdefault(origin, []).append((stop, steps - origin, part))
+        self._groups = [(origin, max(stop for stop, _, _ in members),
+                         [(local, part) for _, local, part in members])
+                        for origin, members in groups.items()]
+
+    def outputs(self, params):
+        """Simulated output, (n_sets, n_points), of the parameter sets ``params`` (n_sets, n_params)."""
+        out = np.empty((params.shape[0], self.steps.size))
+        for origin, stop, members in self._groups:
+            try:
+                with np.errstate(over="ignore", invalid="ignore"):
+                    simulated = self._model.simulate(params, self._u[origin:stop], dt=self._dt, x0=self._x0)
+            except ValueError as error:
+                raise SettingsError(
+                    f"{type(self._model).__name__} cannot simulate the parameters "
+                    f"{dict(zip(self._model.names, params[0].tolist()))} (or a finite-difference "
+                    f"step from them): {error}; choose bounds that keep the parameters admissible") from None
+            for local, part in members:
+                out[:, part] = simulated[:, local]
+        return out
+
+
+class _Residuals:
+    """Residuals y - sim (offsets projected out) and their Jacobians in the free parameters."""
+
+    def __init__(self, simulator, base, free, lower, upper, typical, offset):
+        self._simulator, self._base, self._free = simulator, base, free
+        self._lower, self._upper, self._typical = lower, upper, typical
+        self._offset = offset == "segment"
+
+    def full(self, free_rows):
+        params = np.tile(self._base, (free_rows.shape[0], 1))
+        params[:, self._free] = free_rows
+        return params
+
+    def rows(self, free_rows):
+        residuals = self._simulator.observed - self._simulator.outputs(self.full(free_rows))
+        if self._offset:
+            # The best offset of a segment is its mean residual; removing it
+            # is the exact elimination of these linear nuisance parameters.
+            for part in self._simulator.parts:
+                residuals[:, part] -= residuals[:, part].mean(axis=1, keepdims=True)
+        return residuals
+
+    def __call__(self, theta):
+        return self.rows(theta[None, :])[0]
+
+    def forward_jacobian(self, theta):
+        step = _FORWARD_STEP * np.maximum(np.abs(theta), self._typical)
+        step = np.where(theta + step > self._upper, -step, step)
+        residuals = self.rows(np.vstack([theta, theta + np.diag(step)]))
+        return (residuals[1:] - residuals[0]).T / step
+
+    def central_jacobian(self, theta):
+        step = _CENTRAL_STEP * np.maximum(np.abs(theta), self._typical)
+        # At a bound the difference turns one-sided instead of leaving the box.
+        up, down = np.minimum(theta + step, self._upper), np.maximum(theta - step, self._lower)
+        k = theta.size
+        trial = np.tile(theta, (2 * k, 1))
+        trial[np.arange(k), np.arange(k)] = up
+        trial[k + np.arange(k), np.arange(k)] = down
+        residuals = self.rows(trial)
+        return (residuals[:k] - residuals[k:]).T / (up - down)
+
+
+def fit_segments(u, y, model, segments, *, bounds=None, dt=1.0, initial=None, fixed=None, x0="steady",
+                 warmup=None, offset="none", n_starts=1, rng=None):
+    """Least-squares estimate of the model parameters from data segments.
+
+    Minimises the sum of squared residuals ``y - sim`` over the measured
+    steps of all segments (NaN outputs are skipped) with
+    ``scipy.optimize.least_squares`` (trust-region reflective, inside
+    ``bounds``). Each segment is simulated from a consistent initial state,
+    see the module documentation; steps before a segment are simulated but
+    not fitted. Jacobians are forward differences during the search and
+    central differences (one-sided at a bound) for the covariance, with
+    steps relative to ``max(|value|, range)``: a dead time is only piecewise
+    smooth in its value (kinks at multiples of dt), so no analytic Jacobian
+    would be exact either.
+
+    Parameters
+    ----------
+    u, y : array_like, shape (n_steps,)
+        Input and measured output. NaN in ``y`` marks a missing point; blank
+        the held-out part this way.
+    model : dynia.models.Model
+        For example ``dynia.models.FOPDT()``.
+    segments : list of (start, stop)
+        The data to fit (see :func:`check_segments`); at least one measured
+        point each.
+    bounds : mapping of str to (low, high), optional
+        Range of each fitted parameter (infinite ends allowed). Required for
+        every fitted parameter without an ``initial`` value; parameters
+        without bounds are unbounded.
+    dt : float, default 1.0
+        Sample time.
+    initial : mapping of str to float, optional
+        Start values; by default the middle of the bounds.
+    fixed : mapping of str to float, optional
+        Parameters held at these values, not fitted.
+    x0 : {"steady", "zero"}, default "steady"
+        State at the start of each simulation.
+    warmup : int, optional
+        Steps simulated before each segment; None (default) simulates from
+        the start of the record.
+    offset : {"none", "segment"}, default "none"
+        ``"segment"`` fits one output offset per segment.
+    n_starts : int, default 1
+        Number of starts: the first from ``initial``, the rest uniform in
+        the bounds (which must then be finite); the lowest cost wins.
+    rng : numpy.random.Generator or int, optional
+        Source of the extra starts.
+
+    Returns
+    -------
+    FitResult
+
+    Raises
+    ------
+    ValueError
+        For bad segments, unknown parameter names, a parameter without
+        bounds or start value, a start outside its bounds, no measured
+        point in a segment, or parameters the model cannot simulate.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dynia.models import FOPDT
+    >>> u = np.r_[np.zeros(10), np.ones(30), -np.ones(30)]
+    >>> y = FOPDT().simulate([[1.5, 4.0, 2.5]], u)[0]
+    >>> fit = fit_segments(u, y, FOPDT(), [(5, 70)], bounds={"K": (0, 5), "T": (0, 10), "theta": (0, 6)})
+    >>> [round(fit.parameters[name], 6) for name in ("K", "T", "theta")]
+    [1.5, 4.0, 2.5]
+    >>> fit.identifiable
+    {'K': True, 'T': True, 'theta': True}
+    """
+    if not isinstance(model, Model):
+        raise TypeError(f"model must be a dynia.models.Model, e.g. FirstOrder(); got {type(model).__name__}")
+    u, y = _record(u, y)
+    segments = check_segments(segments, u.size)
+    if not segments:
+        raise SettingsError("segments is empty; give at least one (start, stop) segment to fit")
+    dt, x0, warmup, offset = _scheme(dt, x0, warmup, offset)
+    n_starts = _checks.whole_number(n_starts, "n_starts", minimum=1)
+    fixed = _named_values(fixed, "fixed", model.names)
+    initial = _named_values(initial, "initial", model.names)
+    bounds = _named_bounds(bounds, model.names)
+    free_names = [name for name in model.names if name not in fixed]
+    if not free_names:
+        raise SettingsError(f"fixed holds every parameter of {type(model).__name__}; nothing is left to fit")
+    clash = [name for name in initial if name in fixed]
+    if clash:
+        raise SettingsError(f"initial and fixed both name {clash}; a parameter is either fitted or fixed")
+    lower, upper, start = _box_and_start(free_names, bounds, initial)
+    _check_fixed_in_bounds(fixed, bounds)
+    for position, ((low, high), part) in enumerate(zip(segments, _measured_counts(y, segments))):
+        if part == 0:
+            raise DataError(f"segments[{position}] = ({low}, {high}) has no measured output (all NaN)")
+
+    simulator = _SegmentSimulator(u, y, model, segments, dt=dt, x0=x0, warmup=warmup)
+    free = np.array([model.names.index(name) for name in free_names])
+    base = np.array([fixed.get(name, 0.0) for name in model.names], dtype=float)
+    typical = np.where(np.isfinite(upper - lower), upper - lower, np.maximum(np.abs(start), 1.0))
+    residuals = _Residuals(simulator, base, free, lower, upper, typical, offset)
+
+    starts = [start]
+    if n_starts > 1:
+        if not (np.isfinite(lower).all() and np.isfinite(upper).all()):
+            raise SettingsError("n_starts > 1 draws starts uniformly in the bounds, which must then be finite "
+                             "for every fitted parameter")
+        starts += list(np.random.default_rng(rng).uniform(lower, upper, (n_starts - 1, free.size)))
+    best, nfev = None, 0
+    for point in starts:
+        if not np.isfinite(residuals(point)).all():
+            raise ModelError(f"the simulation overflows at the start "
+                             f"{dict(zip(free_names, point.tolist()))}; choose bounds or initial values "
+                             "where the model is stable")
+        solution = least_squares(residuals, point, jac=residuals.forward_jacobian, bounds=(lower, upper),
+                                 method="trf", x_scale=typical, ftol=_LSQ_TOLERANCE, xtol=_LSQ_TOLERANCE,
+                                 gtol=_LSQ_TOLERANCE)
+        nfev += solution.nfev
+        if best is None or solution.cost < best.cost:
+            best = solution
+    return _summarise(best, nfev, residuals, simulator, u, model, free_names, lower, upper, typical, segments,
+                      settings=dict(
+                          model=type(model).__name__, dt=dt, x0=x0, warmup=warmup, offset=offset,
+                          bounds={name: [float(low), float(high)]
+                                  for name, low, high in zip(free_names, lower, upper)},
+                          initial=dict(zip(free_names, start.tolist())), fixed=fixed, n_starts=n_starts))
+
+
+def _record(u, y):
+    u = _checks.as_1d_float(u, "u")
+    y = _checks.as_1d_float(y, "y", allow_nan=True)
+    if u.size != y.size:
+        raise DataError(f"u has {u.size} steps but y has {y.size}; they must be logged on the same steps")
+    return u, y
+
+
+def _scheme(dt, x0, warmup, offset):
+    if isinstance(dt, bool) or not isinstance(dt, numbers.Real) or not math.isfinite(dt) or dt <= 0:
+        raise SettingsError(f"dt must be a finite number > 0; got {dt!r}")
+    if x0 not in X0_CHOICES:
+        raise SettingsError(f"x0 must be one of {X0_CHOICES}; got {x0!r}")
+    if warmup is not None:
+        warmup = _checks.whole_number(warmup, "warmup", minimum=0)
+    if offset not in OFFSETS:
+        raise SettingsError(f"offset must be one of {OFFSETS}; got {offset!r}")
+    return float(dt), x0, warmup, offset
+
+
+def _named_values(values, name, names):
+    if values is None:
+        return {}
+    if not isinstance(values, Mapping):
+        raise TypeError(f"{name} must map parameter names to values, e.g. {{'K': 2.0}}; "
+                        f"got {type(values).__name__}")
+    unknown = [key for key in values if key not in names]
+    if unknown:
+        raise SettingsError(f"{name} names unknown parameters {unknown}; the model has {list(names)}")
+    checked = {}
+    for key in names:
+        if key in values:
+            value = values[key]
+            if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
+                raise SettingsError(f"{name}[{key!r}] must be a finite number; got {value!r}")
+            checked[key] = float(value)
+    return checked
+
+
+def _named_bounds(bounds, names):
+    if bounds is None:
+        return {}
+    if not isinstance(bounds, Mapping):
+        raise TypeError(f"bounds must map parameter names to (low, high), e.g. {{'K': (0, 7)}}; "
+                        f"got {type(bounds).__name__}")
+    unknown = [key for key in bounds if key not in names]
+    if unknown:
+        raise SettingsError(f"bounds names unknown parameters {unknown}; the model has {list(names)}")
+    checked = {}
+    for key in names:
+        if key not in bounds:
+            continue
+        pair = bounds[key]
+        try:
+            if isinstance(pair, (str, bytes)):
+                raise TypeError
+            low, high = (float(value) for value in pair)
+        except (TypeError, ValueError):
+            raise SettingsError(f"bounds[{key!r}] must be a (low, high) pair of numbers; got {pair!r}") from None
+        if math.isnan(low) or math.isnan(high) or not low < high:
+            raise SettingsError(f"bounds[{key!r}]: need low < high; got ({low}, {high})")
+        checked[key] = (low, high)
+    return checked
+
+
+def _box_and_start(free_names, bounds, initial):
+    lower, upper, start = [], [], []
+    for name in free_names:
+        low, high = bounds.get(name, (-math.inf, math.inf))
+        if name in initial:
+            value = initial[name]
+            if not low <= value <= high:
+                raise SettingsError(f"initial[{name!r}] = {value} lies outside its bounds [{low}, {high}]")
+        elif math.isfinite(low) and math.isfinite(high):
+            value = 0.5 * (low + high)
+        else:
+            raise SettingsError(f"parameter {name!r} needs finite bounds (its start is their middle) or an "
+                             f"initial value; give bounds={{{name!r}: (low, high)}} or "
+                             f"initial={{{name!r}: value}}")
+        lower.append(low)
+        upper.append(high)
+        start.append(value)
+    return np.array(lower), np.array(upper), np.array(start)
+
+
+def _check_fixed_in_bounds(fixed, bounds):
+    for name, value in fixed.items():
+        if name in bounds and not bounds[name][0] <= value <= bounds[name][1]:
+            raise SettingsError(f"fixed[{name!r}] = {value} lies outside its bounds {list(bounds[name])}")
+
+
+def _measured_counts(y, segments):
+    return [int(np.count_nonzero(~np.isnan(y[start:stop]))) for start, stop in segments]
+
+
+def _summarise(solution, nfev, residuals, simulator, u, model, free_names, lower, upper, typical, segments,
+               settings):
+    theta = solution.x
+    with_offsets = settings["offset"] == "segment"
+    final = residuals(theta)
+    n_points = final.size
+    rss = float(final @ final)
+    inverse, identifiable, rank = _inverse_normal_matrix(residuals.central_jacobian(theta), typical)
+    # Degrees of freedom count what the data determine: the rank of J (an
+    # unidentifiable direction fits nothing) plus one offset per segment.
+    dof = n_points - rank - (len(segments) if with_offsets else 0)
+    variance = rss / dof if dof > 0 else math.nan
+    covariance = variance * inverse
+    std_errors = np.where(identifiable, np.sqrt(np.abs(np.diag(covariance))), np.inf)
+    if dof <= 0:
+        std_errors[:] = np.nan
+
+    params = residuals.full(theta[None, :])
+    every_step = _SegmentSimulator(u, np.zeros(u.size), model, segments,
+                                   dt=settings["dt"], x0=settings["x0"], warmup=settings["warmup"])
+    fitted = np.full(u.size, np.nan)
+    fitted[every_step.steps] = every_step.outputs(params)[0]
+    offsets = tuple(float(np.mean(simulator.observed[part] - fitted[simulator.steps[part]])) if with_offsets
+                    else 0.0 for part in simulator.parts)
+    for (start, stop), level in zip(segments, offsets):
+        fitted[start:stop] += level
+    near = _AT_BOUND_RTOL * typical
+    return FitResult(
+        parameters=dict(zip(model.names, params[0].tolist())),
+        std_errors=dict(zip(free_names, std_errors.tolist())),
+        covariance=covariance,
+        fitted_names=tuple(free_names),
+        identifiable=dict(zip(free_names, identifiable.tolist())),
+        at_bound=tuple(name for name, value, low, high, tol in zip(free_names, theta, lower, upper, near)
+                       if value - low <= tol or high - value <= tol),
+        offsets=offsets,
+        segments=tuple(segments),
+        rmse=math.sqrt(rss / n_points),
+        sigma=math.sqrt(variance) if dof > 0 else math.nan,
+        n_points=n_points,
+        dof=dof,
+        success=bool(solution.success),
+        message=str(solution.message),
+        nfev=nfev,
+        fitted=fitted,
+        model=model,
+        settings=settings,
+    )
+
+
+def _inverse_normal_matrix(jacobian, scale):
+    """``(J^T J)^+``, which parameters it determines, and the rank of J.
+
+    Columns are scaled by the parameters' typical scales first, so that the
+    rank decision does not depend on their units. A parameter with a
+    component in the null space of J is not determined; every other one is
+    an estimable function, whose variance the pseudo-inverse gives.
+    """
+    scaled = jacobian * scale
+    _, singular, right = np.linalg.svd(scaled)
+    # With fewer points than parameters J has fewer singular values than
+    # columns; the missing ones are zeros.
+    singular = np.concatenate((singular, np.zeros(right.shape[0] - singular.size)))
+    largest = singular.max()
+    kept = singular > _RANK_RTOL * largest if largest > 0 else np.zeros(singular.size, dtype=bool)
+    identifiable = ~(np.abs(right[~kept].T) > _NULL_COMPONENT).any(axis=1)
+    inverse = (right[kept].T / singular[kept] ** 2) @ right[kept] * np.outer(scale, scale)
+    inverse[~identifiable, :] = np.nan
+    inverse[:, ~identifiable] = np.nan
+    return inverse, identifiable, int(kept.sum())
+
+
+# -------------------------------------------------------------- validation
+
+
+def validation_error(u, y, model, parameters, segments, *, dt=1.0, x0="steady", warmup=None, offset="none"):
+    """Root mean square error of a model on held-out data.
+
+    The model is simulated on ``segments`` by the same initial-state scheme
+    as :func:`fit_segments` (give it the same ``dt``, ``x0``, ``warmup``
+    and ``offset``; :meth:`FitResult.validation_error` does) and compared
+    with the measured points there. With ``offset="segment"`` each segment's
+    offset is its mean residual (a level, not a prediction), which lowers
+    the error by a factor ``sqrt(1 - 1/m)`` on a segment of m points.
+
+    Parameters
+    ----------
+    u, y : array_like, shape (n_steps,)
+        The full record, held-out output included.
+    model : dynia.models.Model
+    parameters : mapping of str to float
+        A value for every model parameter, e.g. ``fit.parameters``.
+    segments : list of (start, stop), or boolean mask of shape (n_steps,)
+        The held-out data, e.g. from :func:`holdout_split`.
+    dt, x0, warmup, offset
+        As :func:`fit_segments`.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dynia.models import FirstOrder
+    >>> u = np.r_[np.zeros(10), np.ones(20), np.zeros(20)]
+    >>> y = FirstOrder().simulate([[2.0, 3.0]], u)[0] + 0.1
+    >>> round(validation_error(u, y, FirstOrder(), {"K": 2.0, "T": 3.0}, [(30, 50)]), 12)
+    0.1
+    """
+    if not isinstance(model, Model):
+        raise TypeError(f"model must be a dynia.models.Model, e.g. FirstOrder(); got {type(model).__name__}")
+    u, y = _record(u, y)
+    mask = np.asarray(segments) if isinstance(segments, np.ndarray) else None
+    if mask is not None and mask.dtype == bool:
+        if mask.shape != u.shape:
+            raise SettingsError(f"the validation mask must have shape {u.shape}; got {mask.shape}")
+        segments = mask_to_segments(mask)
+    segments = check_segments(segments, u.size)
+    dt, x0, warmup, offset = _scheme(dt, x0, warmup, offset)
+    values = _named_values(parameters, "parameters", model.names)
+    missing = [name for name in model.names if name not in values]
+    if missing:
+        raise SettingsError(f"parameters lacks {missing}; give a value for every parameter of "
+                         f"{list(model.names)}")
+    if sum(_measured_counts(y, segments)) == 0:
+        raise DataError("the validation segments hold no measured output (empty, or all NaN)")
+    kept = [segment for segment, count in zip(segments, _measured_counts(y, segments)) if count]
+    simulator = _SegmentSimulator(u, y, model, kept, dt=dt, x0=x0, warmup=warmup)
+    vector = np.array([values[name] for name in model.names])
+    residuals = _Residuals(simulator, vector, np.array([], dtype=int), np.array([]), np.array([]),
+                           np.array([]), offset)
+    error = residuals(np.array([]))
+    return math.sqrt(float(error @ error) / error.size)

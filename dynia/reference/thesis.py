@@ -1,0 +1,342 @@
+"""One-to-one port of the thesis's MATLAB DYNIA (Appendix B): the reference oracle.
+
+This module ports ``movingWindowCalcs.m``, ``runDynia.m``, ``calcLikelihood.m``,
+``cumulLikelihood.m``, ``cld_gradient.m`` and ``confLimits.m`` from Appendix B of
+the 2009 thesis, plus ``selectBestParameters.m``, which the thesis uses but does
+not print. The functions take the same arguments in the same order and run the
+same loops, so that a reader can hold the MATLAB beside the Python line by line.
+It is deliberately slow and plain: the fast engine (:mod:`dynia.analysis`) is
+tested against it.
+
+Time and sample indices are 0-based here where the MATLAB is 1-based; every
+index computed by the MATLAB (``cli``, ``end_index``, ...) is shifted by one
+and nothing else changes.
+
+Shape convention (as in the MATLAB): ``mct`` is (ns, TIME), one simulated
+output per row; ``par`` is (ns,), the samples of the one parameter analysed;
+``y`` is (TIME,).
+
+Quirks kept and deviations made
+-------------------------------
+=====================================  =============================================
+MATLAB behaviour                       What this port does
+=====================================  =============================================
+``movingWindowCalcs`` reads ``yn``,    Uses the argument ``y`` (the only sensible
+which it never receives (it only       reading; the example script passes the
+exists in the example script).         noise-free ``y``, this port uses whatever is
+                                       passed).
+The waitbar (and its ``partitle``,     Dropped: no progress display.
+also never received).
+MATLAB's ``sum`` adds in an order of    Sums run left to right (``numpy.cumsum``),
+its own choosing.                      the order of a plain loop, so the costs
+                                       can be reproduced exactly.
+Some long lines are cut off in the     Read as the mean over the points present
+printed code: the MAE of the full      (divided by ``2n+1`` and ``TIME-tStep+n+1``),
+and final windows, and the argument    and as the arguments the callee bodies use:
+lists of ``movingWindowCalcs``,        ``runDynia(ns, par, best_mat, lb, ub,
+``runDynia`` and ``cumulLikelihood``.  bins)``, ``cumulLikelihood(ns,
+                                       all_par_sorted, par_sorted,
+                                       par_sorted_indices, lhood)``.
+``best = zeros(TIME, ns*(percentage    Not stored (nothing reads it), but the port
+/100), 2)`` fails when                 raises ``ValueError`` in the same cases.
+``ns*percentage/100`` is not an
+integer.
+Windows ``1:tStep+n`` and              Same windows, so the series must hold at
+``tStep-n:TIME`` index outside the     least ``2n`` steps; shorter series raise
+data when ``TIME < 2n``.               ``ValueError`` instead of an index error.
+``calcLikelihood`` uses                Kept: with ``count_max == 1`` the MATLAB
+``length(best_mat)``, the larger       reads a second row that does not exist; the
+dimension of the (count_max, 2)        port raises ``ValueError`` (fewer than two
+matrix.                                behavioural sets).
+Likelihood ``1 - cost``, shifted by    Kept, including the 0/0 = NaN weights when
+``-min`` only when negative, then      every behavioural cost is equal and >= 1.
+normalised.
+``cumulLikelihood``'s second           Read as ``all_par_sorted(it) <
+``while`` condition is cut off in      par_sorted(size)``. ``lhood_c_all`` is
+the printed code.                      computed (grown with zero fill as MATLAB
+                                       does) and returned, though nothing uses it.
+``cld_gradient`` bin width             Kept: the width is added repeatedly, so the
+``(ub-lb)/(bins-1)``, built by         last edges drift by rounding and ``bins``
+repeated addition from ``lb + w``.     bins of that width overrun ``ub``.
+A bin's value is the CLD at its last   Kept: the first sample's weight in each bin
+sample minus the CLD at its first.     is dropped; an empty bin gets minus the next
+                                       sample's weight.
+The bin holding the largest            Kept (they come out 0).
+behavioural value and the last bin.
+``end_index = 0`` when the first       MATLAB stops with an index error; the port
+behavioural value lies exactly on an   raises ``ValueError``.
+edge (``lhood_cumulated(0)``).
+``confLimits``: unweighted limits at   Kept, with the same floating-point
+1-based index ``floor(c*(count_max-     arithmetic (``c1 = (1-conf_level/100)/2``,
+1))+1``.                               ``c2 = 1-c1``).
+``runDynia`` hard-codes                Kept as the default; ``conf_level`` is also
+``conf_level = 90``.                   a keyword-only extra argument of
+                                       ``run_dynia`` and ``moving_window_calcs`` so
+                                       that other levels can be checked.
+``ub == lb`` gives Inf/NaN IC and      Raises ``ValueError`` (``lb < ub`` needed).
+``bins == 1`` an infinite width.       Raises ``ValueError`` (``bins >= 2``).
+=====================================  =============================================
+"""
+import math
+
+import numpy as np
+
+from ..errors import SettingsError
+
+__all__ = [
+    "moving_window_calcs",
+    "run_dynia",
+    "select_best_parameters",
+    "calc_likelihood",
+    "cumul_likelihood",
+    "cld_gradient",
+    "conf_limits",
+]
+
+
+def moving_window_calcs(TIME, par, lb, ub, ns, mct, y, bins, percentage, n, *, conf_level=90):
+    """Moving-window DYNIA for one parameter (``movingWindowCalcs.m``).
+
+    Parameters
+    ----------
+    TIME : int
+        Number of time steps.
+    par : array_like, shape (ns,)
+        Monte Carlo samples of the parameter analysed.
+    lb, ub : float
+        Range the parameter was sampled from.
+    ns : int
+        Number of Monte Carlo samples.
+    mct : array_like, shape (ns, TIME)
+        Simulated output of every sample.
+    y : array_like, shape (TIME,)
+        Measured output.
+    bins : int
+        Number of bins of the CLD gradient.
+    percentage : float
+        Percentage of the samples kept as the behavioural set of each window.
+    n : int
+        Half window: the window at step t holds steps t-n .. t+n.
+    conf_level : float, optional
+        Confidence level of the limits in percent (the MATLAB hard-codes 90).
+
+    Returns
+    -------
+    IC : ndarray, shape (TIME,)
+        Information content.
+    CI_t : ndarray, shape (TIME, 2)
+        Lower and upper confidence limit.
+    gradient_data : ndarray, shape (bins, TIME)
+        CLD gradient per bin, with the MATLAB's quirks.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> par = rng.uniform(0, 1, 50)
+    >>> mct = par[:, None] * np.ones((50, 30))
+    >>> IC, CI_t, grad = moving_window_calcs(30, par, 0, 1, 50, mct, 0.5 * np.ones(30), 5, 10, 2)
+    >>> bool(np.all(IC > 0.8))
+    True
+    """
+    par = np.asarray(par, dtype=float)
+    mct = np.asarray(mct, dtype=float)
+    y = np.asarray(y, dtype=float)
+    _check_port_arguments(TIME, par, lb, ub, ns, mct, y, bins, percentage, n)
+
+    IC = np.zeros(TIME)
+    CI_t = np.zeros((TIME, 2))
+    gradient_data = np.zeros((bins, TIME))
+
+    for t in range(TIME):
+        wPar = par
+        wMAE = np.zeros(ns)
+        # The three windows of the MATLAB: truncated at the start, full, truncated at the end.
+        if t + 1 <= n:
+            for k in range(ns):
+                wMAE[k] = _sum_left_to_right(np.abs(y[0:t + 1 + n] - mct[k, 0:t + 1 + n])) / (t + 1 + n)
+        if t + 1 > n and t + 1 <= TIME - n:
+            for k in range(ns):
+                wMAE[k] = _sum_left_to_right(np.abs(y[t - n:t + n + 1] - mct[k, t - n:t + n + 1])) / (2 * n + 1)
+        if t + 1 > TIME - n:
+            for k in range(ns):
+                wMAE[k] = _sum_left_to_right(np.abs(y[t - n:TIME] - mct[k, t - n:TIME])) / (TIME - t + n)
+        wCost = wMAE ** 2
+
+        count_max = math.floor(len(wCost) * (percentage / 100))
+        best_mat, best_indices = select_best_parameters(wCost, wPar, count_max)
+
+        lhood_cumulated, CI, lhood, gradient_vec = run_dynia(
+            ns, par, best_mat, lb, ub, bins, conf_level=conf_level)
+
+        CI_t[t, 0] = CI[0]
+        CI_t[t, 1] = CI[1]
+        IC[t] = 1 - (CI[1] - CI[0]) / (ub - lb)
+        gradient_data[:, t] = gradient_vec[:, 0]
+    return IC, CI_t, gradient_data
+
+
+def _sum_left_to_right(values):
+    """Sum in index order, as a plain loop does (numpy.sum adds pairwise).
+
+    A fixed, simple order makes the oracle's costs reproducible by any
+    implementation, so ranks agree bit for bit rather than up to rounding.
+    """
+    return np.cumsum(values)[-1]
+
+
+def _check_port_arguments(TIME, par, lb, ub, ns, mct, y, bins, percentage, n):
+    """Raise a clear ``ValueError`` where the MATLAB would fail or misbehave."""
+    if mct.shape != (ns, TIME):
+        raise SettingsError(f"mct must have shape (ns, TIME) = ({ns}, {TIME}); got {mct.shape}")
+    if par.shape != (ns,):
+        raise SettingsError(f"par must have shape (ns,) = ({ns},); got {par.shape}")
+    if y.shape != (TIME,):
+        raise SettingsError(f"y must have shape (TIME,) = ({TIME},); got {y.shape}")
+    if not lb < ub:
+        raise SettingsError(f"lb must be below ub; got lb={lb}, ub={ub}")
+    if bins < 2:
+        raise SettingsError(f"bins must be at least 2 (the bin width is (ub-lb)/(bins-1)); got {bins}")
+    if n < 0 or TIME < 2 * n or TIME < 1:
+        raise SettingsError(
+            f"the MATLAB windows need 0 <= n and TIME >= 2n (and TIME >= 1); got TIME={TIME}, n={n}")
+    rows = ns * (percentage / 100)
+    if rows != math.floor(rows):
+        raise SettingsError(
+            f"ns*percentage/100 = {rows!r} is not a whole number; the MATLAB's "
+            "best = zeros(TIME, ns*(percentage/100), 2) fails for it")
+    if math.floor(rows) < 2:
+        raise SettingsError(
+            f"percentage={percentage} of ns={ns} leaves {math.floor(rows)} behavioural sets; "
+            "calcLikelihood needs at least 2")
+
+
+def select_best_parameters(wCost, wPar, count_max):
+    """Rank by cost, ascending and stable, and keep the first ``count_max``.
+
+    Returns ``best_mat`` (count_max, 2) with columns [cost, parameter] and the
+    indices of the kept samples. Equal costs keep their sample order.
+    """
+    order = np.argsort(wCost, kind="stable")
+    best_indices = order[:count_max]
+    best_mat = np.zeros((count_max, 2))
+    for it in range(count_max):
+        best_mat[it, 0] = wCost[best_indices[it]]
+        best_mat[it, 1] = wPar[best_indices[it]]
+    return best_mat, best_indices
+
+
+def run_dynia(ns, par, best_mat, lb, ub, bins, *, conf_level=90):
+    """Likelihood, CLD, gradient and limits of one window (``runDynia.m``).
+
+    Returns ``lhood_cumulated``, ``CI`` (lower, upper), ``lhood`` and
+    ``gradient_vec`` (bins, 4): [gradient, bin start, bin centre, bin end].
+    """
+    size = len(best_mat[:, 0])
+    lhood = calc_likelihood(best_mat)
+    par_sorted_indices = np.argsort(best_mat[:, 1], kind="stable")
+    par_sorted = best_mat[par_sorted_indices, 1]
+    all_par_sorted = np.sort(par, kind="stable")
+    lhood_cumulated, lhood_c_all = cumul_likelihood(
+        ns, all_par_sorted, par_sorted, par_sorted_indices, lhood)
+    gradient_vec = cld_gradient(bins, ub, lb, par_sorted, lhood_cumulated, size)
+    CI = conf_limits(par_sorted, size, conf_level)
+    return lhood_cumulated, CI, lhood, gradient_vec
+
+
+def calc_likelihood(best_mat):
+    """Likelihood ``1 - cost``, shifted when negative, normalised (``calcLikelihood.m``)."""
+    best_mat = np.asarray(best_mat, dtype=float)
+    size = max(best_mat.shape)  # MATLAB's length(): the larger dimension
+    if size > best_mat.shape[0]:
+        raise SettingsError(
+            f"calcLikelihood reads {size} rows of a {best_mat.shape[0]}-row best_mat "
+            "(MATLAB length() of a matrix with fewer than 2 rows); need at least 2 behavioural sets")
+    lhood = np.zeros(size)
+    for it in range(size):
+        lhood[it] = 1 - best_mat[it, 0]
+    if np.min(lhood) < 0:
+        lhood[:] = lhood[:] - np.min(lhood)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        lhood[:] = lhood[:] / np.sum(lhood)  # 0/0 = NaN, as in MATLAB
+    return lhood
+
+
+def cumul_likelihood(ns, all_par_sorted, par_sorted, par_sorted_indices, lhood):
+    """Cumulative likelihood of the behavioural values in ascending order (``cumulLikelihood.m``).
+
+    Returns ``lhood_cumulated`` (count_max,) and ``lhood_c_all``, the MATLAB's
+    attempt at the CLD over all samples, which nothing downstream reads.
+    """
+    size = len(par_sorted_indices)
+    lhood_cumulated = np.zeros(size)
+    lhood_cumulated[0] = lhood[par_sorted_indices[0]]
+    for it in range(1, size):
+        lhood_cumulated[it] = lhood_cumulated[it - 1] + lhood[par_sorted_indices[it]]
+
+    it = 0
+    while all_par_sorted[it] < par_sorted[0]:
+        it = it + 1
+    assigned = {}  # MATLAB grows lhood_c_all on assignment and fills gaps with 0
+    for j in range(it):
+        assigned[j] = 0.0
+    count = 0
+    while all_par_sorted[it] >= par_sorted[0] and all_par_sorted[it] < par_sorted[size - 1]:
+        count = count + 1
+        it = it + 1
+    for j in range(size):
+        assigned[it + j] = lhood_cumulated[j]
+    for j in range(it + size, ns - count):
+        assigned[j] = 1.0
+    lhood_c_all = np.zeros(max(assigned) + 1 if assigned else 0)
+    for j, value in assigned.items():
+        lhood_c_all[j] = value
+    return lhood_cumulated, lhood_c_all
+
+
+def cld_gradient(bins, ub, lb, par_sorted, lhood_cumulated, size):
+    """CLD increase per bin, with the MATLAB's quirks (``cld_gradient.m``).
+
+    Returns ``gradient_vec`` (bins, 4): [gradient, bin start, bin centre, bin end].
+    """
+    gradient_vec = np.zeros((bins, 4))
+    next_limit = lb + (ub - lb) / (bins - 1)
+    prev_limit = next_limit
+    b = 0
+    # Bins below the smallest behavioural value: the CLD is flat there.
+    while next_limit < par_sorted[0] and next_limit <= ub and b < bins:
+        next_limit = next_limit + (ub - lb) / (bins - 1)
+        gradient_vec[b, :] = [0, prev_limit, (prev_limit + next_limit) / 2, next_limit]
+        b = b + 1
+        prev_limit = next_limit
+    start_index = 0
+    while next_limit <= par_sorted[size - 1] and next_limit <= ub and b < bins:
+        index = start_index
+        while par_sorted[index] < next_limit and index <= size - 2:
+            index = index + 1
+        end_index = index - 1
+        if end_index < 0:
+            raise SettingsError(
+                f"cld_gradient: the smallest behavioural value {par_sorted[0]!r} lies exactly on a "
+                "bin edge, where the MATLAB reads lhood_cumulated(0) and stops")
+        next_limit = next_limit + (ub - lb) / (bins - 1)
+        gradient_vec[b, 0] = lhood_cumulated[end_index] - lhood_cumulated[start_index]
+        gradient_vec[b, 1:] = [prev_limit, (prev_limit + next_limit) / 2, next_limit]
+        b = b + 1
+        prev_limit = next_limit
+        start_index = end_index + 1
+    # Bins above the largest behavioural value: the CLD is flat there too.
+    while next_limit > par_sorted[size - 1] and next_limit <= ub and b < bins:
+        next_limit = next_limit + (ub - lb) / (bins - 1)
+        gradient_vec[b, :] = [0, prev_limit, (prev_limit + next_limit) / 2, next_limit]
+        prev_limit = next_limit
+        b = b + 1
+    return gradient_vec
+
+
+def conf_limits(par_sorted, count_max, conf_level):
+    """Unweighted confidence limits of the sorted behavioural values (``confLimits.m``)."""
+    c1 = (1 - conf_level / 100) / 2
+    c2 = 1 - c1
+    cli = [math.floor(c1 * (count_max - 1)), math.floor(c2 * (count_max - 1))]
+    return np.array([par_sorted[cli[0]], par_sorted[cli[1]]])

@@ -1,0 +1,288 @@
+"""One settings object for every DYNIA front-end, validated once.
+
+:class:`AnalysisSettings` holds what decides a DYNIA analysis: the Monte
+Carlo sample, the window, the behavioural share, the band, the flavour and the
+engine. :func:`dynia.run`, :func:`dynia.adaptive.adaptive_run`,
+:func:`dynia.distributed.run`, :class:`dynia.online.OnlineDynia` and the
+command line all build or take one, so a setting is checked in one place, and
+a front-end that cannot honour a setting says so instead of dropping it
+(:meth:`AnalysisSettings.require`).
+
+Types are checked strictly: ``percentage="10"`` or ``n=2.5`` is a
+:class:`~dynia.errors.SettingsError`, never coerced, never truthy.
+
+Examples
+--------
+>>> from dynia.settings import AnalysisSettings
+>>> settings = AnalysisSettings(n_samples=5000, percentage=1)
+>>> settings.n_behavioural
+50
+>>> settings.replace(n=5).window_length
+11
+>>> AnalysisSettings(conf_level=0.9)
+Traceback (most recent call last):
+    ...
+dynia.errors.SettingsError: conf_level is a percentage in (50, 100); got 0.9 (did you mean 90?)
+"""
+import dataclasses
+import math
+import numbers
+from collections.abc import Mapping
+
+import numpy as np
+
+from .errors import SettingsError
+
+__all__ = ["AnalysisSettings", "SAMPLERS", "ADAPTIVE_SAMPLERS", "FLAVOURS", "WINDOWS", "ENGINES", "X0",
+           "MAX_BINS", "check_dt", "check_x0", "parameter_box"]
+
+SAMPLERS = ("uniform", "lhs", "sobol")
+ADAPTIVE_SAMPLERS = ("iis", "de")
+FLAVOURS = ("thesis", "mcat", "weighted")
+WINDOWS = ("centred", "trailing")
+ENGINES = ("auto", "numba", "numpy")
+X0 = ("zero", "steady")
+# A finer CLD-gradient grid only spreads the behavioural set (a few hundred
+# values) thinner: past this the rows are mostly empty and the array huge.
+MAX_BINS = 1000
+
+
+def _whole(value, name, minimum):
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise SettingsError(f"{name} must be a whole number; got {value!r} ({type(value).__name__})")
+    if value < minimum:
+        raise SettingsError(f"{name} must be at least {minimum}; got {value}")
+    return int(value)
+
+
+def _real(value, name):
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
+        raise SettingsError(f"{name} must be a finite number; got {value!r} ({type(value).__name__})")
+    return float(value)
+
+
+def _choice(value, name, choices):
+    if not isinstance(value, str) or value not in choices:
+        raise SettingsError(f"{name} must be one of {', '.join(map(repr, choices))}; got {value!r}")
+    return value
+
+
+def check_dt(dt):
+    """Return the sample time as a float > 0, or raise :class:`SettingsError` naming ``dt``."""
+    if isinstance(dt, (bool, str)) or np.ndim(dt) != 0:
+        raise SettingsError(f"dt must be a finite number > 0; got {dt!r}")
+    try:
+        value = float(dt)
+    except (TypeError, ValueError):
+        raise SettingsError(f"dt must be a finite number > 0; got {dt!r}") from None
+    if not math.isfinite(value) or value <= 0:
+        raise SettingsError(f"dt must be a finite number > 0; got {dt!r}")
+    return value
+
+
+def check_x0(x0):
+    """Return the initial-state rule ("zero" or "steady"), or raise naming ``x0``."""
+    return _choice(x0, "x0", X0)
+
+
+@dataclasses.dataclass(frozen=True)
+class AnalysisSettings:
+    """Every setting of a DYNIA analysis, checked when the object is made.
+
+    Attributes
+    ----------
+    n_samples : int, default 2000
+        Monte Carlo parameter sets (model evaluations).
+    sampler : {"uniform", "lhs", "sobol", "iis", "de"}, default "uniform"
+        How the parameter box is sampled; "iis" and "de" are the adaptive
+        schemes of :mod:`dynia.adaptive`.
+    n : int, default 10
+        Half window: a window holds 2n+1 steps.
+    percentage : float, default 10
+        Behavioural share of the samples, in percent, in (0, 100].
+    bins : int, default 40
+        CLD-gradient bins, 1 to :data:`MAX_BINS`.
+    conf_level : float, default 90
+        Confidence level of the band in percent, in (50, 100): below 50 the
+        "band" would hold less than half of the behavioural set.
+    flavour : {"thesis", "mcat", "weighted"}, default "thesis"
+    x0 : {"zero", "steady"}, default "zero"
+        Initial state of every simulation.
+    min_points : int, default 1
+        Windows with fewer measured output points report NaN; at most the
+        window length 2n+1.
+    window : {"centred", "trailing"}, default "centred"
+    engine : {"auto", "numba", "numpy"}, default "auto"
+    workers : int or None, default None
+        Threads (None: every core). Results do not depend on it.
+    dt : float, default 1.0
+        Sample time of the record.
+    """
+
+    n_samples: int = 2000
+    sampler: str = "uniform"
+    n: int = 10
+    percentage: float = 10.0
+    bins: int = 40
+    conf_level: float = 90.0
+    flavour: str = "thesis"
+    x0: str = "zero"
+    min_points: int = 1
+    window: str = "centred"
+    engine: str = "auto"
+    workers: int | None = None
+    dt: float = 1.0
+
+    def __post_init__(self):
+        def store(name, value):
+            object.__setattr__(self, name, value)
+
+        store("n_samples", _whole(self.n_samples, "n_samples", 1))
+        store("sampler", _choice(self.sampler, "sampler", SAMPLERS + ADAPTIVE_SAMPLERS))
+        store("n", _whole(self.n, "n", 0))
+        percentage = _real(self.percentage, "percentage")
+        if not 0 < percentage <= 100:
+            raise SettingsError(f"percentage must lie in (0, 100]; got {percentage:g}")
+        store("percentage", percentage)
+        bins = _whole(self.bins, "bins", 1)
+        if bins > MAX_BINS:
+            raise SettingsError(f"bins must be at most {MAX_BINS}; got {bins} (the behavioural set cannot "
+                                "fill a finer grid)")
+        store("bins", bins)
+        conf_level = _real(self.conf_level, "conf_level")
+        if not 50 < conf_level < 100:
+            hint = f" (did you mean {conf_level * 100:g}?)" if 0.5 < conf_level < 1 else ""
+            raise SettingsError(f"conf_level is a percentage in (50, 100); got {conf_level:g}{hint}")
+        store("conf_level", conf_level)
+        store("flavour", _choice(self.flavour, "flavour", FLAVOURS))
+        store("x0", check_x0(self.x0))
+        min_points = _whole(self.min_points, "min_points", 1)
+        if min_points > self.window_length:
+            raise SettingsError(f"min_points {min_points} is more than a window holds (2n+1 = {self.window_length} "
+                                f"with n = {self.n}): no window could ever report a result")
+        store("min_points", min_points)
+        store("window", _choice(self.window, "window", WINDOWS))
+        store("engine", _choice(self.engine, "engine", ENGINES))
+        if self.workers is not None:
+            store("workers", _whole(self.workers, "workers", 1))
+        store("dt", check_dt(self.dt))
+        self._check_combinations()
+
+    def _check_combinations(self):
+        if self.sampler in ADAPTIVE_SAMPLERS:
+            if self.flavour == "mcat":
+                raise SettingsError(f"sampler {self.sampler!r} draws importance-weighted samples, which the mcat flavour cannot "
+                                    "use; take flavour 'thesis' or 'weighted'")
+            if self.engine == "numba":
+                raise SettingsError(f"sampler {self.sampler!r} draws importance-weighted samples, which the compiled engine does "
+                                    "not take; use engine 'auto' or 'numpy'")
+            if self.n_samples < 10:
+                raise SettingsError(f"sampler {self.sampler!r} needs n_samples >= 10; got {self.n_samples}")
+            return
+        if self.engine == "numba" and self.flavour == "mcat":
+            raise SettingsError("engine 'numba' covers the 'thesis' and 'weighted' flavours; use engine "
+                                "'auto' or 'numpy' with flavour 'mcat'")
+        if self.flavour == "mcat":
+            blocks = 100 / self.percentage
+            if abs(blocks - round(blocks)) > 1e-9 * blocks:
+                raise SettingsError(f"the mcat flavour splits the samples into 100/percentage blocks; percentage "
+                                    f"{self.percentage:g} does not divide 100 into a whole number of blocks")
+            if self.n_samples // round(blocks) < 1:
+                raise SettingsError(f"percentage {self.percentage:g} of n_samples {self.n_samples} leaves no "
+                                    "behavioural set")
+        elif self.n_behavioural < 2:
+            raise SettingsError(f"percentage {self.percentage:g} of n_samples {self.n_samples} keeps "
+                                f"{self.n_behavioural} parameter sets per window; at least 2 are needed "
+                                "(raise percentage or n_samples)")
+
+    @property
+    def window_length(self):
+        """Steps in a window, 2n+1."""
+        return 2 * self.n + 1
+
+    @property
+    def n_behavioural(self):
+        """Behavioural sets per window for the thesis and weighted flavours, ``floor(n_samples*percentage/100)``."""
+        return math.floor(self.n_samples * (self.percentage / 100))
+
+    @classmethod
+    def build(cls, settings=None, **options):
+        """``settings`` (or the defaults) with every option that is not None put in.
+
+        The front-ends' keyword arguments default to None so that an explicit
+        keyword overrides a settings object and nothing given is dropped.
+        """
+        if settings is None:
+            settings = cls()
+        elif not isinstance(settings, cls):
+            raise SettingsError(f"settings must be a dynia.settings.AnalysisSettings; got {type(settings).__name__}")
+        given = {key: value for key, value in options.items() if value is not None}
+        return settings.replace(**given) if given else settings
+
+    def replace(self, **changes):
+        """A copy with ``changes``, checked again; an unknown name is an error naming the valid ones."""
+        fields = {field.name for field in dataclasses.fields(self)}
+        unknown = sorted(set(changes) - fields)
+        if unknown:
+            raise SettingsError(f"unknown setting(s) {', '.join(unknown)}; the settings are {', '.join(sorted(fields))}")
+        return dataclasses.replace(self, **changes)
+
+    def require(self, front_end, why="", **allowed):
+        """Raise unless every setting differs from its default only where ``front_end`` can honour it.
+
+        ``allowed`` maps a setting to the values that front-end supports
+        (a tuple), so that, e.g., an online analysis given ``workers=4``
+        says it has no threads instead of ignoring them. ``why`` is added to
+        the message.
+        """
+        for name, supported in allowed.items():
+            value = getattr(self, name)
+            if value not in supported:
+                shown = ", ".join(repr(item) for item in supported)
+                raise SettingsError(f"{front_end} does not support {name}={value!r}; it takes {shown}"
+                                    + (f" ({why})" if why else ""))
+        return self
+
+    def to_dict(self):
+        """The settings as a plain dict (for result.settings and summary.json)."""
+        return dataclasses.asdict(self)
+
+
+def parameter_box(bounds, model_names, model_label="the model"):
+    """Names in the order given and an (n_params, 2) box; every model parameter exactly once.
+
+    Parameters
+    ----------
+    bounds : mapping of str to (low, high)
+    model_names : sequence of str
+        The model's parameter names.
+    model_label : str
+        How messages name the model.
+
+    Returns
+    -------
+    names : list of str
+    box : ndarray (n_params, 2)
+    """
+    if not isinstance(bounds, Mapping):
+        raise SettingsError(f"bounds must map each parameter name to (low, high), e.g. {{'K': (0, 7)}}; "
+                            f"got {type(bounds).__name__}")
+    names = [str(name) for name in bounds]
+    unknown = [name for name in names if name not in model_names]
+    missing = [name for name in model_names if name not in names]
+    if unknown or missing:
+        raise SettingsError(f"bounds must name every parameter of {model_label} {list(model_names)} once"
+                            + (f"; unknown: {unknown}" if unknown else "") + (f"; missing: {missing}" if missing else ""))
+    rows = []
+    for name in names:
+        pair = bounds[name]
+        try:
+            if isinstance(pair, (str, bytes)):
+                raise TypeError
+            low, high = (float(value) for value in pair)
+        except (TypeError, ValueError):
+            raise SettingsError(f"bounds[{name!r}] must be a (low, high) pair of numbers; got {pair!r}") from None
+        if not (math.isfinite(low) and math.isfinite(high) and low < high):
+            raise SettingsError(f"bounds[{name!r}]: need finite low < high; got ({low}, {high})")
+        rows.append((low, high))
+    return names, np.array(rows)
