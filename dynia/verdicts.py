@@ -1,0 +1,224 @@
+"""Verdicts: what each parameter's highest information content is worth.
+
+A DYNIA result reports, per parameter, the window of highest information
+content (IC). A high IC alone is not an estimate: :func:`assess` gives each
+parameter one of :data:`VERDICTS` and the reasons for it.
+
+``"identified"``
+    The highest IC reaches ``weak_below`` and no rule below raises suspicion.
+``"weak"``
+    The highest IC stays below ``weak_below`` (reason ``"low_ic"``), or IC
+    is missing everywhere (reason ``"no_ic"``). Any suspicion found is
+    listed after it.
+``"suspect"``
+    The highest IC reaches ``weak_below`` but at least one rule applies:
+
+    ``"band_at_bound"``
+        The band at max IC lies within 1 % of the range of a sampling bound:
+        the optimum may lie outside the range, or the model cannot fit there.
+    ``"record_edge"``
+        The max-IC step lies less than one full window (2n+1 steps) from the
+        first or last step, so its window is truncated or next to one that
+        is: an artefact of the record's edge is likely.
+    ``"noise_only"``
+        The window at max IC does not discriminate between parameter sets
+        beyond what measurement noise alone produces (see :func:`noise_only`);
+        a narrow band there is a ranking of noise.
+
+Each reason is ``{"code": ..., "text": ...}``; branch on the code, the text
+is for people.
+"""
+import math
+
+import numpy as np
+
+from .errors import ModelError, SettingsError
+
+__all__ = ["VERDICTS", "assess", "noise_only", "noise_sigma"]
+
+VERDICTS = ("identified", "weak", "suspect")
+
+# A band edge this close to a bound, as a fraction of the range, touches it.
+BOUND_TOLERANCE = 0.01
+# MAE spreads up to this many sampling standard deviations of a noise-only MAE count as noise.
+NOISE_MULTIPLE = 3.0
+# Simulated values held at once when re-simulating for the noise rule (160 MB of float64).
+_MAX_VALUES = 20_000_000
+
+
+def noise_sigma(y):
+    """Robust standard deviation of the measurement noise of the record ``y``.
+
+    The median absolute deviation of the first differences between measured
+    neighbours, scaled by 1.4826 (normal consistency) and divided by sqrt(2)
+    (a difference holds two noise draws). Steps and slow dynamics barely move
+    a median, so the estimate follows the noise alone. NaN (missing) samples
+    are skipped; with fewer than two measured neighbours the result is 0.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> y = np.r_[np.zeros(500), np.full(500, 70.0)] + np.random.default_rng(1).normal(0, 0.5, 1000)
+    >>> round(noise_sigma(y), 1)
+    0.5
+    """
+    diff = np.diff(np.asarray(y, dtype=float))
+    diff = diff[np.isfinite(diff)]
+    return float(1.4826 * np.median(np.abs(diff - np.median(diff))) / math.sqrt(2)) if diff.size else 0.0
+
+
+def noise_only(y, sims, start, stop, *, sigma=None, multiple=NOISE_MULTIPLE):
+    """Whether the window ``[start, stop)`` fits noise only, with the spread and threshold compared.
+
+    Each parameter set's cost is its mean absolute error (MAE) over the
+    window's m measured points (NaN in ``y`` are left out). Parameter sets
+    whose outputs differ by less than the noise have MAEs that differ by
+    about the sampling standard deviation of one MAE, ``sigma * sqrt(1 -
+    2/pi) / sqrt(m)`` for normal noise. The window fits noise only when the
+    population's spread, median MAE minus minimum MAE, is at most
+    ``multiple`` times that: the better half of the parameter sets cannot be
+    told apart from the best. Where every set gives the same output the
+    spread is 0, so such a window always fits noise only.
+
+    ``sims`` is (n_samples, >= stop); ``sigma`` defaults to
+    :func:`noise_sigma` of ``y``. Returns ``(call, spread, threshold)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> y = np.random.default_rng(1).normal(0, 0.5, 60)
+    >>> noise_only(y, np.zeros((100, 60)), 20, 41)[0]
+    True
+    """
+    y = np.asarray(y, dtype=float)
+    sigma = noise_sigma(y) if sigma is None else float(sigma)
+    measured = ~np.isnan(y[start:stop])
+    if not measured.any():
+        raise SettingsError(f"the window [{start}, {stop}) has no measured point; noise_only needs at least one")
+    return _judge(_window_mae(y, np.asarray(sims, dtype=float), start, stop), int(measured.sum()), sigma, multiple)
+
+
+def _window_mae(y, sims, start, stop):
+    """MAE of every row of ``sims`` against ``y`` over the measured points of [start, stop)."""
+    window = y[start:stop]
+    measured = ~np.isnan(window)
+    return np.abs(sims[:, start:stop][:, measured] - window[measured]).mean(axis=1)
+
+
+def _judge(mae, m, sigma, multiple):
+    spread = float(np.median(mae) - mae.min())
+    threshold = multiple * sigma * math.sqrt(1 - 2 / math.pi) / math.sqrt(m)
+    return spread <= threshold, spread, threshold
+
+
+def assess(result, *, u=None, y=None, model=None, dt=None, x0=None, weak_below=0.5):
+    """Verdict and reasons for every parameter of a DYNIA result.
+
+    Parameters
+    ----------
+    result : DyniaResult
+        The analysis; its settings must hold the half window ``n``.
+    u, y : array_like, shape (n_steps,), optional
+        The input and output the analysis ran on (offsets already removed).
+    model : dynia.models.Model, optional
+        The model analysed. Without ``u``, ``y`` and ``model`` the
+        ``"noise_only"`` rule is skipped; the other rules need the result only.
+    dt, x0 : optional
+        Simulation settings; default ``result.settings["dt"]`` and
+        ``result.settings["x0"]``, else the model's defaults.
+    weak_below : float, default 0.5
+        Highest IC under which a parameter is ``"weak"``.
+
+    Returns
+    -------
+    dict
+        ``{name: {"verdict": str, "reasons": [{"code": str, "text": str}, ...]}}``
+        in ``result.names`` order.
+
+    Examples
+    --------
+    >>> import numpy as np, dynia
+    >>> u = np.r_[np.zeros(20), np.ones(100), np.zeros(80)]
+    >>> y = dynia.models.FirstOrder().simulate([[2.0, 3.0]], u)[0]
+    >>> res = dynia.run(u, y, dynia.models.FirstOrder(), {"K": (0, 5), "T": (0, 10)}, n=5, rng=1)
+    >>> assess(res, u=u, y=y, model=dynia.models.FirstOrder())["K"]
+    {'verdict': 'identified', 'reasons': []}
+    """
+    if (u is None, y is None, model is None).count(True) not in (0, 3):
+        raise SettingsError("assess needs u, y and model together for the noise_only rule, or none of them")
+    best = {p: int(np.nanargmax(result.ic[p])) for p in range(len(result.names)) if not np.isnan(result.ic[p]).all()}
+    windows = {step: result.window_range(step) for step in set(best.values())}
+    noise = {} if model is None else _noise_windows(result, u, y, model, dt, x0, windows)
+    verdicts = {}
+    for p, name in enumerate(result.names):
+        if p not in best:
+            verdicts[name] = dict(verdict="weak", reasons=[_reason("no_ic", "no window had enough measured points")])
+            continue
+        step = best[p]
+        reasons = _bound_reasons(result, p, step) + _edge_reasons(result, step, windows[step])
+        if noise.get(step):
+            reasons.append(_reason("noise_only", f"the window at max IC (time {result.time[step]:.6g}) "
+                                                 + noise[step]))
+        ic = float(result.ic[p, step])
+        if ic < weak_below:
+            verdicts[name] = dict(verdict="weak", reasons=[_reason("low_ic", f"max IC {ic:.3g} is below "
+                                                                             f"{weak_below:g}")] + reasons)
+        else:
+            verdicts[name] = dict(verdict="suspect" if reasons else "identified", reasons=reasons)
+    return verdicts
+
+
+def _reason(code, text):
+    return {"code": code, "text": text}
+
+
+def _bound_reasons(result, p, step):
+    (low, high), (lower, upper) = result.bounds[p], result.ci[p, step]
+    tolerance = BOUND_TOLERANCE * (high - low)
+    return [_reason("band_at_bound", f"the band [{lower:.4g}, {upper:.4g}] at max IC touches the {side} bound "
+                                     f"{bound:.4g}")
+            for touches, side, bound in ((lower - low <= tolerance, "lower", low),
+                                         (high - upper <= tolerance, "upper", high)) if touches]
+
+
+def _edge_reasons(result, step, window):
+    before, after = result.window_halos
+    length = before + after + 1
+    truncated = "; its window is truncated" if window[1] - window[0] < length else ""
+    return [_reason("record_edge", f"max IC at time {result.time[step]:.6g} is within one window ({length} steps) "
+                                   f"of the record's {edge}{truncated}")
+            for distance, edge in ((step, "start"), (result.time.size - 1 - step, "end")) if distance < length]
+
+
+def _noise_windows(result, u, y, model, dt, x0, windows):
+    """Text of the noise_only reason of each window that fits noise only, else None.
+
+    The samples are simulated once, in batches of at most ``_MAX_VALUES``
+    values, up to the end of the latest window.
+    """
+    u, y = np.asarray(u, dtype=float), np.asarray(y, dtype=float)
+    if y.shape != result.time.shape or u.shape != result.time.shape:
+        raise SettingsError(f"u and y must have the result's {result.time.size} steps; got {u.shape} and {y.shape}")
+    if sorted(model.names) != sorted(result.names):
+        raise ModelError(f"model parameters {list(model.names)} do not match the result's {list(result.names)}")
+    params = result.samples[:, [result.names.index(name) for name in model.names]]
+    options = dict(dt=result.settings.get("dt", 1.0) if dt is None else dt,
+                   x0=result.settings.get("x0", "zero") if x0 is None else x0)
+    points = {step: int((~np.isnan(y[start:stop])).sum()) for step, (start, stop) in windows.items()}
+    windows = {step: window for step, window in windows.items() if points[step]}
+    if not windows:
+        return {}
+    end = max(stop for _, stop in windows.values())
+    mae, batch = {step: [] for step in windows}, max(1, _MAX_VALUES // end)
+    for first in range(0, params.shape[0], batch):
+        sims = model.simulate(params[first:first + batch], u[:end], **options)
+        for step, (start, stop) in windows.items():
+            mae[step].append(_window_mae(y, sims, start, stop))
+    sigma = noise_sigma(y)
+    texts = {}
+    for step in windows:
+        quiet, spread, threshold = _judge(np.concatenate(mae[step]), points[step], sigma, NOISE_MULTIPLE)
+        texts[step] = (f"fits noise only: its MAE spread {spread:.3g} is at most {threshold:.3g}, {NOISE_MULTIPLE:g} "
+                       f"standard deviations of the MAE of {points[step]} points of noise sigma {sigma:.3g}"
+                       if quiet else None)
+    return texts
