@@ -15,7 +15,10 @@ last stored value, or when a maximum interval has passed. The records are
 dense while something happens and sparse while the plant is steady, and the
 input and output of a loop have different timestamps.
 :func:`resample_events` puts two such logs on one uniform grid, as the
-thesis did (section 3.1.3), by linear interpolation.
+thesis did (section 3.1.3), by linear interpolation. :func:`load_csv`
+bridges stretches without records only up to ``max_gap`` grid steps: inside
+a longer one the output is left missing (NaN), so that no window is fitted
+to values the file never held, and a note names each such gap.
 
 Examples
 --------
@@ -40,6 +43,7 @@ import re
 import numpy as np
 
 from . import _checks
+from .errors import DataError, SettingsError
 
 __all__ = ["DataError", "ProcessData", "load_csv", "resample_events"]
 
@@ -62,6 +66,10 @@ _UNIFORM = 1e-6
 # gigabytes before the analysis even starts.
 _MAX_GRID_STEPS = 10_000_000
 
+# The notes name this many gaps one by one and only count the rest: a log
+# with thousands of them should not bury the other notes.
+_LISTED_GAPS = 5
+
 # Longer cells are cut in messages, so that a garbled file still gives one readable line.
 _SHOWN_CHARS = 40
 
@@ -72,24 +80,6 @@ _LISTED_NAMES = 20
 _SECONDS = "a number of seconds"
 _NAIVE = "a timestamp without UTC offset"
 _AWARE = "a timestamp with UTC offset"
-
-
-class DataError(ValueError):
-    """Bad input data.
-
-    The message is one line naming the file, the column and the row (1-based,
-    as a spreadsheet shows, counting the header as row 1), and what was
-    expected there.
-
-    Examples
-    --------
-    >>> from dynia.data import DataError, load_csv
-    >>> try:
-    ...     load_csv("no_such_file.csv", time="time", input="u", output="y")
-    ... except DataError as error:
-    ...     print(error)
-    no_such_file.csv: no such file; expected a CSV file with a header row
-    """
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -107,7 +97,7 @@ class ProcessData:
     u : ndarray, shape (n_steps,)
         Input, finite everywhere.
     y : ndarray, shape (n_steps,)
-        Output, NaN where the measurement is missing.
+        Output, NaN where the measurement is missing and inside the ``gaps``.
     dt : float
         Grid spacing in seconds.
     start : datetime.datetime or float
@@ -117,7 +107,12 @@ class ProcessData:
         grid point.
     notes : tuple of str
         What was done to the data, one sentence each: resampling, filled
-        inputs, missing outputs. Empty when the rows were used as they are.
+        inputs, missing outputs, gaps. Empty when the rows were used as they
+        are.
+    gaps : tuple of (int, int)
+        Grid index ranges ``[start, stop)``, in time order, where ``y`` is
+        NaN because the file has no rows there for longer than ``max_gap``
+        grid steps (see :func:`load_csv`). Empty when there is no such gap.
 
     Examples
     --------
@@ -126,8 +121,8 @@ class ProcessData:
     >>> data = ProcessData(time=np.array([0.0, 2.0, 4.0]), u=np.array([1.0, 1.0, 2.0]),
     ...                    y=np.array([0.0, np.nan, 0.8]), dt=2.0, start=0.0,
     ...                    notes=("1 output value missing, left as NaN in y",))
-    >>> int(np.isnan(data.y).sum()), data.time.size * data.dt
-    (1, 6.0)
+    >>> int(np.isnan(data.y).sum()), data.time.size * data.dt, data.gaps
+    (1, 6.0, ())
     """
 
     time: np.ndarray
@@ -136,10 +131,11 @@ class ProcessData:
     dt: float
     start: datetime.datetime | float
     notes: tuple[str, ...]
+    gaps: tuple[tuple[int, int], ...] = ()
 
 
 def load_csv(path, *, time, input, output, output_path=None, long_format=False,
-             tag_column="tag", value_column="value", dt=None):
+             tag_column="tag", value_column="value", dt=None, max_gap=5.0):
     """Read logged process data from CSV into a uniform :class:`ProcessData`.
 
     Three layouts are read:
@@ -170,6 +166,11 @@ def load_csv(path, *, time, input, output, output_path=None, long_format=False,
     dt : float, optional
         Grid spacing in seconds, > 0. By default the spacing of uniformly
         spaced rows, else the median spacing of the timestamps (see Notes).
+    max_gap : float or None, default 5.0
+        Longest stretch without rows that is interpolated across, in grid
+        steps (``max_gap * dt`` seconds): a number > 1, or None (or
+        ``math.inf``) to interpolate across stretches of any length. Inside a
+        longer stretch ``y`` is NaN (see Notes).
 
     Returns
     -------
@@ -184,10 +185,12 @@ def load_csv(path, *, time, input, output, output_path=None, long_format=False,
         of another kind than the rows before (seconds, timestamps with or
         without UTC offset), times that do not strictly increase (duplicates
         included), fewer than 2 rows, an input or output without any value,
-        logs that do not overlap in time, or a ``dt`` that is not a finite
-        number > 0 or gives fewer than 2 or absurdly many grid points.
-    ValueError
-        ``output_path`` given together with ``long_format``.
+        logs that do not overlap in time, or a ``dt`` that gives fewer than
+        2 grid points or more than 10 000 000.
+    SettingsError
+        ``output_path`` given together with ``long_format``, a ``dt`` that is
+        not a finite number > 0, or a ``max_gap`` that is not a number > 1
+        or None.
 
     Notes
     -----
@@ -224,15 +227,33 @@ def load_csv(path, *, time, input, output, output_path=None, long_format=False,
     value's row or between a missing value and the present values on either
     side of it: exactly the points whose interpolation between neighbouring
     rows would use a missing value. All other points interpolate between the
-    present values around them, however far apart: a long stretch without
-    records is how a historian logs a steady signal, not a gap. The
-    timestamps of missing values still count for the span and for ``dt``.
+    present values around them, unless they lie in a gap. The timestamps of
+    missing values still count for the span, for ``dt`` and as rows.
+
+    **Gaps.** Where two consecutive rows (for two event logs: two
+    consecutive records of either log) lie more than ``max_gap * dt`` apart,
+    the grid points strictly between them are NaN in ``y``: the windows there
+    report no IC instead of fitting values the file never held. ``u`` is
+    filled there as everywhere, since a simulation needs an input at every
+    step. ``gaps`` holds these grid ranges, and a note names each gap with
+    its length and its two times as the file wrote them (the first five
+    gaps; the rest are counted). Uniform rows used as they are have no gaps.
+    The limit counts grid steps, so a given ``dt`` far below the spacing of
+    the rows, or an input logged far more slowly than the output (the
+    default ``dt`` follows the denser log), turns ordinary spacings into
+    gaps. A historian that logs by exception with a deadband stores nothing
+    while a signal stays within it, so its long stretches without records
+    can be steady operation rather than lost data: when the notes show gaps
+    where the plant was steady, raise ``max_gap`` above the longest steady
+    interval (in grid steps), or pass ``max_gap=None`` to interpolate across
+    stretches of any length.
 
     Examples
     --------
     Uniform rows are used as they are; a missing output stays NaN:
 
     >>> import pathlib, tempfile
+    >>> import numpy as np
     >>> from dynia.data import load_csv
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     csv_path = pathlib.Path(folder, "loop.csv")
@@ -254,19 +275,41 @@ def load_csv(path, *, time, input, output, output_path=None, long_format=False,
     ('2024-05-01T12:00:00+00:00', 2.0, array([0., 2., 4.]))
     >>> print(*data.notes)
     resampled 3 irregular rows onto a 2 s grid by linear interpolation (dt inferred: the median spacing of the rows)
+
+    A stretch without rows longer than ``max_gap`` grid steps is left missing in ``y``:
+
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     csv_path = pathlib.Path(folder, "loop.csv")
+    ...     _ = csv_path.write_text("time,u,y\\n0,1,5\\n1,1,5\\n2,1,5\\n10,2,6\\n11,2,6\\n")
+    ...     data = load_csv(csv_path, time="time", input="u", output="y")
+    >>> data.dt, data.gaps, int(np.isnan(data.y).sum()), bool(np.isfinite(data.u).all())
+    (1.0, ((3, 10),), 7, True)
+    >>> print(data.notes[-1])
+    gap of 8 s with no rows from 2 to 10: 7 grid points left missing in y
+
+    What cannot be read stops with one line naming the file (and the row and column):
+
+    >>> from dynia.errors import DataError
+    >>> try:
+    ...     load_csv("no_such_file.csv", time="time", input="u", output="y")
+    ... except DataError as error:
+    ...     print(error)
+    no_such_file.csv: no such file; expected a CSV file with a header row
     """
     if long_format and output_path is not None:
-        raise ValueError("long_format reads both signals from one file; do not give output_path with it")
+        raise SettingsError("long_format reads both signals from one file; do not give output_path with it",
+                            "output_path")
     if dt is not None:
         dt = _grid_spacing(dt)
+    max_gap = _gap_limit(max_gap)
     if long_format:
         input_log, output_log = _tag_logs(_read_table(path), time, tag_column, value_column, input, output)
     elif output_path is not None:
         input_log = _column_log(_read_table(path), time, input, "input")
         output_log = _column_log(_read_table(output_path), time, output, "output")
     else:
-        return _from_rows(_read_table(path), time, input, output, dt)
-    return _from_logs(input_log, output_log, dt)
+        return _from_rows(_read_table(path), time, input, output, dt, max_gap)
+    return _from_logs(input_log, output_log, dt, max_gap)
 
 
 def resample_events(times_u, u, times_y, y, dt=None, start=None, stop=None):
@@ -305,11 +348,13 @@ def resample_events(times_u, u, times_y, y, dt=None, start=None, stop=None):
 
     Raises
     ------
-    ValueError
+    DataError
         Naming the argument: a log whose times and values differ in length,
         timestamps that do not strictly increase (with the index), a
-        non-finite time or value (with the index), ``dt <= 0``, logs that do
-        not overlap in time, or ``start``/``stop`` outside the overlap.
+        non-finite time or value (with the index), or logs that do not
+        overlap in time.
+    SettingsError
+        ``dt <= 0``, or ``start``/``stop`` outside the overlap or not in order.
 
     Notes
     -----
@@ -317,13 +362,16 @@ def resample_events(times_u, u, times_y, y, dt=None, start=None, stop=None):
     timestamps: the typical interval between two consecutive records of the
     loop. It needs no unit and is robust: a few near-coincident timestamps
     of the two tags, or the long gaps of the steady stretches, do not move
-    it. A grid much coarser than that would throw away the detail the logs
-    hold where they are dense; a much finer one adds points that carry
-    nothing new. What it lands on depends on how the logs were compressed.
-    Exception reporting that stores each exception with the reading before
-    it (as plant historians do) makes half the spacings one scan, so the
-    median is about the scan period: the finest resolution the data have,
-    and possibly many more grid points than needed. A log dominated by its
+    it, and neither does a burst of closely spaced records as long as it
+    holds fewer spacings than the rest of the record (1000 records 1 ms
+    apart inside an hour of records 1 s apart leave it at 1 s). A grid much
+    coarser than that would throw away the detail the logs hold where they
+    are dense; a much finer one adds points that carry nothing new. What
+    it lands on depends on how the logs were compressed. Exception
+    reporting that stores each exception with the reading before it (as
+    plant historians do) makes half the spacings one scan, so the median is
+    about the scan period: the finest resolution the data have, and
+    possibly many more grid points than needed. A log dominated by its
     steady stretches gives the steady logging interval, which can be
     coarser than the dynamics. When the time constants of the process are
     roughly known, pass a ``dt`` below the fastest of them instead (the
@@ -333,7 +381,9 @@ def resample_events(times_u, u, times_y, y, dt=None, start=None, stop=None):
     logging historian implies: every value in between was within the
     deadband of the stored ones. A step in a value is stored as the last
     value before and the first value after it, and stays a step on a grid
-    coarser than that interval.
+    coarser than that interval. This function interpolates across stretches
+    without records of any length; :func:`load_csv` leaves the output
+    missing inside those longer than its ``max_gap``.
 
     Examples
     --------
@@ -359,13 +409,13 @@ def resample_events(times_u, u, times_y, y, dt=None, start=None, stop=None):
     first = max(times_u[0], times_y[0])
     last = min(times_u[-1], times_y[-1])
     if not first < last:
-        raise ValueError(
+        raise DataError(
             f"the logs do not overlap in time: times_u spans [{times_u[0]}, {times_u[-1]}] and "
             f"times_y spans [{times_y[0]}, {times_y[-1]}]; a grid needs a stretch where both have data")
     start = first if start is None else _inside(start, "start", first, last)
     stop = last if stop is None else _inside(stop, "stop", first, last)
     if not start < stop:
-        raise ValueError(f"start ({start}) must be before stop ({stop}): the grid would be empty")
+        raise SettingsError(f"start ({start}) must be before stop ({stop}): the grid would be empty")
     if dt is None:
         dt = _median_spacing(times_u, times_y, start, stop)
     else:
@@ -381,13 +431,13 @@ def _log(times, values, times_name, values_name):
     times = _checks.as_1d_float(times, times_name)
     values = _checks.as_1d_float(values, values_name)
     if times.size != values.size:
-        raise ValueError(
+        raise DataError(
             f"{times_name} has {times.size} timestamps but {values_name} has {values.size} values; "
             "a log needs one timestamp per value")
     steps = np.diff(times)
     if (steps <= 0).any():
         index = int(np.argmax(steps <= 0)) + 1
-        raise ValueError(
+        raise DataError(
             f"{times_name} must be strictly increasing: {times_name}[{index}] = {times[index]} "
             f"follows {times_name}[{index - 1}] = {times[index - 1]}")
     return times, values
@@ -396,11 +446,11 @@ def _log(times, values, times_name, values_name):
 def _inside(value, name, first, last):
     """A finite number inside the span both logs cover, or raise naming ``name``."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
-        raise ValueError(f"{name} must be a finite number; got {value!r}")
+        raise SettingsError(f"{name} must be a finite number; got {value!r}", name)
     if not first <= value <= last:
-        raise ValueError(
+        raise SettingsError(
             f"{name} = {value} lies outside [{first}, {last}], the span in which both logs have data "
-            "(values are interpolated, never extrapolated)")
+            "(values are interpolated, never extrapolated)", name)
     return float(value)
 
 
@@ -443,15 +493,22 @@ class _Table:
 
 @dataclasses.dataclass(frozen=True)
 class _Timeline:
-    """The time column of one log: its first time as read, its kind, and every row in seconds from the first."""
+    """The time column of one log: its first time, its kind, every cell as written and in seconds from the first."""
 
     column: str
     first: object
     kind: str
     first_row: int
-    first_cell: str
-    last_cell: str
+    cells: tuple
     seconds: np.ndarray
+
+    @property
+    def first_cell(self):
+        return self.cells[0]
+
+    @property
+    def last_cell(self):
+        return self.cells[-1]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -519,7 +576,7 @@ def _delimiter(header_line):
     return ","
 
 
-def _from_rows(table, time, input, output, dt):
+def _from_rows(table, time, input, output, dt, max_gap):
     """A wide table: its rows as they are when uniformly spaced at ``dt``, else resampled."""
     rows = table.rows
     _at_least_two_rows(table, "the file", rows)
@@ -547,10 +604,11 @@ def _from_rows(table, time, input, output, dt):
         notes.append(f"resampled {len(rows)} irregular rows onto a {step:g} s grid by linear interpolation "
                      f"(dt {dt_source})")
     _note_output_gaps(notes, missing, y_grid)
-    return ProcessData(grid, u_grid, y_grid, step, start, tuple(notes))
+    gaps = _blank_gaps(grid, y_grid, step, max_gap, [(seconds, timeline.cells, "")], notes)
+    return ProcessData(grid, u_grid, y_grid, step, start, tuple(notes), gaps)
 
 
-def _from_logs(input_log, output_log, dt):
+def _from_logs(input_log, output_log, dt, max_gap):
     """Two event logs resampled onto a common grid over the span both cover."""
     origin = _common_origin(input_log, output_log)
     times_u = input_log.timeline.seconds + _elapsed(input_log.timeline.first, origin)
@@ -570,7 +628,10 @@ def _from_logs(input_log, output_log, dt):
         f"{output_log.table.path}, {_counted(len(output_log.rows), 'row')}) onto a common {step:g} s grid "
         f"from {grid[0]:g} s to {grid[-1]:g} s by linear interpolation (dt {dt_source})")
     _note_output_gaps(notes, missing, y_grid)
-    return ProcessData(grid, u_grid, y_grid, step, origin, tuple(notes))
+    logs = [(times, log.timeline.cells, f" in the {role} log ({log.label})")
+            for times, log, role in ((times_u, input_log, "input"), (times_y, output_log, "output"))]
+    gaps = _blank_gaps(grid, y_grid, step, max_gap, logs, notes)
+    return ProcessData(grid, u_grid, y_grid, step, origin, tuple(notes), gaps)
 
 
 def _column_log(table, time, column, argument):
@@ -614,9 +675,9 @@ def _at_least_two_rows(table, label, rows):
 def _timeline(table, column, rows, cells):
     """Parse a time column: one kind of time throughout, strictly increasing; seconds from its first row."""
     column = column.strip()
-    stamps = [_time_stamp(table.path, column, row, cell) for row, cell in zip(rows, cells)]
+    stamps = [_time_stamp(table.path, column, row, cell) for row, cell in zip(rows, cells, strict=True)]
     kind = _kind(stamps[0])
-    for row, cell, stamp in zip(rows, cells, stamps):
+    for row, cell, stamp in zip(rows, cells, stamps, strict=True):
         if _kind(stamp) != kind:
             raise DataError(f"{table.path}: row {row}, column {column!r}: {_shown(cell)} is {_kind(stamp)}, "
                             f"but row {rows[0]} holds {kind} ({_shown(cells[0])}); expected one kind of time "
@@ -641,7 +702,7 @@ def _timeline(table, column, rows, cells):
                             "expected strictly increasing times")
         raise DataError(f"{where}: {_shown(cells[later])} is earlier than {_shown(cells[later - 1])} on row "
                         f"{rows[later - 1]}; expected strictly increasing times")
-    return _Timeline(column, first, kind, rows[0], cells[0].strip(), cells[-1].strip(), seconds)
+    return _Timeline(column, first, kind, rows[0], tuple(cell.strip() for cell in cells), seconds)
 
 
 def _time_stamp(path, column, row, cell):
@@ -693,7 +754,7 @@ def _elapsed(stamp, origin):
 def _values(table, column, rows, cells):
     """Parse a value column: float per cell, NaN for a missing one."""
     values = np.empty(len(cells))
-    for index, (row, cell) in enumerate(zip(rows, cells)):
+    for index, (row, cell) in enumerate(zip(rows, cells, strict=True)):
         text = cell.strip()
         if text.lower() in _MISSING:
             values[index] = np.nan
@@ -747,9 +808,12 @@ def _resampled(path, times_u, u, times_y, y, dt):
     first, last = max(times_u[0], times_y[0]), min(times_u[-1], times_y[-1])
     step = _median_spacing(times_u, times_y, first, last) if dt is None else dt
     which = f"dt = {step:g} s" if dt is not None else f"the inferred dt ({step:g} s, the median spacing)"
-    if (last - first) / step > _MAX_GRID_STEPS:
-        raise DataError(f"{path}: {which} would put {(last - first) / step:.3g} points on the {last - first:g} s "
-                        f"the data span; expected at most {_MAX_GRID_STEPS:,}: give a larger dt, in seconds")
+    steps = (last - first) / step
+    if steps >= _MAX_GRID_STEPS:
+        inferred = "" if dt is not None else " (inferred: the median spacing of the timestamps)"
+        raise DataError(f"{path}: the grid would have {_spaced(math.floor(steps) + 1)} steps at dt = {step:g} s"
+                        f"{inferred} over the {last - first:g} s the data span (limit {_spaced(_MAX_GRID_STEPS)}); "
+                        "pass a larger --dt / dt=")
     missing = np.isnan(y)
     bridged = np.interp(times_y, times_y[~missing], y[~missing])
     grid, u_grid, y_grid = resample_events(times_u, u, times_y, bridged, dt=step)
@@ -777,8 +841,58 @@ def _in_gaps(grid, times, missing, dt):
 
 def _grid_spacing(dt):
     if isinstance(dt, bool) or not isinstance(dt, numbers.Real) or not (math.isfinite(dt) and dt > 0):
-        raise DataError(f"dt must be a finite number of seconds > 0; got {dt!r}")
+        raise SettingsError(f"dt must be a finite number of seconds > 0; got {dt!r}", "dt")
     return float(dt)
+
+
+def _gap_limit(max_gap):
+    """``max_gap`` as a float > 1, or None when stretches of any length are interpolated."""
+    if max_gap is None:
+        return None
+    if isinstance(max_gap, bool) or not isinstance(max_gap, numbers.Real) or not max_gap > 1:
+        raise SettingsError(f"max_gap must be a number of grid steps > 1, or None to interpolate across "
+                            f"stretches without rows of any length; got {max_gap!r}", "max_gap")
+    return None if math.isinf(max_gap) else float(max_gap)
+
+
+def _blank_gaps(grid, y_grid, step, max_gap, logs, notes):
+    """NaN in ``y_grid`` strictly inside every stretch of more than ``max_gap`` steps without rows.
+
+    ``logs`` holds, per log whose rows count, its times (on the grid's
+    clock), its time cells as the file wrote them and a phrase naming it
+    for the notes ("" for a wide file). Each gap that leaves grid points
+    missing gets a note (the first ``_LISTED_GAPS``; the rest are counted).
+    Returns the merged grid ranges ``[start, stop)`` left missing, in time order.
+    """
+    if max_gap is None:
+        return ()
+    # A grid point within rounding of a row is on it, not inside the gap.
+    snap = _GRID_SNAP * step
+    found = []
+    for times, cells, where in logs:
+        for index in np.flatnonzero(np.diff(times) > max_gap * step).tolist():
+            start = int(np.searchsorted(grid, times[index] + snap, side="right"))
+            stop = int(np.searchsorted(grid, times[index + 1] - snap, side="left"))
+            if stop > start:
+                length = times[index + 1] - times[index]
+                found.append((start, stop, f"gap of {_duration(length)} s with no rows{where} from {cells[index]} "
+                                           f"to {cells[index + 1]}: {_counted(stop - start, 'grid point')} left "
+                                           "missing in y"))
+    found.sort(key=lambda gap: gap[:2])
+    notes += [note for _, _, note in found[:_LISTED_GAPS]]
+    rest = found[_LISTED_GAPS:]
+    if rest:
+        points = sum(stop - start for start, stop, _ in rest)
+        notes.append(f"and {_counted(len(rest), 'more gap')} longer than {max_gap:g} grid steps "
+                     f"({_duration(max_gap * step)} s): {_counted(points, 'more grid point')} left missing in y")
+    merged = []
+    for start, stop, _ in found:
+        y_grid[start:stop] = np.nan
+        if merged and start <= merged[-1][1]:
+            merged[-1] = (merged[-1][0], max(merged[-1][1], stop))
+        else:
+            merged.append((start, stop))
+    return tuple(merged)
 
 
 def _described(log):
@@ -801,6 +915,16 @@ def _shown(cell):
 def _listed(names):
     shown = ", ".join(repr(name) for name in names[:_LISTED_NAMES])
     return shown if len(names) <= _LISTED_NAMES else f"{shown}, ... ({len(names)} in all)"
+
+
+def _spaced(number):
+    """A whole number with its thousands set apart by spaces: 10 000 000."""
+    return f"{number:,}".replace(",", " ")
+
+
+def _duration(seconds):
+    """Seconds as a short number, without the float noise of subtracted timestamps."""
+    return f"{round(seconds, 6):.15g}"
 
 
 def _counted(number, noun):

@@ -1,4 +1,4 @@
-"""Data quality of an input/output record: isolated glitches, outliers and stuck values.
+"""Data quality of an input/output record: absurd magnitudes, isolated glitches, outliers and stuck values.
 
 A DYNIA window is only as good as the samples in it. In the thesis's case
 study (section 3.1.3) the highest information content of the time constant
@@ -17,6 +17,14 @@ sample are the nearest samples present.
 
 What is detected, per signal (``"u"`` and ``"y"``)
 --------------------------------------------------
+magnitude
+    A value larger in size than ``max_magnitude``, or than 1e150, beyond
+    which squaring it in a cost overflows to inf (the mean absolute error of
+    the simulated output is far from its bulk then too): a sentinel of the
+    logging system, a unit or parsing error, a corrupted reading.
+    Consecutive such samples form one finding. They are left out of the
+    other tests, like missing samples, so that one 1e308 cell does not turn
+    the bulk and the noise level of its signal into inf.
 glitch
     A run of at most ``max_glitch_length`` samples that departs from the
     local robust trend (a Hampel filter: median and MAD over
@@ -37,8 +45,8 @@ stuck
     signal that moves from most samples to the next, entered with a step
     rather than settled into.
 
-The kinds are tested independently; one sample can be in several findings
-(a zero reading in a signal near 72 is a glitch and an outlier).
+The other kinds are tested independently; one sample can be in several
+findings (a zero reading in a signal near 72 is a glitch and an outlier).
 
 Tuning parameters
 -----------------
@@ -71,6 +79,10 @@ parameter              default   reasoning
 ``stuck_factor``       4.0       A run counts as stuck only when it is much longer than the
                                  signal's own usual runs.
 ``stuck_tolerance``    0.0       A frozen tag repeats its value exactly.
+``max_magnitude``      1e12      No reading of a process variable in the units its historian
+                                 logs comes near it; sentinels (1e30, 3.4e38, 1e308) and
+                                 corrupted floats lie far beyond. Totalisers in small units
+                                 can be large: raise it for them.
 =====================  ========  ==============================================================
 
 Every scale has a floor of ``1e-6`` times the signal's size (the larger of
@@ -106,17 +118,19 @@ Examples
 (True, 38.0)
 """
 import math
+import numbers
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
 from . import _checks
+from .errors import DataError, SettingsError
 from .segments import mask_to_segments
 
 __all__ = ["Finding", "QualityReport", "check_quality", "informative_segments", "KINDS", "SIGNALS"]
 
-KINDS = ("glitch", "outlier", "stuck")
+KINDS = ("magnitude", "glitch", "outlier", "stuck")
 SIGNALS = ("u", "y")
 
 # 1.4826 * MAD estimates the standard deviation of Gaussian noise.
@@ -129,6 +143,9 @@ _USUAL_RUN_QUANTILE = 0.95
 # a steady state reached smoothly, not a tag that froze.
 _SETTLING_STEPS = 3
 _SETTLED_FRACTION = 1e-3
+# A value larger than this squares to more than 1e300, and a sum of such squares
+# overflows: it is a magnitude finding whatever max_magnitude says.
+_SQUARABLE = 1e150
 
 
 @dataclass(frozen=True)
@@ -138,15 +155,15 @@ class Finding:
     Attributes
     ----------
     signal : {"u", "y"}
-    kind : {"glitch", "outlier", "stuck"}
+    kind : {"magnitude", "glitch", "outlier", "stuck"}
     start, stop : int
         Sample indices ``[start, stop)`` of the stretch (missing samples
         inside it are not flagged).
     start_time, end_time : float
         Time of the first and of the last sample of the stretch.
     value : float
-        The most deviant value of the stretch (for stuck runs: the value
-        repeated).
+        The most deviant value of the stretch (for magnitude findings: the
+        largest in size; for stuck runs: the value repeated).
     reason : str
         One sentence on why it was flagged.
     """
@@ -188,7 +205,7 @@ class QualityReport:
         Parameters
         ----------
         signal : {"u", "y"}
-        kinds : sequence of {"glitch", "outlier", "stuck"}, optional
+        kinds : sequence of {"magnitude", "glitch", "outlier", "stuck"}, optional
             Only these kinds (default: all).
 
         Examples
@@ -225,7 +242,7 @@ class QualityReport:
             The signal checked (``u`` or ``y``).
         signal : {"u", "y"}, default "y"
             Which of the two it is.
-        kinds : sequence of {"glitch", "outlier", "stuck"}, optional
+        kinds : sequence of {"magnitude", "glitch", "outlier", "stuck"}, optional
             Exclude only these kinds (default: all).
 
         Returns
@@ -245,7 +262,7 @@ class QualityReport:
         flagged = self.mask(signal, kinds)
         values = _checks.as_1d_float(values, "values", allow_nan=True)
         if values.size != self.time.size:
-            raise ValueError(
+            raise DataError(
                 f"values has {values.size} samples but the report covers {self.time.size}; "
                 "pass the signal that was checked")
         cleaned = values.copy()
@@ -256,7 +273,7 @@ class QualityReport:
             return cleaned
         usable = ~flagged & ~np.isnan(values)
         if not usable.any():
-            raise ValueError(f"every sample of {signal} that is present is flagged; "
+            raise DataError(f"every sample of {signal} that is present is flagged; "
                              "there is nothing to interpolate from")
         cleaned[flagged] = np.interp(self.time[flagged], self.time[usable], values[usable])
         return cleaned
@@ -312,10 +329,11 @@ class QualityReport:
         >>> import numpy as np
         >>> from dynia.quality import check_quality
         >>> print(check_quality(None, np.ones(30), np.linspace(0, 1, 30)).summary())
-        Data quality of 30 samples: no glitches, outliers or stuck values found.
+        Data quality of 30 samples: no absurd magnitudes, glitches, outliers or stuck values found.
         """
         if not self.findings:
-            return f"Data quality of {self.time.size} samples: no glitches, outliers or stuck values found."
+            return (f"Data quality of {self.time.size} samples: no absurd magnitudes, glitches, outliers or stuck "
+                    "values found.")
         count = len(self.findings)
         lines = [f"Data quality of {self.time.size} samples: {count} finding{'' if count == 1 else 's'}."]
         for signal in SIGNALS:
@@ -327,14 +345,14 @@ class QualityReport:
         for f in self.findings:
             when = (f"t={f.start_time:g}" if f.stop - f.start == 1
                     else f"t={f.start_time:g}..{f.end_time:g}")
-            lines.append(f"  {f.signal} {f.kind:<7} {when} (samples {f.start}-{f.stop - 1}): {f.reason}")
+            lines.append(f"  {f.signal} {f.kind:<9} {when} (samples {f.start}-{f.stop - 1}): {f.reason}")
         return "\n".join(lines)
 
 
 def check_quality(time, u, y, *, half_window=3, glitch_threshold=6.0, glitch_min_size=0.1,
                   max_glitch_length=2, outlier_quantile=0.01, outlier_fence=1.0, min_stuck=10,
-                  stuck_factor=4.0, stuck_tolerance=0.0):
-    """Find isolated glitches, outliers and stuck values in an input/output record.
+                  stuck_factor=4.0, stuck_tolerance=0.0, max_magnitude=1e12):
+    """Find absurd magnitudes, isolated glitches, outliers and stuck values in an input/output record.
 
     The tests and the reasoning behind every default are in the module
     documentation.
@@ -364,6 +382,9 @@ def check_quality(time, u, y, *, half_window=3, glitch_threshold=6.0, glitch_min
         A stuck run is at least this many times the signal's usual run length.
     stuck_tolerance : float >= 0, default 0.0
         Consecutive readings differing by at most this are equal.
+    max_magnitude : float > 0, default 1e12
+        Values larger in size are magnitude findings, as are those above
+        1e150 whatever it says (``math.inf``: only those).
 
     Returns
     -------
@@ -377,18 +398,25 @@ def check_quality(time, u, y, *, half_window=3, glitch_threshold=6.0, glitch_min
     >>> y[80:120] = y[80]                                  # a frozen tag
     >>> [(f.kind, f.start, f.stop) for f in check_quality(None, np.full(200, 36.0), y).findings]
     [('stuck', 80, 120)]
+
+    A sentinel is a magnitude finding, and the other tests do not see it:
+
+    >>> y[150] = 1e308
+    >>> report = check_quality(None, np.full(200, 36.0), y)
+    >>> [(f.kind, f.start, f.stop) for f in report.findings], report.findings[0].value
+    ([('magnitude', 150, 151), ('stuck', 80, 120)], 1e+308)
     """
     u = _checks.as_1d_float(u, "u", allow_nan=True)
     y = _checks.as_1d_float(y, "y", allow_nan=True)
     if u.size != y.size:
-        raise ValueError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
+        raise DataError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
     time = _time_axis(time, y.size)
     max_glitch_length = _checks.whole_number(max_glitch_length, "max_glitch_length", minimum=0)
     half_window = _checks.whole_number(half_window, "half_window", minimum=1)
     if half_window < max_glitch_length:
-        raise ValueError(
+        raise SettingsError(
             f"half_window ({half_window}) must be at least max_glitch_length ({max_glitch_length}), "
-            "or a glitch as long as allowed could move the window's median")
+            "or a glitch as long as allowed could move the window's median", "half_window")
     settings = dict(
         half_window=half_window,
         glitch_threshold=_checks.open_interval(glitch_threshold, "glitch_threshold", 0, math.inf),
@@ -399,6 +427,7 @@ def check_quality(time, u, y, *, half_window=3, glitch_threshold=6.0, glitch_min
         min_stuck=_checks.whole_number(min_stuck, "min_stuck", minimum=2),
         stuck_factor=_checks.open_interval(stuck_factor, "stuck_factor", 0, math.inf),
         stuck_tolerance=_nonnegative(stuck_tolerance, "stuck_tolerance"),
+        max_magnitude=_magnitude_limit(max_magnitude),
     )
     findings = []
     for signal, values in (("u", u), ("y", y)):
@@ -443,10 +472,14 @@ def informative_segments(result, *, threshold=0.75, parameter=None):
 
 
 def _signal_findings(signal, values, time, settings):
-    """Every finding of one signal, tests run on its present samples."""
-    where = np.flatnonzero(~np.isnan(values))
+    """Every finding of one signal: magnitudes among its present samples, the other tests on the rest."""
+    present = np.flatnonzero(~np.isnan(values))
+    absurd = np.abs(values[present]) > min(settings["max_magnitude"], _SQUARABLE)
+    found = [_finding(signal, time, present, "magnitude", *run)
+             for run in _magnitudes(values[present], absurd, settings)]
+    where = present[~absurd]
     if where.size == 0:
-        return []
+        return found
     x = values[where]
     # Rounded inwards, the quantiles leave out at least the most extreme value at
     # each end even in a record shorter than 1/outlier_quantile samples.
@@ -454,15 +487,30 @@ def _signal_findings(signal, values, time, settings):
     high = np.quantile(x, 1 - settings["outlier_quantile"], method="lower")
     floor = _RESOLUTION * max(high - low, abs(float(np.median(x))))
 
-    def finding(kind, start, stop, value, reason):
-        first, last = where[start], where[stop - 1]
-        return Finding(signal=signal, kind=kind, start=int(first), stop=int(last) + 1,
-                       start_time=float(time[first]), end_time=float(time[last]),
-                       value=float(value), reason=reason)
+    found += [_finding(signal, time, where, "glitch", *run) for run in _glitches(x, high - low, floor, settings)]
+    found += [_finding(signal, time, where, "outlier", *run) for run in _outliers(x, low, high, floor, settings)]
+    found += [_finding(signal, time, where, "stuck", *run) for run in _stuck_runs(x, settings)]
+    return found
 
-    found = [finding("glitch", *run) for run in _glitches(x, high - low, floor, settings)]
-    found += [finding("outlier", *run) for run in _outliers(x, low, high, floor, settings)]
-    found += [finding("stuck", *run) for run in _stuck_runs(x, settings)]
+
+def _finding(signal, time, where, kind, start, stop, value, reason):
+    """A Finding from a run [start, stop) of the samples ``where`` a test ran on."""
+    first, last = where[start], where[stop - 1]
+    return Finding(signal=signal, kind=kind, start=int(first), stop=int(last) + 1,
+                   start_time=float(time[first]), end_time=float(time[last]), value=float(value), reason=reason)
+
+
+def _magnitudes(x, absurd, settings):
+    """(start, stop, value, reason) of every run of values too large in size to be a measurement."""
+    limit = settings["max_magnitude"]
+    found = []
+    for start, stop in _runs(absurd):
+        run = x[start:stop]
+        worst = run[np.argmax(np.abs(run))]
+        why = (f"its size exceeds max_magnitude = {limit:g}: a sentinel, a unit or parsing error or a corrupted "
+               "reading" if limit <= _SQUARABLE else
+               f"its size exceeds {_SQUARABLE:g}, beyond which squaring it in a cost overflows")
+        found.append((start, stop, worst, f"{worst:.6g} is no plausible reading, {why}; left out of the other tests"))
     return found
 
 
@@ -528,7 +576,7 @@ def _stuck_runs(x, settings):
     settled = _SETTLED_FRACTION * float(np.median(steps))
     tolerance = settings["stuck_tolerance"]
     found = []
-    for start, stop in zip(starts.tolist(), stops.tolist()):
+    for start, stop in zip(starts.tolist(), stops.tolist(), strict=True):
         approach = steps[max(start - _SETTLING_STEPS, 0):start]
         if stop - start < shortest or (approach.size and (approach <= settled).all()):
             continue
@@ -543,7 +591,7 @@ def _stuck_runs(x, settings):
 def _runs(flags):
     """[start, stop) of every run of True in a 1-D boolean array."""
     edges = np.diff(np.r_[0, flags.astype(np.int8), 0])
-    return list(zip(np.flatnonzero(edges == 1).tolist(), np.flatnonzero(edges == -1).tolist()))
+    return list(zip(np.flatnonzero(edges == 1).tolist(), np.flatnonzero(edges == -1).tolist(), strict=True))
 
 
 def _time_axis(time, n_steps):
@@ -551,12 +599,20 @@ def _time_axis(time, n_steps):
         return np.arange(n_steps, dtype=float)
     time = _checks.as_1d_float(time, "time")
     if time.size != n_steps:
-        raise ValueError(f"time has {time.size} values but u and y have {n_steps}; they must match")
+        raise DataError(f"time has {time.size} values but u and y have {n_steps}; they must match")
     steps = np.diff(time)
     if (steps <= 0).any():
         at = int(np.argmax(steps <= 0)) + 1
-        raise ValueError(f"time must increase strictly; time[{at}] = {time[at]} follows {time[at - 1]}")
+        raise DataError(f"time must increase strictly; time[{at}] = {time[at]} follows {time[at - 1]}")
     return time
+
+
+def _magnitude_limit(value):
+    """``max_magnitude`` as a float > 0; inf leaves only the overflow limit."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not value > 0:
+        raise SettingsError(f"max_magnitude must be a number > 0 (math.inf: flag only values above "
+                            f"{_SQUARABLE:g}); got {value!r}", "max_magnitude")
+    return float(value)
 
 
 def _nonnegative(value, name):
@@ -565,7 +621,7 @@ def _nonnegative(value, name):
 
 def _signal_name(signal):
     if signal not in SIGNALS:
-        raise ValueError(f"signal must be one of {SIGNALS}; got {signal!r}")
+        raise SettingsError(f"signal must be one of {SIGNALS}; got {signal!r}", "signal")
     return signal
 
 
@@ -573,10 +629,11 @@ def _kind_names(kinds):
     if kinds is None:
         return KINDS
     if isinstance(kinds, str):
-        raise ValueError(f"kinds must be a sequence of kinds, e.g. ['glitch']; got the string {kinds!r}")
+        raise SettingsError(f"kinds must be a sequence of kinds, e.g. ['glitch']; got the string {kinds!r}",
+                            "kinds")
     unknown = [kind for kind in kinds if kind not in KINDS]
     if unknown:
-        raise ValueError(f"unknown kinds {unknown}; choose from {KINDS}")
+        raise SettingsError(f"unknown kinds {unknown}; choose from {KINDS}", "kinds")
     return tuple(kinds)
 
 
@@ -585,15 +642,16 @@ def _segment_pairs(segments, n_steps):
     try:
         pairs = [tuple(pair) for pair in segments]
     except TypeError:
-        raise ValueError(f"segments must be a sequence of (start, stop) pairs; got {segments!r}") from None
+        raise SettingsError(f"segments must be a sequence of (start, stop) pairs; got {segments!r}",
+                            "segments") from None
     checked = []
     for position, pair in enumerate(pairs):
         if len(pair) != 2:
-            raise ValueError(f"segments[{position}] must be a (start, stop) pair; got {pair!r}")
+            raise SettingsError(f"segments[{position}] must be a (start, stop) pair; got {pair!r}", "segments")
         start = _checks.whole_number(pair[0], f"segments[{position}] start", minimum=0)
         stop = _checks.whole_number(pair[1], f"segments[{position}] stop", minimum=0)
         if not start < stop <= n_steps:
-            raise ValueError(
-                f"segments[{position}] = {pair!r} must satisfy 0 <= start < stop <= {n_steps} (n_steps)")
+            raise SettingsError(
+                f"segments[{position}] = {pair!r} must satisfy 0 <= start < stop <= {n_steps} (n_steps)", "segments")
         checked.append((start, stop))
     return checked

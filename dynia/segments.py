@@ -59,9 +59,7 @@ from .errors import DataError, SettingsError
 from .result import DyniaResult
 
 __all__ = ["check_segments", "segments_to_mask", "mask_to_segments", "intersect_segments", "segments_from_ic",
-           "segments_to_times", "random_segments", "holdout_split", "MODES",
-           # Fitting moved to dynia.fit; these names stay importable from here.
-           "FitResult", "fit_segments", "validation_error"]
+           "segments_to_times", "random_segments", "holdout_split", "MODES"]
 
 MODES = ("any", "joint", "per_parameter")
 

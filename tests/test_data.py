@@ -14,6 +14,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from dynia.data import DataError, ProcessData, load_csv, resample_events
+from dynia.errors import SettingsError
 
 HEATING_SYSTEM = pathlib.Path("/work/shared/data/heating_system/heating_system.dat")
 
@@ -158,6 +159,7 @@ def test_uniform_rows_are_used_as_they_are(tmp_path):
     np.testing.assert_array_equal(data.y, [2, 2.25, 2.5, 3.125])
     assert data.dt == 2.0 and isinstance(data.dt, float)
     assert data.start == 100.0 and data.notes == ()  # the file's time of grid time 0
+    assert data.gaps == ()
 
 
 def test_columns_are_chosen_by_name_in_any_order_with_whitespace_stripped(tmp_path):
@@ -290,17 +292,133 @@ def test_missing_output_at_the_ends_of_irregular_rows(tmp_path):
     np.testing.assert_allclose(data.y[~expected_nan], data.time[~expected_nan])
 
 
-def test_a_long_stretch_without_records_is_no_gap(tmp_path):
-    # exception logging: nothing stored for 100 s while the output was steady
-    data = _load(_write(tmp_path, "time,u,y\n0,1,5\n1,1,5\n101,1,5\n102,2,6\n"), dt=1)
+def test_a_long_stretch_without_records_is_a_gap_unless_max_gap_is_none(tmp_path):
+    path = _write(tmp_path, "time,u,y\n0,1,5\n1,1,5\n101,1,5\n102,2,6\n")
+    data = _load(path, dt=1)
     assert data.time.size == 103
-    assert not np.isnan(data.y).any()
+    np.testing.assert_array_equal(np.flatnonzero(np.isnan(data.y)), np.arange(2, 101))  # strictly inside 1..101
+    assert data.gaps == ((2, 101),)
+    assert data.notes[-1] == "gap of 100 s with no rows from 1 to 101: 99 grid points left missing in y"
+    # exception logging that stored nothing for 100 s while the output was steady: bridge it
+    bridged = _load(path, dt=1, max_gap=None)
+    assert not np.isnan(bridged.y).any() and bridged.gaps == ()
+    np.testing.assert_array_equal(bridged.y[:101], 5)
+    assert not any(note.startswith("gap") for note in bridged.notes)
+    np.testing.assert_array_equal(_load(path, dt=1, max_gap=math.inf).y, bridged.y)
+    # a limit above the stretch bridges it too; one just below does not
+    assert _load(path, dt=1, max_gap=100).gaps == ()
+    assert _load(path, dt=1, max_gap=99.5).gaps == ((2, 101),)
+
+
+def test_a_missing_stretch_in_the_middle_of_a_wide_file_is_left_missing_in_y_only(tmp_path):
+    times = np.r_[np.arange(0, 100), np.arange(200, 300)]  # rows 100 to 199 lost
+    path = _write(tmp_path, "time,u,y\n" + "".join(f"{t},{t},{2 * t}\n" for t in times))
+    data = _load(path)
+    assert data.dt == 1.0 and data.time.size == 300
+    missing = np.isnan(data.y)
+    np.testing.assert_array_equal(np.flatnonzero(missing), np.arange(100, 200))  # strictly inside 99..200
+    np.testing.assert_array_equal(data.y[~missing], 2 * data.time[~missing])
+    np.testing.assert_array_equal(data.u, data.time)  # the input is still filled, finite
+    assert data.gaps == ((100, 200),)
+    assert data.notes == ("resampled 200 irregular rows onto a 1 s grid by linear interpolation (dt inferred: the "
+                          "median spacing of the rows)",
+                          "gap of 101 s with no rows from 99 to 200: 100 grid points left missing in y")
+    bridged = _load(path, max_gap=None)  # the old behaviour: interpolate across
+    np.testing.assert_array_equal(bridged.y, 2 * bridged.time)
+    assert bridged.gaps == () and len(bridged.notes) == 1
+
+
+def test_a_gap_note_names_iso_timestamps_as_the_file_wrote_them(tmp_path):
+    stamps = [f"2024-05-01T11:59:{second:02d}" for second in range(50, 60)] + ["2024-05-01T12:00:00"]
+    stamps += [f"2024-05-01T13:00:{second:02d}" for second in range(11)]
+    data = _load(_write(tmp_path, "time,u,y\n" + "".join(f"{stamp},1,2\n" for stamp in stamps)))
+    assert data.dt == 1.0
+    assert data.notes[-1] == ("gap of 3600 s with no rows from 2024-05-01T12:00:00 to 2024-05-01T13:00:00: "
+                              "3599 grid points left missing in y")
+    assert data.gaps == ((11, 3610),) and int(np.isnan(data.y).sum()) == 3599
+    zoned = _load(_write(tmp_path, "time,u,y\n" + "".join(f"{stamp}Z,1,2\n" for stamp in stamps)))
+    assert "from 2024-05-01T12:00:00Z to 2024-05-01T13:00:00Z:" in zoned.notes[-1]
+
+
+def test_more_than_five_gaps_are_listed_up_to_five_and_counted(tmp_path):
+    # rows every second, with 7 stretches of 10 s (9 grid points each) without rows
+    times = [t for t in range(150) if t % 20 <= 10]
+    data = _load(_write(tmp_path, "time,u,y\n" + "".join(f"{t},1,2\n" for t in times)))
+    assert data.dt == 1.0
+    assert data.gaps == tuple((20 * k + 11, 20 * k + 20) for k in range(7))
+    gap_notes = [note for note in data.notes if note.startswith("gap of")]
+    assert gap_notes == [f"gap of 10 s with no rows from {20 * k + 10} to {20 * k + 20}: 9 grid points left "
+                         "missing in y" for k in range(5)]
+    assert data.notes[-1] == "and 2 more gaps longer than 5 grid steps (5 s): 18 more grid points left missing in y"
+
+
+def test_a_given_dt_far_below_the_spacing_of_the_rows_makes_every_interval_a_gap(tmp_path):
+    data = _load(_write(tmp_path, "time,u,y\n0,0,0\n2,2,4\n4,4,8\n"), dt=0.25)
+    assert data.gaps == ((1, 8), (9, 16))
+    np.testing.assert_array_equal(data.y[[0, 8, 16]], [0, 4, 8])  # the rows themselves are kept
+    np.testing.assert_allclose(data.u, data.time)
+    assert _load(_write(tmp_path, "time,u,y\n0,0,0\n2,2,4\n4,4,8\n"), dt=0.25, max_gap=9).gaps == ()
+
+
+def test_gaps_in_either_event_log_leave_the_output_missing(tmp_path):
+    u_times = [t for t in range(61) if not 45 < t < 55]
+    y_times = [t for t in range(61) if not 20 < t < 40]
+    inputs = _write(tmp_path, "time,u\n" + "".join(f"{t},{t}\n" for t in u_times), name="u.csv")
+    outputs = _write(tmp_path, "time,y\n" + "".join(f"{t},{-t}\n" for t in y_times), name="y.csv")
+    data = _load(inputs, output_path=outputs)
+    assert data.dt == 1.0 and data.time.size == 61
+    assert data.gaps == ((21, 40), (46, 55))
+    missing = np.isnan(data.y)
+    np.testing.assert_array_equal(np.flatnonzero(missing), np.r_[21:40, 46:55])
+    np.testing.assert_array_equal(data.y[~missing], -data.time[~missing])
+    np.testing.assert_array_equal(data.u, data.time)
+    assert data.notes[-2:] == (
+        "gap of 20 s with no rows in the output log (column 'y') from 20 to 40: 19 grid points left missing in y",
+        "gap of 10 s with no rows in the input log (column 'u') from 45 to 55: 9 grid points left missing in y")
+    bridged = _load(inputs, output_path=outputs, max_gap=None)
+    np.testing.assert_array_equal(bridged.y, -bridged.time)
+
+
+def test_overlapping_gaps_of_two_tags_merge_into_one_range(tmp_path):
+    records = [(t, "in", t) for t in range(61) if not 20 < t < 35] + [(t, "out", 1) for t in range(61)
+                                                                      if not 30 < t < 45]
+    records.sort(key=lambda record: record[0])
+    path = _write(tmp_path, "time,tag,value\n" + "".join("{},{},{}\n".format(*record) for record in records))
+    data = load_csv(path, time="time", input="in", output="out", long_format=True)
+    assert data.dt == 1.0
+    assert data.gaps == ((21, 45),)
+    np.testing.assert_array_equal(np.flatnonzero(np.isnan(data.y)), np.arange(21, 45))
+    assert [note.split(":")[0] for note in data.notes if note.startswith("gap")] == [
+        "gap of 15 s with no rows in the input log (tag 'in') from 20 to 35",
+        "gap of 15 s with no rows in the output log (tag 'out') from 30 to 45"]
+
+
+def test_a_burst_of_closely_spaced_rows_does_not_shrink_the_inferred_dt(tmp_path):
+    # an hour of rows 1 s apart, and inside it 1000 rows 1 ms apart
+    burst = 1800.0005 + 0.001 * np.arange(1000)
+    times = np.sort(np.r_[np.arange(3601.0), burst]).tolist()
+    path = _write(tmp_path, "time,u,y\n" + "".join(f"{t!r},{t!r},{3 * t!r}\n" for t in times))
+    data = _load(path)
+    assert data.dt == 1.0
+    assert data.time.size == 3601 and data.gaps == ()
+    np.testing.assert_allclose(data.u, data.time, rtol=1e-12)
+    np.testing.assert_allclose(data.y, 3 * data.time, rtol=1e-12)
+
+
+def test_a_grid_of_too_many_steps_is_refused_naming_dt(tmp_path):
+    # most spacings are a microsecond: the inferred dt would need 1e8 steps over the 100 s span
+    path = _write(tmp_path, "time,u,y\n0,1,2\n1e-06,1,2\n2e-06,1,2\n3e-06,1,2\n100,1,2\n")
+    with pytest.raises(DataError, match=r"data\.csv: the grid would have 10\d \d{3} \d{3} steps at dt = 1e-06 s "
+                                        r"\(inferred: the median spacing of the timestamps\) over the 100 s the data "
+                                        r"span \(limit 10 000 000\); pass a larger --dt / dt=$"):
+        _load(path)
+    assert _load(path, dt=1, max_gap=None).time.size == 101
 
 
 def test_two_files_are_two_event_logs_on_their_common_span(tmp_path):
     inputs = _write(tmp_path, "time,valve\n0,0\n4,4\n9,9\n20,20\n", name="valve.csv")
     outputs = _write(tmp_path, "time,level\n2,4\n3,6\n6,12\n12,24\n", name="level.csv")
-    data = load_csv(inputs, time="time", input="valve", output="level", output_path=outputs)
+    data = load_csv(inputs, time="time", input="valve", output="level", output_path=outputs, max_gap=None)
     # time zero is the first record of either log; the grid starts where both have data
     np.testing.assert_allclose(data.time, np.arange(2.0, 13.0, 2.0))
     np.testing.assert_allclose(data.u, data.time)
@@ -317,7 +435,7 @@ def test_two_files_with_timestamps_count_from_the_earlier_first_record(tmp_path)
     inputs = _write(tmp_path, "time,u\n2024-05-01T00:00:10,1\n2024-05-01T00:01:10,1\n", name="u.csv")
     outputs = _write(tmp_path, "time,y\n2024-05-01T00:00:00,2\n2024-05-01T00:00:20,4\n2024-05-01T00:00:40,\n"
                                "2024-05-01T00:01:00,8\n", name="y.csv")
-    data = load_csv(inputs, time="time", input="u", output="y", output_path=outputs, dt=10)
+    data = load_csv(inputs, time="time", input="u", output="y", output_path=outputs, dt=10, max_gap=None)
     assert data.start == datetime.datetime(2024, 5, 1)
     np.testing.assert_allclose(data.time, [10, 20, 30, 40, 50, 60])
     # the gap runs from the last present value before the missing one to the first after it
@@ -357,7 +475,7 @@ def test_long_format_with_other_column_names(tmp_path):
 
 def test_long_format_and_output_path_exclude_each_other(tmp_path):
     path = _write(tmp_path, "time,tag,value\n0,a,1\n1,a,2\n")
-    with pytest.raises(ValueError, match="do not give output_path"):
+    with pytest.raises(SettingsError, match="do not give output_path"):
         load_csv(path, time="time", input="a", output="a", long_format=True, output_path=path)
 
 
@@ -422,8 +540,8 @@ _LONG = {"long_format": True, "input": "a", "output": "b"}
                                        r"expected one cell per column"),
     (_ROWS, {"dt": 5}, r"data\.csv: dt = 5 s is longer than the 1 s the data span; expected a dt that leaves at least "
                        r"2 grid points$"),
-    (_ROWS, {"dt": 1e-8}, r"data\.csv: dt = 1e-08 s would put 1e\+08 points on the 1 s the data span; "
-                          r"expected at most 10,000,000: give a larger dt"),
+    (_ROWS, {"dt": 1e-8}, r"data\.csv: the grid would have 100 000 001 steps at dt = 1e-08 s over the 1 s the data "
+                          r"span \(limit 10 000 000\); pass a larger --dt / dt=$"),
     ("time,tag,value\n0,a,1\n1,b,2\n2,a,3\n3,b,4\n", {**_LONG, "output": "c"},
      r"data\.csv: column 'tag' holds no tag 'c' \(given as output\) in rows 2 to 5; tags present: 'a', 'b'$"),
     ("time,tag,value\n0,a,1\n1,b,2\n2,a,3\n", _LONG, r"data\.csv: tag 'b' has only one data row \(row 3\)"),
@@ -460,8 +578,16 @@ def test_a_folder_is_not_a_file(tmp_path):
 
 @pytest.mark.parametrize("dt", [0, -1.0, math.nan, math.inf, "2", True])
 def test_dt_must_be_a_finite_number_above_zero(tmp_path, dt):
-    with pytest.raises(DataError, match=r"^dt must be a finite number of seconds > 0; got "):
+    with pytest.raises(SettingsError, match=r"^dt must be a finite number of seconds > 0; got "):
         _load(_write(tmp_path, _ROWS), dt=dt)
+
+
+@pytest.mark.parametrize("max_gap", [1, 0.5, 0, -3, math.nan, -math.inf, "5", True])
+def test_max_gap_must_be_a_number_above_one_or_none(tmp_path, max_gap):
+    with pytest.raises(SettingsError, match=r"^max_gap must be a number of grid steps > 1, or None to interpolate "
+                                            r"across stretches without rows of any length; got ") as caught:
+        _load(_write(tmp_path, _ROWS), max_gap=max_gap)
+    assert caught.value.setting == "max_gap"
 
 
 def test_errors_in_the_output_file_name_that_file(tmp_path):
@@ -492,7 +618,8 @@ def test_a_uniform_numeric_csv_round_trips_exactly(tmp_path, start, spacing, val
     u = np.array([value for value, _ in values])
     y = np.array([np.nan if value is None else value for _, value in values])
     times = start + spacing * np.arange(u.size)
-    rows = "".join(f"{float(t)!r},{a!r},{'' if b is None else repr(b)}\n" for t, (a, b) in zip(times, values))
+    rows = "".join(f"{float(t)!r},{a!r},{'' if b is None else repr(b)}\n"
+                   for t, (a, b) in zip(times, values, strict=True))
     data = _load(_write(tmp_path, "time,u,y\n" + rows))
     np.testing.assert_array_equal(data.u, u)
     np.testing.assert_array_equal(data.y, y)
@@ -514,10 +641,10 @@ def test_irregular_timestamps_of_a_linear_signal_resample_exactly(tmp_path, gaps
               for micro in np.r_[0, np.cumsum(gaps)]]
     (slope_u, slope_y), (offset_u, offset_y) = slopes, offsets
     rows = "".join(f"{stamp},{float(offset_u + slope_u * t)!r},{float(offset_y + slope_y * t)!r}\n"
-                   for stamp, t in zip(stamps, seconds))
+                   for stamp, t in zip(stamps, seconds, strict=True))
     if seconds[-1] < dt:
         dt = seconds[-1]  # the grid needs two points
-    data = _load(_write(tmp_path, "time,u,y\n" + rows), dt=dt)
+    data = _load(_write(tmp_path, "time,u,y\n" + rows), dt=dt, max_gap=None)
     assert data.time[0] == 0 and data.time[-1] <= seconds[-1]
     np.testing.assert_allclose(np.diff(data.time), dt, rtol=1e-9)
     scale = 1 + abs(offset_u) + abs(offset_y)

@@ -1,12 +1,14 @@
-"""Data quality: glitches, outliers and stuck values, and the high-IC segments they fall in."""
+"""Data quality: absurd magnitudes, glitches, outliers and stuck values, and the high-IC segments they fall in."""
 import math
 import statistics
+import warnings
 
 import numpy as np
 import pytest
 
 import dynia
 from dynia.data import resample_events
+from dynia.errors import SettingsError
 from dynia.models import FirstOrder
 from dynia.quality import Finding, QualityReport, check_quality, informative_segments
 from dynia.result import DyniaResult
@@ -87,7 +89,7 @@ def glitch_reference(x, half=3, threshold=6.0, min_size=0.1, longest=2, quantile
     low = ordered[math.ceil(quantile * (len(x) - 1))]  # quantiles rounded inwards to a sample
     high = ordered[math.floor((1 - quantile) * (len(x) - 1))]
     floor = 1e-6 * max(high - low, abs(statistics.median(x)))
-    noise = 1.4826 * statistics.median(abs(b - a) for a, b in zip(x, x[1:])) / 2 ** 0.5
+    noise = 1.4826 * statistics.median(abs(b - a) for a, b in zip(x, x[1:], strict=False)) / 2 ** 0.5
     medians, scales = [], []
     for i in range(len(x)):
         window = list(x[max(i - half, 0):i + half + 1])
@@ -228,6 +230,81 @@ def test_stuck_tolerance_joins_readings_that_differ_by_less():
     assert kinds(check_quality(None, u, y, stuck_tolerance=0.01)) == [("y", "stuck", 500, 540)]
 
 
+# --- absurd magnitudes ------------------------------------------------------------------------
+
+@pytest.mark.parametrize("signal", ["u", "y"])
+@pytest.mark.parametrize("value", [1e308, -1e308])
+def test_a_1e308_cell_is_a_magnitude_finding_and_leaves_the_other_tests_as_without_it(signal, value):
+    rng = np.random.default_rng(12)
+    u, y = noisy_steps(rng)
+    u[640], y[150] = 0.0, 0.0  # a glitch in each signal, to be found as before
+    record = {"u": u, "y": y}
+    record[signal] = record[signal].copy()
+    without = dict(record)
+    without[signal] = record[signal].copy()
+    without[signal][1000] = np.nan
+    record[signal][1000] = value
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no overflow on the way
+        report = check_quality(None, record["u"], record["y"])
+    magnitude = [f for f in report.findings if f.kind == "magnitude"]
+    assert [(f.signal, f.start, f.stop, f.value) for f in magnitude] == [(signal, 1000, 1001, value)]
+    assert magnitude[0].start_time == magnitude[0].end_time == 1000.0
+    assert magnitude[0].reason == (f"{value:.6g} is no plausible reading, its size exceeds max_magnitude = 1e+12: a "
+                                   "sentinel, a unit or parsing error or a corrupted reading; left out of the other "
+                                   "tests")
+    others = [f for f in report.findings if f.kind != "magnitude"]
+    assert others == list(check_quality(None, without["u"], without["y"]).findings)
+    assert kinds(report) == sorted(kinds(report), key=lambda f: (f[0], dynia.quality.KINDS.index(f[1]), f[2]))
+    assert ("u", "glitch", 640, 641) in kinds(report) and ("y", "glitch", 150, 151) in kinds(report)
+    assert report.mask(signal, ["magnitude"]).sum() == 1 and report.mask(signal, ["magnitude"])[1000]
+    assert "1 magnitude" in report.summary() and f"  {signal} magnitude t=1000 (samples 1000-1000): " in \
+        report.summary()
+
+
+def test_magnitudes_are_removed_by_exclude():
+    u, y = np.linspace(1.0, 3.0, 21), np.full(21, 8.0)
+    u[10], y[11] = 1e300, -1e308
+    report = check_quality(None, u, y)
+    assert kinds(report) == [("u", "magnitude", 10, 11), ("y", "magnitude", 11, 12)]
+    assert report.exclude(u, signal="u")[10] == pytest.approx(2.0)
+    assert np.isnan(report.exclude(y)[11]) and np.isnan(report.exclude(y)).sum() == 1
+
+
+def test_the_magnitude_limit_and_the_overflow_limit():
+    y = np.sin(np.arange(100) / 7.0)
+    y[[20, 21, 23, 60]] = [2e12, 5e12, 3e12, 1e11]
+    y[22] = np.nan  # a missing sample does not split a run
+    report = check_quality(None, np.ones(100), y)
+    assert [(f.start, f.stop, f.value) for f in report.findings if f.kind == "magnitude"] == [(20, 24, 5e12)]
+    assert ("y", "magnitude", 60, 61) not in kinds(report)  # 1e11: an outlier, no magnitude finding
+    assert ("y", "outlier", 60, 61) in kinds(report)
+    assert [f.start for f in check_quality(None, np.ones(100), y, max_magnitude=1e10).findings
+            if f.kind == "magnitude"] == [20, 60]
+    assert not any(f.kind == "magnitude"
+                   for f in check_quality(None, np.ones(100), y, max_magnitude=1e13).findings)
+    y[[20, 21, 23, 60]] = [1e140, 1e151, np.sin(23 / 7.0), np.sin(60 / 7.0)]
+    found = [f for f in check_quality(None, np.ones(100), y, max_magnitude=math.inf).findings
+             if f.kind == "magnitude"]
+    assert [(f.start, f.stop, f.value) for f in found] == [(21, 22, 1e151)]
+    assert found[0].reason.endswith("its size exceeds 1e+150, beyond which squaring it in a cost overflows; "
+                                    "left out of the other tests")
+
+
+def test_a_signal_of_nothing_but_absurd_values_has_only_magnitude_findings():
+    report = check_quality(None, np.ones(20), np.full(20, 1e200))
+    assert kinds(report) == [("y", "magnitude", 0, 20)]
+    assert report.summary().splitlines()[0] == "Data quality of 20 samples: 1 finding."
+
+
+@pytest.mark.parametrize("limit", [0, -1.0, math.nan, "1e12", True, None])
+def test_max_magnitude_must_be_a_number_above_zero(limit):
+    with pytest.raises(SettingsError, match=r"^max_magnitude must be a number > 0 \(math\.inf: flag only values "
+                                            r"above 1e\+150\); got ") as caught:
+        check_quality(None, np.ones(5), np.ones(5), max_magnitude=limit)
+    assert caught.value.setting == "max_magnitude"
+
+
 # --- missing samples --------------------------------------------------------------------------
 
 def test_missing_samples_are_never_flagged_and_tests_skip_them():
@@ -317,8 +394,8 @@ def test_to_dataframe_and_summary(glitchy):
     stuck = table[table.kind == "stuck"].iloc[0]
     assert (stuck.start_time, stuck.end_time) == (time[250], time[289])
     text = report.summary()
-    assert "5 findings" in text and "u: 1 glitch, 1 outlier, 0 stuck; 1 flagged sample\n" in text
-    assert "y: 1 glitch, 1 outlier, 1 stuck; 41 flagged samples" in text
+    assert "5 findings" in text and "u: 0 magnitude, 1 glitch, 1 outlier, 0 stuck; 1 flagged sample\n" in text
+    assert "y: 0 magnitude, 1 glitch, 1 outlier, 1 stuck; 41 flagged samples" in text
     assert "40 consecutive readings" in text
 
 
