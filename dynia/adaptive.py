@@ -50,6 +50,7 @@ sample) are the next step; the "de" boxes are built from too few points.
 notebooks/ch5_sampling_benchmark.py measures every sampler on examples 1
 and 2 against 10^6-sample references.
 """
+import dataclasses
 import math
 
 import numpy as np
@@ -60,6 +61,7 @@ from .engine.selection import lowest_weighted
 from .engine.windows import moving_window, window_costs
 from .errors import DataError, SettingsError
 from .settings import AnalysisSettings, parameter_box
+from .verdicts import assess
 
 __all__ = ["BoxMixture", "adaptive_run", "SCHEMES"]
 
@@ -223,7 +225,8 @@ def adaptive_run(u, y, model, bounds, *, scheme=None, settings=None, rng=None, b
                            bounds={name: tuple(map(float, row)) for name, row in zip(names, prior)},
                            n_sampled=spent, n_dropped=0)
     result.settings.update(analysed, sampler=scheme, n_evaluations=spent, weights=weights, n_blocks=n_blocks)
-    return result
+    with np.errstate(over="ignore", invalid="ignore"):
+        return dataclasses.replace(result, verdicts=assess(result, u=u, y=y, model=model))
 
 
 def _uniform_in(box, count, rng):

@@ -1,4 +1,5 @@
 """``dynia.run``: sample, simulate and analyse in one call, streaming over time."""
+import dataclasses
 import warnings
 
 import numpy as np
@@ -11,6 +12,7 @@ from .engine.windows import analyse_stream, default_chunk_steps
 from .errors import DataError, ModelError
 from .sampling import sample
 from .settings import ADAPTIVE_SAMPLERS, AnalysisSettings, parameter_box
+from .verdicts import assess
 
 __all__ = ["run", "DROPPED_WARNING_SHARE", "DroppedSamplesWarning"]
 
@@ -130,14 +132,16 @@ def run(u, y, model, bounds, *, settings=None, dt=None, n_samples=None, sampler=
                     bounds={name: tuple(map(float, row)) for name, row in zip(names, box)},
                     n_sampled=settings.n_samples, n_dropped=n_dropped)
     try:
-        return analyse_stream(y, errors, samples, box, n=settings.n, percentage=settings.percentage,
-                              bins=settings.bins, conf_level=settings.conf_level, flavour=settings.flavour,
-                              names=names, time=np.arange(y.size) * settings.dt, chunk_steps=chunk_steps,
-                              progress=progress, min_points=settings.min_points, settings=recorded,
-                              window=settings.window, engine=settings.engine, workers=workers)
+        result = analyse_stream(y, errors, samples, box, n=settings.n, percentage=settings.percentage,
+                                bins=settings.bins, conf_level=settings.conf_level, flavour=settings.flavour,
+                                names=names, time=np.arange(y.size) * settings.dt, chunk_steps=chunk_steps,
+                                progress=progress, min_points=settings.min_points, settings=recorded,
+                                window=settings.window, engine=settings.engine, workers=workers)
     finally:
         if isinstance(errors, CompiledErrors):
             errors.close()
+    with np.errstate(over="ignore", invalid="ignore"):
+        return dataclasses.replace(result, verdicts=assess(result, u=u, y=y, model=model))
 
 
 def warn_dropped(n_dropped, n_sampled):

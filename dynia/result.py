@@ -40,6 +40,12 @@ class DyniaResult:
         Parameter value of each gradient row.
     settings : dict
         Every option of the run.
+    verdicts : dict or None
+        Per parameter ``{"verdict", "reasons"}`` from
+        :func:`dynia.verdicts.assess` with the data and the model, as
+        :func:`dynia.run` attaches them; None for results built without
+        them (then :meth:`summary` applies the rules that need the result
+        only).
     """
 
     names: tuple
@@ -51,6 +57,7 @@ class DyniaResult:
     gradient: np.ndarray
     bin_centres: np.ndarray
     settings: dict = field(default_factory=dict)
+    verdicts: dict | None = None
 
     def index(self, name):
         """Position of parameter ``name`` on the parameter axis."""
@@ -168,30 +175,36 @@ class DyniaResult:
         return mask
 
     def summary(self):
-        """Per parameter: the highest IC, when it occurs, the band and the estimate there.
+        """Per parameter: the highest IC, when it occurs, the band and the estimate there, and a verdict.
 
         The estimate is the centre of the bin with the largest CLD gradient
-        at the time of the highest IC. Parameters whose IC is missing
-        everywhere get None throughout.
+        at the time of the highest IC. The verdict ("identified", "weak" or
+        "suspect") and its reasons say what that estimate is worth (see
+        :mod:`dynia.verdicts`). Parameters whose IC is missing everywhere get
+        None for the numbers.
 
         Returns
         -------
         dict
-            ``{name: {"max_ic", "time_of_max_ic", "band": [lower, upper], "estimate"}}``
-            with plain Python floats.
+            ``{name: {"max_ic", "time_of_max_ic", "band": [lower, upper], "estimate",
+            "verdict", "reasons"}}`` with plain Python values.
         """
+        from .verdicts import assess  # verdicts reads results: imported here to keep the modules acyclic
+
+        verdicts = self.verdicts if self.verdicts is not None else assess(self)
         summary = {}
         for p, name in enumerate(self.names):
             if np.isnan(self.ic[p]).all():
                 summary[name] = dict(max_ic=None, time_of_max_ic=None, band=[None, None], estimate=None)
-                continue
-            best = int(np.nanargmax(self.ic[p]))
-            summary[name] = dict(
-                max_ic=float(self.ic[p, best]),
-                time_of_max_ic=float(self.time[best]),
-                band=[float(self.ci[p, best, 0]), float(self.ci[p, best, 1])],
-                estimate=float(self.bin_centres[p, int(np.argmax(self.gradient[p, :, best]))]),
-            )
+            else:
+                best = int(np.nanargmax(self.ic[p]))
+                summary[name] = dict(
+                    max_ic=float(self.ic[p, best]),
+                    time_of_max_ic=float(self.time[best]),
+                    band=[float(self.ci[p, best, 0]), float(self.ci[p, best, 1])],
+                    estimate=float(self.bin_centres[p, int(np.argmax(self.gradient[p, :, best]))]),
+                )
+            summary[name].update(verdict=verdicts[name]["verdict"], reasons=list(verdicts[name]["reasons"]))
         return summary
 
     def to_dataframe(self):

@@ -1,0 +1,109 @@
+"""AnalysisSettings: checked once, strictly typed, and honoured (or refused) by every front-end."""
+import numpy as np
+import pytest
+
+import dynia
+from dynia.errors import DataError, DyniaError, ModelError, OutputError, SettingsError
+from dynia.models import FirstOrder
+from dynia.online import OnlineDynia
+from dynia.settings import MAX_BINS, AnalysisSettings
+
+U = np.r_[np.zeros(20), np.full(60, 1.0)]
+Y = FirstOrder().simulate([[2.0, 3.0]], U)[0]
+BOUNDS = {"K": (0, 7), "T": (0, 7)}
+
+
+@pytest.mark.parametrize("error", [DataError, SettingsError, ModelError, OutputError])
+def test_every_error_is_a_dynia_error_and_a_value_error(error):
+    assert issubclass(error, DyniaError) and issubclass(error, ValueError)
+
+
+@pytest.mark.parametrize("field, value, message", [
+    ("percentage", "10", r"percentage must be a finite number; got '10' \(str\)"),
+    ("n", 2.5, r"n must be a whole number; got 2.5 \(float\)"),
+    ("n_samples", True, r"n_samples must be a whole number; got True \(bool\)"),
+    ("conf_level", 0.9, r"conf_level is a percentage in \(50, 100\); got 0.9 \(did you mean 90\?\)"),
+    ("conf_level", 50, r"conf_level is a percentage in \(50, 100\); got 50$"),
+    ("conf_level", 100, r"conf_level is a percentage in \(50, 100\)"),
+    ("bins", MAX_BINS + 1, "bins must be at most 1000"),
+    ("min_points", 22, r"min_points 22 is more than a window holds \(2n\+1 = 21"),
+    ("workers", 0, "workers must be at least 1"),
+    ("flavour", "glue", "flavour must be one of 'thesis', 'mcat', 'weighted'"),
+    ("dt", "1", "dt must be a finite number > 0"),
+])
+def test_a_bad_setting_is_one_clear_error_naming_it(field, value, message):
+    with pytest.raises(SettingsError, match=message) as caught:
+        AnalysisSettings(**{field: value})
+    assert caught.value.setting == field
+
+
+@pytest.mark.parametrize("changes, message", [
+    (dict(sampler="iis", engine="numba"), "which the compiled engine does not take"),
+    (dict(sampler="de", flavour="mcat"), "which the mcat flavour cannot use"),
+    (dict(engine="numba", flavour="mcat"), "engine 'numba' covers the 'thesis' and 'weighted'"),
+    (dict(flavour="mcat", percentage=30), "does not divide 100"),
+    (dict(n_samples=15, percentage=10), "keeps 1 parameter sets per window"),
+])
+def test_settings_that_cannot_go_together_are_refused(changes, message):
+    with pytest.raises(SettingsError, match=message):
+        AnalysisSettings(**changes)
+
+
+def test_build_puts_given_keywords_over_the_object_and_checks_again():
+    base = AnalysisSettings(n=5, percentage=5)
+    assert AnalysisSettings.build(base, n=None, percentage=20) == AnalysisSettings(n=5, percentage=20)
+    assert AnalysisSettings.build(None) == AnalysisSettings()
+    with pytest.raises(SettingsError, match="unknown setting"):
+        base.replace(window_size=3)
+    with pytest.raises(SettingsError, match="settings must be a dynia.settings.AnalysisSettings"):
+        AnalysisSettings.build({"n": 5})
+
+
+def test_the_old_silently_dropped_keywords_now_reach_the_adaptive_run_or_are_refused():
+    # dynia.run(sampler="iis", min_points=11, engine="numba", workers=0) used to drop three of them.
+    with pytest.raises(SettingsError, match="workers must be at least 1"):
+        dynia.run(U, Y, FirstOrder(), BOUNDS, sampler="iis", min_points=11, engine="numba", workers=0)
+    with pytest.raises(SettingsError, match="compiled engine"):
+        dynia.run(U, Y, FirstOrder(), BOUNDS, sampler="iis", min_points=11, engine="numba")
+    res = dynia.run(U, Y, FirstOrder(), BOUNDS, sampler="iis", n_samples=400, n=5, min_points=11, rng=1)
+    assert res.settings["min_points"] == 11 and res.settings["sampler"] == "iis"
+    # min_points 11 of a window of 11: the truncated windows at both ends report nothing.
+    assert np.isnan(res.ic[:, :5]).all() and np.isnan(res.ic[:, -5:]).all() and not np.isnan(res.ic[:, 5:-5]).any()
+
+
+def test_a_settings_object_and_keywords_give_the_same_run():
+    settings = AnalysisSettings(n_samples=300, n=4, percentage=20, conf_level=80)
+    by_object = dynia.run(U, Y, FirstOrder(), BOUNDS, settings=settings, rng=3)
+    by_keywords = dynia.run(U, Y, FirstOrder(), BOUNDS, n_samples=300, n=4, percentage=20, conf_level=80, rng=3)
+    assert np.array_equal(by_object.ic, by_keywords.ic) and np.array_equal(by_object.ci, by_keywords.ci)
+    assert by_object.settings == by_keywords.settings
+    assert by_object.settings["conf_level"] == 80 and by_object.settings["n_sampled"] == 300
+
+
+@pytest.mark.parametrize("changes, message", [
+    (dict(window="centred"), "OnlineDynia does not support window='centred'"),
+    (dict(workers=2), "OnlineDynia does not support workers=2"),
+    (dict(engine="numba"), "OnlineDynia does not support engine='numba'"),
+])
+def test_online_refuses_what_it_cannot_honour(changes, message):
+    settings = AnalysisSettings(n_samples=100, window="trailing").replace(**changes)
+    with pytest.raises(SettingsError, match=message):
+        OnlineDynia(FirstOrder(), BOUNDS, settings=settings)
+
+
+def test_online_takes_a_settings_object_and_equals_the_batch_run():
+    settings = AnalysisSettings(n_samples=300, n=4, window="trailing")
+    online = OnlineDynia(FirstOrder(), BOUNDS, settings=settings, rng=2).replay(U, Y)
+    batch = dynia.run(U, Y, FirstOrder(), BOUNDS, settings=settings, rng=2)
+    assert np.array_equal(online.ic, batch.ic)
+
+
+def test_a_lag_model_whose_pole_underflows_runs_on_both_engines():
+    # T far below dt: exp(-dt/T) is 0 for every sample, so the model has no state term.
+    compiled = dynia.run(U, Y, FirstOrder(), {"K": (0, 7), "T": (0, 0.001)}, n_samples=200, n=3, rng=1,
+                         engine="numba")
+    plain = dynia.run(U, Y, FirstOrder(), {"K": (0, 7), "T": (0, 0.001)}, n_samples=200, n=3, rng=1,
+                      engine="numpy")
+    assert compiled.settings["engine"] == "numba"
+    assert np.array_equal(compiled.ic, plain.ic, equal_nan=True)
+    assert np.array_equal(compiled.ci, plain.ci, equal_nan=True)
