@@ -11,26 +11,25 @@ data the method selects and validates it on the held-out end of the record
 Bad input ends the command with one line on stderr and exit status 2.
 """
 import argparse
-import csv
-import datetime
-import json
+import importlib.metadata
 import math
-import os
-import shutil
+import platform
+import signal
 import sys
-import tempfile
 import tomllib
-from pathlib import Path
+import warnings
 
 import numpy as np
 
-from . import __version__, models
-from .analysis import FLAVOURS
-from .data import DataError, load_csv
+from . import __version__, models, report
+from .data import load_csv
+from .errors import DyniaError, Interrupted, SettingsError
 from .identify import identify
-from .pipeline import run
+from .outdir import OutputDirectory
+from .pipeline import DroppedSamplesWarning, run
+from .quality import check_quality
 from .refine import narrowed_bounds
-from .sampling import SAMPLERS
+from .settings import FLAVOURS, MAX_PARAMETER, SAMPLERS, AnalysisSettings
 
 __all__ = ["main"]
 
@@ -65,7 +64,7 @@ example (the heating-system record; the last 30 % of it is held out for validati
 """
 
 
-class UsageError(Exception):
+class UsageError(SettingsError):
     """A mistake in the command's options, reported as one line with exit status 2."""
 
 
@@ -94,9 +93,9 @@ def _parser():
     method.add_argument("--n", type=int, help="half window: each window holds 2n+1 steps (default 10)")
     method.add_argument("--percentage", type=float, metavar="P",
                         help="behavioural share of the samples in percent (default 10)")
-    method.add_argument("--bins", type=int, metavar="B", help="CLD gradient bins (default 40)")
+    method.add_argument("--bins", type=int, metavar="B", help="CLD gradient bins, at most 1000 (default 40)")
     method.add_argument("--conf-level", type=float, metavar="C",
-                        help="confidence level of the band, percent in (0, 100) (default 90)")
+                        help="confidence level of the band, percent in (50, 100) (default 90)")
     method.add_argument("--flavour", choices=FLAVOURS, help="thesis (default), mcat or weighted")
     method.add_argument("--min-points", type=int, metavar="N",
                         help="windows with fewer measured output points report a missing IC (default 1)")
@@ -132,8 +131,6 @@ def _parser():
                                 "threshold (default) or when all do")
     selection.add_argument("--held-out", type=float, metavar="FRACTION",
                            help="share of the record, at its end, kept for validation (default 0.3)")
-    selection.add_argument("--quality", action="store_true",
-                           help="check the data for glitches, outliers and stuck values and report them")
     selection.add_argument("--exclude-flagged", action="store_true",
                            help="check the data and leave out what is flagged (output as missing, "
                                 "input interpolated)")
@@ -151,8 +148,10 @@ def _parser():
 
 def _add_output_options(command):
     output = command.add_argument_group("output")
-    output.add_argument("--out", metavar="DIR", help="directory for the results (must not exist)")
-    output.add_argument("--overwrite", action="store_true", help="replace DIR if it exists")
+    output.add_argument("--out", metavar="DIR", help="directory for the results (must not exist; see --overwrite)")
+    output.add_argument("--overwrite", action="store_true",
+                        help="replace DIR if it holds the results of an earlier dynia run (never anything else)")
+    output.add_argument("--no-plots", action="store_true", help="write the tables and the summary, no figures")
     output.add_argument("--config", metavar="FILE.toml", help="read the settings from a TOML file")
 
 
@@ -161,8 +160,10 @@ def _add_data_and_model_options(command):
     data.add_argument("data", nargs="?", metavar="DATA.csv",
                       help="CSV file with a header row: time, input and output columns")
     data.add_argument("--time", help="name of the time column: seconds, or ISO 8601 timestamps")
-    data.add_argument("--input", help="name of the input column (in long format: the input's tag)")
-    data.add_argument("--output", help="name of the output column (in long format: the output's tag)")
+    data.add_argument("--input", action="append",
+                      help="name of the input column (in long format: the input's tag); give one")
+    data.add_argument("--output", action="append",
+                      help="name of the output column (in long format: the output's tag); give one")
     data.add_argument("--output-file", metavar="FILE",
                       help="the output is logged in this second file, with its own time column of the "
                            "same name: both logs are resampled onto a common grid")
@@ -171,7 +172,12 @@ def _add_data_and_model_options(command):
     data.add_argument("--tag-column", help="long format: the tag column (default: tag)")
     data.add_argument("--value-column", help="long format: the value column (default: value)")
     data.add_argument("--dt", type=float, metavar="SECONDS",
-                      help="grid spacing for irregular or event-based data (default: inferred)")
+                      help="grid spacing for irregular or event-based data (default: the median spacing of the rows)")
+    data.add_argument("--max-gap", type=float, metavar="STEPS",
+                      help="a stretch without rows longer than this many grid steps is a gap: the output there is "
+                           "left missing, not interpolated (default 5; inf interpolates across everything)")
+    data.add_argument("--quality", action="store_true",
+                      help="check the data for absurd magnitudes, glitches, outliers and stuck values and report them")
     data.add_argument("--offset", metavar="{none,first,VALUE}",
                       help="subtract an output offset before fitting: none (default), first (the first "
                            "measured output) or a number")
@@ -189,103 +195,196 @@ def _add_data_and_model_options(command):
                        help="initial state of every simulation: zero (default) or steady at the first input")
 
 
-DEFAULTS = dict(samples=2000, sampler="uniform", n=10, percentage=10.0, bins=40, conf_level=90.0,
-                flavour="thesis", x0="zero", offset="none", input_offset="none", min_points=1, tag_column="tag",
-                value_column="value", overwrite=False, long=False, second_run=False,
-                narrow_threshold=0.75, narrow_margin=0.5, method="dynia", ic_threshold=0.5, mode="any",
-                held_out=0.3, quality=False, exclude_flagged=False, starts=1)
+# Every option: its type in a --config file, its default and the commands that take it.
+# One table, so that a config key of the wrong type is refused the same way as a
+# command-line value, and a summary records exactly the options of its command.
+_BOTH = ("analyse", "identify")
+_ANALYSE = ("analyse",)
+_IDENTIFY = ("identify",)
+OPTIONS = {
+    "data": ("text", None, _BOTH), "time": ("text", None, _BOTH), "input": ("names", None, _BOTH),
+    "output": ("names", None, _BOTH), "output_file": ("text", None, _BOTH), "long": ("flag", False, _BOTH),
+    "tag_column": ("text", "tag", _BOTH), "value_column": ("text", "value", _BOTH), "dt": ("number", None, _BOTH),
+    "max_gap": ("number", 5.0, _BOTH), "offset": ("offset", "none", _BOTH), "input_offset": ("offset", "none", _BOTH),
+    "model": ("text", None, _BOTH), "param": ("names", None, _BOTH), "x0": ("text", "zero", _BOTH),
+    "samples": ("whole", 2000, _BOTH), "n": ("whole", 10, _BOTH), "percentage": ("number", 10.0, _BOTH),
+    "seed": ("whole", None, _BOTH), "quality": ("flag", False, _BOTH), "no_plots": ("flag", False, _BOTH),
+    "out": ("text", None, _BOTH), "overwrite": ("flag", False, _BOTH),
+    "sampler": ("text", "uniform", _ANALYSE), "bins": ("whole", 40, _ANALYSE), "conf_level": ("number", 90.0, _ANALYSE),
+    "flavour": ("text", "thesis", _ANALYSE), "min_points": ("whole", 1, _ANALYSE),
+    "second_run": ("flag", False, _ANALYSE), "narrow_threshold": ("number", 0.75, _ANALYSE),
+    "narrow_margin": ("number", 0.5, _ANALYSE),
+    "method": ("text", "dynia", _IDENTIFY), "ic_threshold": ("number", 0.5, _IDENTIFY),
+    "mode": ("text", "any", _IDENTIFY), "held_out": ("number", 0.3, _IDENTIFY),
+    "exclude_flagged": ("flag", False, _IDENTIFY), "starts": ("whole", 1, _IDENTIFY),
+}
+
+# The command line's name of each AnalysisSettings field, for error messages.
+_SETTING_OPTIONS = {"n_samples": "--samples"}
 
 
 def main(argv=None):
-    """Entry point of the ``dynia`` command; returns the exit status."""
+    """Entry point of the ``dynia`` command; returns the exit status.
+
+    Errors in what the user gave (a :class:`~dynia.errors.DyniaError`) end
+    the command with one line on stderr and status 2; a signal with status
+    128 + its number and nothing written. Any other exception is a bug in
+    dynia and keeps its traceback.
+    """
     parser = _parser()
+    command_line = ["dynia", *(sys.argv[1:] if argv is None else map(str, argv))]
     try:
-        args = parser.parse_args(argv)
-        if args.command is None:
-            parser.print_help()
-            return 2
-        settings = _settings(args)
-        return _identify(settings) if args.command == "identify" else _analyse(settings)
-    except (UsageError, DataError, ValueError, OSError) as error:
+        # Warnings of numpy, matplotlib and the rest would break the promise of
+        # one line per error; dynia's own warnings are reported by the commands.
+        with warnings.catch_warnings(record=True) as caught, np.errstate(all="ignore"):
+            warnings.simplefilter("always")
+            args = parser.parse_args(argv)
+            if args.command is None:
+                parser.print_help()
+                return 2
+            options = _options(args)
+            run_command = _identify if args.command == "identify" else _analyse
+            return run_command(options, command_line, caught)
+    except DyniaError as error:
         print(f"dynia: error: {_one_line(error)}", file=sys.stderr)
         return 2
+    except Interrupted as error:
+        print(f"dynia: {error}; nothing was written", file=sys.stderr)
+        return 128 + getattr(signal, error.signal_name)
     except KeyboardInterrupt:
         print("dynia: interrupted; nothing was written", file=sys.stderr)
         return 130
 
 
 def _one_line(error):
-    if isinstance(error, FileNotFoundError) and error.filename:
-        return f"{error.filename}: no such file"
     return " ".join(str(error).split())
 
 
-def _settings(args):
-    """Command-line options over the config file over the defaults, checked."""
+def _options(args):
+    """Command-line options over the config file over the defaults, every one checked."""
+    command = args.command
     given = {key: value for key, value in vars(args).items()
              if value is not None and key not in ("command", "config") and value is not False}
-    settings = dict(DEFAULTS)
+    options = {key: default for key, (_, default, commands) in OPTIONS.items() if command in commands}
     if args.config:
-        settings.update(_read_config(args.config))
-    settings.update(given)
+        options.update(_read_config(args.config, command))
+        options["config"] = args.config
+    options.update(given)
     for key in ("data", "time", "input", "output", "model", "out"):
-        if not settings.get(key):
+        if not options.get(key):
             option = "DATA.csv" if key == "data" else f"--{key}"
             raise UsageError(f"{option} is required (on the command line or in --config)")
-    if not settings.get("param"):
+    options["input"] = _one_column(options["input"], "--input")
+    options["output"] = _one_column(options["output"], "--output")
+    if options["input"] == options["output"] and not options["long"]:
+        raise UsageError(f"--input and --output name the same column {options['input']!r}; "
+                         "the output must be logged apart from the input")
+    if not options.get("param"):
         raise UsageError("give a range for every model parameter with --param NAME=LOW:HIGH")
-    if settings["model"] not in MODELS:
-        raise UsageError(f"--model must be one of {', '.join(sorted(MODELS))}; got {settings['model']!r}")
-    settings["bounds"] = _bounds(settings["param"], MODELS[settings["model"]]())
-    for key, minimum in (("samples", 1), ("n", 0), ("bins", 1), ("min_points", 1), ("starts", 1)):
-        if not isinstance(settings[key], int) or isinstance(settings[key], bool) or settings[key] < minimum:
-            raise UsageError(f"--{key.replace('_', '-')} must be a whole number >= {minimum}; got {settings[key]!r}")
-    if not 0 < settings["conf_level"] < 100:
-        raise UsageError(f"--conf-level must lie strictly between 0 and 100; got {settings['conf_level']}")
-    if not 0 < settings["narrow_threshold"] < 1:
-        raise UsageError(f"--narrow-threshold must lie strictly between 0 and 1; got {settings['narrow_threshold']}")
-    if not settings["narrow_margin"] >= 0:
-        raise UsageError(f"--narrow-margin must be >= 0; got {settings['narrow_margin']}")
-    if not 0 < settings["percentage"] <= 100:
-        raise UsageError(f"--percentage must lie in (0, 100]; got {settings['percentage']}")
-    behavioural = math.floor(settings["samples"] * settings["percentage"] / 100)
-    if behavioural < 2:
-        raise UsageError(f"--percentage {settings['percentage']:g} of --samples {settings['samples']} keeps "
-                         f"{behavioural} parameter sets per window; at least 2 are needed")
-    if not 0 < settings["ic_threshold"] <= 1:
-        raise UsageError(f"--ic-threshold must lie in (0, 1]; got {settings['ic_threshold']}")
-    if not 0 < settings["held_out"] < 1:
-        raise UsageError(f"--held-out must lie strictly between 0 and 1; got {settings['held_out']}")
+    if options["model"] not in MODELS:
+        raise UsageError(f"--model must be one of {', '.join(sorted(MODELS))}; got {options['model']!r}")
+    options["bounds"] = _bounds(options["param"], MODELS[options["model"]]())
+    options["analysis"] = _analysis_settings(options)
+    _check_command_options(options)
+    options["offset"] = _offset(options["offset"], "--offset")
+    options["input_offset"] = _offset(options["input_offset"], "--input-offset")
+    if options.get("seed") is None:
+        options["seed"] = int(np.random.SeedSequence().entropy % 2**63)
+    inputs = [path for path in (options["data"], options.get("output_file"), options.get("config")) if path]
+    options["inputs"] = inputs
+    # Checked now, before the data are read: an --out that could cost the user files is refused at once.
+    options["destination"] = OutputDirectory(options["out"], overwrite=options["overwrite"], inputs=inputs,
+                                             command=command)
+    return options
+
+
+def _one_column(names, option):
+    if isinstance(names, str):
+        names = [names]
+    if len(names) != 1:
+        raise UsageError(f"give one {option}: the models take one input and one output (multi-input models are "
+                         f"not supported yet); got {', '.join(map(repr, names))}")
+    return names[0]
+
+
+def _analysis_settings(options):
+    """The AnalysisSettings of the command's options, with errors naming the command-line option."""
+    fields = dict(n_samples=options["samples"], n=options["n"], percentage=options["percentage"], x0=options["x0"])
+    if "bins" in options:  # the analyse-only options
+        fields.update(sampler=options["sampler"], bins=options["bins"], conf_level=options["conf_level"],
+                      flavour=options["flavour"], min_points=options["min_points"])
+    try:
+        return AnalysisSettings(**fields)
+    except SettingsError as error:
+        option = _SETTING_OPTIONS.get(error.setting, f"--{str(error.setting).replace('_', '-')}")
+        message = str(error).replace(str(error.setting), option, 1) if error.setting else str(error)
+        raise UsageError(message) from None
+
+
+def _check_command_options(options):
+    """The options that only the command line has."""
+    for key, low, high, closed_high in (("narrow_threshold", 0, 1, False), ("ic_threshold", 0, 1, True),
+                                        ("held_out", 0, 1, False)):
+        if key in options:
+            value = options[key]
+            inside = low < value <= high if closed_high else low < value < high
+            if not inside:
+                interval = f"({low}, {high}]" if closed_high else f"({low}, {high})"
+                raise UsageError(f"--{key.replace('_', '-')} must lie in {interval}; got {value:g}")
+    if "narrow_margin" in options and not options["narrow_margin"] >= 0:
+        raise UsageError(f"--narrow-margin must be >= 0; got {options['narrow_margin']:g}")
+    if "starts" in options and options["starts"] < 1:
+        raise UsageError(f"--starts must be a whole number >= 1; got {options['starts']}")
+    if not (options["max_gap"] > 1 or math.isinf(options["max_gap"])):
+        raise UsageError(f"--max-gap is a multiple of the grid step above 1 (a gap longer than that many steps is "
+                         f"left missing); got {options['max_gap']:g}")
     for key, choices in (("sampler", SAMPLERS), ("flavour", FLAVOURS), ("x0", ("zero", "steady")),
                          ("method", IDENTIFY_METHODS), ("mode", ("any", "joint"))):
-        if settings[key] not in choices:
-            raise UsageError(f"--{key} must be one of {', '.join(choices)}; got {settings[key]!r}")
-    settings["offset"] = _offset(settings["offset"], "--offset")
-    settings["input_offset"] = _offset(settings["input_offset"], "--input-offset")
-    if settings.get("seed") is None:
-        settings["seed"] = int(np.random.SeedSequence().entropy % 2**63)
-    out = Path(settings["out"])
-    if out.exists() and not settings["overwrite"]:
-        raise UsageError(f"--out {out} exists; choose another directory or add --overwrite")
-    return settings
+        if key in options and options[key] not in choices:
+            raise UsageError(f"--{key} must be one of {', '.join(choices)}; got {options[key]!r}")
 
 
-def _read_config(path):
+def _read_config(path, command):
     try:
         with open(path, "rb") as handle:
             config = tomllib.load(handle)
+    except FileNotFoundError:
+        raise UsageError(f"--config {path}: no such file") from None
+    except OSError as error:
+        raise UsageError(f"--config {path}: cannot be read ({error.strerror})") from None
     except tomllib.TOMLDecodeError as error:
         raise UsageError(f"--config {path}: not valid TOML: {error}") from None
     config = {key.replace("-", "_"): value for key, value in config.items()}
-    allowed = set(DEFAULTS) | {"data", "time", "input", "output", "output_file", "dt", "model", "param",
-                               "seed", "out"}
-    unknown = sorted(set(config) - allowed)
+    allowed = sorted(key for key, (_, _, commands) in OPTIONS.items() if command in commands)
+    unknown = sorted(set(config) - set(allowed))
     if unknown:
-        raise UsageError(f"--config {path}: unknown key(s) {', '.join(unknown)}; "
-                         f"allowed: {', '.join(sorted(allowed))}")
-    if isinstance(config.get("param"), str):
-        config["param"] = [config["param"]]
-    return config
+        raise UsageError(f"--config {path}: unknown key(s) for dynia {command}: {', '.join(unknown)}; "
+                         f"allowed: {', '.join(allowed)}")
+    return {key: _typed(value, OPTIONS[key][0], f"--config {path}: {key}") for key, value in config.items()}
+
+
+def _typed(value, kind, where):
+    """A config value of the kind its option takes, or a one-line error (never truthy strings)."""
+    is_number = isinstance(value, (int, float)) and not isinstance(value, bool)
+    if kind == "flag" and isinstance(value, bool):
+        return value
+    if kind == "whole" and isinstance(value, int) and not isinstance(value, bool):
+        return value
+    if kind == "number" and is_number:
+        return float(value)
+    if kind == "text" and isinstance(value, str):
+        return value
+    if kind == "offset" and (isinstance(value, str) or is_number):
+        return value
+    if kind == "names":
+        if isinstance(value, str):
+            return [value]
+        if isinstance(value, list) and value and all(isinstance(item, str) for item in value):
+            return value
+    expected = {"flag": "true or false (unquoted)", "whole": "a whole number", "number": "a number",
+                "text": "a string", "offset": "none, first or a number",
+                "names": "a string or a list of strings"}[kind]
+    raise UsageError(f"{where} must be {expected}; got {value!r} ({type(value).__name__})")
 
 
 def _bounds(specs, model):
@@ -305,6 +404,9 @@ def _bounds(specs, model):
             raise UsageError(f"--param {name} is given twice")
         if not (math.isfinite(low) and math.isfinite(high) and low < high):
             raise UsageError(f"--param {name}: the lower bound {low:g} must be below the upper bound {high:g}")
+        if max(abs(low), abs(high)) > MAX_PARAMETER:
+            raise UsageError(f"--param {name}: the range reaches beyond {MAX_PARAMETER:g}, where the arithmetic "
+                             "overflows; give the range in the units of the data")
         bounds[name] = (low, high)
     missing = [name for name in model.names if name not in bounds]
     if missing:
@@ -325,95 +427,19 @@ def _offset(value, option):
     return number
 
 
-def _load(settings):
+def _load(options):
     """The data, checked against the window, and the output and input offsets."""
-    data = load_csv(settings["data"], time=settings["time"], input=settings["input"],
-                    output=settings["output"], output_path=settings.get("output_file"),
-                    long_format=settings["long"], tag_column=settings["tag_column"],
-                    value_column=settings["value_column"], dt=settings.get("dt"))
-    window = 2 * settings["n"] + 1
+    data = load_csv(options["data"], time=options["time"], input=options["input"], output=options["output"],
+                    output_path=options.get("output_file"), long_format=options["long"],
+                    tag_column=options["tag_column"], value_column=options["value_column"], dt=options.get("dt"),
+                    max_gap=None if math.isinf(options["max_gap"]) else options["max_gap"])
+    window = 2 * options["n"] + 1
     if data.y.size < window:
-        raise UsageError(f"{settings['data']}: {data.y.size} time steps, fewer than one window of "
-                         f"2n+1 = {window} (--n {settings['n']})")
-    offset = _offset_value(settings["offset"], data.y, settings["data"], "--offset")
-    input_offset = _offset_value(settings["input_offset"], data.u, settings["data"], "--input-offset")
+        raise UsageError(f"{options['data']}: {data.y.size} time steps, fewer than one window of "
+                         f"2n+1 = {window} (--n {options['n']})")
+    offset = _offset_value(options["offset"], data.y, options["data"], "--offset")
+    input_offset = _offset_value(options["input_offset"], data.u, options["data"], "--input-offset")
     return data, offset, input_offset
-
-
-def _write_atomically(out, write):
-    """Call ``write(staging_dir)``, then move the finished directory to ``out``."""
-    out = Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
-    try:
-        write(staging)
-        _move_into_place(staging, out)
-    finally:
-        if staging.exists():
-            shutil.rmtree(staging)
-    if sys.stderr.isatty():  # quiet in scripts and pipelines
-        print(f"dynia: wrote {out}", file=sys.stderr)
-    return 0
-
-
-def _analyse(settings):
-    data, offset, input_offset = _load(settings)
-    model = MODELS[settings["model"]]()
-
-    def analyse(bounds):
-        return run(data.u - input_offset, data.y - offset, model, bounds, dt=data.dt,
-                   n_samples=settings["samples"], sampler=settings["sampler"], n=settings["n"],
-                   percentage=settings["percentage"], bins=settings["bins"],
-                   conf_level=settings["conf_level"], flavour=settings["flavour"], x0=settings["x0"],
-                   rng=settings["seed"], progress=sys.stderr.isatty(), min_points=settings["min_points"])
-
-    result = analyse(settings["bounds"])
-
-    def write(staging):
-        _write_results(staging, result, data, settings, offset, input_offset)
-        if settings["second_run"]:
-            bounds, narrowed = narrowed_bounds(result, settings["bounds"], threshold=settings["narrow_threshold"],
-                                               margin=settings["narrow_margin"])
-            (staging / "second_run").mkdir()
-            _write_results(staging / "second_run", analyse(bounds), data, dict(settings, bounds=bounds),
-                           offset, input_offset, narrowed=narrowed)
-
-    return _write_atomically(settings["out"], write)
-
-
-def _identify(settings):
-    data, offset, input_offset = _load(settings)
-    model = MODELS[settings["model"]]()
-    u, y = data.u - input_offset, data.y - offset
-    found = identify(u, y, model, settings["bounds"], method=settings["method"], dt=data.dt,
-                     x0=settings["x0"], held_out=settings["held_out"], n_samples=settings["samples"],
-                     sampler=settings["sampler"], n=settings["n"], percentage=settings["percentage"],
-                     flavour=settings["flavour"], ic_threshold=settings["ic_threshold"], mode=settings["mode"],
-                     quality=settings["quality"], exclude_flagged=settings["exclude_flagged"],
-                     n_starts=settings["starts"], rng=settings["seed"])
-    summary = found.to_dict(data.time)
-
-    def file_time(index):
-        return _file_times(data, [data.time[index]])[0]
-
-    for key, pairs in (("segments", found.segments), ("validation_segments", found.validation)):
-        summary[key] = [[file_time(start), file_time(stop - 1)] for start, stop in pairs]
-    for finding, entry in zip(found.quality.findings if found.quality else (), summary.get("data_quality", [])):
-        entry.update(start_time=file_time(finding.start), end_time=file_time(finding.stop - 1))
-    recorded = {key: settings[key] for key in sorted(settings)
-                if key not in ("param", "bounds", "second_run", "narrow_threshold", "narrow_margin")}
-    recorded.update(summary.pop("settings"))
-    recorded["offset_value"] = offset
-    recorded["input_offset_value"] = input_offset
-    summary.update(settings=recorded, version=__version__,
-                   data=dict(n_steps=int(data.time.size), dt=data.dt, start=_file_times(data, [0.0])[0],
-                             notes=list(data.notes)))
-
-    def write(staging):
-        (staging / "identified.json").write_text(json.dumps(summary, indent=2, default=_plain) + "\n")
-        _write_fit_figure(staging / "fit.png", found, data, u, y, offset)
-
-    return _write_atomically(settings["out"], write)
 
 
 def _offset_value(offset, values, path, option):
@@ -427,117 +453,162 @@ def _offset_value(offset, values, path, option):
     return float(offset)
 
 
-def _move_into_place(staging, out):
-    """Rename the finished results to ``out``; an old ``out`` is replaced only at the very end."""
-    if out.exists():
-        retired = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=out.parent))
-        os.replace(out, retired / out.name)
-        os.replace(staging, out)
-        shutil.rmtree(retired)
-    else:
-        os.replace(staging, out)
+def _data_warnings(data, u, y, options):
+    """Lines for stderr and summary.json: gaps, absurd magnitudes and (with --quality) data-quality findings."""
+    lines = []
+    for start, stop in data.gaps:
+        first, last = report.file_times(data, [data.time[start], data.time[stop - 1]])
+        lines.append(f"no rows in {options['data']} from {first} to {last}: {stop - start} grid points of the "
+                     "output left missing (raise --max-gap to interpolate across)")
+    for name, values in (("input", data.u), ("output", data.y)):
+        with np.errstate(invalid="ignore"):
+            huge = np.flatnonzero(np.abs(values) > _ABSURD)
+        if huge.size:
+            lines.append(f"the {name} holds {huge.size} value(s) beyond {_ABSURD:g} in magnitude, the first "
+                         f"{values[huge[0]]:g} at time {report.file_times(data, [data.time[huge[0]]])[0]}; "
+                         "check the data (--quality reports them)")
+    findings = []
+    if options["quality"]:
+        found = check_quality(data.time, u, y)
+        for finding in found.findings:
+            start, end = report.file_times(data, [data.time[finding.start], data.time[finding.stop - 1]])
+            findings.append(dict(signal=finding.signal, kind=finding.kind, start_time=start, end_time=end,
+                                 value=finding.value, reason=finding.reason))
+        if findings:
+            kinds = sorted({entry["kind"] for entry in findings})
+            lines.append(f"data quality: {len(findings)} finding(s) ({', '.join(kinds)}); see data_quality in "
+                         "summary.json")
+    return lines, findings
 
 
-def _file_times(data, seconds):
-    """Times as the data file wrote them: ISO timestamps, or numbers on the file's own origin."""
-    if isinstance(data.start, datetime.datetime):
-        return [(data.start + datetime.timedelta(seconds=float(value))).isoformat() for value in seconds]
-    return [data.start + float(value) for value in seconds]
+def _dynia_warnings(caught):
+    """The messages of dynia's own warnings among those caught; the rest stay silent."""
+    messages = [str(item.message) for item in caught if issubclass(item.category, DroppedSamplesWarning)]
+    caught.clear()
+    return messages
 
 
-def _write_results(directory, result, data, settings, offset, input_offset, narrowed=None):
-    names = list(result.names)
-    times = _file_times(data, data.time)
-    _write_csv(directory / "ic.csv", ["time"] + names, result.ic.T, times)
-    limit_columns = [f"{name}_{side}" for name in names for side in ("lower", "upper")]
-    _write_csv(directory / "limits.csv", ["time"] + limit_columns,
-               result.ci.transpose(1, 0, 2).reshape(data.time.size, -1), times)
-    _write_csv(directory / "samples.csv", names, result.samples)
-    parameters = result.summary()
-    for entry in parameters.values():
-        if entry["time_of_max_ic"] is not None:
-            # The result's clock starts at the first grid point, data.time[0] after time zero.
-            entry["time_of_max_ic"] = _file_times(data, [data.time[0] + entry["time_of_max_ic"]])[0]
-    recorded = {key: settings[key] for key in sorted(settings) if key not in ("param", "bounds")}
-    recorded["bounds"] = {name: list(pair) for name, pair in settings["bounds"].items()}
-    recorded["offset_value"] = offset
-    recorded["input_offset_value"] = input_offset
-    recorded["n_dropped"] = result.settings["n_dropped"]
-    recorded["n_behavioural"] = result.settings["n_behavioural"]
-    if narrowed is not None:
-        recorded["narrowed"] = narrowed
-    summary = dict(parameters=parameters, settings=recorded, version=__version__,
-                   data=dict(n_steps=int(data.time.size), dt=data.dt, start=_file_times(data, [0.0])[0],
-                             notes=list(data.notes)))
-    (directory / "summary.json").write_text(json.dumps(summary, indent=2, default=_plain) + "\n")
-    _write_figures(directory, result, data, offset)
+def _provenance(options, command_line):
+    versions = {"dynia": __version__, "python": platform.python_version()}
+    for package in ("numpy", "numba", "scipy", "control", "matplotlib"):
+        try:
+            versions[package] = importlib.metadata.version(package)
+        except importlib.metadata.PackageNotFoundError:
+            versions[package] = None
+    return dict(command_line=command_line, versions=versions,
+                inputs={str(path): {"sha256": report.sha256(path)} for path in options["inputs"]})
 
 
-def _plain(value):
-    if isinstance(value, Path):
-        return str(value)
-    if isinstance(value, np.generic):
-        return value.item()
-    raise TypeError(f"cannot write {type(value).__name__} to JSON")
+def _recorded(options, analysis, offset, input_offset):
+    """Exactly the options of this command as used, and the analysis settings."""
+    command_keys = [key for key in OPTIONS if key in options]
+    recorded = {key: options[key] for key in command_keys if key not in ("param",)}
+    recorded.update(bounds={name: list(pair) for name, pair in options["bounds"].items()},
+                    offset_value=offset, input_offset_value=input_offset, analysis=analysis.to_dict())
+    return recorded
 
 
-def _write_csv(path, header, rows, times=None):
-    """Numbers in full precision, missing values as empty cells, an optional leading time column."""
-    with open(path, "w", newline="") as handle:
-        writer = csv.writer(handle)
-        writer.writerow(header)
-        for index, row in enumerate(rows):
-            cells = ["" if np.isnan(value) else repr(float(value)) for value in row]
-            writer.writerow(cells if times is None else [times[index], *cells])
+def _analyse(options, command_line, caught):
+    model = MODELS[options["model"]]()
+    with options["destination"] as staging:
+        data, offset, input_offset = _load(options)
+        u, y = data.u - input_offset, data.y - offset
+        analysis = options["analysis"].replace(dt=data.dt)
+        notices, quality_findings = _data_warnings(data, u, y, options)
+        for line in notices:
+            print(f"dynia: warning: {line}", file=sys.stderr)
+
+        def analyse(bounds, directory, narrowed=None):
+            result = run(u, y, model, bounds, settings=analysis, rng=options["seed"], progress=sys.stderr.isatty())
+            dropped = _dynia_warnings(caught)
+            for line in dropped:
+                print(f"dynia: warning: {line}", file=sys.stderr)
+            parameters = result.summary()
+            for name in parameters:
+                if parameters[name]["time_of_max_ic"] is not None:
+                    # The result's clock starts at the first grid point, data.time[0] after time zero.
+                    parameters[name]["time_of_max_ic"] = report.file_times(
+                        data, [data.time[0] + parameters[name]["time_of_max_ic"]])[0]
+            settings = _recorded(options, analysis, offset, input_offset)
+            settings["bounds"] = {name: list(pair) for name, pair in bounds.items()}
+            if narrowed is not None:
+                settings["narrowed"] = narrowed
+            summary = dict(
+                parameters=parameters, settings=settings, version=__version__,
+                run=dict(n_sampled=result.settings["n_sampled"], n_dropped=result.settings["n_dropped"],
+                         n_behavioural=result.settings["n_behavioural"], engine=result.settings["engine"]),
+                warnings=notices + dropped,
+                data=dict(n_steps=int(data.time.size), dt=data.dt, start=report.file_times(data, [0.0])[0],
+                          notes=list(data.notes),
+                          gaps=[report.file_times(data, [data.time[a], data.time[b - 1]]) for a, b in data.gaps]),
+                **_provenance(options, command_line))
+            if options["quality"]:
+                summary["data_quality"] = quality_findings
+            report.write_analysis(directory, result, data, summary, offset=offset, plots=not options["no_plots"])
+            return result, parameters
+
+        result, parameters = analyse(options["bounds"], staging)
+        tables = [report.verdict_table(parameters)]
+        if options["second_run"]:
+            bounds, narrowed = narrowed_bounds(result, options["bounds"], threshold=options["narrow_threshold"],
+                                               margin=options["narrow_margin"])
+            (staging / "second_run").mkdir()
+            _, second = analyse(bounds, staging / "second_run", narrowed=narrowed)
+            tables.append("second run (narrowed: " + (", ".join(narrowed) or "none") + ")\n"
+                          + report.verdict_table(second))
+    print("\n\n".join(tables))
+    return _done(options)
 
 
-def _write_figures(directory, result, data, offset):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(9, 5))
-    grid_time = data.time - data.time[0]  # the clock of the result's plots
-    top.plot(grid_time, data.u, color="tab:blue")
-    top.set_ylabel("input")
-    bottom.plot(grid_time, data.y, color="tab:orange")
-    bottom.set_ylabel("output" + (f" (offset {offset:g} removed in the analysis)" if offset else ""))
-    bottom.set_xlabel("time (s from the first grid point)")
-    top.set_title("Data analysed")
-    fig.savefig(directory / "data.png", dpi=110, bbox_inches="tight")
-    plt.close(fig)
-    for name in result.names:
-        for kind, plot in (("ic", result.plot_information_content), ("identifiability", result.plot_identifiability)):
-            fig, ax = plt.subplots(figsize=(9, 3.5))
-            plot(name, ax=ax)
-            ax.set_xlabel("time (s from the first grid point)")
-            fig.savefig(directory / f"{kind}_{name}.png", dpi=110, bbox_inches="tight")
-            plt.close(fig)
+def _identify(options, command_line, caught):
+    model = MODELS[options["model"]]()
+    with options["destination"] as staging:
+        data, offset, input_offset = _load(options)
+        u, y = data.u - input_offset, data.y - offset
+        analysis = options["analysis"].replace(dt=data.dt)
+        notices, _ = _data_warnings(data, u, y, dict(options, quality=False))
+        for line in notices:
+            print(f"dynia: warning: {line}", file=sys.stderr)
+        found = identify(u, y, model, options["bounds"], method=options["method"], settings=analysis,
+                         held_out=options["held_out"], ic_threshold=options["ic_threshold"], mode=options["mode"],
+                         quality=options["quality"], exclude_flagged=options["exclude_flagged"],
+                         n_starts=options["starts"], rng=options["seed"])
+        dropped = _dynia_warnings(caught)
+        for line in dropped:
+            print(f"dynia: warning: {line}", file=sys.stderr)
+        summary = found.to_dict(data.time)
+
+        def file_time(index):
+            return report.file_times(data, [data.time[index]])[0]
+
+        for key, pairs in (("segments", found.segments), ("validation_segments", found.validation)):
+            summary[key] = [[file_time(start), file_time(stop - 1)] for start, stop in pairs]
+        for finding, entry in zip(found.quality.findings if found.quality else (), summary.get("data_quality", [])):
+            entry.update(start_time=file_time(finding.start), end_time=file_time(finding.stop - 1))
+        recorded = _recorded(options, analysis, offset, input_offset)
+        # identify's own record adds what the command line does not set (held_out_steps, min_length, ...);
+        # the analysis settings are already under "analysis".
+        analysis_fields = set(analysis.to_dict())
+        recorded.update({key: value for key, value in summary.pop("settings").items()
+                         if key not in recorded and key not in analysis_fields})
+        summary.update(settings=recorded, version=__version__, warnings=notices + dropped,
+                       data=dict(n_steps=int(data.time.size), dt=data.dt, start=report.file_times(data, [0.0])[0],
+                                 notes=list(data.notes)),
+                       **_provenance(options, command_line))
+        report.write_identification(staging, found, data, u, y, summary, offset=offset,
+                                    plots=not options["no_plots"])
+    return _done(options)
 
 
-def _write_fit_figure(path, found, data, u, y, offset):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    grid_time = data.time - data.time[0]
-    fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(9, 5))
-    top.plot(grid_time, data.u, color="tab:blue")
-    top.set_ylabel("input")
-    bottom.plot(grid_time, y, color="tab:orange", label="measured")
-    bottom.plot(grid_time, found.fit.simulate(u), color="k", linewidth=1, label="fitted model")
-    for number, (start, stop) in enumerate(found.segments):
-        for ax in (top, bottom):
-            ax.axvspan(grid_time[start], grid_time[stop - 1], color="tab:green", alpha=0.15,
-                       label="fitted on" if number == 0 and ax is bottom else None)
-    start, stop = found.validation[0]
-    bottom.axvspan(grid_time[start], grid_time[-1], color="0.5", alpha=0.15, label="held out")
-    estimates = ", ".join(f"{name} = {value:.4g} \u00b1 {found.std_errors[name]:.2g}"
-                          for name, value in found.parameters.items())
-    top.set_title(f"{found.method}: {estimates}; validation RMSE {found.validation_error:.3g}")
-    bottom.set_ylabel("output" + (f" (minus {offset:g})" if offset else ""))
-    bottom.set_xlabel("time (s from the first grid point)")
-    bottom.legend(loc="best", fontsize=8)
-    fig.savefig(path, dpi=110, bbox_inches="tight")
-    plt.close(fig)
+def _done(options):
+    if sys.stderr.isatty():  # quiet in scripts and pipelines
+        print(f"dynia: wrote {options['out']}", file=sys.stderr)
+    return 0
+
+
+# Values beyond this are no measurement of a process: a logger's overflow or
+# fill value (1e308, 9.9e37). Reported on every run; --quality lists them.
+_ABSURD = 1e12
 
 
 if __name__ == "__main__":

@@ -29,7 +29,16 @@ class DataError(DyniaError):
 
 
 class SettingsError(DyniaError):
-    """An option or argument out of range, of the wrong type, or in conflict with another."""
+    """An option or argument out of range, of the wrong type, or in conflict with another.
+
+    ``setting`` names the setting at fault where one does (the name used in
+    the message), so that a front-end can name it its own way, e.g. the
+    command line's ``--conf-level`` for ``conf_level``.
+    """
+
+    def __init__(self, message, setting=None):
+        super().__init__(message)
+        self.setting = setting
 
 
 class ModelError(DyniaError):

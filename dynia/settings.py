@@ -34,7 +34,7 @@ import numpy as np
 from .errors import SettingsError
 
 __all__ = ["AnalysisSettings", "SAMPLERS", "ADAPTIVE_SAMPLERS", "FLAVOURS", "WINDOWS", "ENGINES", "X0",
-           "MAX_BINS", "check_dt", "check_x0", "parameter_box"]
+           "MAX_BINS", "MAX_PARAMETER", "check_dt", "check_x0", "parameter_box"]
 
 SAMPLERS = ("uniform", "lhs", "sobol")
 ADAPTIVE_SAMPLERS = ("iis", "de")
@@ -45,38 +45,41 @@ X0 = ("zero", "steady")
 # A finer CLD-gradient grid only spreads the behavioural set (a few hundred
 # values) thinner: past this the rows are mostly empty and the array huge.
 MAX_BINS = 1000
+# Parameter ranges reaching beyond this are a typo or a unit slip; squares and
+# sums of such values overflow float64 (1.8e308) in the engine and the plots.
+MAX_PARAMETER = 1e150
 
 
 def _whole(value, name, minimum):
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        raise SettingsError(f"{name} must be a whole number; got {value!r} ({type(value).__name__})")
+        raise SettingsError(f"{name} must be a whole number; got {value!r} ({type(value).__name__})", name)
     if value < minimum:
-        raise SettingsError(f"{name} must be at least {minimum}; got {value}")
+        raise SettingsError(f"{name} must be at least {minimum}; got {value}", name)
     return int(value)
 
 
 def _real(value, name):
     if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
-        raise SettingsError(f"{name} must be a finite number; got {value!r} ({type(value).__name__})")
+        raise SettingsError(f"{name} must be a finite number; got {value!r} ({type(value).__name__})", name)
     return float(value)
 
 
 def _choice(value, name, choices):
     if not isinstance(value, str) or value not in choices:
-        raise SettingsError(f"{name} must be one of {', '.join(map(repr, choices))}; got {value!r}")
+        raise SettingsError(f"{name} must be one of {', '.join(map(repr, choices))}; got {value!r}", name)
     return value
 
 
 def check_dt(dt):
     """Return the sample time as a float > 0, or raise :class:`SettingsError` naming ``dt``."""
     if isinstance(dt, (bool, str)) or np.ndim(dt) != 0:
-        raise SettingsError(f"dt must be a finite number > 0; got {dt!r}")
+        raise SettingsError(f"dt must be a finite number > 0; got {dt!r}", "dt")
     try:
         value = float(dt)
     except (TypeError, ValueError):
-        raise SettingsError(f"dt must be a finite number > 0; got {dt!r}") from None
+        raise SettingsError(f"dt must be a finite number > 0; got {dt!r}", "dt") from None
     if not math.isfinite(value) or value <= 0:
-        raise SettingsError(f"dt must be a finite number > 0; got {dt!r}")
+        raise SettingsError(f"dt must be a finite number > 0; got {dt!r}", "dt")
     return value
 
 
@@ -142,24 +145,24 @@ class AnalysisSettings:
         store("n", _whole(self.n, "n", 0))
         percentage = _real(self.percentage, "percentage")
         if not 0 < percentage <= 100:
-            raise SettingsError(f"percentage must lie in (0, 100]; got {percentage:g}")
+            raise SettingsError(f"percentage must lie in (0, 100]; got {percentage:g}", "percentage")
         store("percentage", percentage)
         bins = _whole(self.bins, "bins", 1)
         if bins > MAX_BINS:
             raise SettingsError(f"bins must be at most {MAX_BINS}; got {bins} (the behavioural set cannot "
-                                "fill a finer grid)")
+                                "fill a finer grid)", "bins")
         store("bins", bins)
         conf_level = _real(self.conf_level, "conf_level")
         if not 50 < conf_level < 100:
             hint = f" (did you mean {conf_level * 100:g}?)" if 0.5 < conf_level < 1 else ""
-            raise SettingsError(f"conf_level is a percentage in (50, 100); got {conf_level:g}{hint}")
+            raise SettingsError(f"conf_level is a percentage in (50, 100); got {conf_level:g}{hint}", "conf_level")
         store("conf_level", conf_level)
         store("flavour", _choice(self.flavour, "flavour", FLAVOURS))
         store("x0", check_x0(self.x0))
         min_points = _whole(self.min_points, "min_points", 1)
         if min_points > self.window_length:
             raise SettingsError(f"min_points {min_points} is more than a window holds (2n+1 = {self.window_length} "
-                                f"with n = {self.n}): no window could ever report a result")
+                                f"with n = {self.n}): no window could ever report a result", "min_points")
         store("min_points", min_points)
         store("window", _choice(self.window, "window", WINDOWS))
         store("engine", _choice(self.engine, "engine", ENGINES))
@@ -193,7 +196,7 @@ class AnalysisSettings:
         elif self.n_behavioural < 2:
             raise SettingsError(f"percentage {self.percentage:g} of n_samples {self.n_samples} keeps "
                                 f"{self.n_behavioural} parameter sets per window; at least 2 are needed "
-                                "(raise percentage or n_samples)")
+                                "(raise percentage or n_samples)", "percentage")
 
     @property
     def window_length(self):
@@ -284,5 +287,9 @@ def parameter_box(bounds, model_names, model_label="the model"):
             raise SettingsError(f"bounds[{name!r}] must be a (low, high) pair of numbers; got {pair!r}") from None
         if not (math.isfinite(low) and math.isfinite(high) and low < high):
             raise SettingsError(f"bounds[{name!r}]: need finite low < high; got ({low}, {high})")
+        if max(abs(low), abs(high)) > MAX_PARAMETER:
+            raise SettingsError(f"bounds[{name!r}] = ({low:g}, {high:g}) reaches beyond {MAX_PARAMETER:g}; no "
+                                "parameter of a process model is that large, and the arithmetic on such values "
+                                "overflows")
         rows.append((low, high))
     return names, np.array(rows)

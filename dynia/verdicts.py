@@ -42,8 +42,8 @@ VERDICTS = ("identified", "weak", "suspect")
 BOUND_TOLERANCE = 0.01
 # MAE spreads up to this many sampling standard deviations of a noise-only MAE count as noise.
 NOISE_MULTIPLE = 3.0
-# Simulated values held at once when re-simulating for the noise rule (160 MB of float64).
-_MAX_VALUES = 20_000_000
+# Simulated values per chunk when re-simulating for the noise rule (about 3x this many float64 in flight).
+_MAX_VALUES = 2_000_000
 
 
 def noise_sigma(y):
@@ -193,8 +193,9 @@ def _edge_reasons(result, step, window):
 def _noise_windows(result, u, y, model, dt, x0, windows):
     """Text of the noise_only reason of each window that fits noise only, else None.
 
-    The samples are simulated once, in batches of at most ``_MAX_VALUES``
-    values, up to the end of the latest window.
+    The samples are simulated once, streamed in time chunks of about
+    ``_MAX_VALUES`` values, up to the end of the latest window; only the
+    windows' columns are kept.
     """
     u, y = np.asarray(u, dtype=float), np.asarray(y, dtype=float)
     if y.shape != result.time.shape or u.shape != result.time.shape:
@@ -209,11 +210,22 @@ def _noise_windows(result, u, y, model, dt, x0, windows):
     if not windows:
         return {}
     end = max(stop for _, stop in windows.values())
-    mae, batch = {step: [] for step in windows}, max(1, _MAX_VALUES // end)
-    for first in range(0, params.shape[0], batch):
-        sims = model.simulate(params[first:first + batch], u[:end], **options)
-        for step, (start, stop) in windows.items():
-            mae[step].append(_window_mae(y, sims, start, stop))
+    # Only the windows' columns are kept: the simulation streams through the
+    # record in chunks, so memory is samples x chunk, not samples x record.
+    needed = np.zeros(end, dtype=bool)
+    for start, stop in windows.values():
+        needed[start:stop] = True
+    position = np.cumsum(needed) - 1  # column of step k among the kept ones
+    kept = np.empty((params.shape[0], int(needed.sum())))
+    at = 0
+    for chunk in model.simulate_chunks(params, u[:end], chunk_steps=max(1, _MAX_VALUES // params.shape[0]),
+                                       **options):
+        inside = needed[at:at + chunk.shape[1]]
+        kept[:, position[at:at + chunk.shape[1]][inside]] = chunk[:, inside]
+        at += chunk.shape[1]
+    # A window's steps are all kept, so its columns are one contiguous block.
+    mae = {step: [_window_mae(y[start:stop], kept[:, position[start]:position[stop - 1] + 1], 0, stop - start)]
+           for step, (start, stop) in windows.items()}
     sigma = noise_sigma(y)
     texts = {}
     for step in windows:

@@ -55,7 +55,8 @@ def test_heating_system_end_to_end(heating_run):
     assert summary["version"] == __version__
     for name in ("K", "T"):
         entry = summary["parameters"][name]
-        assert set(entry) == {"max_ic", "time_of_max_ic", "band", "estimate"}
+        assert set(entry) == {"max_ic", "time_of_max_ic", "band", "estimate", "verdict", "reasons"}
+        assert entry["verdict"] in ("identified", "weak", "suspect")
         assert entry["band"][0] <= entry["estimate"] <= entry["band"][1]
         column = header.index(name)
         assert entry["max_ic"] == pytest.approx(np.nanmax(ic[:, 1 + column]))
@@ -63,7 +64,12 @@ def test_heating_system_end_to_end(heating_run):
     assert settings["seed"] == 1 and settings["samples"] == 400 and settings["n"] == 10
     assert settings["bounds"] == {"K": [0.0, 40.0], "T": [0.0, 200.0]}
     assert settings["offset_value"] == pytest.approx(129.32) and settings["input_offset_value"] == 6
-    assert settings["n_dropped"] == 0
+    assert summary["run"]["n_dropped"] == 0 and summary["warnings"] == []
+    assert settings["analysis"]["n_samples"] == 400 and "method" not in settings  # no identify options
+    assert summary["command_line"][:2] == ["dynia", "analyse"]
+    assert set(summary["versions"]) >= {"dynia", "numpy", "numba"}
+    [(path, digest)] = summary["inputs"].items()
+    assert path.endswith("heating_system.csv") and len(digest["sha256"]) == 64
 
 
 def test_heating_system_gain_is_found_among_the_static_gains(heating_run):
@@ -150,26 +156,31 @@ def test_bad_input_is_one_line_exit_2_and_no_output(tmp_path, capsys, content, e
     assert not list(tmp_path.glob(".out.*"))
 
 
-def test_an_existing_output_directory_is_kept_unless_overwrite(tmp_path, capsys):
+def test_an_existing_output_directory_is_kept_and_overwrite_replaces_only_dynias_own(tmp_path, capsys):
     data = _write(tmp_path / "data.csv", GOOD)
     out = tmp_path / "out"
     out.mkdir()
     (out / "keep.txt").write_text("mine")
     status, err = _analyse(capsys, data, *BASE, "--out", out)
-    assert status == 2 and "exists" in err and (out / "keep.txt").exists()
+    assert status == 2 and "exists" in err and (out / "keep.txt").read_text() == "mine"
     status, err = _analyse(capsys, data, *BASE, "--out", out, "--overwrite")
+    assert status == 2 and "dynia did not create it" in err and (out / "keep.txt").read_text() == "mine"
+    mine = tmp_path / "results"
+    assert _analyse(capsys, data, *BASE, "--out", mine)[0] == 0
+    (mine / "note.txt").write_text("added later")
+    status, err = _analyse(capsys, data, *BASE, "--out", mine, "--overwrite")
     assert status == 0, err
-    assert (out / "summary.json").exists() and not (out / "keep.txt").exists()
+    assert (mine / "summary.json").exists() and not (mine / "note.txt").exists()
 
 
 def test_an_interrupted_run_leaves_nothing_behind(tmp_path, capsys, monkeypatch):
-    import dynia.cli
+    import dynia.report
 
     def interrupted(*args, **kwargs):
         (args[0] / "ic.csv").write_text("half")
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(dynia.cli, "_write_figures", interrupted)
+    monkeypatch.setattr(dynia.report, "_write_figures", interrupted)
     data = _write(tmp_path / "data.csv", GOOD)
     status, err = _analyse(capsys, data, *BASE, "--out", tmp_path / "out")
     assert status == 130 and "nothing was written" in err

@@ -1,0 +1,164 @@
+"""What the command line writes: result tables, ``summary.json``, figures and the verdict table.
+
+:func:`write_analysis` fills a result directory of ``dynia analyse``,
+:func:`write_identification` one of ``dynia identify``; :func:`verdict_table`
+is the short table ``dynia analyse`` prints on success. Times are written as
+the data file wrote them (:func:`file_times`). Figures are decimated
+(:mod:`dynia.plotting`) so that their memory does not grow with the record.
+"""
+import csv
+import datetime
+import hashlib
+import json
+from pathlib import Path
+
+import numpy as np
+
+from .plotting import envelope, plot_data
+from .serial import json_ready
+
+__all__ = ["write_analysis", "write_identification", "verdict_table", "file_times", "sha256", "write_json"]
+
+# Rows written to a CSV per call of writerows: bounds the strings held at once.
+_CSV_BLOCK = 10_000
+
+
+def file_times(data, seconds):
+    """Times as the data file wrote them: ISO timestamps, or numbers on the file's own origin."""
+    if isinstance(data.start, datetime.datetime):
+        return [(data.start + datetime.timedelta(seconds=float(value))).isoformat() for value in seconds]
+    return [data.start + float(value) for value in seconds]
+
+
+def sha256(path):
+    """SHA-256 of a file's bytes, hex."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def write_json(path, content):
+    """``content`` as indented JSON with NaN and inf as null."""
+    Path(path).write_text(json.dumps(json_ready(content), indent=2, default=_plain) + "\n")
+
+
+def write_analysis(directory, result, data, summary, *, offset=0.0, plots=True):
+    """Write one analysis into ``directory``: ic.csv, limits.csv, samples.csv, summary.json and figures.
+
+    ``summary`` is the finished content of ``summary.json``; the per-parameter
+    times in it are already the file's.
+    """
+    directory = Path(directory)
+    names = list(result.names)
+    times = file_times(data, data.time)
+    _write_csv(directory / "ic.csv", ["time"] + names, result.ic.T, times)
+    limit_columns = [f"{name}_{side}" for name in names for side in ("lower", "upper")]
+    _write_csv(directory / "limits.csv", ["time"] + limit_columns,
+               result.ci.transpose(1, 0, 2).reshape(data.time.size, -1), times)
+    _write_csv(directory / "samples.csv", names, result.samples)
+    write_json(directory / "summary.json", summary)
+    if plots:
+        _write_figures(directory, result, data, offset)
+
+
+def write_identification(directory, found, data, u, y, summary, *, offset=0.0, plots=True):
+    """Write ``identified.json`` and, with ``plots``, ``fit.png`` into ``directory``."""
+    directory = Path(directory)
+    write_json(directory / "identified.json", summary)
+    if plots:
+        _write_fit_figure(directory / "fit.png", found, data, u, y, offset)
+
+
+def verdict_table(parameters):
+    """The per-parameter lines ``dynia analyse`` prints: max IC, where, band, estimate, verdict and why.
+
+    ``parameters`` is ``summary["parameters"]`` of :func:`write_analysis`.
+    """
+    header = ("parameter", "max IC", "at", "band", "estimate", "verdict")
+    rows = []
+    for name, entry in parameters.items():
+        if entry["max_ic"] is None:
+            rows.append((name, "-", "-", "-", "-", entry["verdict"]))
+            continue
+        low, high = entry["band"]
+        rows.append((name, f"{entry['max_ic']:.3f}", str(entry["time_of_max_ic"]), f"[{low:.4g}, {high:.4g}]",
+                     f"{entry['estimate']:.4g}", entry["verdict"]))
+    widths = [max(len(row[column]) for row in rows + [header]) for column in range(len(header))]
+    lines = ["  ".join(cell.ljust(width) for cell, width in zip(row, widths)).rstrip() for row in [header] + rows]
+    for name, entry in parameters.items():
+        for reason in entry["reasons"]:
+            lines.append(f"  {name} {entry['verdict']}: {reason['text']}")
+    return "\n".join(lines)
+
+
+def _plain(value):
+    if isinstance(value, Path):
+        return str(value)
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    raise TypeError(f"cannot write {type(value).__name__} to JSON")
+
+
+def _write_csv(path, header, rows, times=None):
+    """Numbers in full precision, missing values as empty cells, an optional leading time column."""
+    with open(path, "w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(header)
+        for first in range(0, len(rows), _CSV_BLOCK):
+            block = rows[first:first + _CSV_BLOCK]
+            cells = [["" if np.isnan(value) else repr(value) for value in row] for row in block.tolist()]
+            if times is not None:
+                cells = [[time, *row] for time, row in zip(times[first:first + _CSV_BLOCK], cells)]
+            writer.writerows(cells)
+
+
+def _figure_module():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _write_figures(directory, result, data, offset):
+    plt = _figure_module()
+    grid_time = data.time - data.time[0]  # the clock of the result's plots
+    fig = plot_data(grid_time, data.u, data.y, offset=offset, xlabel="time (s from the first grid point)")
+    fig.savefig(directory / "data.png", dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    for name in result.names:
+        for kind, plot in (("ic", result.plot_information_content), ("identifiability", result.plot_identifiability)):
+            fig, ax = plt.subplots(figsize=(9, 3.5))
+            plot(name, ax=ax)
+            ax.set_xlabel("time (s from the first grid point)")
+            fig.savefig(directory / f"{kind}_{name}.png", dpi=110, bbox_inches="tight")
+            plt.close(fig)
+
+
+def _write_fit_figure(path, found, data, u, y, offset):
+    plt = _figure_module()
+    grid_time = data.time - data.time[0]
+    fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(9, 5))
+    top.plot(*envelope(grid_time, data.u), color="tab:blue")
+    top.set_ylabel("input")
+    bottom.plot(*envelope(grid_time, y), color="tab:orange", label="measured")
+    bottom.plot(*envelope(grid_time, found.fit.simulate(u)), color="k", linewidth=1, label="fitted model")
+    for number, (start, stop) in enumerate(found.segments):
+        for ax in (top, bottom):
+            ax.axvspan(grid_time[start], grid_time[stop - 1], color="tab:green", alpha=0.15,
+                       label="fitted on" if number == 0 and ax is bottom else None)
+    start, _ = found.validation[0]
+    bottom.axvspan(grid_time[start], grid_time[-1], color="0.5", alpha=0.15, label="held out")
+    estimates = ", ".join(f"{name} = {value:.4g} \u00b1 {found.std_errors[name]:.2g}"
+                          for name, value in found.parameters.items())
+    top.set_title(f"{found.method}: {estimates}; validation RMSE {found.validation_error:.3g}")
+    bottom.set_ylabel("output" + (f" (minus {offset:g})" if offset else ""))
+    bottom.set_xlabel("time (s from the first grid point)")
+    bottom.legend(loc="best", fontsize=8)
+    fig.savefig(path, dpi=110, bbox_inches="tight")
+    plt.close(fig)
