@@ -11,7 +11,7 @@ endif
 PY := $(ENV_DIR)/bin/python
 INSTALLED := $(ENV_DIR)/.dynia-installed
 
-PACKAGE := $(wildcard dynia/*.py)
+PACKAGE := $(wildcard dynia/*.py dynia/*/*.py)
 NOTEBOOKS := $(wildcard notebooks/*.py)
 REPORTS := $(patsubst notebooks/%.py,reports/%.html,$(NOTEBOOKS))
 # Notebook parameters: override with `make figures PARAMS=my.yaml` (or one
@@ -39,6 +39,8 @@ $(INSTALLED): pyproject.toml
 	touch $@
 
 test: $(INSTALLED)
+	$(PY) -m ruff check dynia tests notebooks
+	$(PY) -m ruff format --check dynia tests
 	$(PY) -m pytest
 
 bench: $(INSTALLED)

@@ -18,8 +18,30 @@ interval search of Bittencourt et al. (2015) to compare with,
 :mod:`dynia.online` updates the analysis one logged sample at a time, and
 :mod:`dynia.distributed` runs it on a Dask cluster.
 """
-from . import (adaptive, analysis, baseline, cld, data, engine, errors, fit, identify, mcat, models, online, quality,
-               reference, refine, sampling, segments, settings, structure, synthetic, thesis)
+
+from . import (
+    adaptive,
+    analysis,
+    baseline,
+    cld,
+    data,
+    engine,
+    errors,
+    fit,
+    identify,
+    mcat,
+    models,
+    online,
+    quality,
+    reference,
+    refine,
+    sampling,
+    segments,
+    settings,
+    structure,
+    synthetic,
+    thesis,
+)
 from .engine.windows import moving_window
 from .errors import DyniaError
 from .pipeline import run
@@ -29,6 +51,32 @@ from .settings import AnalysisSettings
 
 __version__ = "0.1.0"
 
-__all__ = ["run", "second_run", "moving_window", "DyniaResult", "AnalysisSettings", "DyniaError", "adaptive",
-           "analysis", "baseline", "cld", "data", "engine", "errors", "fit", "identify", "mcat", "models", "online",
-           "quality", "reference", "refine", "sampling", "segments", "settings", "structure", "synthetic", "thesis"]
+__all__ = [
+    "run",
+    "second_run",
+    "moving_window",
+    "DyniaResult",
+    "AnalysisSettings",
+    "DyniaError",
+    "adaptive",
+    "analysis",
+    "baseline",
+    "cld",
+    "data",
+    "engine",
+    "errors",
+    "fit",
+    "identify",
+    "mcat",
+    "models",
+    "online",
+    "quality",
+    "reference",
+    "refine",
+    "sampling",
+    "segments",
+    "settings",
+    "structure",
+    "synthetic",
+    "thesis",
+]

@@ -1,4 +1,5 @@
 """Argument checks shared by the public functions: one clear message per mistake."""
+
 import math
 import numbers
 import os
@@ -22,7 +23,8 @@ def as_1d_float(value, name, *, allow_nan=False):
     if bad.any():
         raise DataError(
             f"{name} holds a non-finite value at index {int(np.argmax(bad))}"
-            + (" (NaN marks a missing value; inf is not allowed)" if allow_nan else ""))
+            + (" (NaN marks a missing value; inf is not allowed)" if allow_nan else "")
+        )
     return array
 
 
@@ -77,8 +79,7 @@ def bounds_array(bounds, n_params):
     """Check an (n_params, 2) array of [low, high] rows with low < high."""
     array = as_2d_float(bounds, "bounds", columns=2)
     if array.shape[0] != n_params:
-        raise SettingsError(
-            f"bounds must have one [low, high] row per parameter ({n_params}); got {array.shape[0]}")
+        raise SettingsError(f"bounds must have one [low, high] row per parameter ({n_params}); got {array.shape[0]}")
     for row, (low, high) in enumerate(array):
         if not low < high:
             raise SettingsError(f"bounds row {row}: the lower bound {low} must be below the upper bound {high}")
@@ -88,3 +89,12 @@ def bounds_array(bounds, n_params):
 def default_workers():
     """Threads to use when none are asked for: every core."""
     return os.cpu_count() or 1
+
+
+def record(u, y):
+    """Input and output of one record as 1-D float arrays of equal length (NaN in ``y`` marks a missing sample)."""
+    u = as_1d_float(u, "u")
+    y = as_1d_float(y, "y", allow_nan=True)
+    if u.size != y.size:
+        raise DataError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
+    return u, y

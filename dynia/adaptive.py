@@ -50,6 +50,7 @@ sample) are the next step; the "de" boxes are built from too few points.
 notebooks/ch5_sampling_benchmark.py measures every sampler on examples 1
 and 2 against 10^6-sample references.
 """
+
 import dataclasses
 import math
 
@@ -59,7 +60,7 @@ from scipy.optimize import differential_evolution
 from . import _checks
 from .engine.selection import lowest_weighted
 from .engine.windows import moving_window, window_costs
-from .errors import DataError, SettingsError
+from .errors import SettingsError
 from .settings import AnalysisSettings, parameter_box
 from .verdicts import assess
 
@@ -116,10 +117,34 @@ class BoxMixture:
         return (1 / np.prod(self.prior[:, 1] - self.prior[:, 0])) / self.density(points)
 
 
-def adaptive_run(u, y, model, bounds, *, scheme=None, settings=None, rng=None, blocks=None, initial_share=0.25,
-                 stages=3, margin=0.25, de_share=0.3, dt=None, n_samples=None, n=None, percentage=None, bins=None,
-                 conf_level=None, flavour=None, x0=None, min_points=None, window=None, engine=None, workers=None,
-                 progress=False):
+def adaptive_run(
+    u,
+    y,
+    model,
+    bounds,
+    *,
+    scheme=None,
+    settings=None,
+    rng=None,
+    blocks=None,
+    initial_share=0.25,
+    stages=3,
+    margin=0.25,
+    de_share=0.3,
+    dt=None,
+    n_samples=None,
+    n=None,
+    percentage=None,
+    bins=None,
+    conf_level=None,
+    flavour=None,
+    x0=None,
+    min_points=None,
+    window=None,
+    engine=None,
+    workers=None,
+    progress=False,
+):
     """DYNIA with evaluations concentrated in the windows' low-cost regions.
 
     Parameters
@@ -161,16 +186,26 @@ def adaptive_run(u, y, model, bounds, *, scheme=None, settings=None, rng=None, b
     """
     if settings is None:
         settings = AnalysisSettings(n_samples=10_000, percentage=1, sampler=scheme or "iis")
-    settings = AnalysisSettings.build(settings, sampler=scheme, dt=dt, n_samples=n_samples, n=n,
-                                      percentage=percentage, bins=bins, conf_level=conf_level, flavour=flavour,
-                                      x0=x0, min_points=min_points, window=window, engine=engine, workers=workers)
+    settings = AnalysisSettings.build(
+        settings,
+        sampler=scheme,
+        dt=dt,
+        n_samples=n_samples,
+        n=n,
+        percentage=percentage,
+        bins=bins,
+        conf_level=conf_level,
+        flavour=flavour,
+        x0=x0,
+        min_points=min_points,
+        window=window,
+        engine=engine,
+        workers=workers,
+    )
     if settings.sampler not in SCHEMES:
         raise SettingsError(f"adaptive_run takes sampler (scheme) 'iis' or 'de'; got {settings.sampler!r}")
     scheme, dt, x0, window, n = settings.sampler, settings.dt, settings.x0, settings.window, settings.n
-    u = _checks.as_1d_float(u, "u")
-    y = _checks.as_1d_float(y, "y", allow_nan=True)
-    if u.size != y.size:
-        raise DataError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
+    u, y = _checks.record(u, y)
     names, prior = parameter_box(bounds, model.names, type(model).__name__)
     order = [names.index(name) for name in model.names]
     rng = np.random.default_rng(rng)
@@ -192,8 +227,9 @@ def adaptive_run(u, y, model, bounds, *, scheme=None, settings=None, rng=None, b
         per_stage = (n_samples - spent) // max(stages, 1)
         for _ in range(stages):
             weights = mixture.importance_weights(samples)
-            regions = _behavioural_boxes(y, sims, samples, weights / weights.sum(), fraction, n, edges,
-                                         prior, margin, window)
+            regions = _behavioural_boxes(
+                y, sims, samples, weights / weights.sum(), fraction, n, edges, prior, margin, window
+            )
             new_samples = _draw_in_boxes(mixture, regions, per_stage, rng)
             samples = np.r_[samples, new_samples]
             sims = np.r_[sims, simulate(new_samples)]
@@ -206,7 +242,8 @@ def adaptive_run(u, y, model, bounds, *, scheme=None, settings=None, rng=None, b
             raise SettingsError(
                 f"the 'de' scheme needs at least {needed} evaluations for {n_blocks} blocks of windows "
                 f"(a population of {population_size} evolved twice per block); got n_samples={n_samples}: "
-                "raise n_samples or lower blocks")
+                "raise n_samples or lower blocks"
+            )
         regions, used = _evolved_boxes(y, simulate, prior, fraction, n, edges, budget, margin, rng, window)
         spent += used
         new_samples = _draw_in_boxes(mixture, regions, n_samples - spent, rng)
@@ -214,16 +251,28 @@ def adaptive_run(u, y, model, bounds, *, scheme=None, settings=None, rng=None, b
         sims = np.r_[sims, simulate(new_samples)]
         spent += new_samples.shape[0]
     weights = mixture.importance_weights(samples)
-    result = moving_window(y, sims, samples, prior, n=n, percentage=settings.percentage, bins=settings.bins,
-                           conf_level=settings.conf_level, flavour=settings.flavour, names=names,
-                           time=np.arange(y.size) * dt, weights=weights, window=window,
-                           min_points=settings.min_points, engine=settings.engine, workers=settings.workers,
-                           progress=progress)
+    result = moving_window(
+        y,
+        sims,
+        samples,
+        prior,
+        n=n,
+        percentage=settings.percentage,
+        bins=settings.bins,
+        conf_level=settings.conf_level,
+        flavour=settings.flavour,
+        names=names,
+        time=np.arange(y.size) * dt,
+        weights=weights,
+        window=window,
+        min_points=settings.min_points,
+        engine=settings.engine,
+        workers=settings.workers,
+        progress=progress,
+    )
     analysed = dict(result.settings)
     result.settings.clear()
-    result.settings.update(settings.to_dict(), model=type(model).__name__,
-                           bounds={name: tuple(map(float, row)) for name, row in zip(names, prior)},
-                           n_sampled=spent, n_dropped=0)
+    result.settings.update(settings.record(model, names, prior, n_sampled=spent, n_dropped=0))
     result.settings.update(analysed, sampler=scheme, n_evaluations=spent, weights=weights, n_blocks=n_blocks)
     with np.errstate(over="ignore", invalid="ignore"):
         return dataclasses.replace(result, verdicts=assess(result, u=u, y=y, model=model))
@@ -236,7 +285,7 @@ def _uniform_in(box, count, rng):
 def _draw_in_boxes(mixture, regions, count, rng):
     """``count`` draws shared equally among ``regions``, each registered with the mixture."""
     shares = np.full(len(regions), count // len(regions))
-    shares[:count - shares.sum()] += 1
+    shares[: count - shares.sum()] += 1
     drawn = []
     for region, share in zip(regions, shares):
         mixture.add(region, share)
@@ -248,8 +297,13 @@ def _enlarged(low, high, prior, margin):
     # A region seen through one or two samples has no width yet: give it a little of the prior's.
     width = np.maximum(high - low, 0.02 * (prior[:, 1] - prior[:, 0]))
     centre = (low + high) / 2
-    return np.stack([np.maximum(centre - width / 2 - margin * width, prior[:, 0]),
-                     np.minimum(centre + width / 2 + margin * width, prior[:, 1])], axis=1)
+    return np.stack(
+        [
+            np.maximum(centre - width / 2 - margin * width, prior[:, 0]),
+            np.minimum(centre + width / 2 + margin * width, prior[:, 1]),
+        ],
+        axis=1,
+    )
 
 
 def _behavioural_boxes(y, sims, samples, prior_weights, fraction, n, edges, prior, margin, window):
@@ -278,20 +332,29 @@ def _evolved_boxes(y, simulate, prior, fraction, n, edges, budget, margin, rng, 
     for start, stop in zip(edges[:-1], edges[1:]):
         evaluated = []
 
-        def block_cost(points):
+        def block_cost(points, start=start, stop=stop, evaluated=evaluated):  # bound now: called in this pass
             sims = simulate(points.T)
             cost = np.nanmean(window_costs(y, sims, n, start, stop, window), axis=0)
             evaluated.append((points.T.copy(), cost))
             return cost
 
-        found = differential_evolution(block_cost, prior, init=population, maxiter=generations,
-                                       popsize=1, polish=False, vectorized=True, updating="deferred",
-                                       tol=0, rng=rng)
+        found = differential_evolution(
+            block_cost,
+            prior,
+            init=population,
+            maxiter=generations,
+            popsize=1,
+            polish=False,
+            vectorized=True,
+            updating="deferred",
+            tol=0,
+            rng=rng,
+        )
         points = np.concatenate([points for points, _ in evaluated])
         costs = np.concatenate([cost for _, cost in evaluated])
         used += points.shape[0]
         # The best few evaluated points outline the block's low-cost region.
-        best = points[np.argsort(costs)[:max(n_params + 1, math.ceil(0.2 * population_size))]]
+        best = points[np.argsort(costs)[: max(n_params + 1, math.ceil(0.2 * population_size))]]
         boxes.append(_enlarged(best.min(axis=0), best.max(axis=0), prior, margin))
         population = found.population
     return boxes, used

@@ -181,6 +181,7 @@ array([[190, 297],
 >>> round(result.candidates[0].static_gain, 1)
 2.0
 """
+
 import math
 import numbers
 from dataclasses import dataclass, field
@@ -191,6 +192,7 @@ import scipy.stats
 
 from . import _checks
 from .errors import DataError, SettingsError
+from .segments import mask_to_segments
 
 __all__ = ["find_intervals", "BaselineResult", "CandidateInterval", "REASONS"]
 
@@ -311,15 +313,40 @@ class BaselineResult:
         except ImportError:
             raise ImportError("to_dataframe needs pandas: pip install 'dynia[pandas]'") from None
         time = self._time(time)
-        rows = [dict(start=c.start, stop=c.stop, start_time=time[c.start], end_time=time[c.stop - 1],
-                     length=c.stop - c.start, input_excited=c.input_excited,
-                     condition_number=c.condition_number, chi2_statistic=c.chi2_statistic,
-                     chi2_threshold=c.chi2_threshold, static_gain=c.static_gain,
-                     accepted=c.accepted, reason=c.reason)
-                for c in self.candidates]
-        return pd.DataFrame(rows, columns=["start", "stop", "start_time", "end_time", "length",
-                                           "input_excited", "condition_number", "chi2_statistic",
-                                           "chi2_threshold", "static_gain", "accepted", "reason"])
+        rows = [
+            dict(
+                start=c.start,
+                stop=c.stop,
+                start_time=time[c.start],
+                end_time=time[c.stop - 1],
+                length=c.stop - c.start,
+                input_excited=c.input_excited,
+                condition_number=c.condition_number,
+                chi2_statistic=c.chi2_statistic,
+                chi2_threshold=c.chi2_threshold,
+                static_gain=c.static_gain,
+                accepted=c.accepted,
+                reason=c.reason,
+            )
+            for c in self.candidates
+        ]
+        return pd.DataFrame(
+            rows,
+            columns=[
+                "start",
+                "stop",
+                "start_time",
+                "end_time",
+                "length",
+                "input_excited",
+                "condition_number",
+                "chi2_statistic",
+                "chi2_threshold",
+                "static_gain",
+                "accepted",
+                "reason",
+            ],
+        )
 
     def _time(self, time):
         n_steps = self.input_excited.size
@@ -331,9 +358,24 @@ class BaselineResult:
         return time
 
 
-def find_intervals(u, y, *, dt=1.0, setpoint=None, mean_forgetting=0.95, variance_forgetting=0.9,
-                   excitation_threshold=4.0, noise_std=None, merge_gap=20, margin=10, min_length=20,
-                   laguerre_order=3, laguerre_pole=0.9, max_condition=1000.0, significance=0.01):
+def find_intervals(
+    u,
+    y,
+    *,
+    dt=1.0,
+    setpoint=None,
+    mean_forgetting=0.95,
+    variance_forgetting=0.9,
+    excitation_threshold=4.0,
+    noise_std=None,
+    merge_gap=20,
+    margin=10,
+    min_length=20,
+    laguerre_order=3,
+    laguerre_pole=0.9,
+    max_condition=1000.0,
+    significance=0.01,
+):
     """Find the intervals of a record that are informative enough for identification.
 
     The scheme of Bittencourt et al. (2015): EWMA excitation detection on
@@ -430,21 +472,28 @@ def find_intervals(u, y, *, dt=1.0, setpoint=None, mean_forgetting=0.95, varianc
     input_excited = np.zeros(u.size, dtype=bool)
     output_excited = np.zeros(u.size, dtype=bool)
     bounds = []
-    for first, end in _runs(finite):
+    for first, end in mask_to_segments(finite):
         stretch = slice(first, end)
-        input_excited[stretch] = _excited(excitation[stretch], noise_std[0], mean_forgetting,
-                                          variance_forgetting, excitation_threshold)
-        output_excited[stretch] = _excited(y[stretch], noise_std[1], mean_forgetting,
-                                           variance_forgetting, excitation_threshold)
-        bounds += _candidate_bounds(input_excited[stretch] | output_excited[stretch], first,
-                                    max(merge_gap, margin), margin)
+        input_excited[stretch] = _excited(
+            excitation[stretch], noise_std[0], mean_forgetting, variance_forgetting, excitation_threshold
+        )
+        output_excited[stretch] = _excited(
+            y[stretch], noise_std[1], mean_forgetting, variance_forgetting, excitation_threshold
+        )
+        bounds += _candidate_bounds(
+            input_excited[stretch] | output_excited[stretch], first, max(merge_gap, margin), margin
+        )
 
     chi2_threshold = float(scipy.stats.chi2.ppf(1 - significance, laguerre_order))
     candidates = []
     for start, stop in bounds:
         condition_number, chi2_statistic, static_gain = _laguerre_tests(
-            u[start:stop], y[start:stop], laguerre_order, laguerre_pole,
-            None if setpoint is None else setpoint[start:stop])
+            u[start:stop],
+            y[start:stop],
+            laguerre_order,
+            laguerre_pole,
+            None if setpoint is None else setpoint[start:stop],
+        )
         has_input = bool(input_excited[start:stop].any())
         if not has_input:
             reason = "no input excitation"
@@ -456,27 +505,41 @@ def find_intervals(u, y, *, dt=1.0, setpoint=None, mean_forgetting=0.95, varianc
             reason = "no causal relation"
         else:
             reason = "accepted"
-        candidates.append(CandidateInterval(start, stop, has_input, condition_number, chi2_statistic,
-                                            chi2_threshold, static_gain, reason))
+        candidates.append(
+            CandidateInterval(
+                start, stop, has_input, condition_number, chi2_statistic, chi2_threshold, static_gain, reason
+            )
+        )
 
     accepted = np.array([(c.start, c.stop) for c in candidates if c.accepted], dtype=np.int64).reshape(-1, 2)
-    settings = dict(dt=dt, closed_loop=setpoint is not None, mean_forgetting=mean_forgetting,
-                    variance_forgetting=variance_forgetting, excitation_threshold=excitation_threshold,
-                    noise_std=noise_std, merge_gap=merge_gap, margin=margin, min_length=min_length,
-                    laguerre_order=laguerre_order, laguerre_pole=laguerre_pole,
-                    max_condition=max_condition, significance=significance)
+    settings = dict(
+        dt=dt,
+        closed_loop=setpoint is not None,
+        mean_forgetting=mean_forgetting,
+        variance_forgetting=variance_forgetting,
+        excitation_threshold=excitation_threshold,
+        noise_std=noise_std,
+        merge_gap=merge_gap,
+        margin=margin,
+        min_length=min_length,
+        laguerre_order=laguerre_order,
+        laguerre_pole=laguerre_pole,
+        max_condition=max_condition,
+        significance=significance,
+    )
     return BaselineResult(accepted, tuple(candidates), input_excited, output_excited, dt, settings)
 
 
 def _excited(x, noise_std, forgetting, variance_forgetting, threshold):
     """Samples where the EWMA of the squared innovation exceeds ``threshold`` times its rest value."""
-    rest = 2 * noise_std ** 2 / (1 + forgetting)
+    rest = 2 * noise_std**2 / (1 + forgetting)
     # Starting the mean at x[0] alone would bias the first innovations by that sample's noise.
-    start = float(np.median(x[:math.ceil(1 / (1 - forgetting))]))
+    start = float(np.median(x[: math.ceil(1 / (1 - forgetting))]))
     mean = scipy.signal.lfilter([1 - forgetting], [1, -forgetting], x, zi=[forgetting * start])[0]
     innovation = x - np.r_[start, mean[:-1]]
-    variance = scipy.signal.lfilter([1 - variance_forgetting], [1, -variance_forgetting], innovation ** 2,
-                                    zi=[variance_forgetting * rest])[0]
+    variance = scipy.signal.lfilter(
+        [1 - variance_forgetting], [1, -variance_forgetting], innovation**2, zi=[variance_forgetting * rest]
+    )[0]
     return variance > threshold * rest
 
 
@@ -486,18 +549,12 @@ def _candidate_bounds(excited, offset, join_gap, margin):
     ``join_gap >= margin``, so moving a start back never reaches the previous stop.
     """
     bounds = []
-    for start, stop in _runs(excited):
+    for start, stop in mask_to_segments(excited):
         if bounds and start - bounds[-1][1] <= join_gap:
             bounds[-1][1] = stop
         else:
             bounds.append([start, stop])
     return [(offset + max(0, start - margin), offset + stop) for start, stop in bounds]
-
-
-def _runs(flags):
-    """[start, stop) of every run of True in a 1-D bool array."""
-    edges = np.flatnonzero(np.diff(np.r_[0, flags.astype(np.int8), 0]))
-    return list(zip(edges[::2].tolist(), edges[1::2].tolist()))
 
 
 def _laguerre_regressors(x, order, pole):

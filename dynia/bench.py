@@ -20,7 +20,11 @@ process so that its peak resident memory (``ru_maxrss``) is its own.
 7. Samplers at percentage 0.1 on example 1: IC error against a uniform
    400 000-sample reference for uniform (10^4, 10^5) and the adaptive
    schemes of :mod:`dynia.adaptive` (10^4).
+8. The command line on a long record: ``dynia analyse`` of a 500 000-row
+   CSV (first-order response to random steps, with noise) with plots on,
+   500 samples; target peak resident memory <= 1.5 GB.
 """
+
 import argparse
 import json
 import resource
@@ -37,6 +41,7 @@ __all__ = ["main", "best_of"]
 
 def _example1(n_samples, n_steps, seed=2009):
     from .models import FirstOrder
+
     rng = np.random.default_rng(seed)
     u = example_firstorder_input(n_steps)
     model = FirstOrder()
@@ -58,6 +63,7 @@ def best_of(function, repeats):
 def _case_port_vs_engine():
     from . import thesis
     from .analysis import moving_window
+
     u, y, params, model = _example1(2000, 500)
     sims = model.simulate(params, u)
     start = time.perf_counter()
@@ -66,12 +72,14 @@ def _case_port_vs_engine():
     port = time.perf_counter() - start
     engine = best_of(lambda: moving_window(y, sims, params, [[0, 7], [0, 7]], n=10), 7)
     single = best_of(lambda: moving_window(y, sims, params, [[0, 7], [0, 7]], n=10, workers=1), 7)
-    return dict(port_s=port, engine_s=engine, engine_one_thread_s=single, ratio=port / engine,
-                ratio_one_thread=port / single)
+    return dict(
+        port_s=port, engine_s=engine, engine_one_thread_s=single, ratio=port / engine, ratio_one_thread=port / single
+    )
 
 
 def _case_engine(n_samples, n_steps):
     from .analysis import moving_window
+
     u, y, params, model = _example1(n_samples, n_steps)
     sims = model.simulate(params, u)
     seconds = best_of(lambda: moving_window(y, sims, params, [[0, 7], [0, 7]], n=10), 2)
@@ -80,17 +88,18 @@ def _case_engine(n_samples, n_steps):
 
 def _case_run(n_samples, n_steps, engine="auto"):
     from .pipeline import run
+
     u, y, _, model = _example1(1, n_steps)
     start = time.perf_counter()
     result = run(u, y, model, {"K": (0, 7), "T": (0, 7)}, n_samples=n_samples, n=10, rng=1, engine=engine)
     seconds = time.perf_counter() - start
-    return dict(seconds=seconds, sample_steps_per_s=n_samples * n_steps / seconds,
-                engine=result.settings["engine"])
+    return dict(seconds=seconds, sample_steps_per_s=n_samples * n_steps / seconds, engine=result.settings["engine"])
 
 
 def _case_throughput():
     from . import thesis
     from .pipeline import run
+
     u, y, params, model = _example1(2000, 500)
     sims = model.simulate(params, u)
     start = time.perf_counter()
@@ -101,15 +110,23 @@ def _case_throughput():
     run(u, y, model, {"K": (0, 7), "T": (0, 7)}, n_samples=200, n=10, rng=1, engine="numba")  # compile
     result = dict(port_sample_steps_per_s=port_rate)
     for engine, repeats in (("numba", 3), ("numpy", 1)):
-        seconds = best_of(lambda: run(u, y, model, {"K": (0, 7), "T": (0, 7)}, n_samples=20_000, n=10,
-                                      rng=1, engine=engine), repeats)
-        result[engine] = dict(seconds=seconds, sample_steps_per_s=20_000 * 20_000 / seconds,
-                              ratio_to_port=20_000 * 20_000 / seconds / port_rate)
+        seconds = best_of(
+            lambda engine=engine: run(
+                u, y, model, {"K": (0, 7), "T": (0, 7)}, n_samples=20_000, n=10, rng=1, engine=engine
+            ),
+            repeats,
+        )
+        result[engine] = dict(
+            seconds=seconds,
+            sample_steps_per_s=20_000 * 20_000 / seconds,
+            ratio_to_port=20_000 * 20_000 / seconds / port_rate,
+        )
     return result
 
 
 def _case_online():
     from .online import OnlineDynia
+
     u, y, _, model = _example1(1, 2_000)
     online = OnlineDynia(model, {"K": (0, 7), "T": (0, 7)}, n_samples=10_000, n=10, rng=1)
     times = []
@@ -118,12 +135,17 @@ def _case_online():
         online.update(u_t, y_t)
         times.append(time.perf_counter() - start)
     times = np.array(times[50:]) * 1e3  # the first updates warm the caches
-    return dict(mean_ms=float(times.mean()), median_ms=float(np.median(times)),
-                p99_ms=float(np.percentile(times, 99)), updates=int(times.size))
+    return dict(
+        mean_ms=float(times.mean()),
+        median_ms=float(np.median(times)),
+        p99_ms=float(np.percentile(times, 99)),
+        updates=int(times.size),
+    )
 
 
 def _case_sampling():
     from .pipeline import run
+
     u, y, _, model = _example1(1, 500)
     bounds = {"K": (0, 7), "T": (0, 7)}
     reference = run(u, y, model, bounds, n_samples=400_000, n=10, percentage=0.1, rng=1)
@@ -137,6 +159,58 @@ def _case_sampling():
     return result
 
 
+def _case_cli_long_record(n_rows=500_000):
+    import tempfile
+    from pathlib import Path
+
+    from .cli import main as cli_main
+    from .models import FirstOrder
+
+    rng = np.random.default_rng(1)
+    u = np.repeat(rng.choice([0.0, 10.0, 20.0, 30.0], n_rows // 200 + 1), 200)[:n_rows]
+    y = FirstOrder().simulate([[2.0, 25.0]], u)[0] + rng.normal(0, 0.5, n_rows)
+    with tempfile.TemporaryDirectory() as folder:
+        data = Path(folder, "long.csv")
+        with open(data, "w") as handle:
+            handle.write("time,u,y\n")
+            for first in range(0, n_rows, 100_000):
+                block = np.column_stack(
+                    [
+                        np.arange(first, min(first + 100_000, n_rows)),
+                        u[first : first + 100_000],
+                        y[first : first + 100_000],
+                    ]
+                )
+                np.savetxt(handle, block, delimiter=",", fmt=["%d", "%.6g", "%.6g"])
+        start = time.perf_counter()
+        arguments = [
+            "analyse",
+            str(data),
+            "--time",
+            "time",
+            "--input",
+            "u",
+            "--output",
+            "y",
+            "--model",
+            "first-order",
+            "--param",
+            "K=0:5",
+            "--param",
+            "T=0:50",
+            "--samples",
+            "500",
+            "--seed",
+            "1",
+            "--out",
+            str(Path(folder, "out")),
+        ]
+        status = cli_main(arguments)
+        seconds = time.perf_counter() - start
+        figures = len(list(Path(folder, "out").glob("*.png")))
+    return dict(rows=n_rows, seconds=seconds, status=status, figures=figures)
+
+
 CASES = {
     "port-vs-engine": _case_port_vs_engine,
     "engine-20000x2000": lambda: _case_engine(20_000, 2_000),
@@ -146,6 +220,7 @@ CASES = {
     "memory-100000x100000": lambda: _case_run(100_000, 100_000),
     "online-10000": _case_online,
     "sampling-example1": _case_sampling,
+    "cli-500000-rows": _case_cli_long_record,
 }
 
 
@@ -166,41 +241,63 @@ def main(argv=None):
     for name in CASES:
         if name in args.skip:
             continue
-        output = subprocess.run([sys.executable, "-m", "dynia.bench", "--case", name],
-                                check=True, capture_output=True, text=True).stdout
+        output = subprocess.run(
+            [sys.executable, "-m", "dynia.bench", "--case", name], check=True, capture_output=True, text=True
+        ).stdout
         result = json.loads(output.strip().splitlines()[-1])
         print(_describe(name, result), flush=True)
 
 
 def _describe(name, r):
     if name == "port-vs-engine":
-        return (f"thesis example 1 (500 steps, 2000 samples, K and T): port {r['port_s']:.2f} s, "
-                f"engine {r['engine_s'] * 1e3:.1f} ms -> {r['ratio']:.0f}x (target >= 300x); "
-                f"one thread {r['engine_one_thread_s'] * 1e3:.1f} ms -> {r['ratio_one_thread']:.0f}x; "
-                f"peak RSS {r['peak_rss_mb']:.0f} MB")
+        return (
+            f"thesis example 1 (500 steps, 2000 samples, K and T): port {r['port_s']:.2f} s, "
+            f"engine {r['engine_s'] * 1e3:.1f} ms -> {r['ratio']:.0f}x (target >= 300x); "
+            f"one thread {r['engine_one_thread_s'] * 1e3:.1f} ms -> {r['ratio_one_thread']:.0f}x; "
+            f"peak RSS {r['peak_rss_mb']:.0f} MB"
+        )
     if name == "throughput-20000x20000":
         engines = "; ".join(
             f"{engine} engine {r[engine]['seconds']:.2f} s = {r[engine]['sample_steps_per_s']:.3g} "
             f"sample-steps/s, {r[engine]['ratio_to_port']:.0f}x the port"
-            for engine in ("numba", "numpy"))
-        return (f"complete analysis (simulate + K and T, thesis flavour), 20 000 samples x 20 000 steps: "
-                f"{engines} (port {r['port_sample_steps_per_s']:.3g} sample-steps/s on example 1; "
-                f"target >= 1e8); peak RSS {r['peak_rss_mb']:.0f} MB")
+            for engine in ("numba", "numpy")
+        )
+        return (
+            f"complete analysis (simulate + K and T, thesis flavour), 20 000 samples x 20 000 steps: "
+            f"{engines} (port {r['port_sample_steps_per_s']:.3g} sample-steps/s on example 1; "
+            f"target >= 1e8); peak RSS {r['peak_rss_mb']:.0f} MB"
+        )
     if name == "memory-100000x100000":
-        return (f"dynia.run, 10^5 samples x 10^5 steps ({r['engine']} engine): {r['seconds']:.0f} s, "
-                f"{r['sample_steps_per_s']:.3g} sample-steps/s, peak RSS {r['peak_rss_mb']:.0f} MB "
-                "(target <= 2048 MB)")
+        return (
+            f"dynia.run, 10^5 samples x 10^5 steps ({r['engine']} engine): {r['seconds']:.0f} s, "
+            f"{r['sample_steps_per_s']:.3g} sample-steps/s, peak RSS {r['peak_rss_mb']:.0f} MB "
+            "(target <= 2048 MB)"
+        )
     if name == "online-10000":
-        return (f"OnlineDynia.update, 10 000 samples, first order, n=10 ({r['updates']} updates): mean "
-                f"{r['mean_ms']:.3f} ms, median {r['median_ms']:.3f} ms, 99th percentile {r['p99_ms']:.3f} ms "
-                f"(target <= 1 ms); peak RSS {r['peak_rss_mb']:.0f} MB")
+        return (
+            f"OnlineDynia.update, 10 000 samples, first order, n=10 ({r['updates']} updates): mean "
+            f"{r['mean_ms']:.3f} ms, median {r['median_ms']:.3f} ms, 99th percentile {r['p99_ms']:.3f} ms "
+            f"(target <= 1 ms); peak RSS {r['peak_rss_mb']:.0f} MB"
+        )
+    if name == "cli-500000-rows":
+        return (
+            f"dynia analyse on a {r['rows']:,}-row CSV, 500 samples, plots on ({r['figures']} figures, exit "
+            f"{r['status']}): {r['seconds']:.0f} s, peak RSS {r['peak_rss_mb']:.0f} MB (target <= 1536 MB)"
+        )
     if name == "sampling-example1":
-        runs = ", ".join(f"{key}: RMSE {value['rmse']:.3f} in {value['seconds']:.1f} s"
-                         for key, value in r.items() if key != "peak_rss_mb")
-        return (f"example 1 at percentage 0.1, IC error against uniform 400 000 by sampler and "
-                f"evaluations: {runs} (goal: an adaptive sampler at 10 000 matching uniform at 100 000)")
-    return (f"{name}: {r['seconds']:.2f} s, {r['sample_steps_per_s']:.3g} sample-steps/s, "
-            f"peak RSS {r['peak_rss_mb']:.0f} MB")
+        runs = ", ".join(
+            f"{key}: RMSE {value['rmse']:.3f} in {value['seconds']:.1f} s"
+            for key, value in r.items()
+            if key != "peak_rss_mb"
+        )
+        return (
+            f"example 1 at percentage 0.1, IC error against uniform 400 000 by sampler and "
+            f"evaluations: {runs} (goal: an adaptive sampler at 10 000 matching uniform at 100 000)"
+        )
+    return (
+        f"{name}: {r['seconds']:.2f} s, {r['sample_steps_per_s']:.3g} sample-steps/s, "
+        f"peak RSS {r['peak_rss_mb']:.0f} MB"
+    )
 
 
 if __name__ == "__main__":

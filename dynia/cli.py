@@ -10,6 +10,7 @@ data the method selects and validates it on the held-out end of the record
 (:mod:`dynia.identify`), writing ``identified.json`` and ``fit.png``.
 Bad input ends the command with one line on stderr and exit status 2.
 """
+
 import argparse
 import importlib.metadata
 import math
@@ -35,8 +36,7 @@ __all__ = ["main"]
 
 IDENTIFY_METHODS = ("dynia", "baseline", "whole")
 
-MODELS = {"first-order": models.FirstOrder, "fopdt": models.FOPDT,
-          "second-order-delay": models.SecondOrderDelay}
+MODELS = {"first-order": models.FirstOrder, "fopdt": models.FOPDT, "second-order-delay": models.SecondOrderDelay}
 
 EXAMPLE = """\
 example (the DaISy heating-system record shipped in data/; it starts in steady state
@@ -76,72 +76,117 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _parser():
-    parser = _Parser(prog="dynia", description="Dynamic Identifiability Analysis (DYNIA) of process data: "
-                     "find the stretches of logged data that carry information about each model parameter.")
+    parser = _Parser(
+        prog="dynia",
+        description="Dynamic Identifiability Analysis (DYNIA) of process data: "
+        "find the stretches of logged data that carry information about each model parameter.",
+    )
     parser.add_argument("--version", action="version", version=f"dynia {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND")
     analyse = commands.add_parser(
-        "analyse", help="run DYNIA on a CSV file and write the results to a directory",
+        "analyse",
+        help="run DYNIA on a CSV file and write the results to a directory",
         description="Sample the model's parameters, simulate every sample on the logged input and, "
-                    "at every time step, rank the samples over a moving window: the information "
-                    "content IC(t) of each parameter, its confidence band and the CLD gradient.",
-        epilog=EXAMPLE, formatter_class=argparse.RawDescriptionHelpFormatter)
+        "at every time step, rank the samples over a moving window: the information "
+        "content IC(t) of each parameter, its confidence band and the CLD gradient.",
+        epilog=EXAMPLE,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     _add_data_and_model_options(analyse)
     method = analyse.add_argument_group("method")
     method.add_argument("--samples", type=int, metavar="N", help="Monte Carlo parameter sets (default 2000)")
     method.add_argument("--sampler", choices=sorted(SAMPLERS), help="uniform (default), lhs or sobol")
     method.add_argument("--n", type=int, help="half window: each window holds 2n+1 steps (default 10)")
-    method.add_argument("--percentage", type=float, metavar="P",
-                        help="behavioural share of the samples in percent (default 10)")
+    method.add_argument(
+        "--percentage", type=float, metavar="P", help="behavioural share of the samples in percent (default 10)"
+    )
     method.add_argument("--bins", type=int, metavar="B", help="CLD gradient bins, at most 1000 (default 40)")
-    method.add_argument("--conf-level", type=float, metavar="C",
-                        help="confidence level of the band, percent in (50, 100) (default 90)")
+    method.add_argument(
+        "--conf-level", type=float, metavar="C", help="confidence level of the band, percent in (50, 100) (default 90)"
+    )
     method.add_argument("--flavour", choices=FLAVOURS, help="thesis (default), mcat or weighted")
-    method.add_argument("--min-points", type=int, metavar="N",
-                        help="windows with fewer measured output points report a missing IC (default 1)")
-    method.add_argument("--second-run", action="store_true",
-                        help="narrow the range of every parameter whose highest IC reaches "
-                             "--narrow-threshold to its band there, and analyse again (thesis 3.1): "
-                             "results in DIR/second_run/")
-    method.add_argument("--narrow-threshold", type=float, metavar="IC",
-                        help="highest IC from which a parameter counts as identified (default 0.75)")
-    method.add_argument("--narrow-margin", type=float, metavar="M",
-                        help="the band is widened by M times its width on each side (default 0.5)")
-    method.add_argument("--seed", type=int, metavar="S",
-                        help="seed of every random draw (default: drawn at random and recorded)")
+    method.add_argument(
+        "--min-points",
+        type=int,
+        metavar="N",
+        help="windows with fewer measured output points report a missing IC (default 1)",
+    )
+    method.add_argument(
+        "--second-run",
+        action="store_true",
+        help="narrow the range of every parameter whose highest IC reaches "
+        "--narrow-threshold to its band there, and analyse again (thesis 3.1): "
+        "results in DIR/second_run/",
+    )
+    method.add_argument(
+        "--narrow-threshold",
+        type=float,
+        metavar="IC",
+        help="highest IC from which a parameter counts as identified (default 0.75)",
+    )
+    method.add_argument(
+        "--narrow-margin",
+        type=float,
+        metavar="M",
+        help="the band is widened by M times its width on each side (default 0.5)",
+    )
+    method.add_argument(
+        "--seed", type=int, metavar="S", help="seed of every random draw (default: drawn at random and recorded)"
+    )
     _add_output_options(analyse)
 
     identify = commands.add_parser(
-        "identify", help="re-identify the model by least squares on selected data and validate it",
+        "identify",
+        help="re-identify the model by least squares on selected data and validate it",
         description="Choose the data to fit on (DYNIA's high-IC segments, the intervals of the "
-                    "Bittencourt et al. 2015 search, or the whole record), estimate the parameters "
-                    "by least squares with standard errors, and score the model on the held-out end "
-                    "of the record. Writes DIR/identified.json and DIR/fit.png.",
-        epilog=IDENTIFY_EXAMPLE, formatter_class=argparse.RawDescriptionHelpFormatter)
+        "Bittencourt et al. 2015 search, or the whole record), estimate the parameters "
+        "by least squares with standard errors, and score the model on the held-out end "
+        "of the record. Writes DIR/identified.json and DIR/fit.png.",
+        epilog=IDENTIFY_EXAMPLE,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     _add_data_and_model_options(identify)
     selection = identify.add_argument_group("selection and fit")
-    selection.add_argument("--method", choices=IDENTIFY_METHODS,
-                           help="dynia (default): segments where the IC reaches --ic-threshold; baseline: "
-                                "the accepted intervals of the Bittencourt et al. (2015) search; whole: "
-                                "the whole record before the held-out part")
-    selection.add_argument("--ic-threshold", type=float, metavar="IC",
-                           help="dynia: IC from which a step is informative (default 0.5)")
-    selection.add_argument("--mode", choices=("any", "joint"),
-                           help="dynia: a step is informative when any parameter's IC reaches the "
-                                "threshold (default) or when all do")
-    selection.add_argument("--held-out", type=float, metavar="FRACTION",
-                           help="share of the record, at its end, kept for validation (default 0.3)")
-    selection.add_argument("--exclude-flagged", action="store_true",
-                           help="check the data and leave out what is flagged (output as missing, "
-                                "input interpolated)")
-    selection.add_argument("--starts", type=int, metavar="N",
-                           help="least-squares starting points: the middle of the ranges, then random (default 1)")
+    selection.add_argument(
+        "--method",
+        choices=IDENTIFY_METHODS,
+        help="dynia (default): segments where the IC reaches --ic-threshold; baseline: "
+        "the accepted intervals of the Bittencourt et al. (2015) search; whole: "
+        "the whole record before the held-out part",
+    )
+    selection.add_argument(
+        "--ic-threshold", type=float, metavar="IC", help="dynia: IC from which a step is informative (default 0.5)"
+    )
+    selection.add_argument(
+        "--mode",
+        choices=("any", "joint"),
+        help="dynia: a step is informative when any parameter's IC reaches the threshold (default) or when all do",
+    )
+    selection.add_argument(
+        "--held-out",
+        type=float,
+        metavar="FRACTION",
+        help="share of the record, at its end, kept for validation (default 0.3)",
+    )
+    selection.add_argument(
+        "--exclude-flagged",
+        action="store_true",
+        help="check the data and leave out what is flagged (output as missing, input interpolated)",
+    )
+    selection.add_argument(
+        "--starts",
+        type=int,
+        metavar="N",
+        help="least-squares starting points: the middle of the ranges, then random (default 1)",
+    )
     selection.add_argument("--samples", type=int, metavar="N", help="dynia: Monte Carlo parameter sets (default 2000)")
     selection.add_argument("--n", type=int, help="dynia: half window, each window holds 2n+1 steps (default 10)")
-    selection.add_argument("--percentage", type=float, metavar="P",
-                           help="dynia: behavioural share of the samples in percent (default 10)")
-    selection.add_argument("--seed", type=int, metavar="S",
-                           help="seed of every random draw (default: drawn at random and recorded)")
+    selection.add_argument(
+        "--percentage", type=float, metavar="P", help="dynia: behavioural share of the samples in percent (default 10)"
+    )
+    selection.add_argument(
+        "--seed", type=int, metavar="S", help="seed of every random draw (default: drawn at random and recorded)"
+    )
     _add_output_options(identify)
     return parser
 
@@ -149,50 +194,86 @@ def _parser():
 def _add_output_options(command):
     output = command.add_argument_group("output")
     output.add_argument("--out", metavar="DIR", help="directory for the results (must not exist; see --overwrite)")
-    output.add_argument("--overwrite", action="store_true",
-                        help="replace DIR if it holds the results of an earlier dynia run (never anything else)")
+    output.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace DIR if it holds the results of an earlier dynia run (never anything else)",
+    )
     output.add_argument("--no-plots", action="store_true", help="write the tables and the summary, no figures")
     output.add_argument("--config", metavar="FILE.toml", help="read the settings from a TOML file")
 
 
 def _add_data_and_model_options(command):
     data = command.add_argument_group("data")
-    data.add_argument("data", nargs="?", metavar="DATA.csv",
-                      help="CSV file with a header row: time, input and output columns")
+    data.add_argument(
+        "data", nargs="?", metavar="DATA.csv", help="CSV file with a header row: time, input and output columns"
+    )
     data.add_argument("--time", help="name of the time column: seconds, or ISO 8601 timestamps")
-    data.add_argument("--input", action="append",
-                      help="name of the input column (in long format: the input's tag); give one")
-    data.add_argument("--output", action="append",
-                      help="name of the output column (in long format: the output's tag); give one")
-    data.add_argument("--output-file", metavar="FILE",
-                      help="the output is logged in this second file, with its own time column of the "
-                           "same name: both logs are resampled onto a common grid")
-    data.add_argument("--long", action="store_true",
-                      help="DATA.csv is a long-format event log: columns time, tag, value")
+    data.add_argument(
+        "--input", action="append", help="name of the input column (in long format: the input's tag); give one"
+    )
+    data.add_argument(
+        "--output", action="append", help="name of the output column (in long format: the output's tag); give one"
+    )
+    data.add_argument(
+        "--output-file",
+        metavar="FILE",
+        help="the output is logged in this second file, with its own time column of the "
+        "same name: both logs are resampled onto a common grid",
+    )
+    data.add_argument(
+        "--long", action="store_true", help="DATA.csv is a long-format event log: columns time, tag, value"
+    )
     data.add_argument("--tag-column", help="long format: the tag column (default: tag)")
     data.add_argument("--value-column", help="long format: the value column (default: value)")
-    data.add_argument("--dt", type=float, metavar="SECONDS",
-                      help="grid spacing for irregular or event-based data (default: the median spacing of the rows)")
-    data.add_argument("--max-gap", type=float, metavar="STEPS",
-                      help="a stretch without rows longer than this many grid steps is a gap: the output there is "
-                           "left missing, not interpolated (default 5; inf interpolates across everything)")
-    data.add_argument("--quality", action="store_true",
-                      help="check the data for absurd magnitudes, glitches, outliers and stuck values and report them")
-    data.add_argument("--offset", metavar="{none,first,VALUE}",
-                      help="subtract an output offset before fitting: none (default), first (the first "
-                           "measured output) or a number")
-    data.add_argument("--input-offset", metavar="{none,first,VALUE}",
-                      help="subtract an input offset before simulating: none (default), first or a "
-                           "number; with --offset and --x0 zero this makes a deviation model around "
-                           "an operating point")
+    data.add_argument(
+        "--dt",
+        type=float,
+        metavar="SECONDS",
+        help="grid spacing for irregular or event-based data (default: the median spacing of the rows)",
+    )
+    data.add_argument(
+        "--max-gap",
+        type=float,
+        metavar="STEPS",
+        help="a stretch without rows longer than this many grid steps is a gap: the output there is "
+        "left missing, not interpolated (default 5; inf interpolates across everything)",
+    )
+    data.add_argument(
+        "--quality",
+        action="store_true",
+        help="check the data for absurd magnitudes, glitches, outliers and stuck values and report them",
+    )
+    data.add_argument(
+        "--offset",
+        metavar="{none,first,VALUE}",
+        help="subtract an output offset before fitting: none (default), first (the first measured output) or a number",
+    )
+    data.add_argument(
+        "--input-offset",
+        metavar="{none,first,VALUE}",
+        help="subtract an input offset before simulating: none (default), first or a "
+        "number; with --offset and --x0 zero this makes a deviation model around "
+        "an operating point",
+    )
     model = command.add_argument_group("model")
-    model.add_argument("--model", choices=sorted(MODELS),
-                       help="first-order: K/(T s+1); fopdt: K e^(-theta s)/(T s+1); "
-                            "second-order-delay: K e^(-theta s)/((T1 s+1)(T2 s+1))")
-    model.add_argument("--param", action="append", metavar="NAME=LOW:HIGH",
-                       help="sampling range of a model parameter; give one per parameter")
-    model.add_argument("--x0", choices=["zero", "steady"],
-                       help="initial state of every simulation: zero (default) or steady at the first input")
+    model.add_argument(
+        "--model",
+        choices=sorted(MODELS),
+        help="first-order: K/(T s+1); fopdt: K e^(-theta s)/(T s+1); "
+        "second-order-delay: K e^(-theta s)/((T1 s+1)(T2 s+1))",
+    )
+    model.add_argument(
+        "--param",
+        action="append",
+        metavar="NAME=LOW:HIGH",
+        help="sampling range of a model parameter; give one per parameter",
+    )
+    model.add_argument(
+        "--x0",
+        choices=["zero", "steady"],
+        help="initial state of every simulation: zero (default) or steady at the first input",
+    )
 
 
 # Every option: its type in a --config file, its default and the commands that take it.
@@ -202,21 +283,43 @@ _BOTH = ("analyse", "identify")
 _ANALYSE = ("analyse",)
 _IDENTIFY = ("identify",)
 OPTIONS = {
-    "data": ("text", None, _BOTH), "time": ("text", None, _BOTH), "input": ("names", None, _BOTH),
-    "output": ("names", None, _BOTH), "output_file": ("text", None, _BOTH), "long": ("flag", False, _BOTH),
-    "tag_column": ("text", "tag", _BOTH), "value_column": ("text", "value", _BOTH), "dt": ("number", None, _BOTH),
-    "max_gap": ("number", 5.0, _BOTH), "offset": ("offset", "none", _BOTH), "input_offset": ("offset", "none", _BOTH),
-    "model": ("text", None, _BOTH), "param": ("names", None, _BOTH), "x0": ("text", "zero", _BOTH),
-    "samples": ("whole", 2000, _BOTH), "n": ("whole", 10, _BOTH), "percentage": ("number", 10.0, _BOTH),
-    "seed": ("whole", None, _BOTH), "quality": ("flag", False, _BOTH), "no_plots": ("flag", False, _BOTH),
-    "out": ("text", None, _BOTH), "overwrite": ("flag", False, _BOTH),
-    "sampler": ("text", "uniform", _ANALYSE), "bins": ("whole", 40, _ANALYSE), "conf_level": ("number", 90.0, _ANALYSE),
-    "flavour": ("text", "thesis", _ANALYSE), "min_points": ("whole", 1, _ANALYSE),
-    "second_run": ("flag", False, _ANALYSE), "narrow_threshold": ("number", 0.75, _ANALYSE),
+    "data": ("text", None, _BOTH),
+    "time": ("text", None, _BOTH),
+    "input": ("names", None, _BOTH),
+    "output": ("names", None, _BOTH),
+    "output_file": ("text", None, _BOTH),
+    "long": ("flag", False, _BOTH),
+    "tag_column": ("text", "tag", _BOTH),
+    "value_column": ("text", "value", _BOTH),
+    "dt": ("number", None, _BOTH),
+    "max_gap": ("number", 5.0, _BOTH),
+    "offset": ("offset", "none", _BOTH),
+    "input_offset": ("offset", "none", _BOTH),
+    "model": ("text", None, _BOTH),
+    "param": ("names", None, _BOTH),
+    "x0": ("text", "zero", _BOTH),
+    "samples": ("whole", 2000, _BOTH),
+    "n": ("whole", 10, _BOTH),
+    "percentage": ("number", 10.0, _BOTH),
+    "seed": ("whole", None, _BOTH),
+    "quality": ("flag", False, _BOTH),
+    "no_plots": ("flag", False, _BOTH),
+    "out": ("text", None, _BOTH),
+    "overwrite": ("flag", False, _BOTH),
+    "sampler": ("text", "uniform", _ANALYSE),
+    "bins": ("whole", 40, _ANALYSE),
+    "conf_level": ("number", 90.0, _ANALYSE),
+    "flavour": ("text", "thesis", _ANALYSE),
+    "min_points": ("whole", 1, _ANALYSE),
+    "second_run": ("flag", False, _ANALYSE),
+    "narrow_threshold": ("number", 0.75, _ANALYSE),
     "narrow_margin": ("number", 0.5, _ANALYSE),
-    "method": ("text", "dynia", _IDENTIFY), "ic_threshold": ("number", 0.5, _IDENTIFY),
-    "mode": ("text", "any", _IDENTIFY), "held_out": ("number", 0.3, _IDENTIFY),
-    "exclude_flagged": ("flag", False, _IDENTIFY), "starts": ("whole", 1, _IDENTIFY),
+    "method": ("text", "dynia", _IDENTIFY),
+    "ic_threshold": ("number", 0.5, _IDENTIFY),
+    "mode": ("text", "any", _IDENTIFY),
+    "held_out": ("number", 0.3, _IDENTIFY),
+    "exclude_flagged": ("flag", False, _IDENTIFY),
+    "starts": ("whole", 1, _IDENTIFY),
 }
 
 # The command line's name of each AnalysisSettings field, for error messages.
@@ -263,8 +366,11 @@ def _one_line(error):
 def _options(args):
     """Command-line options over the config file over the defaults, every one checked."""
     command = args.command
-    given = {key: value for key, value in vars(args).items()
-             if value is not None and key not in ("command", "config") and value is not False}
+    given = {
+        key: value
+        for key, value in vars(args).items()
+        if value is not None and key not in ("command", "config") and value is not False
+    }
     options = {key: default for key, (_, default, commands) in OPTIONS.items() if command in commands}
     if args.config:
         options.update(_read_config(args.config, command))
@@ -277,8 +383,10 @@ def _options(args):
     options["input"] = _one_column(options["input"], "--input")
     options["output"] = _one_column(options["output"], "--output")
     if options["input"] == options["output"] and not options["long"]:
-        raise UsageError(f"--input and --output name the same column {options['input']!r}; "
-                         "the output must be logged apart from the input")
+        raise UsageError(
+            f"--input and --output name the same column {options['input']!r}; "
+            "the output must be logged apart from the input"
+        )
     if not options.get("param"):
         raise UsageError("give a range for every model parameter with --param NAME=LOW:HIGH")
     if options["model"] not in MODELS:
@@ -293,8 +401,9 @@ def _options(args):
     inputs = [path for path in (options["data"], options.get("output_file"), options.get("config")) if path]
     options["inputs"] = inputs
     # Checked now, before the data are read: an --out that could cost the user files is refused at once.
-    options["destination"] = OutputDirectory(options["out"], overwrite=options["overwrite"], inputs=inputs,
-                                             command=command)
+    options["destination"] = OutputDirectory(
+        options["out"], overwrite=options["overwrite"], inputs=inputs, command=command
+    )
     return options
 
 
@@ -302,8 +411,10 @@ def _one_column(names, option):
     if isinstance(names, str):
         names = [names]
     if len(names) != 1:
-        raise UsageError(f"give one {option}: the models take one input and one output (multi-input models are "
-                         f"not supported yet); got {', '.join(map(repr, names))}")
+        raise UsageError(
+            f"give one {option}: the models take one input and one output (multi-input models are "
+            f"not supported yet); got {', '.join(map(repr, names))}"
+        )
     return names[0]
 
 
@@ -311,8 +422,13 @@ def _analysis_settings(options):
     """The AnalysisSettings of the command's options, with errors naming the command-line option."""
     fields = dict(n_samples=options["samples"], n=options["n"], percentage=options["percentage"], x0=options["x0"])
     if "bins" in options:  # the analyse-only options
-        fields.update(sampler=options["sampler"], bins=options["bins"], conf_level=options["conf_level"],
-                      flavour=options["flavour"], min_points=options["min_points"])
+        fields.update(
+            sampler=options["sampler"],
+            bins=options["bins"],
+            conf_level=options["conf_level"],
+            flavour=options["flavour"],
+            min_points=options["min_points"],
+        )
     try:
         return AnalysisSettings(**fields)
     except SettingsError as error:
@@ -323,8 +439,11 @@ def _analysis_settings(options):
 
 def _check_command_options(options):
     """The options that only the command line has."""
-    for key, low, high, closed_high in (("narrow_threshold", 0, 1, False), ("ic_threshold", 0, 1, True),
-                                        ("held_out", 0, 1, False)):
+    for key, low, high, closed_high in (
+        ("narrow_threshold", 0, 1, False),
+        ("ic_threshold", 0, 1, True),
+        ("held_out", 0, 1, False),
+    ):
         if key in options:
             value = options[key]
             inside = low < value <= high if closed_high else low < value < high
@@ -336,10 +455,17 @@ def _check_command_options(options):
     if "starts" in options and options["starts"] < 1:
         raise UsageError(f"--starts must be a whole number >= 1; got {options['starts']}")
     if not (options["max_gap"] > 1 or math.isinf(options["max_gap"])):
-        raise UsageError(f"--max-gap is a multiple of the grid step above 1 (a gap longer than that many steps is "
-                         f"left missing); got {options['max_gap']:g}")
-    for key, choices in (("sampler", SAMPLERS), ("flavour", FLAVOURS), ("x0", ("zero", "steady")),
-                         ("method", IDENTIFY_METHODS), ("mode", ("any", "joint"))):
+        raise UsageError(
+            f"--max-gap is a multiple of the grid step above 1 (a gap longer than that many steps is "
+            f"left missing); got {options['max_gap']:g}"
+        )
+    for key, choices in (
+        ("sampler", SAMPLERS),
+        ("flavour", FLAVOURS),
+        ("x0", ("zero", "steady")),
+        ("method", IDENTIFY_METHODS),
+        ("mode", ("any", "joint")),
+    ):
         if key in options and options[key] not in choices:
             raise UsageError(f"--{key} must be one of {', '.join(choices)}; got {options[key]!r}")
 
@@ -358,8 +484,9 @@ def _read_config(path, command):
     allowed = sorted(key for key, (_, _, commands) in OPTIONS.items() if command in commands)
     unknown = sorted(set(config) - set(allowed))
     if unknown:
-        raise UsageError(f"--config {path}: unknown key(s) for dynia {command}: {', '.join(unknown)}; "
-                         f"allowed: {', '.join(allowed)}")
+        raise UsageError(
+            f"--config {path}: unknown key(s) for dynia {command}: {', '.join(unknown)}; allowed: {', '.join(allowed)}"
+        )
     return {key: _typed(value, OPTIONS[key][0], f"--config {path}: {key}") for key, value in config.items()}
 
 
@@ -381,9 +508,14 @@ def _typed(value, kind, where):
             return [value]
         if isinstance(value, list) and value and all(isinstance(item, str) for item in value):
             return value
-    expected = {"flag": "true or false (unquoted)", "whole": "a whole number", "number": "a number",
-                "text": "a string", "offset": "none, first or a number",
-                "names": "a string or a list of strings"}[kind]
+    expected = {
+        "flag": "true or false (unquoted)",
+        "whole": "a whole number",
+        "number": "a number",
+        "text": "a string",
+        "offset": "none, first or a number",
+        "names": "a string or a list of strings",
+    }[kind]
     raise UsageError(f"{where} must be {expected}; got {value!r} ({type(value).__name__})")
 
 
@@ -405,13 +537,16 @@ def _bounds(specs, model):
         if not (math.isfinite(low) and math.isfinite(high) and low < high):
             raise UsageError(f"--param {name}: the lower bound {low:g} must be below the upper bound {high:g}")
         if max(abs(low), abs(high)) > MAX_PARAMETER:
-            raise UsageError(f"--param {name}: the range reaches beyond {MAX_PARAMETER:g}, where the arithmetic "
-                             "overflows; give the range in the units of the data")
+            raise UsageError(
+                f"--param {name}: the range reaches beyond {MAX_PARAMETER:g}, where the arithmetic "
+                "overflows; give the range in the units of the data"
+            )
         bounds[name] = (low, high)
     missing = [name for name in model.names if name not in bounds]
     if missing:
-        raise UsageError(f"no --param for {', '.join(missing)} ({type(model).__name__} has parameters "
-                         f"{', '.join(model.names)})")
+        raise UsageError(
+            f"no --param for {', '.join(missing)} ({type(model).__name__} has parameters {', '.join(model.names)})"
+        )
     return bounds
 
 
@@ -429,14 +564,24 @@ def _offset(value, option):
 
 def _load(options):
     """The data, checked against the window, and the output and input offsets."""
-    data = load_csv(options["data"], time=options["time"], input=options["input"], output=options["output"],
-                    output_path=options.get("output_file"), long_format=options["long"],
-                    tag_column=options["tag_column"], value_column=options["value_column"], dt=options.get("dt"),
-                    max_gap=None if math.isinf(options["max_gap"]) else options["max_gap"])
+    data = load_csv(
+        options["data"],
+        time=options["time"],
+        input=options["input"],
+        output=options["output"],
+        output_path=options.get("output_file"),
+        long_format=options["long"],
+        tag_column=options["tag_column"],
+        value_column=options["value_column"],
+        dt=options.get("dt"),
+        max_gap=None if math.isinf(options["max_gap"]) else options["max_gap"],
+    )
     window = 2 * options["n"] + 1
     if data.y.size < window:
-        raise UsageError(f"{options['data']}: {data.y.size} time steps, fewer than one window of "
-                         f"2n+1 = {window} (--n {options['n']})")
+        raise UsageError(
+            f"{options['data']}: {data.y.size} time steps, fewer than one window of "
+            f"2n+1 = {window} (--n {options['n']})"
+        )
     offset = _offset_value(options["offset"], data.y, options["data"], "--offset")
     input_offset = _offset_value(options["input_offset"], data.u, options["data"], "--input-offset")
     return data, offset, input_offset
@@ -458,26 +603,39 @@ def _data_warnings(data, u, y, options):
     lines = []
     for start, stop in data.gaps:
         first, last = report.file_times(data, [data.time[start], data.time[stop - 1]])
-        lines.append(f"no rows in {options['data']} from {first} to {last}: {stop - start} grid points of the "
-                     "output left missing (raise --max-gap to interpolate across)")
+        lines.append(
+            f"no rows in {options['data']} from {first} to {last}: {stop - start} grid points of the "
+            "output left missing (raise --max-gap to interpolate across)"
+        )
     for name, values in (("input", data.u), ("output", data.y)):
         with np.errstate(invalid="ignore"):
             huge = np.flatnonzero(np.abs(values) > _ABSURD)
         if huge.size:
-            lines.append(f"the {name} holds {huge.size} value(s) beyond {_ABSURD:g} in magnitude, the first "
-                         f"{values[huge[0]]:g} at time {report.file_times(data, [data.time[huge[0]]])[0]}; "
-                         "check the data (--quality reports them)")
+            lines.append(
+                f"the {name} holds {huge.size} value(s) beyond {_ABSURD:g} in magnitude, the first "
+                f"{values[huge[0]]:g} at time {report.file_times(data, [data.time[huge[0]]])[0]}; "
+                "check the data (--quality reports them)"
+            )
     findings = []
     if options["quality"]:
         found = check_quality(data.time, u, y)
         for finding in found.findings:
             start, end = report.file_times(data, [data.time[finding.start], data.time[finding.stop - 1]])
-            findings.append(dict(signal=finding.signal, kind=finding.kind, start_time=start, end_time=end,
-                                 value=finding.value, reason=finding.reason))
+            findings.append(
+                dict(
+                    signal=finding.signal,
+                    kind=finding.kind,
+                    start_time=start,
+                    end_time=end,
+                    value=finding.value,
+                    reason=finding.reason,
+                )
+            )
         if findings:
             kinds = sorted({entry["kind"] for entry in findings})
-            lines.append(f"data quality: {len(findings)} finding(s) ({', '.join(kinds)}); see data_quality in "
-                         "summary.json")
+            lines.append(
+                f"data quality: {len(findings)} finding(s) ({', '.join(kinds)}); see data_quality in summary.json"
+            )
     return lines, findings
 
 
@@ -495,16 +653,23 @@ def _provenance(options, command_line):
             versions[package] = importlib.metadata.version(package)
         except importlib.metadata.PackageNotFoundError:
             versions[package] = None
-    return dict(command_line=command_line, versions=versions,
-                inputs={str(path): {"sha256": report.sha256(path)} for path in options["inputs"]})
+    return dict(
+        command_line=command_line,
+        versions=versions,
+        inputs={str(path): {"sha256": report.sha256(path)} for path in options["inputs"]},
+    )
 
 
 def _recorded(options, analysis, offset, input_offset):
     """Exactly the options of this command as used, and the analysis settings."""
     command_keys = [key for key in OPTIONS if key in options]
     recorded = {key: options[key] for key in command_keys if key not in ("param",)}
-    recorded.update(bounds={name: list(pair) for name, pair in options["bounds"].items()},
-                    offset_value=offset, input_offset_value=input_offset, analysis=analysis.to_dict())
+    recorded.update(
+        bounds={name: list(pair) for name, pair in options["bounds"].items()},
+        offset_value=offset,
+        input_offset_value=input_offset,
+        analysis=analysis.to_dict(),
+    )
     return recorded
 
 
@@ -528,20 +693,32 @@ def _analyse(options, command_line, caught):
                 if parameters[name]["time_of_max_ic"] is not None:
                     # The result's clock starts at the first grid point, data.time[0] after time zero.
                     parameters[name]["time_of_max_ic"] = report.file_times(
-                        data, [data.time[0] + parameters[name]["time_of_max_ic"]])[0]
+                        data, [data.time[0] + parameters[name]["time_of_max_ic"]]
+                    )[0]
             settings = _recorded(options, analysis, offset, input_offset)
             settings["bounds"] = {name: list(pair) for name, pair in bounds.items()}
             if narrowed is not None:
                 settings["narrowed"] = narrowed
             summary = dict(
-                parameters=parameters, settings=settings, version=__version__,
-                run=dict(n_sampled=result.settings["n_sampled"], n_dropped=result.settings["n_dropped"],
-                         n_behavioural=result.settings["n_behavioural"], engine=result.settings["engine"]),
+                parameters=parameters,
+                settings=settings,
+                version=__version__,
+                run=dict(
+                    n_sampled=result.settings["n_sampled"],
+                    n_dropped=result.settings["n_dropped"],
+                    n_behavioural=result.settings["n_behavioural"],
+                    engine=result.settings["engine"],
+                ),
                 warnings=notices + dropped,
-                data=dict(n_steps=int(data.time.size), dt=data.dt, start=report.file_times(data, [0.0])[0],
-                          notes=list(data.notes),
-                          gaps=[report.file_times(data, [data.time[a], data.time[b - 1]]) for a, b in data.gaps]),
-                **_provenance(options, command_line))
+                data=dict(
+                    n_steps=int(data.time.size),
+                    dt=data.dt,
+                    start=report.file_times(data, [0.0])[0],
+                    notes=list(data.notes),
+                    gaps=[report.file_times(data, [data.time[a], data.time[b - 1]]) for a, b in data.gaps],
+                ),
+                **_provenance(options, command_line),
+            )
             if options["quality"]:
                 summary["data_quality"] = quality_findings
             report.write_analysis(directory, result, data, summary, offset=offset, plots=not options["no_plots"])
@@ -550,12 +727,14 @@ def _analyse(options, command_line, caught):
         result, parameters = analyse(options["bounds"], staging)
         tables = [report.verdict_table(parameters)]
         if options["second_run"]:
-            bounds, narrowed = narrowed_bounds(result, options["bounds"], threshold=options["narrow_threshold"],
-                                               margin=options["narrow_margin"])
+            bounds, narrowed = narrowed_bounds(
+                result, options["bounds"], threshold=options["narrow_threshold"], margin=options["narrow_margin"]
+            )
             (staging / "second_run").mkdir()
             _, second = analyse(bounds, staging / "second_run", narrowed=narrowed)
-            tables.append("second run (narrowed: " + (", ".join(narrowed) or "none") + ")\n"
-                          + report.verdict_table(second))
+            tables.append(
+                "second run (narrowed: " + (", ".join(narrowed) or "none") + ")\n" + report.verdict_table(second)
+            )
     print("\n\n".join(tables))
     return _done(options)
 
@@ -569,10 +748,21 @@ def _identify(options, command_line, caught):
         notices, _ = _data_warnings(data, u, y, dict(options, quality=False))
         for line in notices:
             print(f"dynia: warning: {line}", file=sys.stderr)
-        found = identify(u, y, model, options["bounds"], method=options["method"], settings=analysis,
-                         held_out=options["held_out"], ic_threshold=options["ic_threshold"], mode=options["mode"],
-                         quality=options["quality"], exclude_flagged=options["exclude_flagged"],
-                         n_starts=options["starts"], rng=options["seed"])
+        found = identify(
+            u,
+            y,
+            model,
+            options["bounds"],
+            method=options["method"],
+            settings=analysis,
+            held_out=options["held_out"],
+            ic_threshold=options["ic_threshold"],
+            mode=options["mode"],
+            quality=options["quality"],
+            exclude_flagged=options["exclude_flagged"],
+            n_starts=options["starts"],
+            rng=options["seed"],
+        )
         dropped = _dynia_warnings(caught)
         for line in dropped:
             print(f"dynia: warning: {line}", file=sys.stderr)
@@ -589,14 +779,23 @@ def _identify(options, command_line, caught):
         # identify's own record adds what the command line does not set (held_out_steps, min_length, ...);
         # the analysis settings are already under "analysis".
         analysis_fields = set(analysis.to_dict())
-        recorded.update({key: value for key, value in summary.pop("settings").items()
-                         if key not in recorded and key not in analysis_fields})
-        summary.update(settings=recorded, version=__version__, warnings=notices + dropped,
-                       data=dict(n_steps=int(data.time.size), dt=data.dt, start=report.file_times(data, [0.0])[0],
-                                 notes=list(data.notes)),
-                       **_provenance(options, command_line))
-        report.write_identification(staging, found, data, u, y, summary, offset=offset,
-                                    plots=not options["no_plots"])
+        recorded.update(
+            {
+                key: value
+                for key, value in summary.pop("settings").items()
+                if key not in recorded and key not in analysis_fields
+            }
+        )
+        summary.update(
+            settings=recorded,
+            version=__version__,
+            warnings=notices + dropped,
+            data=dict(
+                n_steps=int(data.time.size), dt=data.dt, start=report.file_times(data, [0.0])[0], notes=list(data.notes)
+            ),
+            **_provenance(options, command_line),
+        )
+        report.write_identification(staging, found, data, u, y, summary, offset=offset, plots=not options["no_plots"])
     return _done(options)
 
 

@@ -31,6 +31,7 @@ array([1.        , 1.        , 1.        , 2.33333333])
 >>> y
 array([2., 3., 4., 5.])
 """
+
 import csv
 import dataclasses
 import datetime
@@ -134,8 +135,19 @@ class ProcessData:
     gaps: tuple[tuple[int, int], ...] = ()
 
 
-def load_csv(path, *, time, input, output, output_path=None, long_format=False,
-             tag_column="tag", value_column="value", dt=None, max_gap=5.0):
+def load_csv(
+    path,
+    *,
+    time,
+    input,
+    output,
+    output_path=None,
+    long_format=False,
+    tag_column="tag",
+    value_column="value",
+    dt=None,
+    max_gap=5.0,
+):
     """Read logged process data from CSV into a uniform :class:`ProcessData`.
 
     Three layouts are read:
@@ -297,8 +309,9 @@ def load_csv(path, *, time, input, output, output_path=None, long_format=False,
     no_such_file.csv: no such file; expected a CSV file with a header row
     """
     if long_format and output_path is not None:
-        raise SettingsError("long_format reads both signals from one file; do not give output_path with it",
-                            "output_path")
+        raise SettingsError(
+            "long_format reads both signals from one file; do not give output_path with it", "output_path"
+        )
     if dt is not None:
         dt = _grid_spacing(dt)
     max_gap = _gap_limit(max_gap)
@@ -411,7 +424,8 @@ def resample_events(times_u, u, times_y, y, dt=None, start=None, stop=None):
     if not first < last:
         raise DataError(
             f"the logs do not overlap in time: times_u spans [{times_u[0]}, {times_u[-1]}] and "
-            f"times_y spans [{times_y[0]}, {times_y[-1]}]; a grid needs a stretch where both have data")
+            f"times_y spans [{times_y[0]}, {times_y[-1]}]; a grid needs a stretch where both have data"
+        )
     start = first if start is None else _inside(start, "start", first, last)
     stop = last if stop is None else _inside(stop, "stop", first, last)
     if not start < stop:
@@ -433,13 +447,15 @@ def _log(times, values, times_name, values_name):
     if times.size != values.size:
         raise DataError(
             f"{times_name} has {times.size} timestamps but {values_name} has {values.size} values; "
-            "a log needs one timestamp per value")
+            "a log needs one timestamp per value"
+        )
     steps = np.diff(times)
     if (steps <= 0).any():
         index = int(np.argmax(steps <= 0)) + 1
         raise DataError(
             f"{times_name} must be strictly increasing: {times_name}[{index}] = {times[index]} "
-            f"follows {times_name}[{index - 1}] = {times[index - 1]}")
+            f"follows {times_name}[{index - 1}] = {times[index - 1]}"
+        )
     return times, values
 
 
@@ -450,7 +466,9 @@ def _inside(value, name, first, last):
     if not first <= value <= last:
         raise SettingsError(
             f"{name} = {value} lies outside [{first}, {last}], the span in which both logs have data "
-            "(values are interpolated, never extrapolated)", name)
+            "(values are interpolated, never extrapolated)",
+            name,
+        )
     return float(value)
 
 
@@ -485,10 +503,14 @@ class _Table:
         where = f"{self.path}: row {self.header_row} (the header)"
         if found:
             raise DataError(f"{where} names {len(found)} columns {wanted!r}; expected one, to read {argument} from")
-        hint = (" (they are numbers: the file seems to lack a header row naming the columns)"
-                if all(_is_number(column) for column in self.header) else "")
-        raise DataError(f"{where} has no column {wanted!r} (given as {argument}); "
-                        f"available columns: {_listed(self.header)}{hint}")
+        hint = (
+            " (they are numbers: the file seems to lack a header row naming the columns)"
+            if all(_is_number(column) for column in self.header)
+            else ""
+        )
+        raise DataError(
+            f"{where} has no column {wanted!r} (given as {argument}); available columns: {_listed(self.header)}{hint}"
+        )
 
 
 @dataclasses.dataclass(frozen=True)
@@ -552,11 +574,12 @@ def _read_table(path):
             if header is None:
                 header_row, header = row, tuple(cell.strip() for cell in record)
                 continue
-            if any(cell.strip() for cell in record[len(header):]):
+            if any(cell.strip() for cell in record[len(header) :]):
                 raise DataError(
                     f"{name}: row {row} has {len(record)} cells but the header (row {header_row}) names "
                     f"{len(header)} columns; expected one cell per column (a decimal comma in a "
-                    "comma-separated file splits a number in two)")
+                    "comma-separated file splits a number in two)"
+                )
             rows.append(row)
             records.append(record)
     except csv.Error as error:
@@ -597,12 +620,14 @@ def _from_rows(table, time, input, output, dt, max_gap):
         return ProcessData(step * np.arange(seconds.size), u, y, float(step), start, tuple(notes))
     grid, u_grid, y_grid, step = _resampled(table.path, seconds, u, seconds, y, dt)
     if uniform:
-        notes.append(f"resampled {len(rows)} rows spaced {spacing:g} s onto the given {step:g} s grid "
-                     "by linear interpolation")
+        notes.append(
+            f"resampled {len(rows)} rows spaced {spacing:g} s onto the given {step:g} s grid by linear interpolation"
+        )
     else:
         dt_source = "given" if dt is not None else "inferred: the median spacing of the rows"
-        notes.append(f"resampled {len(rows)} irregular rows onto a {step:g} s grid by linear interpolation "
-                     f"(dt {dt_source})")
+        notes.append(
+            f"resampled {len(rows)} irregular rows onto a {step:g} s grid by linear interpolation (dt {dt_source})"
+        )
     _note_output_gaps(notes, missing, y_grid)
     gaps = _blank_gaps(grid, y_grid, step, max_gap, [(seconds, timeline.cells, "")], notes)
     return ProcessData(grid, u_grid, y_grid, step, start, tuple(notes), gaps)
@@ -616,7 +641,8 @@ def _from_logs(input_log, output_log, dt, max_gap):
     if not max(times_u[0], times_y[0]) < min(times_u[-1], times_y[-1]):
         raise DataError(
             f"{output_log.table.path}: the output log ({_described(output_log)}) does not overlap the input log "
-            f"({_described(input_log)}) of {input_log.table.path} in time; expected a stretch where both have data")
+            f"({_described(input_log)}) of {input_log.table.path} in time; expected a stretch where both have data"
+        )
     notes = list(dict.fromkeys(input_log.table.notes + output_log.table.notes))
     u = _filled_input(input_log.table, input_log.label, input_log.rows, times_u, input_log.values, notes)
     missing = _output_gaps(output_log.table, output_log.label, output_log.rows, output_log.values)
@@ -626,10 +652,13 @@ def _from_logs(input_log, output_log, dt, max_gap):
         f"resampled the input log ({input_log.label} of {input_log.table.path}, "
         f"{_counted(len(input_log.rows), 'row')}) and the output log ({output_log.label} of "
         f"{output_log.table.path}, {_counted(len(output_log.rows), 'row')}) onto a common {step:g} s grid "
-        f"from {grid[0]:g} s to {grid[-1]:g} s by linear interpolation (dt {dt_source})")
+        f"from {grid[0]:g} s to {grid[-1]:g} s by linear interpolation (dt {dt_source})"
+    )
     _note_output_gaps(notes, missing, y_grid)
-    logs = [(times, log.timeline.cells, f" in the {role} log ({log.label})")
-            for times, log, role in ((times_u, input_log, "input"), (times_y, output_log, "output"))]
+    logs = [
+        (times, log.timeline.cells, f" in the {role} log ({log.label})")
+        for times, log, role in ((times_u, input_log, "input"), (times_y, output_log, "output"))
+    ]
     gaps = _blank_gaps(grid, y_grid, step, max_gap, logs, notes)
     return ProcessData(grid, u_grid, y_grid, step, origin, tuple(notes), gaps)
 
@@ -649,9 +678,11 @@ def _tag_logs(table, time, tag_column, value_column, input, output):
         picks = [index for index, cell in enumerate(tags) if cell == wanted]
         if not picks:
             present = [cell for cell in dict.fromkeys(tags) if cell]
-            raise DataError(f"{table.path}: column {tag_column.strip()!r} holds no tag {wanted!r} "
-                            f"(given as {argument}) in rows {table.rows[0]} to {table.rows[-1]}; "
-                            f"tags present: {_listed(present)}")
+            raise DataError(
+                f"{table.path}: column {tag_column.strip()!r} holds no tag {wanted!r} "
+                f"(given as {argument}) in rows {table.rows[0]} to {table.rows[-1]}; "
+                f"tags present: {_listed(present)}"
+            )
         logs.append(_event_log(table, f"tag {wanted!r}", time, value_column, "value_column", picks))
     return logs
 
@@ -668,8 +699,9 @@ def _event_log(table, label, time, column, argument, picks):
 
 def _at_least_two_rows(table, label, rows):
     if len(rows) < 2:
-        raise DataError(f"{table.path}: {label} has only one data row (row {rows[0]}); "
-                        "expected at least 2 to span a time")
+        raise DataError(
+            f"{table.path}: {label} has only one data row (row {rows[0]}); expected at least 2 to span a time"
+        )
 
 
 def _timeline(table, column, rows, cells):
@@ -679,9 +711,11 @@ def _timeline(table, column, rows, cells):
     kind = _kind(stamps[0])
     for row, cell, stamp in zip(rows, cells, stamps, strict=True):
         if _kind(stamp) != kind:
-            raise DataError(f"{table.path}: row {row}, column {column!r}: {_shown(cell)} is {_kind(stamp)}, "
-                            f"but row {rows[0]} holds {kind} ({_shown(cells[0])}); expected one kind of time "
-                            "throughout")
+            raise DataError(
+                f"{table.path}: row {row}, column {column!r}: {_shown(cell)} is {_kind(stamp)}, "
+                f"but row {rows[0]} holds {kind} ({_shown(cells[0])}); expected one kind of time "
+                "throughout"
+            )
     first = stamps[0]
     if kind == _SECONDS:
         with np.errstate(over="ignore"):  # an overflow is reported below, with its row
@@ -690,18 +724,24 @@ def _timeline(table, column, rows, cells):
         seconds = np.array([(stamp - first).total_seconds() for stamp in stamps])
     if not np.isfinite(seconds).all():
         far = int(np.argmin(np.isfinite(seconds)))
-        raise DataError(f"{table.path}: row {rows[far]}, column {column!r}: {_shown(cells[far])} is so far from "
-                        f"{_shown(cells[0])} on row {rows[0]} that the seconds between them overflow; "
-                        "expected times of one record")
+        raise DataError(
+            f"{table.path}: row {rows[far]}, column {column!r}: {_shown(cells[far])} is so far from "
+            f"{_shown(cells[0])} on row {rows[0]} that the seconds between them overflow; "
+            "expected times of one record"
+        )
     steps = np.diff(seconds)
     if not (steps > 0).all():
         later = int(np.argmax(steps <= 0)) + 1
         where = f"{table.path}: row {rows[later]}, column {column!r}"
         if steps[later - 1] == 0:
-            raise DataError(f"{where}: duplicate timestamp {_shown(cells[later])}, already on row {rows[later - 1]}; "
-                            "expected strictly increasing times")
-        raise DataError(f"{where}: {_shown(cells[later])} is earlier than {_shown(cells[later - 1])} on row "
-                        f"{rows[later - 1]}; expected strictly increasing times")
+            raise DataError(
+                f"{where}: duplicate timestamp {_shown(cells[later])}, already on row {rows[later - 1]}; "
+                "expected strictly increasing times"
+            )
+        raise DataError(
+            f"{where}: {_shown(cells[later])} is earlier than {_shown(cells[later - 1])} on row "
+            f"{rows[later - 1]}; expected strictly increasing times"
+        )
     return _Timeline(column, first, kind, rows[0], tuple(cell.strip() for cell in cells), seconds)
 
 
@@ -710,8 +750,9 @@ def _time_stamp(path, column, row, cell):
     text = cell.strip()
     where = f"{path}: row {row}, column {column!r}"
     if text.lower() in _MISSING:
-        raise DataError(f"{where}: the time is missing ({_shown(cell)}); "
-                        "expected a number of seconds or an ISO 8601 timestamp")
+        raise DataError(
+            f"{where}: the time is missing ({_shown(cell)}); expected a number of seconds or an ISO 8601 timestamp"
+        )
     try:
         seconds = float(text)
     except ValueError:
@@ -720,8 +761,10 @@ def _time_stamp(path, column, row, cell):
         try:
             return datetime.datetime.fromisoformat(iso)
         except ValueError:
-            raise DataError(f"{where}: {_shown(cell)} is neither a number of seconds nor an ISO 8601 timestamp "
-                            "such as 2024-05-01T12:00:00") from None
+            raise DataError(
+                f"{where}: {_shown(cell)} is neither a number of seconds nor an ISO 8601 timestamp "
+                "such as 2024-05-01T12:00:00"
+            ) from None
     if not math.isfinite(seconds):
         raise DataError(f"{where}: {_shown(cell)} is not a finite time; expected a number of seconds")
     return seconds
@@ -741,7 +784,8 @@ def _common_origin(input_log, output_log):
             f"{output_log.table.path}: row {first_y.first_row}, column {first_y.column!r}: "
             f"{_shown(first_y.first_cell)} is {first_y.kind}, but row {first_u.first_row} of "
             f"{input_log.table.path} ({input_log.label}) holds {first_u.kind} ({_shown(first_u.first_cell)}); "
-            "expected one kind of time for both signals")
+            "expected one kind of time for both signals"
+        )
     return min(first_u.first, first_y.first)
 
 
@@ -776,12 +820,16 @@ def _filled_input(table, label, rows, times, values, notes):
     """The input with its missing values interpolated in time, ends held; a note says how many."""
     missing = np.isnan(values)
     if missing.all():
-        raise DataError(f"{table.path}: {label} has no value in rows {rows[0]} to {rows[-1]}; "
-                        "expected at least one number for the input")
+        raise DataError(
+            f"{table.path}: {label} has no value in rows {rows[0]} to {rows[-1]}; "
+            "expected at least one number for the input"
+        )
     if not missing.any():
         return values
-    notes.append(f"filled {_counted(missing.sum(), 'missing input value')} by linear interpolation "
-                 "between the nearest present values")
+    notes.append(
+        f"filled {_counted(missing.sum(), 'missing input value')} by linear interpolation "
+        "between the nearest present values"
+    )
     return np.interp(times, times[~missing], values[~missing])
 
 
@@ -789,15 +837,19 @@ def _output_gaps(table, label, rows, values):
     """Where the output is missing; a DataError when it is missing everywhere."""
     missing = np.isnan(values)
     if missing.all():
-        raise DataError(f"{table.path}: {label} has no value in rows {rows[0]} to {rows[-1]}; "
-                        "expected at least one number for the output")
+        raise DataError(
+            f"{table.path}: {label} has no value in rows {rows[0]} to {rows[-1]}; "
+            "expected at least one number for the output"
+        )
     return missing
 
 
 def _note_output_gaps(notes, missing, y_grid):
     if missing.any():
-        notes.append(f"{_counted(missing.sum(), 'output value')} missing, leaving "
-                     f"{_counted(np.isnan(y_grid).sum(), 'grid point')} NaN in y")
+        notes.append(
+            f"{_counted(missing.sum(), 'output value')} missing, leaving "
+            f"{_counted(np.isnan(y_grid).sum(), 'grid point')} NaN in y"
+        )
 
 
 def _resampled(path, times_u, u, times_y, y, dt):
@@ -811,15 +863,19 @@ def _resampled(path, times_u, u, times_y, y, dt):
     steps = (last - first) / step
     if steps >= _MAX_GRID_STEPS:
         inferred = "" if dt is not None else " (inferred: the median spacing of the timestamps)"
-        raise DataError(f"{path}: the grid would have {_spaced(math.floor(steps) + 1)} steps at dt = {step:g} s"
-                        f"{inferred} over the {last - first:g} s the data span (limit {_spaced(_MAX_GRID_STEPS)}); "
-                        "pass a larger --dt / dt=")
+        raise DataError(
+            f"{path}: the grid would have {_spaced(math.floor(steps) + 1)} steps at dt = {step:g} s"
+            f"{inferred} over the {last - first:g} s the data span (limit {_spaced(_MAX_GRID_STEPS)}); "
+            "pass a larger --dt / dt="
+        )
     missing = np.isnan(y)
     bridged = np.interp(times_y, times_y[~missing], y[~missing])
     grid, u_grid, y_grid = resample_events(times_u, u, times_y, bridged, dt=step)
     if grid.size < 2:
-        raise DataError(f"{path}: {which} is longer than the {last - first:g} s the data span; "
-                        "expected a dt that leaves at least 2 grid points")
+        raise DataError(
+            f"{path}: {which} is longer than the {last - first:g} s the data span; "
+            "expected a dt that leaves at least 2 grid points"
+        )
     y_grid[_in_gaps(grid, times_y, missing, step)] = np.nan
     return grid, u_grid, y_grid, float(step)
 
@@ -835,8 +891,7 @@ def _in_gaps(grid, times, missing, dt):
     after = np.minimum(after, times.size - 1)
     on_before = grid - times[before] <= _GRID_SNAP * dt
     on_after = times[after] - grid <= _GRID_SNAP * dt
-    return np.where(on_before, missing[before],
-                    np.where(on_after, missing[after], missing[before] | missing[after]))
+    return np.where(on_before, missing[before], np.where(on_after, missing[after], missing[before] | missing[after]))
 
 
 def _grid_spacing(dt):
@@ -850,8 +905,11 @@ def _gap_limit(max_gap):
     if max_gap is None:
         return None
     if isinstance(max_gap, bool) or not isinstance(max_gap, numbers.Real) or not max_gap > 1:
-        raise SettingsError(f"max_gap must be a number of grid steps > 1, or None to interpolate across "
-                            f"stretches without rows of any length; got {max_gap!r}", "max_gap")
+        raise SettingsError(
+            f"max_gap must be a number of grid steps > 1, or None to interpolate across "
+            f"stretches without rows of any length; got {max_gap!r}",
+            "max_gap",
+        )
     return None if math.isinf(max_gap) else float(max_gap)
 
 
@@ -875,16 +933,24 @@ def _blank_gaps(grid, y_grid, step, max_gap, logs, notes):
             stop = int(np.searchsorted(grid, times[index + 1] - snap, side="left"))
             if stop > start:
                 length = times[index + 1] - times[index]
-                found.append((start, stop, f"gap of {_duration(length)} s with no rows{where} from {cells[index]} "
-                                           f"to {cells[index + 1]}: {_counted(stop - start, 'grid point')} left "
-                                           "missing in y"))
+                found.append(
+                    (
+                        start,
+                        stop,
+                        f"gap of {_duration(length)} s with no rows{where} from {cells[index]} "
+                        f"to {cells[index + 1]}: {_counted(stop - start, 'grid point')} left "
+                        "missing in y",
+                    )
+                )
     found.sort(key=lambda gap: gap[:2])
     notes += [note for _, _, note in found[:_LISTED_GAPS]]
     rest = found[_LISTED_GAPS:]
     if rest:
         points = sum(stop - start for start, stop, _ in rest)
-        notes.append(f"and {_counted(len(rest), 'more gap')} longer than {max_gap:g} grid steps "
-                     f"({_duration(max_gap * step)} s): {_counted(points, 'more grid point')} left missing in y")
+        notes.append(
+            f"and {_counted(len(rest), 'more gap')} longer than {max_gap:g} grid steps "
+            f"({_duration(max_gap * step)} s): {_counted(points, 'more grid point')} left missing in y"
+        )
     merged = []
     for start, stop, _ in found:
         y_grid[start:stop] = np.nan
@@ -909,7 +975,7 @@ def _is_number(text):
 
 def _shown(cell):
     """A cell for a message: quoted, and cut when long."""
-    return repr(cell if len(cell) <= _SHOWN_CHARS else cell[:_SHOWN_CHARS - 3] + "...")
+    return repr(cell if len(cell) <= _SHOWN_CHARS else cell[: _SHOWN_CHARS - 3] + "...")
 
 
 def _listed(names):

@@ -59,6 +59,7 @@ local cluster of one single-threaded worker process per core and closes it
 at the end; worker processes are started afresh, so a script calling it must
 guard its entry point with ``if __name__ == "__main__":``.
 """
+
 import copy
 import math
 import operator
@@ -72,7 +73,7 @@ from . import _checks
 from .engine.flavours import compiled_engine, flavour_analysis
 from .engine.kernels import CompiledErrors
 from .engine.windows import StreamedErrors, window_halos, window_inputs, window_mean
-from .errors import DataError, DyniaError, ModelError
+from .errors import DyniaError, ModelError
 from .pipeline import warn_dropped
 from .result import DyniaResult
 from .sampling import sample
@@ -88,9 +89,31 @@ _STATEFUL_FLAVOURS = ("mcat",)
 _BLOCK_VALUES = 4_000_000
 
 
-def run(u, y, model, bounds, *, client=None, sample_chunks=None, time_chunks=None, settings=None, dt=None,
-        n_samples=None, sampler=None, n=None, percentage=None, bins=None, conf_level=None, flavour=None, x0=None,
-        rng=None, progress=False, min_points=None, window=None, engine=None):
+def run(
+    u,
+    y,
+    model,
+    bounds,
+    *,
+    client=None,
+    sample_chunks=None,
+    time_chunks=None,
+    settings=None,
+    dt=None,
+    n_samples=None,
+    sampler=None,
+    n=None,
+    percentage=None,
+    bins=None,
+    conf_level=None,
+    flavour=None,
+    x0=None,
+    rng=None,
+    progress=False,
+    min_points=None,
+    window=None,
+    engine=None,
+):
     """:func:`dynia.run` on a ``dask.distributed`` cluster, with the same result.
 
     Parameters
@@ -158,17 +181,31 @@ def run(u, y, model, bounds, *, client=None, sample_chunks=None, time_chunks=Non
     """
     distributed = _import_distributed()
     if client is not None and not isinstance(client, distributed.Client):
-        raise TypeError(f"client must be a distributed.Client, or None for a local cluster; "
-                        f"got {type(client).__name__}")
-    u = _checks.as_1d_float(u, "u")
-    y = _checks.as_1d_float(y, "y", allow_nan=True)
-    if u.size != y.size:
-        raise DataError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
-    settings = AnalysisSettings.build(settings, dt=dt, n_samples=n_samples, sampler=sampler, n=n,
-                                      percentage=percentage, bins=bins, conf_level=conf_level, flavour=flavour,
-                                      x0=x0, min_points=min_points, window=window, engine=engine)
-    settings.require("dynia.distributed.run", sampler=SAMPLERS, workers=(None,),
-                     why="the adaptive schemes run on one machine: use dynia.run; the cluster's workers are its threads")
+        raise TypeError(
+            f"client must be a distributed.Client, or None for a local cluster; got {type(client).__name__}"
+        )
+    u, y = _checks.record(u, y)
+    settings = AnalysisSettings.build(
+        settings,
+        dt=dt,
+        n_samples=n_samples,
+        sampler=sampler,
+        n=n,
+        percentage=percentage,
+        bins=bins,
+        conf_level=conf_level,
+        flavour=flavour,
+        x0=x0,
+        min_points=min_points,
+        window=window,
+        engine=engine,
+    )
+    settings.require(
+        "dynia.distributed.run",
+        sampler=SAMPLERS,
+        workers=(None,),
+        why="the adaptive schemes run on one machine: use dynia.run; the cluster's workers are its threads",
+    )
     names, box = parameter_box(bounds, model.names, type(model).__name__)
     n_samples, dt, x0, flavour = settings.n_samples, settings.dt, settings.x0, settings.flavour
     before, after = window_halos(settings.n, settings.window)
@@ -189,40 +226,71 @@ def run(u, y, model, bounds, *, client=None, sample_chunks=None, time_chunks=Non
         if sample_chunks is None:
             sample_chunks = math.ceil(n_samples / threads)
         u_data, y_data = client.scatter([u, y], broadcast=True, hash=False)
-        finite = np.concatenate(client.gather([
-            client.submit(_finite_rows, model, rows, u_data, dt, x0, first, pure=False)
-            for first, rows in _scatter_rows(client, samples[:, model_order], sample_chunks)]))
+        finite = np.concatenate(
+            client.gather(
+                [
+                    client.submit(_finite_rows, model, rows, u_data, dt, x0, first, pure=False)
+                    for first, rows in _scatter_rows(client, samples[:, model_order], sample_chunks)
+                ]
+            )
+        )
         if not finite.any():
-            raise ModelError(f"the simulation of every one of the {n_samples} parameter sets overflowed; "
-                             "check the model and the parameter ranges")
+            raise ModelError(
+                f"the simulation of every one of the {n_samples} parameter sets overflowed; "
+                "check the model and the parameter ranges"
+            )
         samples = samples[finite]
         warn_dropped(int(n_samples - samples.shape[0]), n_samples)
-        flavour_impl = flavour_analysis(flavour, compiled, samples, box, settings.percentage, settings.bins,
-                                        settings.conf_level, settings.min_points)
+        flavour_impl = flavour_analysis(
+            flavour,
+            compiled,
+            samples,
+            box,
+            settings.percentage,
+            settings.bins,
+            settings.conf_level,
+            settings.min_points,
+        )
         n_steps = y.size
         if time_chunks is None:
             time_chunks = max(1, min(math.ceil(n_steps / (4 * threads)), _BLOCK_VALUES // samples.shape[0]))
         windows = _Windows(before, after, settings.min_points, compiled)
-        chunk_inputs = [client.submit(_chunk_window_inputs, model, rows, u_data, y_data, dt, x0, windows,
-                                      time_chunks, first, pure=False)
-                        for first, rows in _scatter_rows(client, samples[:, model_order], sample_chunks)]
-        ic, ci, gradient = _analyse_on_cluster(client, chunk_inputs, flavour_impl, windows, n_steps,
-                                               time_chunks, stateful=flavour in _STATEFUL_FLAVOURS,
-                                               progress=progress)
+        chunk_inputs = [
+            client.submit(
+                _chunk_window_inputs, model, rows, u_data, y_data, dt, x0, windows, time_chunks, first, pure=False
+            )
+            for first, rows in _scatter_rows(client, samples[:, model_order], sample_chunks)
+        ]
+        ic, ci, gradient = _analyse_on_cluster(
+            client,
+            chunk_inputs,
+            flavour_impl,
+            windows,
+            n_steps,
+            time_chunks,
+            stateful=flavour in _STATEFUL_FLAVOURS,
+            progress=progress,
+        )
 
     # The same record as dynia.run's: the settings asked for, then what the analysis did.
-    recorded = dict(settings.to_dict(), model=type(model).__name__,
-                    bounds={name: tuple(map(float, row)) for name, row in zip(names, box)},
-                    n_sampled=n_samples, n_dropped=int(n_samples - samples.shape[0]))
-    recorded.update(n_samples=samples.shape[0], n_behavioural=flavour_impl.count,
-                    engine="numba" if compiled else "numpy")
-    return DyniaResult(names=tuple(names), samples=samples, bounds=box,
-                       time=np.arange(n_steps) * float(dt), ic=ic, ci=ci, gradient=gradient,
-                       bin_centres=flavour_impl.bin_centres, settings=recorded)
+    recorded = settings.record(model, names, box, n_sampled=n_samples, n_dropped=n_samples - samples.shape[0])
+    recorded.update(
+        n_samples=samples.shape[0], n_behavioural=flavour_impl.count, engine="numba" if compiled else "numpy"
+    )
+    return DyniaResult(
+        names=tuple(names),
+        samples=samples,
+        bounds=box,
+        time=np.arange(n_steps) * float(dt),
+        ic=ic,
+        ci=ci,
+        gradient=gradient,
+        bin_centres=flavour_impl.bin_centres,
+        settings=recorded,
+    )
 
 
-def _analyse_on_cluster(client, chunk_inputs, flavour, windows, n_steps, time_chunks, *, stateful,
-                        progress):
+def _analyse_on_cluster(client, chunk_inputs, flavour, windows, n_steps, time_chunks, *, stateful, progress):
     """Stage 2 from the futures of stage 1: one task per time chunk; ic, ci, gradient on the client.
 
     ``chunk_inputs`` (the stage-1 futures, in sample order) is emptied, so
@@ -234,14 +302,16 @@ def _analyse_on_cluster(client, chunk_inputs, flavour, windows, n_steps, time_ch
 
     spans = [(start, min(start + time_chunks, n_steps)) for start in range(0, n_steps, time_chunks)]
     # blocks[s][k]: the window inputs of sample chunk s for time chunk k
-    blocks = [[client.submit(operator.getitem, inputs, k, pure=False) for k in range(len(spans))]
-              for inputs in chunk_inputs]
+    blocks = [
+        [client.submit(operator.getitem, inputs, k, pure=False) for k in range(len(spans))] for inputs in chunk_inputs
+    ]
     chunk_inputs.clear()
     state = client.scatter(flavour, hash=False)
     chunk_spans = {}
     for k, (start, stop) in enumerate(spans):
-        analysed = client.submit(_analyse_time_chunk, state, windows, [row[k] for row in blocks], stop - start,
-                                 pure=False)
+        analysed = client.submit(
+            _analyse_time_chunk, state, windows, [row[k] for row in blocks], stop - start, pure=False
+        )
         chunk_spans[client.submit(operator.getitem, analysed, 0, pure=False)] = (start, stop)
         if stateful:
             state = client.submit(operator.getitem, analysed, 1, pure=False)
@@ -254,6 +324,7 @@ def _analyse_on_cluster(client, chunk_inputs, flavour, windows, n_steps, time_ch
     finished = as_completed(chunk_spans, loop=client.loop)
     if progress:
         from tqdm.auto import tqdm
+
         finished = tqdm(finished, total=len(chunk_spans), desc="DYNIA windows", unit="chunk")
     for future in finished:
         start, stop = chunk_spans.pop(future)
@@ -277,16 +348,19 @@ def _connected(client, distributed):
         return
     # Port 0: a free port for the scheduler's web server, which otherwise
     # wants 8787 and warns when another cluster holds it.
-    with distributed.LocalCluster(n_workers=os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                                  dashboard_address=":0") as cluster, \
-            distributed.Client(cluster, set_as_default=False) as own:
+    with (
+        distributed.LocalCluster(
+            n_workers=os.cpu_count() or 1, threads_per_worker=1, processes=True, dashboard_address=":0"
+        ) as cluster,
+        distributed.Client(cluster, set_as_default=False) as own,
+    ):
         yield own
 
 
 def _scatter_rows(client, rows, size):
     """Send consecutive chunks of ``size`` rows to the workers: (first row, future) pairs."""
     firsts = range(0, rows.shape[0], size)
-    return zip(firsts, client.scatter([rows[first:first + size] for first in firsts], hash=False))
+    return zip(firsts, client.scatter([rows[first : first + size] for first in firsts], hash=False))
 
 
 @contextmanager
@@ -295,8 +369,10 @@ def _sample_chunk_context(first, count):
     try:
         yield
     except DyniaError as error:
-        raise type(error)(f"in the sample chunk of samples {first} to {first + count - 1} "
-                          f"(sample numbers below count from {first}): {error}") from error
+        raise type(error)(
+            f"in the sample chunk of samples {first} to {first + count - 1} "
+            f"(sample numbers below count from {first}): {error}"
+        ) from error
 
 
 def _finite_rows(model, params, u, dt, x0, first):
@@ -336,8 +412,9 @@ class _Windows:
 
     def block(self, errors, start, stop, n_steps):
         """One sample chunk's input to the windows at steps [start, stop), with its measured counts."""
-        window_errors, measured = window_inputs(errors, start, stop, self.before, self.after, n_steps,
-                                                 time_major=self.compiled)
+        window_errors, measured = window_inputs(
+            errors, start, stop, self.before, self.after, n_steps, time_major=self.compiled
+        )
         if self.compiled:
             return window_errors, measured
         return window_mean(window_errors, measured, stop - start, self.slots)
@@ -356,8 +433,10 @@ def _chunk_window_inputs(model, params, u, y, dt, x0, windows, time_chunks, firs
     n_steps = y.size
     with _sample_chunk_context(first, params.shape[0]):
         errors = windows.errors(model, params, u, y, dt, x0, time_chunks)
-        return [windows.block(errors, start, min(start + time_chunks, n_steps), n_steps)
-                for start in range(0, n_steps, time_chunks)]
+        return [
+            windows.block(errors, start, min(start + time_chunks, n_steps), n_steps)
+            for start in range(0, n_steps, time_chunks)
+        ]
 
 
 def _analyse_time_chunk(flavour, windows, blocks, m):

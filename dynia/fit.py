@@ -41,6 +41,7 @@ Examples
 >>> {name: round(value, 6) for name, value in fit.parameters.items()}
 {'K': 2.0, 'T': 3.0}
 """
+
 import math
 import numbers
 from collections.abc import Mapping
@@ -181,8 +182,15 @@ class FitResult:
         settings = self.settings
         if segments is None:
             segments = [(0, u.size)]
-        simulator = _SegmentSimulator(u, np.zeros(u.size), self.model, check_segments(segments, u.size),
-                                      dt=settings["dt"], x0=settings["x0"], warmup=settings["warmup"])
+        simulator = _SegmentSimulator(
+            u,
+            np.zeros(u.size),
+            self.model,
+            check_segments(segments, u.size),
+            dt=settings["dt"],
+            x0=settings["x0"],
+            warmup=settings["warmup"],
+        )
         output = np.full(u.size, np.nan)
         output[simulator.steps] = simulator.outputs(self._vector()[None, :])[0]
         return output
@@ -190,8 +198,17 @@ class FitResult:
     def validation_error(self, u, y, segments):
         """:func:`validation_error` of this fit, with its settings, on ``segments`` (or a mask)."""
         settings = self.settings
-        return validation_error(u, y, self.model, self.parameters, segments, dt=settings["dt"],
-                                x0=settings["x0"], warmup=settings["warmup"], offset=settings["offset"])
+        return validation_error(
+            u,
+            y,
+            self.model,
+            self.parameters,
+            segments,
+            dt=settings["dt"],
+            x0=settings["x0"],
+            warmup=settings["warmup"],
+            offset=settings["offset"],
+        )
 
     def to_dict(self):
         """Everything but the arrays ``fitted`` and the model, as JSON-ready Python values.
@@ -240,9 +257,10 @@ class _SegmentSimulator:
         for (start, stop), steps, part in zip(segments, measured, self.parts):
             origin = 0 if warmup is None else max(0, start - warmup)
             groups.setdefault(origin, []).append((stop, steps - origin, part))
-        self._groups = [(origin, max(stop for stop, _, _ in members),
-                         [(local, part) for _, local, part in members])
-                        for origin, members in groups.items()]
+        self._groups = [
+            (origin, max(stop for stop, _, _ in members), [(local, part) for _, local, part in members])
+            for origin, members in groups.items()
+        ]
 
     def outputs(self, params):
         """Simulated output, (n_sets, n_points), of the parameter sets ``params`` (n_sets, n_params)."""
@@ -255,7 +273,8 @@ class _SegmentSimulator:
                 raise SettingsError(
                     f"{type(self._model).__name__} cannot simulate the parameters "
                     f"{dict(zip(self._model.names, params[0].tolist()))} (or a finite-difference "
-                    f"step from them): {error}; choose bounds that keep the parameters admissible") from None
+                    f"step from them): {error}; choose bounds that keep the parameters admissible"
+                ) from None
             for local, part in members:
                 out[:, part] = simulated[:, local]
         return out
@@ -304,8 +323,22 @@ class _Residuals:
         return (residuals[:k] - residuals[k:]).T / (up - down)
 
 
-def fit_segments(u, y, model, segments, *, bounds=None, dt=1.0, initial=None, fixed=None, x0="steady",
-                 warmup=None, offset="none", n_starts=1, rng=None):
+def fit_segments(
+    u,
+    y,
+    model,
+    segments,
+    *,
+    bounds=None,
+    dt=1.0,
+    initial=None,
+    fixed=None,
+    x0="steady",
+    warmup=None,
+    offset="none",
+    n_starts=1,
+    rng=None,
+):
     """Least-squares estimate of the model parameters from data segments.
 
     Minimises the sum of squared residuals ``y - sim`` over the measured
@@ -407,34 +440,61 @@ def fit_segments(u, y, model, segments, *, bounds=None, dt=1.0, initial=None, fi
     starts = [start]
     if n_starts > 1:
         if not (np.isfinite(lower).all() and np.isfinite(upper).all()):
-            raise SettingsError("n_starts > 1 draws starts uniformly in the bounds, which must then be finite "
-                             "for every fitted parameter")
+            raise SettingsError(
+                "n_starts > 1 draws starts uniformly in the bounds, which must then be finite "
+                "for every fitted parameter"
+            )
         starts += list(np.random.default_rng(rng).uniform(lower, upper, (n_starts - 1, free.size)))
     best, nfev = None, 0
     for point in starts:
         if not np.isfinite(residuals(point)).all():
-            raise ModelError(f"the simulation overflows at the start "
-                             f"{dict(zip(free_names, point.tolist()))}; choose bounds or initial values "
-                             "where the model is stable")
-        solution = least_squares(residuals, point, jac=residuals.forward_jacobian, bounds=(lower, upper),
-                                 method="trf", x_scale=typical, ftol=_LSQ_TOLERANCE, xtol=_LSQ_TOLERANCE,
-                                 gtol=_LSQ_TOLERANCE)
+            raise ModelError(
+                f"the simulation overflows at the start "
+                f"{dict(zip(free_names, point.tolist()))}; choose bounds or initial values "
+                "where the model is stable"
+            )
+        solution = least_squares(
+            residuals,
+            point,
+            jac=residuals.forward_jacobian,
+            bounds=(lower, upper),
+            method="trf",
+            x_scale=typical,
+            ftol=_LSQ_TOLERANCE,
+            xtol=_LSQ_TOLERANCE,
+            gtol=_LSQ_TOLERANCE,
+        )
         nfev += solution.nfev
         if best is None or solution.cost < best.cost:
             best = solution
-    return _summarise(best, nfev, residuals, simulator, u, model, free_names, lower, upper, typical, segments,
-                      settings=dict(
-                          model=type(model).__name__, dt=dt, x0=x0, warmup=warmup, offset=offset,
-                          bounds={name: [float(low), float(high)]
-                                  for name, low, high in zip(free_names, lower, upper)},
-                          initial=dict(zip(free_names, start.tolist())), fixed=fixed, n_starts=n_starts))
+    return _summarise(
+        best,
+        nfev,
+        residuals,
+        simulator,
+        u,
+        model,
+        free_names,
+        lower,
+        upper,
+        typical,
+        segments,
+        settings=dict(
+            model=type(model).__name__,
+            dt=dt,
+            x0=x0,
+            warmup=warmup,
+            offset=offset,
+            bounds={name: [float(low), float(high)] for name, low, high in zip(free_names, lower, upper)},
+            initial=dict(zip(free_names, start.tolist())),
+            fixed=fixed,
+            n_starts=n_starts,
+        ),
+    )
 
 
 def _record(u, y):
-    u = _checks.as_1d_float(u, "u")
-    y = _checks.as_1d_float(y, "y", allow_nan=True)
-    if u.size != y.size:
-        raise DataError(f"u has {u.size} steps but y has {y.size}; they must be logged on the same steps")
+    u, y = _checks.record(u, y)
     return u, y
 
 
@@ -454,8 +514,7 @@ def _named_values(values, name, names):
     if values is None:
         return {}
     if not isinstance(values, Mapping):
-        raise TypeError(f"{name} must map parameter names to values, e.g. {{'K': 2.0}}; "
-                        f"got {type(values).__name__}")
+        raise TypeError(f"{name} must map parameter names to values, e.g. {{'K': 2.0}}; got {type(values).__name__}")
     unknown = [key for key in values if key not in names]
     if unknown:
         raise SettingsError(f"{name} names unknown parameters {unknown}; the model has {list(names)}")
@@ -473,8 +532,9 @@ def _named_bounds(bounds, names):
     if bounds is None:
         return {}
     if not isinstance(bounds, Mapping):
-        raise TypeError(f"bounds must map parameter names to (low, high), e.g. {{'K': (0, 7)}}; "
-                        f"got {type(bounds).__name__}")
+        raise TypeError(
+            f"bounds must map parameter names to (low, high), e.g. {{'K': (0, 7)}}; got {type(bounds).__name__}"
+        )
     unknown = [key for key in bounds if key not in names]
     if unknown:
         raise SettingsError(f"bounds names unknown parameters {unknown}; the model has {list(names)}")
@@ -506,9 +566,11 @@ def _box_and_start(free_names, bounds, initial):
         elif math.isfinite(low) and math.isfinite(high):
             value = 0.5 * (low + high)
         else:
-            raise SettingsError(f"parameter {name!r} needs finite bounds (its start is their middle) or an "
-                             f"initial value; give bounds={{{name!r}: (low, high)}} or "
-                             f"initial={{{name!r}: value}}")
+            raise SettingsError(
+                f"parameter {name!r} needs finite bounds (its start is their middle) or an "
+                f"initial value; give bounds={{{name!r}: (low, high)}} or "
+                f"initial={{{name!r}: value}}"
+            )
         lower.append(low)
         upper.append(high)
         start.append(value)
@@ -525,8 +587,7 @@ def _measured_counts(y, segments):
     return [int(np.count_nonzero(~np.isnan(y[start:stop]))) for start, stop in segments]
 
 
-def _summarise(solution, nfev, residuals, simulator, u, model, free_names, lower, upper, typical, segments,
-               settings):
+def _summarise(solution, nfev, residuals, simulator, u, model, free_names, lower, upper, typical, segments, settings):
     theta = solution.x
     with_offsets = settings["offset"] == "segment"
     final = residuals(theta)
@@ -543,12 +604,15 @@ def _summarise(solution, nfev, residuals, simulator, u, model, free_names, lower
         std_errors[:] = np.nan
 
     params = residuals.full(theta[None, :])
-    every_step = _SegmentSimulator(u, np.zeros(u.size), model, segments,
-                                   dt=settings["dt"], x0=settings["x0"], warmup=settings["warmup"])
+    every_step = _SegmentSimulator(
+        u, np.zeros(u.size), model, segments, dt=settings["dt"], x0=settings["x0"], warmup=settings["warmup"]
+    )
     fitted = np.full(u.size, np.nan)
     fitted[every_step.steps] = every_step.outputs(params)[0]
-    offsets = tuple(float(np.mean(simulator.observed[part] - fitted[simulator.steps[part]])) if with_offsets
-                    else 0.0 for part in simulator.parts)
+    offsets = tuple(
+        float(np.mean(simulator.observed[part] - fitted[simulator.steps[part]])) if with_offsets else 0.0
+        for part in simulator.parts
+    )
     for (start, stop), level in zip(segments, offsets):
         fitted[start:stop] += level
     near = _AT_BOUND_RTOL * typical
@@ -558,8 +622,11 @@ def _summarise(solution, nfev, residuals, simulator, u, model, free_names, lower
         covariance=covariance,
         fitted_names=tuple(free_names),
         identifiable=dict(zip(free_names, identifiable.tolist())),
-        at_bound=tuple(name for name, value, low, high, tol in zip(free_names, theta, lower, upper, near)
-                       if value - low <= tol or high - value <= tol),
+        at_bound=tuple(
+            name
+            for name, value, low, high, tol in zip(free_names, theta, lower, upper, near)
+            if value - low <= tol or high - value <= tol
+        ),
         offsets=offsets,
         segments=tuple(segments),
         rmse=math.sqrt(rss / n_points),
@@ -648,14 +715,12 @@ def validation_error(u, y, model, parameters, segments, *, dt=1.0, x0="steady", 
     values = _named_values(parameters, "parameters", model.names)
     missing = [name for name in model.names if name not in values]
     if missing:
-        raise SettingsError(f"parameters lacks {missing}; give a value for every parameter of "
-                         f"{list(model.names)}")
+        raise SettingsError(f"parameters lacks {missing}; give a value for every parameter of {list(model.names)}")
     if sum(_measured_counts(y, segments)) == 0:
         raise DataError("the validation segments hold no measured output (empty, or all NaN)")
     kept = [segment for segment, count in zip(segments, _measured_counts(y, segments)) if count]
     simulator = _SegmentSimulator(u, y, model, kept, dt=dt, x0=x0, warmup=warmup)
     vector = np.array([values[name] for name in model.names])
-    residuals = _Residuals(simulator, vector, np.array([], dtype=int), np.array([]), np.array([]),
-                           np.array([]), offset)
+    residuals = _Residuals(simulator, vector, np.array([], dtype=int), np.array([]), np.array([]), np.array([]), offset)
     error = residuals(np.array([]))
     return math.sqrt(float(error @ error) / error.size)

@@ -40,18 +40,25 @@ Examples
 >>> found.segments, found.validation
 ([(0, 210)], [(210, 300)])
 """
+
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from . import _checks
 from .baseline import find_intervals
-from .errors import DataError, SettingsError
+from .errors import SettingsError
 from .fit import fit_segments
 from .pipeline import run
 from .quality import check_quality
-from .segments import (check_segments, holdout_split, intersect_segments, segments_from_ic, segments_to_mask,
-                       segments_to_times)
+from .segments import (
+    check_segments,
+    holdout_split,
+    intersect_segments,
+    segments_from_ic,
+    segments_to_mask,
+    segments_to_times,
+)
 from .serial import json_number
 from .settings import AnalysisSettings, parameter_box
 from .structure import structure_warnings
@@ -120,18 +127,49 @@ class Identification:
         )
         if self.quality is not None:
             summary["data_quality"] = [
-                dict(signal=f.signal, kind=f.kind, start_time=json_number(time[f.start]),
-                     end_time=json_number(time[f.stop - 1]), value=json_number(f.value),
-                     reason=f.reason, inside_fitted_segments=any(
-                         f.start < stop and start < f.stop for start, stop in self.segments))
-                for f in self.quality.findings]
+                dict(
+                    signal=f.signal,
+                    kind=f.kind,
+                    start_time=json_number(time[f.start]),
+                    end_time=json_number(time[f.stop - 1]),
+                    value=json_number(f.value),
+                    reason=f.reason,
+                    inside_fitted_segments=any(f.start < stop and start < f.stop for start, stop in self.segments),
+                )
+                for f in self.quality.findings
+            ]
         return summary
 
 
-def identify(u, y, model, bounds, *, method="dynia", settings=None, dt=None, x0=None, held_out=0.3, segments=None,
-             n_samples=None, sampler=None, n=None, percentage=None, flavour=None, ic_threshold=0.5,
-             mode="any", min_length=None, merge_gap=None, min_points=None, baseline_options=None, quality=False,
-             exclude_flagged=False, quality_options=None, n_starts=1, rng=None):
+def identify(
+    u,
+    y,
+    model,
+    bounds,
+    *,
+    method="dynia",
+    settings=None,
+    dt=None,
+    x0=None,
+    held_out=0.3,
+    segments=None,
+    n_samples=None,
+    sampler=None,
+    n=None,
+    percentage=None,
+    flavour=None,
+    ic_threshold=0.5,
+    mode="any",
+    min_length=None,
+    merge_gap=None,
+    min_points=None,
+    baseline_options=None,
+    quality=False,
+    exclude_flagged=False,
+    quality_options=None,
+    n_starts=1,
+    rng=None,
+):
     """Select data by ``method``, fit the model there and validate it on held-out data.
 
     Parameters
@@ -183,16 +221,22 @@ def identify(u, y, model, bounds, *, method="dynia", settings=None, dt=None, x0=
     -------
     Identification
     """
-    u = _checks.as_1d_float(u, "u")
-    y = _checks.as_1d_float(y, "y", allow_nan=True)
-    if u.size != y.size:
-        raise DataError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
+    u, y = _checks.record(u, y)
     if method not in METHODS:
         raise SettingsError(f"method must be one of {METHODS}; got {method!r}")
     if (segments is None) != (method != "given"):
         raise SettingsError("segments are given exactly when method='given'")
-    analysis = AnalysisSettings.build(settings, dt=dt, x0=x0, n_samples=n_samples, sampler=sampler, n=n,
-                                      percentage=percentage, flavour=flavour, min_points=min_points)
+    analysis = AnalysisSettings.build(
+        settings,
+        dt=dt,
+        x0=x0,
+        n_samples=n_samples,
+        sampler=sampler,
+        n=n,
+        percentage=percentage,
+        flavour=flavour,
+        min_points=min_points,
+    )
     dt, x0 = analysis.dt, analysis.x0
     names, box = parameter_box(bounds, model.names, type(model).__name__)
     bounds = {name: tuple(map(float, row)) for name, row in zip(names, box)}
@@ -211,41 +255,66 @@ def identify(u, y, model, bounds, *, method="dynia", settings=None, dt=None, x0=
     dynia_result = baseline_result = None
     if method == "dynia":
         dynia_result = run(u, y_fit, model, bounds, settings=analysis, rng=rng)
-        chosen = intersect_segments(segments_from_ic(dynia_result, threshold=ic_threshold, mode=mode,
-                                                     min_length=min_length, merge_gap=merge_gap), fit_part)
+        chosen = intersect_segments(
+            segments_from_ic(
+                dynia_result, threshold=ic_threshold, mode=mode, min_length=min_length, merge_gap=merge_gap
+            ),
+            fit_part,
+        )
         notes += [str(warning) for warning in structure_warnings(dynia_result)]
     elif method == "baseline":
         fitting = segments_to_mask(fit_part, u.size)
-        baseline_result = find_intervals(np.where(fitting, u, np.nan), y_fit, dt=dt,
-                                         **(baseline_options or {}))
+        baseline_result = find_intervals(np.where(fitting, u, np.nan), y_fit, dt=dt, **(baseline_options or {}))
         chosen = intersect_segments([tuple(map(int, pair)) for pair in baseline_result.accepted], fit_part)
     elif method == "whole":
         chosen = list(fit_part)
     else:
         chosen = intersect_segments(check_segments(segments, u.size), fit_part)
     if not chosen:
-        raise SettingsError(f"method {method!r} selected no data to fit on"
-                         + (f" (no window reached IC {ic_threshold}; lower ic_threshold)"
-                            if method == "dynia" else ""))
+        raise SettingsError(
+            f"method {method!r} selected no data to fit on"
+            + (f" (no window reached IC {ic_threshold}; lower ic_threshold)" if method == "dynia" else "")
+        )
     if report is not None:
         inside = sum(len(found) for found in report.findings_in(chosen).values())
         if inside:
-            notes.append(f"{inside} data-quality finding(s) lie inside the fitted segments"
-                         + ("" if exclude_flagged else "; exclude them with exclude_flagged=True"))
+            notes.append(
+                f"{inside} data-quality finding(s) lie inside the fitted segments"
+                + ("" if exclude_flagged else "; exclude them with exclude_flagged=True")
+            )
 
     fit = fit_segments(u, y_fit, model, chosen, bounds=bounds, dt=dt, x0=x0, n_starts=n_starts, rng=rng)
-    recorded = dict(method=method, dt=dt, x0=x0, held_out_steps=int(sum(b - a for a, b in validation)),
-                    bounds={name: list(pair) for name, pair in bounds.items()}, n_starts=n_starts,
-                    quality=bool(quality or exclude_flagged), exclude_flagged=bool(exclude_flagged))
+    recorded = dict(
+        method=method,
+        dt=dt,
+        x0=x0,
+        held_out_steps=int(sum(b - a for a, b in validation)),
+        bounds={name: list(pair) for name, pair in bounds.items()},
+        n_starts=n_starts,
+        quality=bool(quality or exclude_flagged),
+        exclude_flagged=bool(exclude_flagged),
+    )
     if method == "dynia":
-        recorded.update(analysis.to_dict(), ic_threshold=ic_threshold, mode=mode, min_length=min_length,
-                        merge_gap=merge_gap)
+        recorded.update(
+            analysis.to_dict(), ic_threshold=ic_threshold, mode=mode, min_length=min_length, merge_gap=merge_gap
+        )
     if method == "baseline":
-        recorded["baseline"] = {key: json_number(value) if isinstance(value, float) else value
-                                for key, value in baseline_result.settings.items()
-                                if isinstance(value, (int, float, str, bool))}
-    return Identification(method=method, parameters=dict(fit.parameters), std_errors=dict(fit.std_errors),
-                          segments=list(fit.segments), validation=list(validation),
-                          validation_error=fit.validation_error(u, y, validation), fit=fit,
-                          dynia_result=dynia_result, baseline_result=baseline_result, quality=report,
-                          warnings=notes, settings=recorded)
+        recorded["baseline"] = {
+            key: json_number(value) if isinstance(value, float) else value
+            for key, value in baseline_result.settings.items()
+            if isinstance(value, (int, float, str, bool))
+        }
+    return Identification(
+        method=method,
+        parameters=dict(fit.parameters),
+        std_errors=dict(fit.std_errors),
+        segments=list(fit.segments),
+        validation=list(validation),
+        validation_error=fit.validation_error(u, y, validation),
+        fit=fit,
+        dynia_result=dynia_result,
+        baseline_result=baseline_result,
+        quality=report,
+        warnings=notes,
+        settings=recorded,
+    )

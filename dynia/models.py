@@ -311,8 +311,7 @@ class Model:
         if bad.any():
             sample, column = np.argwhere(bad)[0]
             raise DataError(
-                f"params must be finite; sample {sample} has "
-                f"{self.names[column]} = {params[sample, column]}"
+                f"params must be finite; sample {sample} has {self.names[column]} = {params[sample, column]}"
             )
         return params
 
@@ -323,13 +322,9 @@ class Model:
             negative = np.flatnonzero(column < 0)
             if negative.size:
                 sample = negative[0]
-                raise ModelError(
-                    f"{name} must be >= 0; sample {sample} has {name} = {column[sample]}"
-                )
+                raise ModelError(f"{name} must be >= 0; sample {sample} has {name} = {column[sample]}")
 
-    def discretise(
-        self, params: np.ndarray, dt: float, n_steps: int, steady: bool
-    ) -> _DiscreteSystem:
+    def discretise(self, params: np.ndarray, dt: float, n_steps: int, steady: bool) -> _DiscreteSystem:
         raise NotImplementedError
 
 
@@ -377,9 +372,7 @@ class Stepper:
         if not np.isfinite(u_k):
             raise DataError(f"u_k must be finite; got {u_k} at step {self.steps}")
         if self._recursion is None:
-            self._recursion = _Recursion(
-                self._system, _initial_state(self._system, self._x0, u_k)
-            )
+            self._recursion = _Recursion(self._system, _initial_state(self._system, self._x0, u_k))
             # Slots not yet written stand for the input before t=0.
             self._history.fill(u_k if self._x0 == "steady" else 0.0)
         self._history[self.steps % self._history.shape[0]] = u_k
@@ -491,9 +484,7 @@ class SecondOrderDelay(_Lag):
             """Free-response factors and the state after a unit input step."""
             decay1 = np.exp(-duration / lag1_clamped)
             decay2 = np.exp(-duration / lag2_clamped)
-            coupling = _cascade_coupling(
-                duration, lag1, lag2, lag1_clamped, lag2_clamped, decay1, decay2
-            )
+            coupling = _cascade_coupling(duration, lag1, lag2, lag1_clamped, lag2_clamped, decay1, decay2)
             step_x1 = -np.expm1(-duration / lag1_clamped)
             # By superposition the step response of x2 is K (1 - e^{-t/T2} - coupling).
             step_x2 = gain * (-np.expm1(-duration / lag2_clamped) - coupling)
@@ -509,9 +500,7 @@ class SecondOrderDelay(_Lag):
         late_decay1, late_decay2, late_coupling, late_x1, late_x2 = over((1.0 - fraction) * dt)
         _, _, _, early_x1, early_x2 = over(fraction * dt)
         gamma_now = np.stack((late_x1, late_x2))
-        gamma_prev = np.stack(
-            (late_decay1 * early_x1, gain * late_coupling * early_x1 + late_decay2 * early_x2)
-        )
+        gamma_prev = np.stack((late_decay1 * early_x1, gain * late_coupling * early_x1 + late_decay2 * early_x2))
         zeros = np.zeros(n_samples)
         return _DiscreteSystem(
             phi=phi,
@@ -642,10 +631,7 @@ class TransferFunction(Model):
                     f"got {type(system).__name__} for sample {sample}"
                 )
             if not system.isctime():
-                raise ModelError(
-                    f"factory must return a continuous-time system; sample {sample} "
-                    f"gave dt={system.dt}"
-                )
+                raise ModelError(f"factory must return a continuous-time system; sample {sample} gave dt={system.dt}")
             if system.ninputs != 1 or system.noutputs != 1:
                 raise ModelError(
                     f"factory must return a single-input single-output system; sample "
@@ -741,9 +727,7 @@ def _steady_state(a, b):
     return -np.linalg.solve(a, b[:, :, None])[:, :, 0].T
 
 
-def _run(
-    system: _DiscreteSystem, u: np.ndarray, x0: str, chunk_steps: int
-) -> Iterator[np.ndarray]:
+def _run(system: _DiscreteSystem, u: np.ndarray, x0: str, chunk_steps: int) -> Iterator[np.ndarray]:
     """Advance all samples through ``u`` and yield (n_samples, m) output chunks."""
     n_samples = system.c.shape[1]
     n_steps = u.shape[0]
@@ -767,8 +751,7 @@ def _run(
             inputs = [column[:, 0] for column in inputs]
         for step in range(stop - start):
             # The state after the record is never output; advancing to it could only overflow.
-            recursion.step(time_major[step], [rows[step] for rows in inputs],
-                           advance=start + step + 1 < n_steps)
+            recursion.step(time_major[step], [rows[step] for rows in inputs], advance=start + step + 1 < n_steps)
         yield _to_sample_major(time_major[: stop - start])
 
 
@@ -802,9 +785,7 @@ class _Recursion:
             + [(system.feed_now, now_source), (system.feed_prev, prev_source)]
         )
         self.needs_prev = any(
-            source == prev_source
-            for terms in [*self._state_terms, self._output_terms]
-            for _, source in terms
+            source == prev_source for terms in [*self._state_terms, self._output_terms] for _, source in terms
         )
         self._current, self._upcoming = list(state), list(np.empty_like(state))
         self._scratch = np.empty(n_samples)
@@ -874,10 +855,6 @@ def _check_input(u) -> np.ndarray:
 
 
 def _check_chunk_steps(chunk_steps) -> int:
-    if (
-        isinstance(chunk_steps, bool)
-        or not isinstance(chunk_steps, numbers.Integral)
-        or chunk_steps < 1
-    ):
+    if isinstance(chunk_steps, bool) or not isinstance(chunk_steps, numbers.Integral) or chunk_steps < 1:
         raise ModelError(f"chunk_steps must be None or an integer >= 1; got {chunk_steps!r}")
     return int(chunk_steps)

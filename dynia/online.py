@@ -30,6 +30,7 @@ How an update works
 The cost is O(n_samples x (2n+1)) per update and memory is fixed: nothing
 grows with the number of steps.
 """
+
 import numbers
 
 import numpy as np
@@ -43,7 +44,6 @@ from .sampling import sample
 from .settings import SAMPLERS, AnalysisSettings, parameter_box
 
 __all__ = ["OnlineDynia"]
-
 
 
 class OnlineDynia:
@@ -125,22 +125,60 @@ class OnlineDynia:
     True
     """
 
-    def __init__(self, model, bounds, *, settings=None, n_samples=None, n=None, percentage=None, bins=None,
-                 conf_level=None, flavour=None, dt=None, rng=None, x0=None, sampler=None, min_points=None):
+    def __init__(
+        self,
+        model,
+        bounds,
+        *,
+        settings=None,
+        n_samples=None,
+        n=None,
+        percentage=None,
+        bins=None,
+        conf_level=None,
+        flavour=None,
+        dt=None,
+        rng=None,
+        x0=None,
+        sampler=None,
+        min_points=None,
+    ):
         if not isinstance(model, Model):
-            raise TypeError(f"model must be a dynia.models.Model, e.g. dynia.models.FirstOrder(); "
-                            f"got {type(model).__name__}")
-        settings = AnalysisSettings.build(settings or AnalysisSettings(window="trailing"), n_samples=n_samples, n=n,
-                                          percentage=percentage, bins=bins, conf_level=conf_level, flavour=flavour,
-                                          dt=dt, x0=x0, sampler=sampler, min_points=min_points)
-        settings.require("OnlineDynia", window=("trailing",), sampler=SAMPLERS, engine=("auto", "numpy"),
-                         workers=(None,), why="the adaptive schemes need the whole record; an update is one "
-                         "trailing window, analysed on numpy in the calling thread")
+            raise TypeError(
+                f"model must be a dynia.models.Model, e.g. dynia.models.FirstOrder(); got {type(model).__name__}"
+            )
+        settings = AnalysisSettings.build(
+            settings or AnalysisSettings(window="trailing"),
+            n_samples=n_samples,
+            n=n,
+            percentage=percentage,
+            bins=bins,
+            conf_level=conf_level,
+            flavour=flavour,
+            dt=dt,
+            x0=x0,
+            sampler=sampler,
+            min_points=min_points,
+        )
+        settings.require(
+            "OnlineDynia",
+            window=("trailing",),
+            sampler=SAMPLERS,
+            engine=("auto", "numpy"),
+            workers=(None,),
+            why="the adaptive schemes need the whole record; an update is one "
+            "trailing window, analysed on numpy in the calling thread",
+        )
         names, box = parameter_box(bounds, model.names, type(model).__name__)
         n_samples, dt, x0 = settings.n_samples, settings.dt, settings.x0
         self._n = settings.n
         self._min_points = settings.min_points
-        percentage, bins, conf_level, flavour = settings.percentage, settings.bins, settings.conf_level, settings.flavour
+        percentage, bins, conf_level, flavour = (
+            settings.percentage,
+            settings.bins,
+            settings.conf_level,
+            settings.flavour,
+        )
 
         self.names = tuple(names)
         self.bounds = box
@@ -156,9 +194,11 @@ class OnlineDynia:
         self._stepper = model.stepper(self._model_params, dt=dt, x0=x0)  # checks dt and x0
         self._dt = float(dt)
         self.bin_centres = self._flavour.bin_centres
-        self._settings = dict(settings.to_dict(), model=type(model).__name__,
-                              bounds={name: tuple(map(float, row)) for name, row in zip(names, box)},
-                              n_sampled=n_samples, n_dropped=0, n_behavioural=self._flavour.count, engine="numpy")
+        self._settings = dict(
+            settings.record(model, names, box, n_sampled=n_samples, n_dropped=0),
+            n_behavioural=self._flavour.count,
+            engine="numpy",
+        )
 
         width = 2 * self._n + 1
         self._errors = np.zeros((width, n_samples))  # ring: row t % width holds step t
@@ -249,10 +289,7 @@ class OnlineDynia:
             from the steps fed before; comparable with
             ``dynia.run(..., window="trailing")`` on the same record.
         """
-        u = _checks.as_1d_float(u, "u")
-        y = _checks.as_1d_float(y, "y", allow_nan=True)
-        if u.size != y.size:
-            raise DataError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
+        u, y = _checks.record(u, y)
         n_params, n_bins = self.bin_centres.shape
         ic = np.empty((n_params, u.size))
         ci = np.empty((n_params, u.size, 2))
@@ -261,9 +298,17 @@ class OnlineDynia:
         for step, (u_t, y_t) in enumerate(zip(u.tolist(), y.tolist())):
             ic[:, step], ci[:, step], gradient[:, :, step] = self.update(u_t, y_t)
         settings = dict(self._settings, n_diverged=self.n_diverged)
-        return DyniaResult(names=self.names, samples=np.array(self.samples), bounds=self.bounds.copy(),
-                           time=(first + np.arange(u.size)) * self._dt, ic=ic, ci=ci,
-                           gradient=gradient, bin_centres=self.bin_centres, settings=settings)
+        return DyniaResult(
+            names=self.names,
+            samples=np.array(self.samples),
+            bounds=self.bounds.copy(),
+            time=(first + np.arange(u.size)) * self._dt,
+            ic=ic,
+            ci=ci,
+            gradient=gradient,
+            bin_centres=self.bin_centres,
+            settings=settings,
+        )
 
     def _window_mean(self):
         """Each sample's MAE over the window ending at the newest step, into ``_mae``.
@@ -314,10 +359,11 @@ def _scalar(value, name, step, *, allow_nan):
     if isinstance(value, np.ndarray) and value.ndim == 0:
         value = value[()]
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise TypeError(f"{name} must be a real number (one logged value); got {type(value).__name__} "
-                        f"at step {step}")
+        raise TypeError(f"{name} must be a real number (one logged value); got {type(value).__name__} at step {step}")
     value = float(value)
     if np.isinf(value) or (np.isnan(value) and not allow_nan):
-        raise DataError(f"{name} must be finite at step {step}; got {value}"
-                        + (" (NaN marks a missing measurement; inf is not allowed)" if allow_nan else ""))
+        raise DataError(
+            f"{name} must be finite at step {step}; got {value}"
+            + (" (NaN marks a missing measurement; inf is not allowed)" if allow_nan else "")
+        )
     return value

@@ -34,6 +34,7 @@ Examples
 ['.dynia-output', 'ic.csv']
 >>> shutil.rmtree(out.parent)
 """
+
 import datetime
 import fcntl
 import json
@@ -144,12 +145,14 @@ class OutputDirectory:
         """Refuse an ``out`` that rules 1 to 4 forbid; return whether it exists (as dynia's, to be replaced)."""
         path, shown = os.path.realpath(self._path), f"--out {self.out}"
         if path == os.sep or _inside(os.path.realpath(os.path.expanduser("~")), path):
-            raise OutputError(f"{shown} is the filesystem root, the home directory or a parent of it; "
-                              "choose a new directory")
+            raise OutputError(
+                f"{shown} is the filesystem root, the home directory or a parent of it; choose a new directory"
+            )
         for source in self._inputs:
             if _inside(source, path):
-                raise OutputError(f"{shown} is or contains the input {source}; "
-                                  "choose a directory apart from the inputs")
+                raise OutputError(
+                    f"{shown} is or contains the input {source}; choose a directory apart from the inputs"
+                )
         if _inside(os.path.realpath(os.getcwd()), path):
             raise OutputError(f"{shown} is the current directory or one of its parents; choose a new directory")
         try:
@@ -161,8 +164,10 @@ class OutputDirectory:
         if not self.overwrite:
             raise OutputError(f"{shown} exists; choose another directory or add --overwrite")
         if not _made_by_dynia(path):
-            raise OutputError(f"{shown} exists but dynia did not create it (it has no {MARKER} file); "
-                              "--overwrite replaces only dynia's own results, choose another directory")
+            raise OutputError(
+                f"{shown} exists but dynia did not create it (it has no {MARKER} file); "
+                "--overwrite replaces only dynia's own results, choose another directory"
+            )
         return True
 
     def __enter__(self):
@@ -209,8 +214,10 @@ class OutputDirectory:
                     return descriptor, path
             except BlockingIOError:
                 os.close(descriptor)
-                raise OutputError(f"another dynia run is writing --out {self.out} (it holds {path}); "
-                                  "wait for it to finish or choose another directory") from None
+                raise OutputError(
+                    f"another dynia run is writing --out {self.out} (it holds {path}); "
+                    "wait for it to finish or choose another directory"
+                ) from None
             except FileNotFoundError:
                 pass
             except BaseException:
@@ -222,8 +229,12 @@ class OutputDirectory:
     def _write_marker(self):
         from . import __version__  # here, not at import: dynia/__init__.py may import this module first
 
-        record = dict(created_by="dynia", version=__version__, command=self.command,
-                      created=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"))
+        record = dict(
+            created_by="dynia",
+            version=__version__,
+            command=self.command,
+            created=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        )
         (self.staging / MARKER).write_text(json.dumps(record, indent=2) + "\n")
 
     def _install_handlers(self):
@@ -259,8 +270,9 @@ class OutputDirectory:
         self._set_permissions()
         path = self._path
         if self._existed and not _made_by_dynia(path):
-            self._keep_aside(f"--out {self.out} changed while dynia ran and no longer holds dynia's results; "
-                             "left it as it is")
+            self._keep_aside(
+                f"--out {self.out} changed while dynia ran and no longer holds dynia's results; left it as it is"
+            )
         if not self._existed and os.path.lexists(path):
             self._keep_aside(f"--out {self.out} appeared while dynia ran; left it as it is")
         retired = None
@@ -283,8 +295,10 @@ class OutputDirectory:
             try:
                 shutil.rmtree(retired)
             except OSError as error:
-                raise OutputError(f"wrote --out {self.out}, but cannot remove the previous results, moved to "
-                                  f"{retired}: {error.strerror}") from None
+                raise OutputError(
+                    f"wrote --out {self.out}, but cannot remove the previous results, moved to "
+                    f"{retired}: {error.strerror}"
+                ) from None
 
     def _keep_aside(self, reason):
         """Move the finished results to a new visible name beside ``out`` and raise, saying where they are."""

@@ -1,4 +1,5 @@
 """``dynia.run``: sample, simulate and analyse in one call, streaming over time."""
+
 import dataclasses
 import warnings
 
@@ -9,7 +10,7 @@ from .adaptive import adaptive_run
 from .engine.flavours import compiled_engine
 from .engine.kernels import CompiledErrors
 from .engine.windows import analyse_stream, default_chunk_steps
-from .errors import DataError, ModelError
+from .errors import ModelError
 from .sampling import sample
 from .settings import ADAPTIVE_SAMPLERS, AnalysisSettings, parameter_box
 from .verdicts import assess
@@ -25,9 +26,29 @@ class DroppedSamplesWarning(UserWarning):
     """More than 1 % of the parameter sets were dropped because their simulation was not finite."""
 
 
-def run(u, y, model, bounds, *, settings=None, dt=None, n_samples=None, sampler=None, n=None, percentage=None,
-        bins=None, conf_level=None, flavour=None, x0=None, min_points=None, window=None, engine=None,
-        workers=None, rng=None, progress=False):
+def run(
+    u,
+    y,
+    model,
+    bounds,
+    *,
+    settings=None,
+    dt=None,
+    n_samples=None,
+    sampler=None,
+    n=None,
+    percentage=None,
+    bins=None,
+    conf_level=None,
+    flavour=None,
+    x0=None,
+    min_points=None,
+    window=None,
+    engine=None,
+    workers=None,
+    rng=None,
+    progress=False,
+):
     """Dynamic identifiability analysis of a model against measured data.
 
     Draws ``n_samples`` parameter sets from the box ``bounds``, simulates the
@@ -101,23 +122,36 @@ def run(u, y, model, bounds, *, settings=None, dt=None, n_samples=None, sampler=
     >>> res.ic.shape
     (2, 80)
     """
-    settings = AnalysisSettings.build(settings, dt=dt, n_samples=n_samples, sampler=sampler, n=n,
-                                     percentage=percentage, bins=bins, conf_level=conf_level, flavour=flavour,
-                                     x0=x0, min_points=min_points, window=window, engine=engine, workers=workers)
-    u = _checks.as_1d_float(u, "u")
-    y = _checks.as_1d_float(y, "y", allow_nan=True)
-    if u.size != y.size:
-        raise DataError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
+    settings = AnalysisSettings.build(
+        settings,
+        dt=dt,
+        n_samples=n_samples,
+        sampler=sampler,
+        n=n,
+        percentage=percentage,
+        bins=bins,
+        conf_level=conf_level,
+        flavour=flavour,
+        x0=x0,
+        min_points=min_points,
+        window=window,
+        engine=engine,
+        workers=workers,
+    )
+    u, y = _checks.record(u, y)
     names, box = parameter_box(bounds, model.names, type(model).__name__)
     if settings.sampler in ADAPTIVE_SAMPLERS:
-        return adaptive_run(u, y, model, dict(zip(names, map(tuple, box))), scheme=settings.sampler,
-                            settings=settings, rng=rng)
+        return adaptive_run(
+            u, y, model, dict(zip(names, map(tuple, box))), scheme=settings.sampler, settings=settings, rng=rng
+        )
     samples = sample(settings.sampler, settings.n_samples, box, np.random.default_rng(rng))
     model_order = [names.index(name) for name in model.names]
     finite = model.finite_samples(samples[:, model_order], u, dt=settings.dt, x0=settings.x0)
     if not finite.any():
-        raise ModelError(f"the simulation of every one of the {settings.n_samples} parameter sets overflowed; "
-                         "check the model and the parameter ranges")
+        raise ModelError(
+            f"the simulation of every one of the {settings.n_samples} parameter sets overflowed; "
+            "check the model and the parameter ranges"
+        )
     samples = samples[finite]
     n_dropped = int(settings.n_samples - samples.shape[0])
     warn_dropped(n_dropped, settings.n_samples)
@@ -126,17 +160,31 @@ def run(u, y, model, bounds, *, settings=None, dt=None, n_samples=None, sampler=
     if compiled_engine(settings.engine, settings.flavour):
         errors = CompiledErrors(model, samples[:, model_order], u, y, dt=settings.dt, x0=settings.x0, workers=workers)
     else:
-        errors = model.simulate_chunks(samples[:, model_order], u, dt=settings.dt, x0=settings.x0,
-                                       chunk_steps=chunk_steps)
-    recorded = dict(settings.to_dict(), model=type(model).__name__,
-                    bounds={name: tuple(map(float, row)) for name, row in zip(names, box)},
-                    n_sampled=settings.n_samples, n_dropped=n_dropped)
+        errors = model.simulate_chunks(
+            samples[:, model_order], u, dt=settings.dt, x0=settings.x0, chunk_steps=chunk_steps
+        )
+    recorded = settings.record(model, names, box, n_sampled=settings.n_samples, n_dropped=n_dropped)
     try:
-        result = analyse_stream(y, errors, samples, box, n=settings.n, percentage=settings.percentage,
-                                bins=settings.bins, conf_level=settings.conf_level, flavour=settings.flavour,
-                                names=names, time=np.arange(y.size) * settings.dt, chunk_steps=chunk_steps,
-                                progress=progress, min_points=settings.min_points, settings=recorded,
-                                window=settings.window, engine=settings.engine, workers=workers)
+        result = analyse_stream(
+            y,
+            errors,
+            samples,
+            box,
+            n=settings.n,
+            percentage=settings.percentage,
+            bins=settings.bins,
+            conf_level=settings.conf_level,
+            flavour=settings.flavour,
+            names=names,
+            time=np.arange(y.size) * settings.dt,
+            chunk_steps=chunk_steps,
+            progress=progress,
+            min_points=settings.min_points,
+            settings=recorded,
+            window=settings.window,
+            engine=settings.engine,
+            workers=workers,
+        )
     finally:
         if isinstance(errors, CompiledErrors):
             errors.close()
@@ -147,6 +195,10 @@ def run(u, y, model, bounds, *, settings=None, dt=None, n_samples=None, sampler=
 def warn_dropped(n_dropped, n_sampled):
     """Warn (:class:`DroppedSamplesWarning`) when more than 1 % of the sampled sets were dropped."""
     if n_dropped > DROPPED_WARNING_SHARE * n_sampled:
-        warnings.warn(f"{n_dropped} of {n_sampled} parameter sets ({100 * n_dropped / n_sampled:.1f} %) were dropped "
-                      "because their simulation is not finite (an unstable model overflowing); the analysis covers "
-                      "only the rest of the box", DroppedSamplesWarning, stacklevel=3)
+        warnings.warn(
+            f"{n_dropped} of {n_sampled} parameter sets ({100 * n_dropped / n_sampled:.1f} %) were dropped "
+            "because their simulation is not finite (an unstable model overflowing); the analysis covers "
+            "only the rest of the box",
+            DroppedSamplesWarning,
+            stacklevel=3,
+        )

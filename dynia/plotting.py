@@ -18,6 +18,7 @@ steps, all of one width except a shorter last one; the work is one reshape of
 the whole buckets plus the last bucket on its own, without copying the data.
 Time is finite and increasing; NaN in the values marks missing data.
 """
+
 import numpy as np
 
 from ._checks import whole_number
@@ -168,6 +169,7 @@ def plot_data(time, u, y, *, offset=0.0, xlabel="time"):
     [4000, 4000]
     """
     import matplotlib.pyplot as plt
+
     fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(9, 5))
     top.plot(*envelope(time, u), color="tab:blue")
     top.set_ylabel("input")

@@ -117,6 +117,7 @@ Examples
 >>> bool(np.isnan(clean_y[151])), float(clean_u[150])
 (True, 38.0)
 """
+
 import math
 import numbers
 from dataclasses import dataclass, field
@@ -222,7 +223,7 @@ class QualityReport:
         flagged = np.zeros(self.time.size, dtype=bool)
         for finding in self.findings:
             if finding.signal == signal and finding.kind in kinds:
-                flagged[finding.start:finding.stop] = True
+                flagged[finding.start : finding.stop] = True
         return flagged & ~self.missing[signal]
 
     def exclude(self, values, signal="y", kinds=None):
@@ -264,7 +265,8 @@ class QualityReport:
         if values.size != self.time.size:
             raise DataError(
                 f"values has {values.size} samples but the report covers {self.time.size}; "
-                "pass the signal that was checked")
+                "pass the signal that was checked"
+            )
         cleaned = values.copy()
         if not flagged.any():
             return cleaned
@@ -273,8 +275,9 @@ class QualityReport:
             return cleaned
         usable = ~flagged & ~np.isnan(values)
         if not usable.any():
-            raise DataError(f"every sample of {signal} that is present is flagged; "
-                             "there is nothing to interpolate from")
+            raise DataError(
+                f"every sample of {signal} that is present is flagged; there is nothing to interpolate from"
+            )
         cleaned[flagged] = np.interp(self.time[flagged], self.time[usable], values[usable])
         return cleaned
 
@@ -318,8 +321,7 @@ class QualityReport:
         except ImportError:
             raise ImportError("to_dataframe needs pandas: pip install 'dynia[pandas]'") from None
         columns = ["signal", "kind", "start", "stop", "start_time", "end_time", "value", "reason"]
-        return pd.DataFrame([[getattr(f, name) for name in columns] for f in self.findings],
-                            columns=columns)
+        return pd.DataFrame([[getattr(f, name) for name in columns] for f in self.findings], columns=columns)
 
     def summary(self):
         """A short text: counts per signal and kind, then one line per finding.
@@ -332,26 +334,40 @@ class QualityReport:
         Data quality of 30 samples: no absurd magnitudes, glitches, outliers or stuck values found.
         """
         if not self.findings:
-            return (f"Data quality of {self.time.size} samples: no absurd magnitudes, glitches, outliers or stuck "
-                    "values found.")
+            return (
+                f"Data quality of {self.time.size} samples: no absurd magnitudes, glitches, outliers or stuck "
+                "values found."
+            )
         count = len(self.findings)
         lines = [f"Data quality of {self.time.size} samples: {count} finding{'' if count == 1 else 's'}."]
         for signal in SIGNALS:
-            counts = [f"{sum(f.signal == signal and f.kind == kind for f in self.findings)} {kind}"
-                      for kind in KINDS]
+            counts = [f"{sum(f.signal == signal and f.kind == kind for f in self.findings)} {kind}" for kind in KINDS]
             flagged = int(self.mask(signal).sum())
-            lines.append(f"  {signal}: " + ", ".join(counts)
-                         + f"; {flagged} flagged sample{'' if flagged == 1 else 's'}")
+            lines.append(
+                f"  {signal}: " + ", ".join(counts) + f"; {flagged} flagged sample{'' if flagged == 1 else 's'}"
+            )
         for f in self.findings:
-            when = (f"t={f.start_time:g}" if f.stop - f.start == 1
-                    else f"t={f.start_time:g}..{f.end_time:g}")
+            when = f"t={f.start_time:g}" if f.stop - f.start == 1 else f"t={f.start_time:g}..{f.end_time:g}"
             lines.append(f"  {f.signal} {f.kind:<9} {when} (samples {f.start}-{f.stop - 1}): {f.reason}")
         return "\n".join(lines)
 
 
-def check_quality(time, u, y, *, half_window=3, glitch_threshold=6.0, glitch_min_size=0.1,
-                  max_glitch_length=2, outlier_quantile=0.01, outlier_fence=1.0, min_stuck=10,
-                  stuck_factor=4.0, stuck_tolerance=0.0, max_magnitude=1e12):
+def check_quality(
+    time,
+    u,
+    y,
+    *,
+    half_window=3,
+    glitch_threshold=6.0,
+    glitch_min_size=0.1,
+    max_glitch_length=2,
+    outlier_quantile=0.01,
+    outlier_fence=1.0,
+    min_stuck=10,
+    stuck_factor=4.0,
+    stuck_tolerance=0.0,
+    max_magnitude=1e12,
+):
     """Find absurd magnitudes, isolated glitches, outliers and stuck values in an input/output record.
 
     The tests and the reasoning behind every default are in the module
@@ -416,7 +432,9 @@ def check_quality(time, u, y, *, half_window=3, glitch_threshold=6.0, glitch_min
     if half_window < max_glitch_length:
         raise SettingsError(
             f"half_window ({half_window}) must be at least max_glitch_length ({max_glitch_length}), "
-            "or a glitch as long as allowed could move the window's median", "half_window")
+            "or a glitch as long as allowed could move the window's median",
+            "half_window",
+        )
     settings = dict(
         half_window=half_window,
         glitch_threshold=_checks.open_interval(glitch_threshold, "glitch_threshold", 0, math.inf),
@@ -432,8 +450,9 @@ def check_quality(time, u, y, *, half_window=3, glitch_threshold=6.0, glitch_min
     findings = []
     for signal, values in (("u", u), ("y", y)):
         findings += _signal_findings(signal, values, time, settings)
-    return QualityReport(findings=tuple(findings), time=time,
-                         missing={"u": np.isnan(u), "y": np.isnan(y)}, settings=settings)
+    return QualityReport(
+        findings=tuple(findings), time=time, missing={"u": np.isnan(u), "y": np.isnan(y)}, settings=settings
+    )
 
 
 def informative_segments(result, *, threshold=0.75, parameter=None):
@@ -475,8 +494,9 @@ def _signal_findings(signal, values, time, settings):
     """Every finding of one signal: magnitudes among its present samples, the other tests on the rest."""
     present = np.flatnonzero(~np.isnan(values))
     absurd = np.abs(values[present]) > min(settings["max_magnitude"], _SQUARABLE)
-    found = [_finding(signal, time, present, "magnitude", *run)
-             for run in _magnitudes(values[present], absurd, settings)]
+    found = [
+        _finding(signal, time, present, "magnitude", *run) for run in _magnitudes(values[present], absurd, settings)
+    ]
     where = present[~absurd]
     if where.size == 0:
         return found
@@ -496,20 +516,30 @@ def _signal_findings(signal, values, time, settings):
 def _finding(signal, time, where, kind, start, stop, value, reason):
     """A Finding from a run [start, stop) of the samples ``where`` a test ran on."""
     first, last = where[start], where[stop - 1]
-    return Finding(signal=signal, kind=kind, start=int(first), stop=int(last) + 1,
-                   start_time=float(time[first]), end_time=float(time[last]), value=float(value), reason=reason)
+    return Finding(
+        signal=signal,
+        kind=kind,
+        start=int(first),
+        stop=int(last) + 1,
+        start_time=float(time[first]),
+        end_time=float(time[last]),
+        value=float(value),
+        reason=reason,
+    )
 
 
 def _magnitudes(x, absurd, settings):
     """(start, stop, value, reason) of every run of values too large in size to be a measurement."""
     limit = settings["max_magnitude"]
     found = []
-    for start, stop in _runs(absurd):
+    for start, stop in mask_to_segments(absurd):
         run = x[start:stop]
         worst = run[np.argmax(np.abs(run))]
-        why = (f"its size exceeds max_magnitude = {limit:g}: a sentinel, a unit or parsing error or a corrupted "
-               "reading" if limit <= _SQUARABLE else
-               f"its size exceeds {_SQUARABLE:g}, beyond which squaring it in a cost overflows")
+        why = (
+            f"its size exceeds max_magnitude = {limit:g}: a sentinel, a unit or parsing error or a corrupted reading"
+            if limit <= _SQUARABLE
+            else f"its size exceeds {_SQUARABLE:g}, beyond which squaring it in a cost overflows"
+        )
         found.append((start, stop, worst, f"{worst:.6g} is no plausible reading, {why}; left out of the other tests"))
     return found
 
@@ -530,7 +560,7 @@ def _glitches(x, bulk_width, floor, settings):
     departure = np.abs(x - local)
     far = (departure > threshold * scale) & (departure >= settings["glitch_min_size"] * bulk_width)
     found = []
-    for start, stop in _runs(far):
+    for start, stop in mask_to_segments(far):
         if stop - start > longest:
             continue
         run, run_scale = x[start:stop], scale[start:stop]
@@ -539,10 +569,18 @@ def _glitches(x, bulk_width, floor, settings):
             continue
         worst = start + int(np.argmax(departure[start:stop] / run_scale))
         size = float(departure[worst] / scale[worst])
-        found.append((start, stop, x[worst], (
-            f"{stop - start} sample{'s' if stop - start > 1 else ''} at {x[worst]:.6g} "
-            f"{size:.3g} robust standard deviations from the local median {local[worst]:.6g} "
-            "and far from both neighbours: an isolated erroneous reading")))
+        found.append(
+            (
+                start,
+                stop,
+                x[worst],
+                (
+                    f"{stop - start} sample{'s' if stop - start > 1 else ''} at {x[worst]:.6g} "
+                    f"{size:.3g} robust standard deviations from the local median {local[worst]:.6g} "
+                    "and far from both neighbours: an isolated erroneous reading"
+                ),
+            )
+        )
     return found
 
 
@@ -551,12 +589,20 @@ def _outliers(x, low, high, floor, settings):
     margin = max(settings["outlier_fence"] * (high - low), floor)
     below, above = low - margin, high + margin
     found = []
-    for start, stop in _runs((x < below) | (x > above)):
+    for start, stop in mask_to_segments((x < below) | (x > above)):
         run = x[start:stop]
         worst = run[np.argmax(np.maximum(below - run, run - above))]
-        found.append((start, stop, worst, (
-            f"{worst:.6g} lies outside [{below:.6g}, {above:.6g}], the record's bulk "
-            f"[{low:.6g}, {high:.6g}] widened by {settings['outlier_fence']:g} times its width")))
+        found.append(
+            (
+                start,
+                stop,
+                worst,
+                (
+                    f"{worst:.6g} lies outside [{below:.6g}, {above:.6g}], the record's bulk "
+                    f"[{low:.6g}, {high:.6g}] widened by {settings['outlier_fence']:g} times its width"
+                ),
+            )
+        )
     return found
 
 
@@ -577,21 +623,23 @@ def _stuck_runs(x, settings):
     tolerance = settings["stuck_tolerance"]
     found = []
     for start, stop in zip(starts.tolist(), stops.tolist(), strict=True):
-        approach = steps[max(start - _SETTLING_STEPS, 0):start]
+        approach = steps[max(start - _SETTLING_STEPS, 0) : start]
         if stop - start < shortest or (approach.size and (approach <= settled).all()):
             continue
-        found.append((start, stop, x[start], (
-            f"{stop - start} consecutive readings equal to {x[start]:.6g}"
-            + (f" within {tolerance:g}" if tolerance else "")
-            + f", where this signal's runs of equal readings are usually at most {usual:g} long: "
-            "a frozen sensor or tag")))
+        found.append(
+            (
+                start,
+                stop,
+                x[start],
+                (
+                    f"{stop - start} consecutive readings equal to {x[start]:.6g}"
+                    + (f" within {tolerance:g}" if tolerance else "")
+                    + f", where this signal's runs of equal readings are usually at most {usual:g} long: "
+                    "a frozen sensor or tag"
+                ),
+            )
+        )
     return found
-
-
-def _runs(flags):
-    """[start, stop) of every run of True in a 1-D boolean array."""
-    edges = np.diff(np.r_[0, flags.astype(np.int8), 0])
-    return list(zip(np.flatnonzero(edges == 1).tolist(), np.flatnonzero(edges == -1).tolist(), strict=True))
 
 
 def _time_axis(time, n_steps):
@@ -610,8 +658,10 @@ def _time_axis(time, n_steps):
 def _magnitude_limit(value):
     """``max_magnitude`` as a float > 0; inf leaves only the overflow limit."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real) or not value > 0:
-        raise SettingsError(f"max_magnitude must be a number > 0 (math.inf: flag only values above "
-                            f"{_SQUARABLE:g}); got {value!r}", "max_magnitude")
+        raise SettingsError(
+            f"max_magnitude must be a number > 0 (math.inf: flag only values above {_SQUARABLE:g}); got {value!r}",
+            "max_magnitude",
+        )
     return float(value)
 
 
@@ -629,8 +679,7 @@ def _kind_names(kinds):
     if kinds is None:
         return KINDS
     if isinstance(kinds, str):
-        raise SettingsError(f"kinds must be a sequence of kinds, e.g. ['glitch']; got the string {kinds!r}",
-                            "kinds")
+        raise SettingsError(f"kinds must be a sequence of kinds, e.g. ['glitch']; got the string {kinds!r}", "kinds")
     unknown = [kind for kind in kinds if kind not in KINDS]
     if unknown:
         raise SettingsError(f"unknown kinds {unknown}; choose from {KINDS}", "kinds")
@@ -642,8 +691,9 @@ def _segment_pairs(segments, n_steps):
     try:
         pairs = [tuple(pair) for pair in segments]
     except TypeError:
-        raise SettingsError(f"segments must be a sequence of (start, stop) pairs; got {segments!r}",
-                            "segments") from None
+        raise SettingsError(
+            f"segments must be a sequence of (start, stop) pairs; got {segments!r}", "segments"
+        ) from None
     checked = []
     for position, pair in enumerate(pairs):
         if len(pair) != 2:
@@ -652,6 +702,7 @@ def _segment_pairs(segments, n_steps):
         stop = _checks.whole_number(pair[1], f"segments[{position}] stop", minimum=0)
         if not start < stop <= n_steps:
             raise SettingsError(
-                f"segments[{position}] = {pair!r} must satisfy 0 <= start < stop <= {n_steps} (n_steps)", "segments")
+                f"segments[{position}] = {pair!r} must satisfy 0 <= start < stop <= {n_steps} (n_steps)", "segments"
+            )
         checked.append((start, stop))
     return checked

@@ -21,13 +21,14 @@ few next to missing data, can be sharp by chance; and a parameter whose band
 drifts between informative windows points to a model-structure problem
 (thesis 4.4). None of them should narrow a range.
 """
+
 import numpy as np
 
 from . import _checks
+from .errors import SettingsError
 from .pipeline import run
 from .segments import mask_to_segments
 from .structure import clear_of_bounds
-from .errors import SettingsError
 
 __all__ = ["narrowed_bounds", "second_run"]
 
@@ -119,6 +120,10 @@ def second_run(u, y, model, bounds, *, threshold=0.75, margin=0.5, **options):
     first = run(u, y, model, bounds, **options)
     new_bounds, narrowed = narrowed_bounds(first, bounds, threshold=threshold, margin=margin)
     second = run(u, y, model, new_bounds, **options)
-    second.settings.update(first_run_bounds={name: tuple(map(float, pair)) for name, pair in bounds.items()},
-                           narrowed=narrowed, narrowing_threshold=threshold, narrowing_margin=margin)
+    second.settings.update(
+        first_run_bounds={name: tuple(map(float, pair)) for name, pair in bounds.items()},
+        narrowed=narrowed,
+        narrowing_threshold=threshold,
+        narrowing_margin=margin,
+    )
     return first, second, narrowed

@@ -6,6 +6,7 @@ is the short table ``dynia analyse`` prints on success. Times are written as
 the data file wrote them (:func:`file_times`). Figures are decimated
 (:mod:`dynia.plotting`) so that their memory does not grow with the record.
 """
+
 import csv
 import datetime
 import hashlib
@@ -55,8 +56,12 @@ def write_analysis(directory, result, data, summary, *, offset=0.0, plots=True):
     times = file_times(data, data.time)
     _write_csv(directory / "ic.csv", ["time"] + names, result.ic.T, times)
     limit_columns = [f"{name}_{side}" for name in names for side in ("lower", "upper")]
-    _write_csv(directory / "limits.csv", ["time"] + limit_columns,
-               result.ci.transpose(1, 0, 2).reshape(data.time.size, -1), times)
+    _write_csv(
+        directory / "limits.csv",
+        ["time"] + limit_columns,
+        result.ci.transpose(1, 0, 2).reshape(data.time.size, -1),
+        times,
+    )
     _write_csv(directory / "samples.csv", names, result.samples)
     write_json(directory / "summary.json", summary)
     if plots:
@@ -83,8 +88,16 @@ def verdict_table(parameters):
             rows.append((name, "-", "-", "-", "-", entry["verdict"]))
             continue
         low, high = entry["band"]
-        rows.append((name, f"{entry['max_ic']:.3f}", str(entry["time_of_max_ic"]), f"[{low:.4g}, {high:.4g}]",
-                     f"{entry['estimate']:.4g}", entry["verdict"]))
+        rows.append(
+            (
+                name,
+                f"{entry['max_ic']:.3f}",
+                str(entry["time_of_max_ic"]),
+                f"[{low:.4g}, {high:.4g}]",
+                f"{entry['estimate']:.4g}",
+                entry["verdict"],
+            )
+        )
     widths = [max(len(row[column]) for row in rows + [header]) for column in range(len(header))]
     lines = ["  ".join(cell.ljust(width) for cell, width in zip(row, widths)).rstrip() for row in [header] + rows]
     for name, entry in parameters.items():
@@ -109,10 +122,10 @@ def _write_csv(path, header, rows, times=None):
         writer = csv.writer(handle)
         writer.writerow(header)
         for first in range(0, len(rows), _CSV_BLOCK):
-            block = rows[first:first + _CSV_BLOCK]
+            block = rows[first : first + _CSV_BLOCK]
             cells = [["" if np.isnan(value) else repr(value) for value in row] for row in block.tolist()]
             if times is not None:
-                cells = [[time, *row] for time, row in zip(times[first:first + _CSV_BLOCK], cells)]
+                cells = [[time, *row] for time, row in zip(times[first : first + _CSV_BLOCK], cells)]
             writer.writerows(cells)
 
 
@@ -150,12 +163,18 @@ def _write_fit_figure(path, found, data, u, y, offset):
     bottom.plot(*envelope(grid_time, found.fit.simulate(u)), color="k", linewidth=1, label="fitted model")
     for number, (start, stop) in enumerate(found.segments):
         for ax in (top, bottom):
-            ax.axvspan(grid_time[start], grid_time[stop - 1], color="tab:green", alpha=0.15,
-                       label="fitted on" if number == 0 and ax is bottom else None)
+            ax.axvspan(
+                grid_time[start],
+                grid_time[stop - 1],
+                color="tab:green",
+                alpha=0.15,
+                label="fitted on" if number == 0 and ax is bottom else None,
+            )
     start, _ = found.validation[0]
     bottom.axvspan(grid_time[start], grid_time[-1], color="0.5", alpha=0.15, label="held out")
-    estimates = ", ".join(f"{name} = {value:.4g} \u00b1 {found.std_errors[name]:.2g}"
-                          for name, value in found.parameters.items())
+    estimates = ", ".join(
+        f"{name} = {value:.4g} \u00b1 {found.std_errors[name]:.2g}" for name, value in found.parameters.items()
+    )
     top.set_title(f"{found.method}: {estimates}; validation RMSE {found.validation_error:.3g}")
     bottom.set_ylabel("output" + (f" (minus {offset:g})" if offset else ""))
     bottom.set_xlabel("time (s from the first grid point)")

@@ -5,6 +5,7 @@ Shapes follow the package convention (see :mod:`dynia.analysis`):
 ``gradient`` (n_params, n_bins, n_steps), ``bin_centres`` (n_params, n_bins),
 ``samples`` (n_samples, n_params), ``bounds`` (n_params, 2).
 """
+
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -74,8 +75,9 @@ class DyniaResult:
         "centred"); a result built without them has no known geometry.
         """
         if "n" not in self.settings:
-            raise SettingsError("this result's settings have no half window 'n', so which samples each "
-                                "window used is unknown")
+            raise SettingsError(
+                "this result's settings have no half window 'n', so which samples each window used is unknown"
+            )
         n = int(self.settings["n"])
         window = self.settings.get("window", "centred")
         if window not in ("centred", "trailing"):
@@ -145,7 +147,7 @@ class DyniaResult:
         before, after = self.window_halos
         shift = (before - after) // 2
         centres = np.zeros_like(steps)
-        centres[:steps.size - shift] = steps[shift:]
+        centres[: steps.size - shift] = steps[shift:]
         return centres
 
     def windows_using(self, samples):
@@ -170,8 +172,10 @@ class DyniaResult:
     def _step_mask(self, mask, name):
         mask = np.asarray(mask)
         if mask.dtype != bool or mask.shape != self.time.shape:
-            raise SettingsError(f"{name} must be a boolean mask of shape {self.time.shape}, one flag per step; "
-                                f"got dtype {mask.dtype}, shape {mask.shape}")
+            raise SettingsError(
+                f"{name} must be a boolean mask of shape {self.time.shape}, one flag per step; "
+                f"got dtype {mask.dtype}, shape {mask.shape}"
+            )
         return mask
 
     def summary(self):
@@ -217,13 +221,15 @@ class DyniaResult:
         except ImportError:
             raise ImportError("to_dataframe needs pandas: pip install 'dynia[pandas]'") from None
         n_params, n_steps = self.ic.shape
-        return pd.DataFrame({
-            "time": np.tile(self.time, n_params),
-            "parameter": np.repeat(self.names, n_steps),
-            "ic": self.ic.ravel(),
-            "lower": self.ci[:, :, 0].ravel(),
-            "upper": self.ci[:, :, 1].ravel(),
-        })
+        return pd.DataFrame(
+            {
+                "time": np.tile(self.time, n_params),
+                "parameter": np.repeat(self.names, n_steps),
+                "ic": self.ic.ravel(),
+                "lower": self.ci[:, :, 0].ravel(),
+                "upper": self.ci[:, :, 1].ravel(),
+            }
+        )
 
     def plot_information_content(self, name, ax=None):
         """Information content of ``name`` over time (thesis Figures 2.8, 3.3, ...).
@@ -232,6 +238,7 @@ class DyniaResult:
         :func:`dynia.plotting.envelope`, so its memory does not grow with it.
         """
         import matplotlib.pyplot as plt
+
         p = self.index(name)
         ax = ax if ax is not None else plt.figure().add_subplot()
         ax.plot(*envelope(self.time, self.ic[p]), color="k", linewidth=1)
@@ -252,11 +259,13 @@ class DyniaResult:
         not grow with it.
         """
         import matplotlib.pyplot as plt
+
         p = self.index(name)
         ax = ax if ax is not None else plt.figure().add_subplot()
         columns_time, columns = decimated_columns(self.time, self.gradient[p])
-        ax.pcolormesh(columns_time, self.bin_centres[p], columns, cmap="Greys",
-                      shading="nearest", vmin=0, rasterized=True)
+        ax.pcolormesh(
+            columns_time, self.bin_centres[p], columns, cmap="Greys", shading="nearest", vmin=0, rasterized=True
+        )
         ax.plot(*envelope(self.time, self.ci[p, :, 0]), color="tab:blue", linewidth=1, label="lower limit")
         ax.plot(*envelope(self.time, self.ci[p, :, 1]), color="tab:red", linewidth=1, label="upper limit")
         if true_value is not None:

@@ -5,6 +5,7 @@ Every sampler returns (n_samples, n_params) with the columns in the order of
 and draws all its randomness from ``rng`` (a :class:`numpy.random.Generator`
 or a seed; the same seed gives bit-identical samples).
 """
+
 import numpy as np
 from scipy.stats import qmc
 

@@ -48,6 +48,7 @@ Examples
 >>> holdout_split(100)
 ([(0, 70)], [(70, 100)])
 """
+
 import math
 import numbers
 from collections.abc import Mapping
@@ -58,8 +59,17 @@ from . import _checks
 from .errors import DataError, SettingsError
 from .result import DyniaResult
 
-__all__ = ["check_segments", "segments_to_mask", "mask_to_segments", "intersect_segments", "segments_from_ic",
-           "segments_to_times", "random_segments", "holdout_split", "MODES"]
+__all__ = [
+    "check_segments",
+    "segments_to_mask",
+    "mask_to_segments",
+    "intersect_segments",
+    "segments_from_ic",
+    "segments_to_times",
+    "random_segments",
+    "holdout_split",
+    "MODES",
+]
 
 MODES = ("any", "joint", "per_parameter")
 
@@ -96,10 +106,10 @@ def check_segments(segments, n_steps=None, name="segments"):
     --------
     >>> check_segments([[0, 5], (7, 9)], 10)
     [(0, 5), (7, 9)]
-    >>> check_segments([(0, 5), (4, 9)], 10)
+    >>> check_segments([(0, 5), (4, 9)], 10)  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    ValueError: segments[1] = (4, 9) overlaps segments[0] = (0, 5); segments must be sorted and non-overlapping
+    dynia.errors.SettingsError: segments[1] = (4, 9) overlaps segments[0] = (0, 5); ...
     """
     if n_steps is not None:
         n_steps = _checks.whole_number(n_steps, "n_steps", minimum=1)
@@ -119,12 +129,14 @@ def check_segments(segments, n_steps=None, name="segments"):
             limit = "" if n_steps is None else f" <= {n_steps}"
             raise SettingsError(
                 f"{name}[{position}] = ({start}, {stop}) is not a segment{record}; "
-                f"need 0 <= start < stop{limit} (stop is exclusive)")
+                f"need 0 <= start < stop{limit} (stop is exclusive)"
+            )
         if checked and start < checked[-1][1]:
             order = "overlaps" if start >= checked[-1][0] else "starts before"
             raise SettingsError(
                 f"{name}[{position}] = ({start}, {stop}) {order} {name}[{position - 1}] = "
-                f"{checked[-1]}; segments must be sorted and non-overlapping")
+                f"{checked[-1]}; segments must be sorted and non-overlapping"
+            )
         checked.append((start, stop))
     return checked
 
@@ -163,8 +175,7 @@ def mask_to_segments(mask):
     if mask.ndim != 1 or mask.dtype != bool:
         raise DataError(f"mask must be a 1-D boolean array; got dtype {mask.dtype}, shape {mask.shape}")
     edges = np.diff(np.concatenate(([0], mask.astype(np.int8), [0])))
-    return [(int(start), int(stop)) for start, stop in
-            zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1))]
+    return [(int(start), int(stop)) for start, stop in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1))]
 
 
 def intersect_segments(segments, allowed):
@@ -187,8 +198,7 @@ def intersect_segments(segments, allowed):
     return common
 
 
-def segments_from_ic(result, *, threshold=0.5, min_length=None, merge_gap=None, parameters=None,
-                     mode="any"):
+def segments_from_ic(result, *, threshold=0.5, min_length=None, merge_gap=None, parameters=None, mode="any"):
     """Segments where the information content reaches a threshold.
 
     Steps are informative where the IC of the chosen parameters is at least
@@ -270,8 +280,10 @@ def _chosen_parameters(parameters, names):
     chosen = tuple(parameters)
     unknown = [name for name in chosen if name not in names]
     if unknown or not chosen:
-        raise SettingsError(f"parameters must name some of the result's parameters {list(names)}; "
-                         f"got {list(chosen)}" + (f" (unknown: {unknown})" if unknown else ""))
+        raise SettingsError(
+            f"parameters must name some of the result's parameters {list(names)}; "
+            f"got {list(chosen)}" + (f" (unknown: {unknown})" if unknown else "")
+        )
     if len(set(chosen)) != len(chosen):
         raise SettingsError(f"parameters names a parameter twice: {list(chosen)}")
     return chosen
@@ -282,15 +294,21 @@ def _thresholds(threshold, chosen):
         missing = [name for name in chosen if name not in threshold]
         unknown = [name for name in threshold if name not in chosen]
         if missing or unknown:
-            raise SettingsError(f"threshold must give a value for each parameter {list(chosen)}"
-                             + (f"; missing: {missing}" if missing else "")
-                             + (f"; not among them: {unknown}" if unknown else ""))
+            raise SettingsError(
+                f"threshold must give a value for each parameter {list(chosen)}"
+                + (f"; missing: {missing}" if missing else "")
+                + (f"; not among them: {unknown}" if unknown else "")
+            )
         values = [threshold[name] for name in chosen]
     else:
         values = [threshold] * len(chosen)
     for name, value in zip(chosen, values):
-        if (isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value)
-                or not 0 <= value <= 1):
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, numbers.Real)
+            or not math.isfinite(value)
+            or not 0 <= value <= 1
+        ):
             raise SettingsError(f"threshold of {name} must be a number in [0, 1] (IC lies there); got {value!r}")
     return np.array(values, dtype=float)
 
@@ -328,8 +346,7 @@ def segments_to_times(segments, time):
     [[0.0, 2.0], [10.0, 14.0]]
     """
     time = _checks.as_1d_float(time, "time")
-    return [[float(time[start]), float(time[stop - 1])]
-            for start, stop in check_segments(segments, time.size)]
+    return [[float(time[start]), float(time[stop - 1])] for start, stop in check_segments(segments, time.size)]
 
 
 def random_segments(lengths, n_steps, rng=None, *, exclude=None):
@@ -370,19 +387,23 @@ def random_segments(lengths, n_steps, rng=None, *, exclude=None):
     n_steps = _checks.whole_number(n_steps, "n_steps", minimum=1)
     if isinstance(lengths, (numbers.Number, str)):
         raise SettingsError(f"lengths must be a sequence of segment lengths; got {lengths!r}")
-    lengths = [_checks.whole_number(length, f"lengths[{position}]", minimum=1)
-               for position, length in enumerate(lengths)]
+    lengths = [
+        _checks.whole_number(length, f"lengths[{position}]", minimum=1) for position, length in enumerate(lengths)
+    ]
     free = np.ones(n_steps, dtype=bool) if exclude is None else ~segments_to_mask(exclude, n_steps)
     if sum(lengths) > free.sum():
-        raise SettingsError(f"the lengths total {sum(lengths)} steps but only {int(free.sum())} of the "
-                         f"{n_steps} steps are free")
+        raise SettingsError(
+            f"the lengths total {sum(lengths)} steps but only {int(free.sum())} of the {n_steps} steps are free"
+        )
     rng = np.random.default_rng(rng)
     for _ in range(_PLACEMENT_ATTEMPTS):
         placed = _place(lengths, free, rng)
         if placed is not None:
             return sorted(placed)
-    raise SettingsError(f"could not place segments of lengths {lengths} in the free steps after "
-                     f"{_PLACEMENT_ATTEMPTS} attempts; the free part of the record is too fragmented")
+    raise SettingsError(
+        f"could not place segments of lengths {lengths} in the free steps after "
+        f"{_PLACEMENT_ATTEMPTS} attempts; the free part of the record is too fragmented"
+    )
 
 
 def _place(lengths, free, rng):
@@ -396,7 +417,7 @@ def _place(lengths, free, rng):
         if starts.size == 0:
             return None
         start = int(starts[rng.integers(starts.size)])
-        available[start:start + length] = False
+        available[start : start + length] = False
         placed.append((start, start + length))
     return placed
 

@@ -1,4 +1,5 @@
 """Plain JSON values from numbers and containers: NaN and inf become null."""
+
 import math
 import numbers
 from collections.abc import Mapping

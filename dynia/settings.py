@@ -24,6 +24,7 @@ Traceback (most recent call last):
     ...
 dynia.errors.SettingsError: conf_level is a percentage in (50, 100); got 0.9 (did you mean 90?)
 """
+
 import dataclasses
 import math
 import numbers
@@ -33,8 +34,20 @@ import numpy as np
 
 from .errors import SettingsError
 
-__all__ = ["AnalysisSettings", "SAMPLERS", "ADAPTIVE_SAMPLERS", "FLAVOURS", "WINDOWS", "ENGINES", "X0",
-           "MAX_BINS", "MAX_PARAMETER", "check_dt", "check_x0", "parameter_box"]
+__all__ = [
+    "AnalysisSettings",
+    "SAMPLERS",
+    "ADAPTIVE_SAMPLERS",
+    "FLAVOURS",
+    "WINDOWS",
+    "ENGINES",
+    "X0",
+    "MAX_BINS",
+    "MAX_PARAMETER",
+    "check_dt",
+    "check_x0",
+    "parameter_box",
+]
 
 SAMPLERS = ("uniform", "lhs", "sobol")
 ADAPTIVE_SAMPLERS = ("iis", "de")
@@ -149,8 +162,9 @@ class AnalysisSettings:
         store("percentage", percentage)
         bins = _whole(self.bins, "bins", 1)
         if bins > MAX_BINS:
-            raise SettingsError(f"bins must be at most {MAX_BINS}; got {bins} (the behavioural set cannot "
-                                "fill a finer grid)", "bins")
+            raise SettingsError(
+                f"bins must be at most {MAX_BINS}; got {bins} (the behavioural set cannot fill a finer grid)", "bins"
+            )
         store("bins", bins)
         conf_level = _real(self.conf_level, "conf_level")
         if not 50 < conf_level < 100:
@@ -161,8 +175,11 @@ class AnalysisSettings:
         store("x0", check_x0(self.x0))
         min_points = _whole(self.min_points, "min_points", 1)
         if min_points > self.window_length:
-            raise SettingsError(f"min_points {min_points} is more than a window holds (2n+1 = {self.window_length} "
-                                f"with n = {self.n}): no window could ever report a result", "min_points")
+            raise SettingsError(
+                f"min_points {min_points} is more than a window holds (2n+1 = {self.window_length} "
+                f"with n = {self.n}): no window could ever report a result",
+                "min_points",
+            )
         store("min_points", min_points)
         store("window", _choice(self.window, "window", WINDOWS))
         store("engine", _choice(self.engine, "engine", ENGINES))
@@ -174,29 +191,41 @@ class AnalysisSettings:
     def _check_combinations(self):
         if self.sampler in ADAPTIVE_SAMPLERS:
             if self.flavour == "mcat":
-                raise SettingsError(f"sampler {self.sampler!r} draws importance-weighted samples, which the mcat flavour cannot "
-                                    "use; take flavour 'thesis' or 'weighted'")
+                raise SettingsError(
+                    f"sampler {self.sampler!r} draws importance-weighted samples, which the mcat flavour cannot "
+                    "use; take flavour 'thesis' or 'weighted'"
+                )
             if self.engine == "numba":
-                raise SettingsError(f"sampler {self.sampler!r} draws importance-weighted samples, which the compiled engine does "
-                                    "not take; use engine 'auto' or 'numpy'")
+                raise SettingsError(
+                    f"sampler {self.sampler!r} draws importance-weighted samples, which the compiled engine does "
+                    "not take; use engine 'auto' or 'numpy'"
+                )
             if self.n_samples < 10:
                 raise SettingsError(f"sampler {self.sampler!r} needs n_samples >= 10; got {self.n_samples}")
             return
         if self.engine == "numba" and self.flavour == "mcat":
-            raise SettingsError("engine 'numba' covers the 'thesis' and 'weighted' flavours; use engine "
-                                "'auto' or 'numpy' with flavour 'mcat'")
+            raise SettingsError(
+                "engine 'numba' covers the 'thesis' and 'weighted' flavours; use engine "
+                "'auto' or 'numpy' with flavour 'mcat'"
+            )
         if self.flavour == "mcat":
             blocks = 100 / self.percentage
             if abs(blocks - round(blocks)) > 1e-9 * blocks:
-                raise SettingsError(f"the mcat flavour splits the samples into 100/percentage blocks; percentage "
-                                    f"{self.percentage:g} does not divide 100 into a whole number of blocks")
+                raise SettingsError(
+                    f"the mcat flavour splits the samples into 100/percentage blocks; percentage "
+                    f"{self.percentage:g} does not divide 100 into a whole number of blocks"
+                )
             if self.n_samples // round(blocks) < 1:
-                raise SettingsError(f"percentage {self.percentage:g} of n_samples {self.n_samples} leaves no "
-                                    "behavioural set")
+                raise SettingsError(
+                    f"percentage {self.percentage:g} of n_samples {self.n_samples} leaves no behavioural set"
+                )
         elif self.n_behavioural < 2:
-            raise SettingsError(f"percentage {self.percentage:g} of n_samples {self.n_samples} keeps "
-                                f"{self.n_behavioural} parameter sets per window; at least 2 are needed "
-                                "(raise percentage or n_samples)", "percentage")
+            raise SettingsError(
+                f"percentage {self.percentage:g} of n_samples {self.n_samples} keeps "
+                f"{self.n_behavioural} parameter sets per window; at least 2 are needed "
+                "(raise percentage or n_samples)",
+                "percentage",
+            )
 
     @property
     def window_length(self):
@@ -227,7 +256,9 @@ class AnalysisSettings:
         fields = {field.name for field in dataclasses.fields(self)}
         unknown = sorted(set(changes) - fields)
         if unknown:
-            raise SettingsError(f"unknown setting(s) {', '.join(unknown)}; the settings are {', '.join(sorted(fields))}")
+            raise SettingsError(
+                f"unknown setting(s) {', '.join(unknown)}; the settings are {', '.join(sorted(fields))}"
+            )
         return dataclasses.replace(self, **changes)
 
     def require(self, front_end, why="", **allowed):
@@ -242,13 +273,24 @@ class AnalysisSettings:
             value = getattr(self, name)
             if value not in supported:
                 shown = ", ".join(repr(item) for item in supported)
-                raise SettingsError(f"{front_end} does not support {name}={value!r}; it takes {shown}"
-                                    + (f" ({why})" if why else ""))
+                raise SettingsError(
+                    f"{front_end} does not support {name}={value!r}; it takes {shown}" + (f" ({why})" if why else "")
+                )
         return self
 
     def to_dict(self):
         """The settings as a plain dict (for result.settings and summary.json)."""
         return dataclasses.asdict(self)
+
+    def record(self, model, names, box, *, n_sampled, n_dropped):
+        """``result.settings`` of a run: these settings, the model, the ranges and the samples drawn and dropped."""
+        return dict(
+            self.to_dict(),
+            model=type(model).__name__,
+            bounds={name: tuple(map(float, row)) for name, row in zip(names, box)},
+            n_sampled=int(n_sampled),
+            n_dropped=int(n_dropped),
+        )
 
 
 def parameter_box(bounds, model_names, model_label="the model"):
@@ -268,14 +310,18 @@ def parameter_box(bounds, model_names, model_label="the model"):
     box : ndarray (n_params, 2)
     """
     if not isinstance(bounds, Mapping):
-        raise SettingsError(f"bounds must map each parameter name to (low, high), e.g. {{'K': (0, 7)}}; "
-                            f"got {type(bounds).__name__}")
+        raise SettingsError(
+            f"bounds must map each parameter name to (low, high), e.g. {{'K': (0, 7)}}; got {type(bounds).__name__}"
+        )
     names = [str(name) for name in bounds]
     unknown = [name for name in names if name not in model_names]
     missing = [name for name in model_names if name not in names]
     if unknown or missing:
-        raise SettingsError(f"bounds must name every parameter of {model_label} {list(model_names)} once"
-                            + (f"; unknown: {unknown}" if unknown else "") + (f"; missing: {missing}" if missing else ""))
+        raise SettingsError(
+            f"bounds must name every parameter of {model_label} {list(model_names)} once"
+            + (f"; unknown: {unknown}" if unknown else "")
+            + (f"; missing: {missing}" if missing else "")
+        )
     rows = []
     for name in names:
         pair = bounds[name]
@@ -288,8 +334,10 @@ def parameter_box(bounds, model_names, model_label="the model"):
         if not (math.isfinite(low) and math.isfinite(high) and low < high):
             raise SettingsError(f"bounds[{name!r}]: need finite low < high; got ({low}, {high})")
         if max(abs(low), abs(high)) > MAX_PARAMETER:
-            raise SettingsError(f"bounds[{name!r}] = ({low:g}, {high:g}) reaches beyond {MAX_PARAMETER:g}; no "
-                                "parameter of a process model is that large, and the arithmetic on such values "
-                                "overflows")
+            raise SettingsError(
+                f"bounds[{name!r}] = ({low:g}, {high:g}) reaches beyond {MAX_PARAMETER:g}; no "
+                "parameter of a process model is that large, and the arithmetic on such values "
+                "overflows"
+            )
         rows.append((low, high))
     return names, np.array(rows)

@@ -74,6 +74,7 @@ the location of the CLD-gradient maximum of T moves from 0.25 (t=13-17) to 0.75 
 parameter should not move: the model structure may be wrong (thesis 4.4), unless T really
 varies over time
 """
+
 import math
 from dataclasses import dataclass
 
@@ -81,9 +82,9 @@ import numpy as np
 import scipy.stats
 
 from . import _checks
+from .errors import SettingsError
 from .result import DyniaResult
 from .segments import mask_to_segments
-from .errors import SettingsError
 
 __all__ = ["StructureWarning", "structure_warnings", "clear_of_bounds"]
 
@@ -215,8 +216,10 @@ def _ignored_windows(result, ignore):
         return np.zeros(n_steps, dtype=bool)
     ignore = np.asarray(ignore)
     if ignore.dtype != bool or ignore.shape != (n_steps,):
-        raise SettingsError(f"ignore must be a boolean array of shape ({n_steps},), one flag per step; "
-                            f"got dtype {ignore.dtype} and shape {ignore.shape}")
+        raise SettingsError(
+            f"ignore must be a boolean array of shape ({n_steps},), one flag per step; "
+            f"got dtype {ignore.dtype} and shape {ignore.shape}"
+        )
     return result.windows_using(ignore)
 
 
@@ -274,15 +277,28 @@ def _drift(result, p, blocks, drift_tolerance):
 
     if abs(trend) >= _TREND:
         first, last = sorted((lowest, highest))
-        course = (f"moves from {at(first)} to {at(last)}, {100 * spread:.0f} % of its range "
-                  f"[{low:g}, {high:g}], {'rising' if trend > 0 else 'falling'} over time")
+        course = (
+            f"moves from {at(first)} to {at(last)}, {100 * spread:.0f} % of its range "
+            f"[{low:g}, {high:g}], {'rising' if trend > 0 else 'falling'} over time"
+        )
     else:
-        course = (f"goes back and forth between {at(lowest)} and {at(highest)}, "
-                  f"{100 * spread:.0f} % of its range [{low:g}, {high:g}]")
-    message = (f"the location of the CLD-gradient maximum of {name} {course} ({len(blocks)} "
-               f"informative segments); a constant parameter should not move: the model structure "
-               f"may be wrong (thesis 4.4), unless {name} really varies over time")
+        course = (
+            f"goes back and forth between {at(lowest)} and {at(highest)}, "
+            f"{100 * spread:.0f} % of its range [{low:g}, {high:g}]"
+        )
+    message = (
+        f"the location of the CLD-gradient maximum of {name} {course} ({len(blocks)} "
+        f"informative segments); a constant parameter should not move: the model structure "
+        f"may be wrong (thesis 4.4), unless {name} really varies over time"
+    )
     return StructureWarning(
-        parameter=name, segments=tuple((int(s[0]), int(s[-1]) + 1) for s in blocks), times=times,
-        locations=locations, bands=bands, compared=(lowest, highest), spread=spread, trend=trend,
-        message=message)
+        parameter=name,
+        segments=tuple((int(s[0]), int(s[-1]) + 1) for s in blocks),
+        times=times,
+        locations=locations,
+        bands=bands,
+        compared=(lowest, highest),
+        spread=spread,
+        trend=trend,
+        message=message,
+    )

@@ -20,6 +20,7 @@ Examples
 >>> bool(time_u[0] == time_y[0] == 0), bool(time_u[-1] == time_y[-1] == 3 * 1440)
 (True, True)
 """
+
 import math
 from dataclasses import dataclass
 
@@ -125,11 +126,25 @@ class CoolingWaterTruth:
         return np.clip((t - self.drift_start) / (self.drift_end - self.drift_start), 0.0, 1.0)
 
 
-def cooling_water_loop(rng, *, days=30, gain=2.0, time_constant=2.0, input_level=36.0,
-                       drifted_input=40.0, n_steps=6, step_offset=(1.0, 2.0), scan=1 / 6,
-                       glitch_lag=1.0, input_wander=0.25, output_disturbance=0.3,
-                       sensor_noise=0.05, input_deadband=0.1, output_deadband=0.3,
-                       max_interval=60.0):
+def cooling_water_loop(
+    rng,
+    *,
+    days=30,
+    gain=2.0,
+    time_constant=2.0,
+    input_level=36.0,
+    drifted_input=40.0,
+    n_steps=6,
+    step_offset=(1.0, 2.0),
+    scan=1 / 6,
+    glitch_lag=1.0,
+    input_wander=0.25,
+    output_disturbance=0.3,
+    sensor_noise=0.05,
+    input_deadband=0.1,
+    output_deadband=0.3,
+    max_interval=60.0,
+):
     """Event logs of a synthetic cooling-water return loop, and the truth behind them.
 
     Time is in minutes from the start of the record. The process is the
@@ -276,18 +291,28 @@ def cooling_water_loop(rng, *, days=30, gain=2.0, time_constant=2.0, input_level
     if not steady.any():
         raise SettingsError(
             f"days = {days} is too short: no steady minute at least {margin} minutes from the steps "
-            "and the drift is left for the glitch")
+            "and the drift is left for the glitch"
+        )
     glitch_time = float(rng.choice(minutes[steady]))
 
     truth = CoolingWaterTruth(
-        gain=gain, gain_after=gain * input_level / drifted_input, time_constant=time_constant,
-        input_level=input_level, drifted_input=drifted_input, step_times=step_times,
-        step_inputs=step_inputs, drift_start=drift_start, drift_end=drift_end,
-        glitch_time=glitch_time, glitch_time_output=glitch_time + glitch_lag, scan=scan, end=end)
+        gain=gain,
+        gain_after=gain * input_level / drifted_input,
+        time_constant=time_constant,
+        input_level=input_level,
+        drifted_input=drifted_input,
+        step_times=step_times,
+        step_inputs=step_inputs,
+        drift_start=drift_start,
+        drift_end=drift_end,
+        glitch_time=glitch_time,
+        glitch_time_output=glitch_time + glitch_lag,
+        scan=scan,
+        end=end,
+    )
 
     # The process on the input's raster: u[k] is held on [raster[k], raster[k+1]).
-    u_true = truth.base_input_at(raster) + _ornstein_uhlenbeck(rng, raster.size, scan, 120.0,
-                                                             input_wander)
+    u_true = truth.base_input_at(raster) + _ornstein_uhlenbeck(rng, raster.size, scan, 120.0, input_wander)
     drive = truth.gain_at(raster) * u_true
     pole = math.exp(-scan / time_constant)
     states, _ = scipy.signal.lfilter([1 - pole], [1, -pole], drive, zi=[pole * drive[0]])
@@ -303,8 +328,12 @@ def cooling_water_loop(rng, *, days=30, gain=2.0, time_constant=2.0, input_level
     scans_y = rng.uniform(0, 0.8 * scan) + raster + rng.uniform(0, 0.2 * scan, raster.size)
     time_y = np.r_[0.0, scans_y[(scans_y > 0) & (scans_y < end)], end]
     index = np.searchsorted(raster, time_y, side="right") - 1
-    y = (drive[index] + (states[index] - drive[index]) * np.exp(-(time_y - raster[index]) / time_constant)
-         + disturbance[index] + rng.normal(0, sensor_noise, time_y.size))
+    y = (
+        drive[index]
+        + (states[index] - drive[index]) * np.exp(-(time_y - raster[index]) / time_constant)
+        + disturbance[index]
+        + rng.normal(0, sensor_noise, time_y.size)
+    )
 
     _zero_reading(time_u, u, glitch_time)
     _zero_reading(time_y, y, glitch_time + glitch_lag)

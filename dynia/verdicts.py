@@ -28,6 +28,7 @@ parameter one of :data:`VERDICTS` and the reasons for it.
 Each reason is ``{"code": ..., "text": ...}``; branch on the code, the text
 is for people.
 """
+
 import math
 
 import numpy as np
@@ -157,12 +158,12 @@ def assess(result, *, u=None, y=None, model=None, dt=None, x0=None, weak_below=0
         step = best[p]
         reasons = _bound_reasons(result, p, step) + _edge_reasons(result, step, windows[step])
         if noise.get(step):
-            reasons.append(_reason("noise_only", f"the window at max IC (time {result.time[step]:.6g}) "
-                                                 + noise[step]))
+            reasons.append(_reason("noise_only", f"the window at max IC (time {result.time[step]:.6g}) " + noise[step]))
         ic = float(result.ic[p, step])
         if ic < weak_below:
-            verdicts[name] = dict(verdict="weak", reasons=[_reason("low_ic", f"max IC {ic:.3g} is below "
-                                                                             f"{weak_below:g}")] + reasons)
+            verdicts[name] = dict(
+                verdict="weak", reasons=[_reason("low_ic", f"max IC {ic:.3g} is below {weak_below:g}")] + reasons
+            )
         else:
             verdicts[name] = dict(verdict="suspect" if reasons else "identified", reasons=reasons)
     return verdicts
@@ -175,19 +176,29 @@ def _reason(code, text):
 def _bound_reasons(result, p, step):
     (low, high), (lower, upper) = result.bounds[p], result.ci[p, step]
     tolerance = BOUND_TOLERANCE * (high - low)
-    return [_reason("band_at_bound", f"the band [{lower:.4g}, {upper:.4g}] at max IC touches the {side} bound "
-                                     f"{bound:.4g}")
-            for touches, side, bound in ((lower - low <= tolerance, "lower", low),
-                                         (high - upper <= tolerance, "upper", high)) if touches]
+    return [
+        _reason("band_at_bound", f"the band [{lower:.4g}, {upper:.4g}] at max IC touches the {side} bound {bound:.4g}")
+        for touches, side, bound in (
+            (lower - low <= tolerance, "lower", low),
+            (high - upper <= tolerance, "upper", high),
+        )
+        if touches
+    ]
 
 
 def _edge_reasons(result, step, window):
     before, after = result.window_halos
     length = before + after + 1
     truncated = "; its window is truncated" if window[1] - window[0] < length else ""
-    return [_reason("record_edge", f"max IC at time {result.time[step]:.6g} is within one window ({length} steps) "
-                                   f"of the record's {edge}{truncated}")
-            for distance, edge in ((step, "start"), (result.time.size - 1 - step, "end")) if distance < length]
+    return [
+        _reason(
+            "record_edge",
+            f"max IC at time {result.time[step]:.6g} is within one window ({length} steps) "
+            f"of the record's {edge}{truncated}",
+        )
+        for distance, edge in ((step, "start"), (result.time.size - 1 - step, "end"))
+        if distance < length
+    ]
 
 
 def _noise_windows(result, u, y, model, dt, x0, windows):
@@ -203,8 +214,10 @@ def _noise_windows(result, u, y, model, dt, x0, windows):
     if sorted(model.names) != sorted(result.names):
         raise ModelError(f"model parameters {list(model.names)} do not match the result's {list(result.names)}")
     params = result.samples[:, [result.names.index(name) for name in model.names]]
-    options = dict(dt=result.settings.get("dt", 1.0) if dt is None else dt,
-                   x0=result.settings.get("x0", "zero") if x0 is None else x0)
+    options = dict(
+        dt=result.settings.get("dt", 1.0) if dt is None else dt,
+        x0=result.settings.get("x0", "zero") if x0 is None else x0,
+    )
     points = {step: int((~np.isnan(y[start:stop])).sum()) for step, (start, stop) in windows.items()}
     windows = {step: window for step, window in windows.items() if points[step]}
     if not windows:
@@ -218,19 +231,23 @@ def _noise_windows(result, u, y, model, dt, x0, windows):
     position = np.cumsum(needed) - 1  # column of step k among the kept ones
     kept = np.empty((params.shape[0], int(needed.sum())))
     at = 0
-    for chunk in model.simulate_chunks(params, u[:end], chunk_steps=max(1, _MAX_VALUES // params.shape[0]),
-                                       **options):
-        inside = needed[at:at + chunk.shape[1]]
-        kept[:, position[at:at + chunk.shape[1]][inside]] = chunk[:, inside]
+    for chunk in model.simulate_chunks(params, u[:end], chunk_steps=max(1, _MAX_VALUES // params.shape[0]), **options):
+        inside = needed[at : at + chunk.shape[1]]
+        kept[:, position[at : at + chunk.shape[1]][inside]] = chunk[:, inside]
         at += chunk.shape[1]
     # A window's steps are all kept, so its columns are one contiguous block.
-    mae = {step: [_window_mae(y[start:stop], kept[:, position[start]:position[stop - 1] + 1], 0, stop - start)]
-           for step, (start, stop) in windows.items()}
+    mae = {
+        step: [_window_mae(y[start:stop], kept[:, position[start] : position[stop - 1] + 1], 0, stop - start)]
+        for step, (start, stop) in windows.items()
+    }
     sigma = noise_sigma(y)
     texts = {}
     for step in windows:
         quiet, spread, threshold = _judge(np.concatenate(mae[step]), points[step], sigma, NOISE_MULTIPLE)
-        texts[step] = (f"fits noise only: its MAE spread {spread:.3g} is at most {threshold:.3g}, {NOISE_MULTIPLE:g} "
-                       f"standard deviations of the MAE of {points[step]} points of noise sigma {sigma:.3g}"
-                       if quiet else None)
+        texts[step] = (
+            f"fits noise only: its MAE spread {spread:.3g} is at most {threshold:.3g}, {NOISE_MULTIPLE:g} "
+            f"standard deviations of the MAE of {points[step]} points of noise sigma {sigma:.3g}"
+            if quiet
+            else None
+        )
     return texts

@@ -232,7 +232,7 @@ def plot_selections(time, u, y, found, randoms, second, *, title, time_label, pa
     rows = [(label, fit.segments, COLOURS[label]) for label, fit in found.items() if fit is not None]
     for label, draws in randoms.items():
         rows += [(f"random, as {label} #{k + 1}", draws[k].segments, "0.5") for k in range(min(2, len(draws)))]
-    for row, (label, segments, colour) in enumerate(rows):
+    for row, (_, segments, colour) in enumerate(rows):
         axes[2].broken_barh([(time[start], time[stop - 1] - time[start] + time[1] - time[0])
                              for start, stop in segments], (row - 0.35, 0.7), color=colour)
     axes[2].set_yticks(range(len(rows)), [label for label, _, _ in rows], fontsize="small")
@@ -531,7 +531,7 @@ for (label, (model, truth, bounds)), case_seed in zip(KNOWN_TRUTH.items(), synth
         known[label].append(dict(u=u, y=y, glitch=glitch, clean=cleaned(u, y), found=found, randoms=randoms,
                                  second=second, excluded=excluded))
 
-for label, (model, truth, _) in KNOWN_TRUTH.items():
+for label in KNOWN_TRUTH:
     first = known[label][0]
     print(f"{label}, first noise seed:")
     print_table(first["found"], first["randoms"], *first["clean"])

@@ -1,4 +1,5 @@
 """Shared test data: the thesis's example 1, simulated independently of dynia.models."""
+
 import numpy as np
 import pytest
 

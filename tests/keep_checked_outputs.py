@@ -4,6 +4,7 @@ Reference runs (tests/notebooks/*.ipynb) are committed only for the cells
 marked NBVAL_CHECK_OUTPUT; figures and other outputs would only bloat the
 repository. Usage: python tests/keep_checked_outputs.py NOTEBOOK.ipynb
 """
+
 import sys
 
 import nbformat

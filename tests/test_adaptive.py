@@ -1,9 +1,10 @@
 """Importance-weighted DYNIA and the adaptive samplers."""
+
 import numpy as np
 import pytest
 
 import dynia
-from dynia.adaptive import BoxMixture, adaptive_run
+from dynia.adaptive import BoxMixture
 from dynia.models import FirstOrder
 
 
@@ -45,7 +46,7 @@ def test_equal_weights_select_the_same_set_and_limits_one_position_apart_at_most
     for p in range(2):
         ordered = np.sort(params[:, p][selected], axis=1)
         for side, position in ((0, 19), (1, 379)):
-            near = ordered[:, position - 1:position + 2]
+            near = ordered[:, position - 1 : position + 2]
             assert (weighted.ci[p, :, side, None] == near).any(axis=1).all()
             np.testing.assert_array_equal(plain.ci[p, :, side], ordered[:, position])
 
@@ -56,13 +57,18 @@ def test_importance_weights_recover_the_uniform_result_from_another_proposal(exa
     uniform = rng.uniform(0, 7, (20_000, 2))
     reference = dynia.moving_window(y, FirstOrder().simulate(uniform, u), uniform, [[0, 7], [0, 7]], n=10)
     # half the samples uniform, half with K squeezed into [1.5, 2.5]
-    proposal = np.r_[rng.uniform(0, 7, (10_000, 2)),
-                     np.c_[rng.uniform(1.5, 2.5, 10_000), rng.uniform(0, 7, 10_000)]]
+    proposal = np.r_[rng.uniform(0, 7, (10_000, 2)), np.c_[rng.uniform(1.5, 2.5, 10_000), rng.uniform(0, 7, 10_000)]]
     mixture = BoxMixture([[0, 7], [0, 7]])
     mixture.counts[0] = 10_000
     mixture.add([[1.5, 2.5], [0, 7]], 10_000)
-    weighted = dynia.moving_window(y, FirstOrder().simulate(proposal, u), proposal, [[0, 7], [0, 7]], n=10,
-                                   weights=mixture.importance_weights(proposal))
+    weighted = dynia.moving_window(
+        y,
+        FirstOrder().simulate(proposal, u),
+        proposal,
+        [[0, 7], [0, 7]],
+        n=10,
+        weights=mixture.importance_weights(proposal),
+    )
     # Both converge to the same curves; 2000 behavioural uniform samples leave
     # Monte Carlo noise of about 0.01 in IC.
     assert np.abs(weighted.ic - reference.ic).mean() < 0.01
@@ -71,8 +77,12 @@ def test_importance_weights_recover_the_uniform_result_from_another_proposal(exa
 @pytest.mark.parametrize("scheme", ["iis", "de"])
 def test_adaptive_runs_spend_exactly_their_budget_and_repeat_with_the_seed(example1, scheme):
     u, y = example1
-    runs = [dynia.run(u, y, FirstOrder(), {"K": (0, 7), "T": (0, 7)}, sampler=scheme, n_samples=3000, n=10,
-                      percentage=1, rng=5) for _ in range(2)]
+    runs = [
+        dynia.run(
+            u, y, FirstOrder(), {"K": (0, 7), "T": (0, 7)}, sampler=scheme, n_samples=3000, n=10, percentage=1, rng=5
+        )
+        for _ in range(2)
+    ]
     assert runs[0].settings["n_evaluations"] == 3000
     np.testing.assert_array_equal(runs[0].ic, runs[1].ic)
     assert runs[0].samples.shape[0] == runs[0].settings["weights"].size <= 3000
@@ -85,8 +95,10 @@ def test_iterated_importance_sampling_beats_uniform_at_the_same_budget(example1)
     uniform = dynia.run(u, y, FirstOrder(), bounds, n_samples=5000, n=10, percentage=0.5, rng=2)
     adaptive = dynia.run(u, y, FirstOrder(), bounds, sampler="iis", n_samples=5000, n=10, percentage=0.5, rng=2)
     # over the steps before the final settling (see the note in dynia.adaptive)
-    error = {name: np.sqrt(np.nanmean((res.ic[:, :400] - reference.ic[:, :400]) ** 2))
-             for name, res in (("uniform", uniform), ("iis", adaptive))}
+    error = {
+        name: np.sqrt(np.nanmean((res.ic[:, :400] - reference.ic[:, :400]) ** 2))
+        for name, res in (("uniform", uniform), ("iis", adaptive))
+    }
     assert error["iis"] < error["uniform"]
 
 

@@ -1,13 +1,13 @@
 """The fast engine against the plain ports, on hand-checkable cases, and on bad input."""
+
 import math
 
 import numpy as np
 import pytest
+from conftest import example_firstorder_input, first_order_response
 
 from dynia import mcat, thesis
 from dynia.analysis import lowest_stable, moving_window, stable_rank_mask
-
-from conftest import example_firstorder_input, first_order_response
 
 
 def _small_example(seed, steps=120, samples=300, zero_start=20):
@@ -26,15 +26,18 @@ def _small_example(seed, steps=120, samples=300, zero_start=20):
 # cost ties by sample index, as the port's stable sort does, so the same
 # parameter values are selected and the limits and IC agree exactly
 # (tolerance 0), ties included.
-@pytest.mark.parametrize("seed, n, percentage, conf_level", [
-    (0, 10, 10, 90), (1, 3, 20, 95), (2, 0, 10, 60), (3, 25, 5, 90), (4, 7, 12, 80)])
+@pytest.mark.parametrize(
+    "seed, n, percentage, conf_level", [(0, 10, 10, 90), (1, 3, 20, 95), (2, 0, 10, 60), (3, 25, 5, 90), (4, 7, 12, 80)]
+)
 def test_thesis_flavour_equals_the_port_exactly(seed, n, percentage, conf_level):
     y, sims, params = _small_example(seed)
-    res = moving_window(y, sims, params, [[0, 7], [0, 7]], n=n, percentage=percentage,
-                        conf_level=conf_level, chunk_steps=17)
+    res = moving_window(
+        y, sims, params, [[0, 7], [0, 7]], n=n, percentage=percentage, conf_level=conf_level, chunk_steps=17
+    )
     for p in range(2):
-        IC, CI_t, _ = thesis.moving_window_calcs(y.size, params[:, p], 0, 7, len(params), sims, y,
-                                                 40, percentage, n, conf_level=conf_level)
+        IC, CI_t, _ = thesis.moving_window_calcs(
+            y.size, params[:, p], 0, 7, len(params), sims, y, 40, percentage, n, conf_level=conf_level
+        )
         np.testing.assert_array_equal(res.ic[p], IC)
         np.testing.assert_array_equal(res.ci[p], CI_t)
 
@@ -43,8 +46,7 @@ def test_thesis_flavour_equals_the_port_on_example1(example1):
     e = example1
     res = moving_window(e["y"], e["sims"], e["params"], e["bounds"], n=10)
     for p in range(2):  # the port takes ~3 s a parameter here
-        IC, CI_t, _ = thesis.moving_window_calcs(500, e["params"][:, p], 0, 7, 2000, e["sims"], e["y"],
-                                                 40, 10, 10)
+        IC, CI_t, _ = thesis.moving_window_calcs(500, e["params"][:, p], 0, 7, 2000, e["sims"], e["y"], 40, 10, 10)
         np.testing.assert_array_equal(res.ic[p], IC)
         np.testing.assert_array_equal(res.ci[p], CI_t)
 
@@ -52,8 +54,7 @@ def test_thesis_flavour_equals_the_port_on_example1(example1):
 @pytest.mark.parametrize("seed, n, bins, samples", [(0, 10, 20, 300), (1, 2, 40, 305), (2, 0, 7, 40)])
 def test_mcat_flavour_equals_the_id_time_port_exactly(seed, n, bins, samples):
     y, sims, params = _small_example(seed, samples=samples)
-    res = moving_window(y, sims, params, [[0, 7], [0, 7]], n=n, bins=bins, flavour="mcat",
-                        chunk_steps=13)
+    res = moving_window(y, sims, params, [[0, 7], [0, 7]], n=n, bins=bins, flavour="mcat", chunk_steps=13)
     for p in range(2):
         ic, lcl, ucl, colour, grid = mcat.id_time(sims.T, y, params, p, n, containers=bins)
         np.testing.assert_array_equal(res.ic[p], ic)
@@ -73,8 +74,7 @@ def _weighted_reference(y, sims, params, bounds, n, percentage, conf_level, wind
             lo, hi = max(t - n, 0), min(t + n + 1, steps)
         else:
             lo, hi = max(t - 2 * n, 0), t + 1
-        cost = np.array([np.cumsum(np.abs(y[lo:hi] - sims[k, lo:hi]))[-1] / (hi - lo)
-                         for k in range(samples)]) ** 2
+        cost = np.array([np.cumsum(np.abs(y[lo:hi] - sims[k, lo:hi]))[-1] / (hi - lo) for k in range(samples)]) ** 2
         best = np.argsort(cost, kind="stable")[:count]
         lhood = 1 - cost[best]
         if lhood.min() < 0:
@@ -98,10 +98,12 @@ def test_weighted_flavour_equals_a_loop_reference():
 
 def test_trailing_window_equals_a_loop_reference():
     y, sims, params = _small_example(6, steps=60, samples=200, zero_start=0)
-    res = moving_window(y, sims, params, [[0, 7], [0, 7]], n=4, flavour="weighted", conf_level=80,
-                        window="trailing", chunk_steps=7)
+    res = moving_window(
+        y, sims, params, [[0, 7], [0, 7]], n=4, flavour="weighted", conf_level=80, window="trailing", chunk_steps=7
+    )
     np.testing.assert_array_equal(
-        res.ic, _weighted_reference(y, sims, params, [[0, 7], [0, 7]], 4, 10, 80, window="trailing"))
+        res.ic, _weighted_reference(y, sims, params, [[0, 7], [0, 7]], 4, 10, 80, window="trailing")
+    )
     assert res.settings["window"] == "trailing"
 
 
@@ -110,8 +112,7 @@ def test_trailing_window_is_the_centred_one_shifted_by_n(flavour):
     y, sims, params = _small_example(7)
     n = 6
     centred = moving_window(y, sims, params, [[0, 7], [0, 7]], n=n, flavour=flavour)
-    trailing = moving_window(y, sims, params, [[0, 7], [0, 7]], n=n, flavour=flavour, window="trailing",
-                             chunk_steps=11)
+    trailing = moving_window(y, sims, params, [[0, 7], [0, 7]], n=n, flavour=flavour, window="trailing", chunk_steps=11)
     np.testing.assert_array_equal(trailing.ic[:, n:], centred.ic[:, :-n])
     np.testing.assert_array_equal(trailing.ci[:, n:], centred.ci[:, :-n])
     np.testing.assert_array_equal(trailing.gradient[:, :, n:], centred.gradient[:, :, :-n])
@@ -169,11 +170,9 @@ def test_exact_ties_go_to_the_lowest_sample_index():
 
 def test_results_do_not_depend_on_chunking_or_threads(example1):
     e = example1
-    reference = moving_window(e["y"], e["sims"], e["params"], e["bounds"], n=10, workers=1,
-                              chunk_steps=500)
+    reference = moving_window(e["y"], e["sims"], e["params"], e["bounds"], n=10, workers=1, chunk_steps=500)
     for chunk_steps, workers in [(1, 2), (7, 2), (64, 1), (None, None)]:
-        res = moving_window(e["y"], e["sims"], e["params"], e["bounds"], n=10, workers=workers,
-                            chunk_steps=chunk_steps)
+        res = moving_window(e["y"], e["sims"], e["params"], e["bounds"], n=10, workers=workers, chunk_steps=chunk_steps)
         np.testing.assert_array_equal(res.ic, reference.ic)
         np.testing.assert_array_equal(res.ci, reference.ci)
         np.testing.assert_array_equal(res.gradient, reference.gradient)
@@ -200,30 +199,40 @@ def test_missing_measurements_use_the_points_present():
     assert np.isnan(with_one.ic[0, 4]) and np.isfinite(with_one.ic[0, [3, 5]]).all()
 
 
-@pytest.mark.parametrize("change, message", [
-    (dict(y=np.zeros(4)), "sims has 3 steps"),
-    (dict(sims=np.zeros(3)), "sims must be 2-D"),
-    (dict(params=np.zeros((9, 1))), "params has 9 rows"),
-    (dict(bounds=[[9, 0]]), "lower bound 9.0 must be below"),
-    (dict(bounds=[[0, 5]]), "outside its bounds"),
-    (dict(flavour="glue"), "flavour must be one of"),
-    (dict(window="left"), "window must be one of"),
-    (dict(percentage=10), "keeps 1 parameter sets per window"),
-    (dict(percentage=0), r"percentage must lie in \(0, 100\]"),
-    (dict(percentage=100.5), r"percentage must lie in \(0, 100\]"),
-    (dict(conf_level=100), r"conf_level is a percentage in \(50, 100\)"),
-    (dict(n=-1), "n must be at least 0"),
-    (dict(n=1.5), "n must be a whole number"),
-    (dict(y=[1, "a", 2]), "y must be a 1-D array of numbers"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (dict(y=np.zeros(4)), "sims has 3 steps"),
+        (dict(sims=np.zeros(3)), "sims must be 2-D"),
+        (dict(params=np.zeros((9, 1))), "params has 9 rows"),
+        (dict(bounds=[[9, 0]]), "lower bound 9.0 must be below"),
+        (dict(bounds=[[0, 5]]), "outside its bounds"),
+        (dict(flavour="glue"), "flavour must be one of"),
+        (dict(window="left"), "window must be one of"),
+        (dict(percentage=10), "keeps 1 parameter sets per window"),
+        (dict(percentage=0), r"percentage must lie in \(0, 100\]"),
+        (dict(percentage=100.5), r"percentage must lie in \(0, 100\]"),
+        (dict(conf_level=100), r"conf_level is a percentage in \(50, 100\)"),
+        (dict(n=-1), "n must be at least 0"),
+        (dict(n=1.5), "n must be a whole number"),
+        (dict(y=[1, "a", 2]), "y must be a 1-D array of numbers"),
+    ],
+)
 def test_bad_input_gets_a_clear_error(change, message):
     y, sims, params = _hand_case()
     args = dict(y=y, sims=sims, params=params, bounds=[[0, 9]])
     args.update(change)
     options = {key: args.pop(key) for key in list(args) if key not in ("y", "sims", "params", "bounds")}
     with pytest.raises(ValueError, match=message):
-        moving_window(args["y"], args["sims"], args["params"], args["bounds"], n=options.pop("n", 1),
-                      percentage=options.pop("percentage", 40), **options)
+        moving_window(
+            args["y"],
+            args["sims"],
+            args["params"],
+            args["bounds"],
+            n=options.pop("n", 1),
+            percentage=options.pop("percentage", 40),
+            **options,
+        )
 
 
 def test_non_finite_simulations_are_named():

@@ -1,10 +1,14 @@
 """The Bittencourt et al. (2015) interval search on records with known steps."""
+
 import numpy as np
 import pytest
 import scipy.stats
 
-from dynia.baseline import REASONS, find_intervals
-from dynia.baseline import _laguerre_regressors  # the orthonormality check needs the raw filters
+from dynia.baseline import (
+    REASONS,
+    _laguerre_regressors,  # the orthonormality check needs the raw filters
+    find_intervals,
+)
 
 STEPS = (300, 700, 1100)
 N_STEPS = 1500
@@ -13,7 +17,7 @@ N_STEPS = 1500
 def lag_response(u, gain, time_constant, delay=0):
     """Zero-order-hold response of gain e^(-delay s) / (time_constant s + 1), delay in whole samples."""
     pole = np.exp(-1.0 / time_constant)
-    delayed = np.r_[np.full(delay, u[0]), u[:u.size - delay]]
+    delayed = np.r_[np.full(delay, u[0]), u[: u.size - delay]]
     y = np.zeros(u.size)
     for k in range(u.size - 1):
         y[k + 1] = pole * y[k] + gain * (1 - pole) * delayed[k]
@@ -163,7 +167,9 @@ def test_closed_loop_intervals_follow_the_setpoint_changes_not_the_disturbances(
     result = find_intervals(u, y, setpoint=setpoint)
     assert_usable(result, N_STEPS)
     assert [(start < 300 < stop, start < 1100 < stop) for start, stop in result.accepted] == [
-        (True, False), (False, True)]
+        (True, False),
+        (False, True),
+    ]
     [upset] = [c for c in result.candidates if c.start < 710 < c.stop]
     assert upset.reason == "no input excitation"
     for candidate in result.candidates:
@@ -208,25 +214,28 @@ def test_intervals_in_time_units_and_the_table():
         result.intervals([0, 1, 2])
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    (dict(u=np.zeros((2, 50))), r"u must be 1-D \(n_steps,\); got shape \(2, 50\)"),
-    (dict(y=np.zeros(49)), "u has 50 samples but y has 49"),
-    (dict(y=np.r_[np.zeros(49), np.inf]), "y holds a non-finite value at index 49"),
-    (dict(setpoint=np.zeros(10)), "setpoint has 10 samples but u has 50"),
-    (dict(dt=0), "dt must be greater than 0.0; got 0"),
-    (dict(mean_forgetting=1.0), "mean_forgetting must lie strictly between 0 and 1"),
-    (dict(variance_forgetting="0.9"), "variance_forgetting must be a finite number"),
-    (dict(excitation_threshold=1.0), "excitation_threshold must be greater than 1.0"),
-    (dict(noise_std=0.1), r"noise_std must be a pair \(input, output\)"),
-    (dict(noise_std=(0.1, -1)), r"noise_std\[1\] must be greater than 0.0"),
-    (dict(margin=-1), "margin must be at least 0"),
-    (dict(merge_gap=2.5), "merge_gap must be a whole number"),
-    (dict(laguerre_order=0), "laguerre_order must be at least 1"),
-    (dict(min_length=4), "min_length must be at least 5"),
-    (dict(laguerre_pole=1.0), r"laguerre_pole must lie in \[0, 1\)"),
-    (dict(max_condition=1), "max_condition must be greater than 1.0"),
-    (dict(significance=0), "significance must lie strictly between 0 and 1"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(u=np.zeros((2, 50))), r"u must be 1-D \(n_steps,\); got shape \(2, 50\)"),
+        (dict(y=np.zeros(49)), "u has 50 samples but y has 49"),
+        (dict(y=np.r_[np.zeros(49), np.inf]), "y holds a non-finite value at index 49"),
+        (dict(setpoint=np.zeros(10)), "setpoint has 10 samples but u has 50"),
+        (dict(dt=0), "dt must be greater than 0.0; got 0"),
+        (dict(mean_forgetting=1.0), "mean_forgetting must lie strictly between 0 and 1"),
+        (dict(variance_forgetting="0.9"), "variance_forgetting must be a finite number"),
+        (dict(excitation_threshold=1.0), "excitation_threshold must be greater than 1.0"),
+        (dict(noise_std=0.1), r"noise_std must be a pair \(input, output\)"),
+        (dict(noise_std=(0.1, -1)), r"noise_std\[1\] must be greater than 0.0"),
+        (dict(margin=-1), "margin must be at least 0"),
+        (dict(merge_gap=2.5), "merge_gap must be a whole number"),
+        (dict(laguerre_order=0), "laguerre_order must be at least 1"),
+        (dict(min_length=4), "min_length must be at least 5"),
+        (dict(laguerre_pole=1.0), r"laguerre_pole must lie in \[0, 1\)"),
+        (dict(max_condition=1), "max_condition must be greater than 1.0"),
+        (dict(significance=0), "significance must lie strictly between 0 and 1"),
+    ],
+)
 def test_bad_arguments_are_named(kwargs, message):
     arguments = dict(u=np.zeros(50), y=np.zeros(50)) | kwargs
     with pytest.raises(ValueError, match=message):

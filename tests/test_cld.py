@@ -1,6 +1,6 @@
 """CLD building blocks on hand-worked cases, one set and many sets at once."""
+
 import numpy as np
-import pytest
 
 from dynia import cld
 

@@ -1,4 +1,5 @@
 """The dynia command line: end to end on the DaISy heating system, settings files, bad input."""
+
 import json
 import subprocess
 import sys
@@ -6,17 +7,36 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import given, strategies as st
+from cli_cases import BASE, GOOD, HEATING
+from hypothesis import given
+from hypothesis import strategies as st
 
 from dynia import __version__
 from dynia.cli import UsageError, _bounds, main
 from dynia.models import FirstOrder
 
-ROOT = Path(__file__).resolve().parent.parent
-HEATING = ROOT / "data" / "heating_system" / "heating_system.csv"
-HEATING_ARGS = ["--time", "time", "--input", "u", "--output", "y", "--model", "first-order",
-                "--param", "K=0:40", "--param", "T=0:200", "--input-offset", "6", "--offset", "first",
-                "--samples", "400", "--seed", "1"]
+HEATING_ARGS = [
+    "--time",
+    "time",
+    "--input",
+    "u",
+    "--output",
+    "y",
+    "--model",
+    "first-order",
+    "--param",
+    "K=0:40",
+    "--param",
+    "T=0:200",
+    "--input-offset",
+    "6",
+    "--offset",
+    "first",
+    "--samples",
+    "400",
+    "--seed",
+    "1",
+]
 
 
 def _analyse(capsys, *args):
@@ -40,8 +60,17 @@ def heating_run(tmp_path_factory):
 
 def test_heating_system_end_to_end(heating_run):
     out = heating_run
-    expected = {"ic.csv", "limits.csv", "samples.csv", "summary.json", "data.png", "ic_K.png",
-                "ic_T.png", "identifiability_K.png", "identifiability_T.png"}
+    expected = {
+        "ic.csv",
+        "limits.csv",
+        "samples.csv",
+        "summary.json",
+        "data.png",
+        "ic_K.png",
+        "ic_T.png",
+        "identifiability_K.png",
+        "identifiability_T.png",
+    }
     assert expected <= {path.name for path in out.iterdir()}
     header, ic = _read_csv(out / "ic.csv")
     assert header == ["time", "K", "T"] and ic.shape == (801, 3)
@@ -88,7 +117,8 @@ def test_config_file_gives_the_same_run(tmp_path, capsys, heating_run):
     config.write_text(
         f'data = "{HEATING}"\ntime = "time"\ninput = "u"\noutput = "y"\nmodel = "first-order"\n'
         'param = ["K=0:40", "T=0:200"]\ninput-offset = "6"\noffset = "first"\nsamples = 400\nseed = 1\n'
-        f'out = "{tmp_path / "from-config"}"\n')
+        f'out = "{tmp_path / "from-config"}"\n'
+    )
     status, err = _analyse(capsys, "--config", config)
     assert status == 0, err
     assert (tmp_path / "from-config" / "ic.csv").read_text() == (heating_run / "ic.csv").read_text()
@@ -109,38 +139,36 @@ def _write(path, text):
     return path
 
 
-GOOD = "time,u,y\n" + "".join(f"{t},{1.0 if t > 5 else 0.0},{2.0 if t > 6 else 0.0}\n" for t in range(40))
-BASE = ["--time", "time", "--input", "u", "--output", "y", "--model", "first-order",
-        "--param", "K=0:5", "--param", "T=0:5", "--samples", "100", "--n", "3", "--seed", "2"]
-
-
 def _with(extra):
     """BASE with the model and the K range replaced where ``extra`` gives its own."""
     args = list(BASE)
     if "--model" in extra:
-        del args[args.index("--model"):args.index("--model") + 2]
+        del args[args.index("--model") : args.index("--model") + 2]
     if any(value.startswith("K=") for value in extra):
-        del args[args.index("K=0:5") - 1:args.index("K=0:5") + 1]
+        del args[args.index("K=0:5") - 1 : args.index("K=0:5") + 1]
     return args + extra
 
 
-@pytest.mark.parametrize("content, extra, message", [
-    (None, [], "no such file"),
-    ("", [], "empty"),
-    ("time,u,y\n", [], ""),
-    (GOOD.replace("time,u,y", "time,u,z"), [], "'y'"),
-    (GOOD.replace("7,1.0,2.0", "7,1.0,abc"), [], "abc"),
-    (GOOD.replace("8,1.0", "6.5,1.0"), [], "increasing"),
-    ("time,u,y\n" + "".join(f"{t},1,2\n" for t in range(5)), [], "fewer than one window"),
-    (GOOD, ["--param", "K=5:0"], "lower bound"),
-    (GOOD, ["--param", "tau=0:1"], "tau"),
-    (GOOD, ["--model", "third-order"], "--model"),
-    (GOOD, ["--flavour", "glue"], "--flavour"),
-    (GOOD, ["--percentage", "1"], "at least 2"),
-    (GOOD, ["--conf-level", "100"], "--conf-level"),
-    (GOOD, ["--param", "K=0-5"], "NAME=LOW:HIGH"),
-    (GOOD, ["--offset", "warm"], "--offset"),
-])
+@pytest.mark.parametrize(
+    "content, extra, message",
+    [
+        (None, [], "no such file"),
+        ("", [], "empty"),
+        ("time,u,y\n", [], ""),
+        (GOOD.replace("time,u,y", "time,u,z"), [], "'y'"),
+        (GOOD.replace("7,1.0,2.0", "7,1.0,abc"), [], "abc"),
+        (GOOD.replace("8,1.0", "6.5,1.0"), [], "increasing"),
+        ("time,u,y\n" + "".join(f"{t},1,2\n" for t in range(5)), [], "fewer than one window"),
+        (GOOD, ["--param", "K=5:0"], "lower bound"),
+        (GOOD, ["--param", "tau=0:1"], "tau"),
+        (GOOD, ["--model", "third-order"], "--model"),
+        (GOOD, ["--flavour", "glue"], "--flavour"),
+        (GOOD, ["--percentage", "1"], "at least 2"),
+        (GOOD, ["--conf-level", "100"], "--conf-level"),
+        (GOOD, ["--param", "K=0-5"], "NAME=LOW:HIGH"),
+        (GOOD, ["--offset", "warm"], "--offset"),
+    ],
+)
 def test_bad_input_is_one_line_exit_2_and_no_output(tmp_path, capsys, content, extra, message):
     data = tmp_path / "data.csv"
     if content is not None:
@@ -198,6 +226,7 @@ def test_missing_output_values_give_missing_ic(tmp_path, capsys):
     _, ic = _read_csv(tmp_path / "out" / "ic.csv")
     assert np.isnan(ic[20:28, 1]).all() and np.isfinite(ic[:18, 1]).all()
 
+
 finite = st.floats(allow_nan=False, allow_infinity=False, min_value=-1e12, max_value=1e12)
 
 
@@ -224,14 +253,35 @@ def test_malformed_param_ranges_are_usage_errors(text):
 
 def test_second_run_writes_its_own_results(tmp_path, capsys):
     import dynia
+
     u = dynia.synthetic.example_firstorder_input()
     y = FirstOrder().simulate([[2.0, 3.0]], u)[0] + np.random.default_rng(4).normal(0, 0.5, u.size)
-    data = _write(tmp_path / "example1.csv",
-                  "time,u,y\n" + "".join(f"{k},{float(a)!r},{float(b)!r}\n" for k, (a, b) in enumerate(zip(u, y))))
+    data = _write(
+        tmp_path / "example1.csv",
+        "time,u,y\n" + "".join(f"{k},{float(a)!r},{float(b)!r}\n" for k, (a, b) in enumerate(zip(u, y))),
+    )
     out = tmp_path / "twice"
-    status, err = _analyse(capsys, data, "--time", "time", "--input", "u", "--output", "y", "--model",
-                           "first-order", "--param", "K=0:7", "--param", "T=0:7", "--seed", "1",
-                           "--second-run", "--out", out)
+    status, err = _analyse(
+        capsys,
+        data,
+        "--time",
+        "time",
+        "--input",
+        "u",
+        "--output",
+        "y",
+        "--model",
+        "first-order",
+        "--param",
+        "K=0:7",
+        "--param",
+        "T=0:7",
+        "--seed",
+        "1",
+        "--second-run",
+        "--out",
+        out,
+    )
     assert status == 0, err
     first = json.loads((out / "summary.json").read_text())
     second = json.loads((out / "second_run" / "summary.json").read_text())
@@ -244,14 +294,15 @@ def test_second_run_writes_its_own_results(tmp_path, capsys):
 
 # ------------------------------------------------------------------ dynia identify
 
+
 @pytest.fixture(scope="module")
 def heating_identified(tmp_path_factory):
     runs = tmp_path_factory.mktemp("identify")
     for method in ("dynia", "baseline", "whole"):
-        assert main(["identify", str(HEATING), *HEATING_ARGS, "--method", method, "--out",
-                     str(runs / method)]) == 0
-    return {method: json.loads((runs / method / "identified.json").read_text())
-            for method in ("dynia", "baseline", "whole")} | {"dir": runs}
+        assert main(["identify", str(HEATING), *HEATING_ARGS, "--method", method, "--out", str(runs / method)]) == 0
+    return {
+        method: json.loads((runs / method / "identified.json").read_text()) for method in ("dynia", "baseline", "whole")
+    } | {"dir": runs}
 
 
 def test_identify_writes_the_checked_schema(heating_identified):
@@ -281,12 +332,33 @@ def test_identify_recovers_a_known_model_with_a_glitch_excluded(tmp_path, capsys
     u = np.repeat(rng.choice([0.0, 1.0, 2.0], 12), 50)
     y = FirstOrder().simulate([[1.5, 8.0]], u)[0] + rng.normal(0, 0.02, u.size)
     y[130] = 40.0  # one erroneous reading
-    _write(tmp_path / "data.csv", "time,u,y\n" + "".join(f"{k},{float(a)!r},{float(b)!r}\n" for k, (a, b) in enumerate(zip(u, y))))
-    common = ["--time", "time", "--input", "u", "--output", "y", "--model", "first-order",
-              "--param", "K=0:5", "--param", "T=0:30", "--method", "whole", "--seed", "2"]
+    _write(
+        tmp_path / "data.csv",
+        "time,u,y\n" + "".join(f"{k},{float(a)!r},{float(b)!r}\n" for k, (a, b) in enumerate(zip(u, y))),
+    )
+    common = [
+        "--time",
+        "time",
+        "--input",
+        "u",
+        "--output",
+        "y",
+        "--model",
+        "first-order",
+        "--param",
+        "K=0:5",
+        "--param",
+        "T=0:30",
+        "--method",
+        "whole",
+        "--seed",
+        "2",
+    ]
     assert main(["identify", str(tmp_path / "data.csv"), *common, "--out", str(tmp_path / "raw")]) == 0
-    assert main(["identify", str(tmp_path / "data.csv"), *common, "--exclude-flagged",
-                 "--out", str(tmp_path / "clean")]) == 0
+    assert (
+        main(["identify", str(tmp_path / "data.csv"), *common, "--exclude-flagged", "--out", str(tmp_path / "clean")])
+        == 0
+    )
     raw, clean = (json.loads((tmp_path / name / "identified.json").read_text()) for name in ("raw", "clean"))
     # The reading is both a glitch (off its neighbours) and an outlier (off the record's range).
     assert {(entry["start_time"], entry["end_time"]) for entry in clean["data_quality"]} == {(130.0, 130.0)}
@@ -296,12 +368,15 @@ def test_identify_recovers_a_known_model_with_a_glitch_excluded(tmp_path, capsys
     assert clean["fit_rmse"] < raw["fit_rmse"] / 5
 
 
-@pytest.mark.parametrize("extra, message", [
-    (["--method", "random"], "--method"),
-    (["--ic-threshold", "1.5"], "--ic-threshold"),
-    (["--held-out", "1"], "--held-out"),
-    (["--starts", "0"], "--starts"),
-])
+@pytest.mark.parametrize(
+    "extra, message",
+    [
+        (["--method", "random"], "--method"),
+        (["--ic-threshold", "1.5"], "--ic-threshold"),
+        (["--held-out", "1"], "--held-out"),
+        (["--starts", "0"], "--starts"),
+    ],
+)
 def test_identify_bad_options_are_one_line_errors(tmp_path, capsys, extra, message):
     status = main(["identify", str(HEATING), *HEATING_ARGS, *extra, "--out", str(tmp_path / "out")])
     err = capsys.readouterr().err.strip().splitlines()

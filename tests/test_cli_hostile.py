@@ -5,6 +5,7 @@ Every case checks the exit status, that an error is exactly one ``dynia: error:`
 column at fault, that neither stream carries a traceback or a numpy/matplotlib warning, that the user's files
 are byte-identical afterwards, and that no staging (``.partial``) or lock litter is left behind.
 """
+
 import hashlib
 import json
 import os
@@ -19,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_cases import BASE, GOOD, HEATING
 
 import dynia
 import dynia.cli
@@ -29,20 +31,13 @@ from dynia.outdir import MARKER, OutputDirectory
 from dynia.pipeline import DroppedSamplesWarning
 from dynia.verdicts import VERDICTS
 
-ROOT = Path(__file__).resolve().parent.parent
-HEATING = ROOT / "data" / "heating_system" / "heating_system.csv"
-
-# A step test of 40 rows at 1 s: the input steps at 6 s, the output at 7 s.
-GOOD = "time,u,y\n" + "".join(f"{t},{1.0 if t > 5 else 0.0},{2.0 if t > 6 else 0.0}\n" for t in range(40))
-BASE = ["--time", "time", "--input", "u", "--output", "y", "--model", "first-order",
-        "--param", "K=0:5", "--param", "T=0:5", "--samples", "100", "--n", "3", "--seed", "2"]
-
 # Text that must never reach the user: a traceback, a Python warning (RuntimeWarning, UserWarning, ...),
 # numpy's floating-point complaints, matplotlib's chatter.
 FORBIDDEN = re.compile(r"Traceback|\b\w*Warning\b|encountered in|[Mm]atplotlib|warnings\.warn")
 
 
 # ------------------------------------------------------------------ helpers
+
 
 def _write(path, text):
     path.write_text(text)
@@ -109,8 +104,11 @@ def _state(path):
 
 def _litter(directory):
     """Staging, lock or retired-output names dynia left under ``directory``."""
-    return sorted(str(item) for item in Path(directory).rglob("*")
-                  if ".partial" in item.name or item.name.endswith(".dynia-lock") or ".old-" in item.name)
+    return sorted(
+        str(item)
+        for item in Path(directory).rglob("*")
+        if ".partial" in item.name or item.name.endswith(".dynia-lock") or ".old-" in item.name
+    )
 
 
 def _summary(out):
@@ -132,6 +130,7 @@ def good(tmp_path):
 @pytest.fixture
 def never_analysed(monkeypatch):
     """Fail the test if the analysis or the data loading starts: errors must come before any work."""
+
     def refuse(*args, **kwargs):
         raise AssertionError("the analysis started although the command should have stopped before")
 
@@ -140,6 +139,7 @@ def never_analysed(monkeypatch):
 
 
 # ------------------------------------------------------------------ output directory: never destroy anything
+
 
 @pytest.mark.parametrize("overwrite", [[], ["--overwrite"]])
 def test_out_equal_to_the_input_file_is_refused(tmp_path, capsys, good, never_analysed, overwrite):
@@ -271,8 +271,7 @@ def test_a_second_run_on_the_same_out_fails_fast_with_a_lock_message(tmp_path, c
     assert _litter(tmp_path) == []
 
 
-def test_out_appearing_during_the_run_is_left_alone_and_the_results_kept_beside_it(tmp_path, capsys, good,
-                                                                                   monkeypatch):
+def test_out_appearing_during_the_run_is_left_alone_and_the_results_kept_beside_it(tmp_path, capsys, good, monkeypatch):
     out = tmp_path / "results"
     original = dynia.report.write_analysis
 
@@ -307,9 +306,31 @@ def test_a_signal_during_the_run_leaves_nothing_behind(tmp_path, name, status):
     data = _slow_run_files(tmp_path)
     out = tmp_path / "results"
     before = _state(data)
-    command = [sys.executable, "-m", "dynia.cli", "analyse", str(data), "--time", "time", "--input", "u",
-               "--output", "y", "--model", "first-order", "--param", "K=0:5", "--param", "T=0:5",
-               "--samples", "20000", "--seed", "1", "--out", str(out)]
+    command = [
+        sys.executable,
+        "-m",
+        "dynia.cli",
+        "analyse",
+        str(data),
+        "--time",
+        "time",
+        "--input",
+        "u",
+        "--output",
+        "y",
+        "--model",
+        "first-order",
+        "--param",
+        "K=0:5",
+        "--param",
+        "T=0:5",
+        "--samples",
+        "20000",
+        "--seed",
+        "1",
+        "--out",
+        str(out),
+    ]
     process = subprocess.Popen(command, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         deadline = time.monotonic() + 30
@@ -346,10 +367,12 @@ def test_result_permissions_follow_the_umask(tmp_path, capsys, good, umask, file
     files = [item for item in out.rglob("*") if item.is_file()]
     assert {item.name for item in files} >= {"summary.json", "ic.csv", MARKER}
     assert {item.name: oct(stat.S_IMODE(item.stat().st_mode)) for item in files} == {
-        item.name: oct(file_mode) for item in files}
+        item.name: oct(file_mode) for item in files
+    }
 
 
 # ------------------------------------------------------------------ data: no invented data, no silent drops
+
 
 def test_a_gap_in_the_time_column_is_left_missing_and_reported(tmp_path, capsys):
     # 1 s rows from 0 to 59 without the rows of 20..29 s: 11 s (> 5 grid steps) without data.
@@ -457,8 +480,7 @@ def test_a_parameter_range_where_the_arithmetic_overflows_is_refused(tmp_path, c
 
 
 @pytest.mark.parametrize("plots", [["--no-plots"], []])
-def test_dropping_more_than_one_percent_of_the_samples_is_in_the_summary(tmp_path, capsys, good, plots,
-                                                                          monkeypatch):
+def test_dropping_more_than_one_percent_of_the_samples_is_in_the_summary(tmp_path, capsys, good, plots, monkeypatch):
     # No built-in model overflows inside the ranges the command line accepts, so the model is
     # made to report 5 % of its sets as not finite; what is checked is how the command reports it.
     def finite_but_every_twentieth(self, params, u, dt=1.0, x0="zero"):
@@ -478,8 +500,11 @@ def test_dropping_more_than_one_percent_of_the_samples_is_in_the_summary(tmp_pat
 
 # ------------------------------------------------------------------ settings that make results meaningless
 
-@pytest.mark.parametrize("value, needles", [("0.9", ["--conf-level", "90"]), ("40", ["--conf-level"]),
-                                            ("100", ["--conf-level"]), ("nan", ["--conf-level"])])
+
+@pytest.mark.parametrize(
+    "value, needles",
+    [("0.9", ["--conf-level", "90"]), ("40", ["--conf-level"]), ("100", ["--conf-level"]), ("nan", ["--conf-level"])],
+)
 def test_conf_level_out_of_range_is_an_error(tmp_path, capsys, good, never_analysed, value, needles):
     _one_error(*_analyse(capsys, good, *BASE, "--conf-level", value, "--out", tmp_path / "out"), *needles)
     assert not (tmp_path / "out").exists() and _litter(tmp_path) == []
@@ -508,8 +533,9 @@ def test_the_same_column_as_input_and_output_is_an_error(tmp_path, capsys, good,
     assert not (tmp_path / "out").exists()
 
 
-TWO_INPUTS = "time,u,u2,y\n" + "".join(f"{t},{1.0 if t > 5 else 0.0},{t % 3},{2.0 if t > 6 else 0.0}\n"
-                                       for t in range(40))
+TWO_INPUTS = "time,u,u2,y\n" + "".join(
+    f"{t},{1.0 if t > 5 else 0.0},{t % 3},{2.0 if t > 6 else 0.0}\n" for t in range(40)
+)
 
 
 def test_a_repeated_input_is_an_error(tmp_path, capsys, never_analysed):
@@ -532,9 +558,16 @@ def test_bins_out_of_range_is_an_error(tmp_path, capsys, good, never_analysed, b
     _one_error(*_analyse(capsys, good, *BASE, "--bins", bins, "--out", tmp_path / "out"), "--bins")
 
 
-@pytest.mark.parametrize("line, key", [('overwrite = "false"', "overwrite"), ('percentage = "10"', "percentage"),
-                                       ("samples = 2.5", "samples"), ('second-run = "no"', "second"),
-                                       ("n = true", "n")])
+@pytest.mark.parametrize(
+    "line, key",
+    [
+        ('overwrite = "false"', "overwrite"),
+        ('percentage = "10"', "percentage"),
+        ("samples = 2.5", "samples"),
+        ('second-run = "no"', "second"),
+        ("n = true", "n"),
+    ],
+)
 def test_config_values_of_the_wrong_type_are_errors_never_truthy(tmp_path, capsys, good, never_analysed, line, key):
     out = tmp_path / "results"
     # An earlier dynia run: were "false" read as true, the run would replace it.
@@ -565,6 +598,7 @@ def test_a_time_constant_range_below_the_grid_step_is_handled(tmp_path, capsys, 
 
 # ------------------------------------------------------------------ results that say what they found
 
+
 def test_success_prints_a_verdict_table(tmp_path, capsys, good):
     status, stdout, err = _analyse(capsys, good, *BASE, "--out", tmp_path / "out")
     _succeeded(status, stdout, err)
@@ -582,9 +616,31 @@ def test_success_prints_a_verdict_table(tmp_path, capsys, good):
 def test_heating_record_verdicts_as_in_the_readme(tmp_path, capsys):
     out = tmp_path / "heating"
     status, stdout, err = _analyse(
-        capsys, HEATING, "--time", "time", "--input", "u", "--output", "y", "--model", "first-order",
-        "--param", "K=0:40", "--param", "T=0:200", "--input-offset", "6", "--offset", "first", "--x0", "zero",
-        "--seed", "1", "--out", out)
+        capsys,
+        HEATING,
+        "--time",
+        "time",
+        "--input",
+        "u",
+        "--output",
+        "y",
+        "--model",
+        "first-order",
+        "--param",
+        "K=0:40",
+        "--param",
+        "T=0:200",
+        "--input-offset",
+        "6",
+        "--offset",
+        "first",
+        "--x0",
+        "zero",
+        "--seed",
+        "1",
+        "--out",
+        out,
+    )
     _succeeded(status, stdout, err)
     parameters = _summary(out)["parameters"]
     assert _summary(out)["settings"]["analysis"]["n_samples"] == 2000
@@ -602,9 +658,31 @@ def test_a_dead_time_peaking_at_the_record_start_is_suspect(tmp_path, capsys):
     data = _csv(tmp_path / "step.csv", time, u, y)
     out = tmp_path / "results"
     status, stdout, err = _analyse(
-        capsys, data, "--time", "time", "--input", "u", "--output", "y", "--model", "fopdt",
-        "--param", "K=0:5", "--param", "T=0:20", "--param", "theta=0:5", "--samples", "400", "--n", "3",
-        "--seed", "3", "--out", out)
+        capsys,
+        data,
+        "--time",
+        "time",
+        "--input",
+        "u",
+        "--output",
+        "y",
+        "--model",
+        "fopdt",
+        "--param",
+        "K=0:5",
+        "--param",
+        "T=0:20",
+        "--param",
+        "theta=0:5",
+        "--samples",
+        "400",
+        "--n",
+        "3",
+        "--seed",
+        "3",
+        "--out",
+        out,
+    )
     _succeeded(status, stdout, err)
     theta = _summary(out)["parameters"]["theta"]
     assert theta["time_of_max_ic"] == 3, theta
@@ -619,8 +697,16 @@ def test_no_plots_writes_no_figures(tmp_path, capsys, good):
     assert (out / "summary.json").exists() and (out / "ic.csv").exists()
 
 
-ANALYSE_ONLY = {"sampler", "bins", "conf_level", "flavour", "min_points", "second_run", "narrow_threshold",
-                "narrow_margin"}
+ANALYSE_ONLY = {
+    "sampler",
+    "bins",
+    "conf_level",
+    "flavour",
+    "min_points",
+    "second_run",
+    "narrow_threshold",
+    "narrow_margin",
+}
 IDENTIFY_ONLY = {"method", "ic_threshold", "mode", "held_out", "exclude_flagged", "starts"}
 
 

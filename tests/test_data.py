@@ -4,6 +4,7 @@ resample_events: exact on piecewise-linear signals, the grid it promises, one
 clear error per mistake. load_csv: every layout and kind of time, missing
 values, and one DataError line naming file, row and column per bad input.
 """
+
 import datetime
 import math
 import pathlib
@@ -34,8 +35,7 @@ def test_a_linear_signal_resamples_exactly(seed):
     if max(times_u[0], times_y[0]) >= min(times_u[-1], times_y[-1]):
         times_y = times_y + (times_u[0] - times_y[0])  # make them overlap
     dt = rng.uniform(0.05, 3)
-    grid, u, y = resample_events(times_u, slope_u * times_u + offset_u,
-                                 times_y, slope_y * times_y + offset_y, dt=dt)
+    grid, u, y = resample_events(times_u, slope_u * times_u + offset_u, times_y, slope_y * times_y + offset_y, dt=dt)
     np.testing.assert_allclose(u, slope_u * grid + offset_u, rtol=1e-12, atol=1e-9)
     np.testing.assert_allclose(y, slope_y * grid + offset_y, rtol=1e-12, atol=1e-9)
 
@@ -109,26 +109,29 @@ def test_a_step_logged_as_last_value_before_and_first_after_stays_a_step():
     np.testing.assert_array_equal(u[30:], 40)
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    (dict(times_u=[0, 1, 2], u=[1, 2]), r"times_u has 3 timestamps but u has 2 values"),
-    (dict(times_y=[0, 1], y=[1, 2, 3]), r"times_y has 2 timestamps but y has 3 values"),
-    (dict(times_u=[0, 1, 1]), r"times_u must be strictly increasing: times_u\[2\] = 1.0 follows times_u\[1\]"),
-    (dict(times_y=[0, 2, 1]), r"times_y must be strictly increasing: times_y\[2\] = 1.0"),
-    (dict(times_u=[0, np.nan, 2]), r"times_u holds a non-finite value at index 1"),
-    (dict(u=[1, 2, np.inf]), r"u holds a non-finite value at index 2"),
-    (dict(y=[np.nan, 2, 3]), r"y holds a non-finite value at index 0"),
-    (dict(times_y=[[0, 1, 2]]), r"times_y must be 1-D"),
-    (dict(u=[]), r"u is empty"),
-    (dict(dt=0), r"dt must lie strictly between 0 and inf; got 0"),
-    (dict(dt=-1.0), r"dt must lie strictly between 0 and inf; got -1.0"),
-    (dict(dt=np.nan), r"dt must be a finite number; got nan"),
-    (dict(dt="1"), r"dt must be a finite number; got '1'"),
-    (dict(times_y=[5, 6, 7]), r"the logs do not overlap in time: times_u spans \[0.0, 2.0\]"),
-    (dict(times_y=[2, 3, 4]), r"the logs do not overlap in time"),
-    (dict(start=-1), r"start = -1 lies outside \[0.0, 2.0\]"),
-    (dict(stop=3), r"stop = 3 lies outside"),
-    (dict(start=1.5, stop=1.0), r"start \(1.5\) must be before stop \(1.0\)"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(times_u=[0, 1, 2], u=[1, 2]), r"times_u has 3 timestamps but u has 2 values"),
+        (dict(times_y=[0, 1], y=[1, 2, 3]), r"times_y has 2 timestamps but y has 3 values"),
+        (dict(times_u=[0, 1, 1]), r"times_u must be strictly increasing: times_u\[2\] = 1.0 follows times_u\[1\]"),
+        (dict(times_y=[0, 2, 1]), r"times_y must be strictly increasing: times_y\[2\] = 1.0"),
+        (dict(times_u=[0, np.nan, 2]), r"times_u holds a non-finite value at index 1"),
+        (dict(u=[1, 2, np.inf]), r"u holds a non-finite value at index 2"),
+        (dict(y=[np.nan, 2, 3]), r"y holds a non-finite value at index 0"),
+        (dict(times_y=[[0, 1, 2]]), r"times_y must be 1-D"),
+        (dict(u=[]), r"u is empty"),
+        (dict(dt=0), r"dt must lie strictly between 0 and inf; got 0"),
+        (dict(dt=-1.0), r"dt must lie strictly between 0 and inf; got -1.0"),
+        (dict(dt=np.nan), r"dt must be a finite number; got nan"),
+        (dict(dt="1"), r"dt must be a finite number; got '1'"),
+        (dict(times_y=[5, 6, 7]), r"the logs do not overlap in time: times_u spans \[0.0, 2.0\]"),
+        (dict(times_y=[2, 3, 4]), r"the logs do not overlap in time"),
+        (dict(start=-1), r"start = -1 lies outside \[0.0, 2.0\]"),
+        (dict(stop=3), r"stop = 3 lies outside"),
+        (dict(start=1.5, stop=1.0), r"start \(1.5\) must be before stop \(1.0\)"),
+    ],
+)
 def test_mistakes_are_named(kwargs, message):
     arguments = dict(times_u=[0, 1, 2], u=[1, 2, 3], times_y=[0, 1, 2], y=[2, 4, 6])
     arguments.update(kwargs)
@@ -137,6 +140,7 @@ def test_mistakes_are_named(kwargs, message):
 
 
 # --- load_csv -----------------------------------------------------------------
+
 
 def _write(folder, text, name="data.csv", encoding="utf-8"):
     """Write ``text`` as the file ``name`` in ``folder``, byte for byte (no newline translation)."""
@@ -192,15 +196,15 @@ def test_irregular_rows_are_resampled_at_the_median_spacing(tmp_path):
     np.testing.assert_allclose(data.time, np.arange(7.0))
     np.testing.assert_allclose(data.u, data.time)
     np.testing.assert_allclose(data.y, 1 + 2 * data.time)
-    assert data.notes == ("resampled 5 irregular rows onto a 1 s grid by linear interpolation "
-                          "(dt inferred: the median spacing of the rows)",)
-    assert _load(path, dt=2).notes == ("resampled 5 irregular rows onto a 2 s grid by linear interpolation "
-                                       "(dt given)",)
+    assert data.notes == (
+        "resampled 5 irregular rows onto a 1 s grid by linear interpolation "
+        "(dt inferred: the median spacing of the rows)",
+    )
+    assert _load(path, dt=2).notes == ("resampled 5 irregular rows onto a 2 s grid by linear interpolation (dt given)",)
 
 
 def test_iso_timestamps_with_z_are_utc_and_start_keeps_the_first(tmp_path):
-    path = _write(tmp_path, "time,u,y\n2024-05-01T12:00:00Z,1,2\n2024-05-01T12:00:30Z,1,2\n"
-                            "2024-05-01T12:01:00Z,1,2\n")
+    path = _write(tmp_path, "time,u,y\n2024-05-01T12:00:00Z,1,2\n2024-05-01T12:00:30Z,1,2\n2024-05-01T12:01:00Z,1,2\n")
     data = _load(path)
     assert data.dt == 30.0
     np.testing.assert_array_equal(data.time, [0, 30, 60])
@@ -208,28 +212,34 @@ def test_iso_timestamps_with_z_are_utc_and_start_keeps_the_first(tmp_path):
 
 
 def test_timestamps_with_offsets_are_compared_across_a_daylight_saving_change(tmp_path):
-    path = _write(tmp_path, "time,u,y\n2024-03-31T01:59:00+01:00,1,2\n2024-03-31T03:00:00+02:00,1,2\n"
-                            "2024-03-31T03:01:00+02:00,1,2\n")
+    path = _write(
+        tmp_path,
+        "time,u,y\n2024-03-31T01:59:00+01:00,1,2\n2024-03-31T03:00:00+02:00,1,2\n2024-03-31T03:01:00+02:00,1,2\n",
+    )
     data = _load(path)
     assert data.dt == 60.0 and data.notes == ()
     assert data.start.utcoffset() == datetime.timedelta(hours=1)
 
 
 def test_naive_timestamps_with_a_space_and_fractions_of_a_second(tmp_path):
-    path = _write(tmp_path, "time,u,y\n2024-01-01 23:59:59.500,1,2\n2024-01-02 00:00:00.000,1,2\n"
-                            "2024-01-02 00:00:00.500,1,2\n")
+    path = _write(
+        tmp_path, "time,u,y\n2024-01-01 23:59:59.500,1,2\n2024-01-02 00:00:00.000,1,2\n2024-01-02 00:00:00.500,1,2\n"
+    )
     data = _load(path)
     assert data.dt == 0.5
     assert data.start == datetime.datetime(2024, 1, 1, 23, 59, 59, 500000)
 
 
-@pytest.mark.parametrize("text", [
-    "time;u;y\n0;1;2\n1;3;4\n",
-    "time\tu\ty\n0\t1\t2\n1\t3\t4\n",
-    '"time";"u";"y"\r\n"0";"1";"2"\r\n"1";"3";"4"\r\n',
-    '\ufefftime,u,y\n0,1,2\n1,3,4\n',  # Excel's "CSV UTF-8" starts with a byte order mark
-    "\n\ntime,u,y\n\n0,1,2\n1,3,4\n\n\n,,\n",
-])
+@pytest.mark.parametrize(
+    "text",
+    [
+        "time;u;y\n0;1;2\n1;3;4\n",
+        "time\tu\ty\n0\t1\t2\n1\t3\t4\n",
+        '"time";"u";"y"\r\n"0";"1";"2"\r\n"1";"3";"4"\r\n',
+        "\ufefftime,u,y\n0,1,2\n1,3,4\n",  # Excel's "CSV UTF-8" starts with a byte order mark
+        "\n\ntime,u,y\n\n0,1,2\n1,3,4\n\n\n,,\n",
+    ],
+)
 def test_separators_quotes_byte_order_mark_and_blank_rows(tmp_path, text):
     data = _load(_write(tmp_path, text))
     np.testing.assert_array_equal(data.u, [1, 3])
@@ -256,8 +266,10 @@ def test_missing_values_fill_the_input_and_stay_nan_in_the_output(tmp_path, toke
     data = _load(path)
     np.testing.assert_array_equal(data.u, [1, 1, 2, 3, 3])  # ends held, the middle interpolated
     np.testing.assert_array_equal(data.y, [np.nan, 1, np.nan, 3, 4])
-    assert data.notes == ("filled 3 missing input values by linear interpolation between the nearest present values",
-                          "2 output values missing, left as NaN in y")
+    assert data.notes == (
+        "filled 3 missing input values by linear interpolation between the nearest present values",
+        "2 output values missing, left as NaN in y",
+    )
 
 
 def test_a_row_shorter_than_the_header_misses_its_last_cells(tmp_path):
@@ -320,9 +332,11 @@ def test_a_missing_stretch_in_the_middle_of_a_wide_file_is_left_missing_in_y_onl
     np.testing.assert_array_equal(data.y[~missing], 2 * data.time[~missing])
     np.testing.assert_array_equal(data.u, data.time)  # the input is still filled, finite
     assert data.gaps == ((100, 200),)
-    assert data.notes == ("resampled 200 irregular rows onto a 1 s grid by linear interpolation (dt inferred: the "
-                          "median spacing of the rows)",
-                          "gap of 101 s with no rows from 99 to 200: 100 grid points left missing in y")
+    assert data.notes == (
+        "resampled 200 irregular rows onto a 1 s grid by linear interpolation (dt inferred: the "
+        "median spacing of the rows)",
+        "gap of 101 s with no rows from 99 to 200: 100 grid points left missing in y",
+    )
     bridged = _load(path, max_gap=None)  # the old behaviour: interpolate across
     np.testing.assert_array_equal(bridged.y, 2 * bridged.time)
     assert bridged.gaps == () and len(bridged.notes) == 1
@@ -333,8 +347,9 @@ def test_a_gap_note_names_iso_timestamps_as_the_file_wrote_them(tmp_path):
     stamps += [f"2024-05-01T13:00:{second:02d}" for second in range(11)]
     data = _load(_write(tmp_path, "time,u,y\n" + "".join(f"{stamp},1,2\n" for stamp in stamps)))
     assert data.dt == 1.0
-    assert data.notes[-1] == ("gap of 3600 s with no rows from 2024-05-01T12:00:00 to 2024-05-01T13:00:00: "
-                              "3599 grid points left missing in y")
+    assert data.notes[-1] == (
+        "gap of 3600 s with no rows from 2024-05-01T12:00:00 to 2024-05-01T13:00:00: 3599 grid points left missing in y"
+    )
     assert data.gaps == ((11, 3610),) and int(np.isnan(data.y).sum()) == 3599
     zoned = _load(_write(tmp_path, "time,u,y\n" + "".join(f"{stamp}Z,1,2\n" for stamp in stamps)))
     assert "from 2024-05-01T12:00:00Z to 2024-05-01T13:00:00Z:" in zoned.notes[-1]
@@ -347,8 +362,10 @@ def test_more_than_five_gaps_are_listed_up_to_five_and_counted(tmp_path):
     assert data.dt == 1.0
     assert data.gaps == tuple((20 * k + 11, 20 * k + 20) for k in range(7))
     gap_notes = [note for note in data.notes if note.startswith("gap of")]
-    assert gap_notes == [f"gap of 10 s with no rows from {20 * k + 10} to {20 * k + 20}: 9 grid points left "
-                         "missing in y" for k in range(5)]
+    assert gap_notes == [
+        f"gap of 10 s with no rows from {20 * k + 10} to {20 * k + 20}: 9 grid points left missing in y"
+        for k in range(5)
+    ]
     assert data.notes[-1] == "and 2 more gaps longer than 5 grid steps (5 s): 18 more grid points left missing in y"
 
 
@@ -374,14 +391,16 @@ def test_gaps_in_either_event_log_leave_the_output_missing(tmp_path):
     np.testing.assert_array_equal(data.u, data.time)
     assert data.notes[-2:] == (
         "gap of 20 s with no rows in the output log (column 'y') from 20 to 40: 19 grid points left missing in y",
-        "gap of 10 s with no rows in the input log (column 'u') from 45 to 55: 9 grid points left missing in y")
+        "gap of 10 s with no rows in the input log (column 'u') from 45 to 55: 9 grid points left missing in y",
+    )
     bridged = _load(inputs, output_path=outputs, max_gap=None)
     np.testing.assert_array_equal(bridged.y, -bridged.time)
 
 
 def test_overlapping_gaps_of_two_tags_merge_into_one_range(tmp_path):
-    records = [(t, "in", t) for t in range(61) if not 20 < t < 35] + [(t, "out", 1) for t in range(61)
-                                                                      if not 30 < t < 45]
+    records = [(t, "in", t) for t in range(61) if not 20 < t < 35] + [
+        (t, "out", 1) for t in range(61) if not 30 < t < 45
+    ]
     records.sort(key=lambda record: record[0])
     path = _write(tmp_path, "time,tag,value\n" + "".join("{},{},{}\n".format(*record) for record in records))
     data = load_csv(path, time="time", input="in", output="out", long_format=True)
@@ -390,7 +409,8 @@ def test_overlapping_gaps_of_two_tags_merge_into_one_range(tmp_path):
     np.testing.assert_array_equal(np.flatnonzero(np.isnan(data.y)), np.arange(21, 45))
     assert [note.split(":")[0] for note in data.notes if note.startswith("gap")] == [
         "gap of 15 s with no rows in the input log (tag 'in') from 20 to 35",
-        "gap of 15 s with no rows in the output log (tag 'out') from 30 to 45"]
+        "gap of 15 s with no rows in the output log (tag 'out') from 30 to 45",
+    ]
 
 
 def test_a_burst_of_closely_spaced_rows_does_not_shrink_the_inferred_dt(tmp_path):
@@ -408,9 +428,12 @@ def test_a_burst_of_closely_spaced_rows_does_not_shrink_the_inferred_dt(tmp_path
 def test_a_grid_of_too_many_steps_is_refused_naming_dt(tmp_path):
     # most spacings are a microsecond: the inferred dt would need 1e8 steps over the 100 s span
     path = _write(tmp_path, "time,u,y\n0,1,2\n1e-06,1,2\n2e-06,1,2\n3e-06,1,2\n100,1,2\n")
-    with pytest.raises(DataError, match=r"data\.csv: the grid would have 10\d \d{3} \d{3} steps at dt = 1e-06 s "
-                                        r"\(inferred: the median spacing of the timestamps\) over the 100 s the data "
-                                        r"span \(limit 10 000 000\); pass a larger --dt / dt=$"):
+    with pytest.raises(
+        DataError,
+        match=r"data\.csv: the grid would have 10\d \d{3} \d{3} steps at dt = 1e-06 s "
+        r"\(inferred: the median spacing of the timestamps\) over the 100 s the data "
+        r"span \(limit 10 000 000\); pass a larger --dt / dt=$",
+    ):
         _load(path)
     assert _load(path, dt=1, max_gap=None).time.size == 101
 
@@ -428,13 +451,17 @@ def test_two_files_are_two_event_logs_on_their_common_span(tmp_path):
     assert data.notes == (
         f"resampled the input log (column 'valve' of {inputs}, 4 rows) and the output log (column 'level' of "
         f"{outputs}, 4 rows) onto a common 2 s grid from 2 s to 12 s by linear interpolation "
-        "(dt inferred: the median spacing of both logs' timestamps)",)
+        "(dt inferred: the median spacing of both logs' timestamps)",
+    )
 
 
 def test_two_files_with_timestamps_count_from_the_earlier_first_record(tmp_path):
     inputs = _write(tmp_path, "time,u\n2024-05-01T00:00:10,1\n2024-05-01T00:01:10,1\n", name="u.csv")
-    outputs = _write(tmp_path, "time,y\n2024-05-01T00:00:00,2\n2024-05-01T00:00:20,4\n2024-05-01T00:00:40,\n"
-                               "2024-05-01T00:01:00,8\n", name="y.csv")
+    outputs = _write(
+        tmp_path,
+        "time,y\n2024-05-01T00:00:00,2\n2024-05-01T00:00:20,4\n2024-05-01T00:00:40,\n2024-05-01T00:01:00,8\n",
+        name="y.csv",
+    )
     data = load_csv(inputs, time="time", input="u", output="y", output_path=outputs, dt=10, max_gap=None)
     assert data.start == datetime.datetime(2024, 5, 1)
     np.testing.assert_allclose(data.time, [10, 20, 30, 40, 50, 60])
@@ -445,15 +472,18 @@ def test_two_files_with_timestamps_count_from_the_earlier_first_record(tmp_path)
 
 
 def test_long_format_reads_each_tag_as_a_log(tmp_path):
-    path = _write(tmp_path, "time,tag,value,unit\n"
-                            "2024-05-01T00:00:00Z,FIC101,1,%\n"
-                            "2024-05-01T00:00:00Z,TI204,20,degC\n"
-                            "2024-05-01T00:00:05Z,PI300,abc,bar\n"  # another tag: never parsed
-                            "2024-05-01T00:00:10Z,FIC101,3,%\n"
-                            "2024-05-01T00:00:20Z,TI204,22,degC\n"
-                            "2024-05-01T00:00:30Z,TI204,NA,degC\n"
-                            "2024-05-01T00:00:40Z,FIC101,,%\n"
-                            "2024-05-01T00:00:40Z,TI204,24,degC\n")
+    path = _write(
+        tmp_path,
+        "time,tag,value,unit\n"
+        "2024-05-01T00:00:00Z,FIC101,1,%\n"
+        "2024-05-01T00:00:00Z,TI204,20,degC\n"
+        "2024-05-01T00:00:05Z,PI300,abc,bar\n"  # another tag: never parsed
+        "2024-05-01T00:00:10Z,FIC101,3,%\n"
+        "2024-05-01T00:00:20Z,TI204,22,degC\n"
+        "2024-05-01T00:00:30Z,TI204,NA,degC\n"
+        "2024-05-01T00:00:40Z,FIC101,,%\n"
+        "2024-05-01T00:00:40Z,TI204,24,degC\n",
+    )
     data = load_csv(path, time="time", input="FIC101", output="TI204", long_format=True)
     assert data.dt == 10.0
     np.testing.assert_allclose(data.time, [0, 10, 20, 30, 40])
@@ -461,14 +491,15 @@ def test_long_format_reads_each_tag_as_a_log(tmp_path):
     np.testing.assert_allclose(data.y, [20, 21, 22, np.nan, 24])
     assert data.start == datetime.datetime(2024, 5, 1, tzinfo=datetime.timezone.utc)
     assert data.notes[0] == "filled 1 missing input value by linear interpolation between the nearest present values"
-    assert data.notes[1].startswith(f"resampled the input log (tag 'FIC101' of {path}, 3 rows) and the output log "
-                                    f"(tag 'TI204' of {path}, 4 rows) onto a common 10 s grid")
+    assert data.notes[1].startswith(
+        f"resampled the input log (tag 'FIC101' of {path}, 3 rows) and the output log "
+        f"(tag 'TI204' of {path}, 4 rows) onto a common 10 s grid"
+    )
 
 
 def test_long_format_with_other_column_names(tmp_path):
     path = _write(tmp_path, "t;name;v\n0;a;1\n0;b;2\n1;a;3\n2;b;6\n")
-    data = load_csv(path, time="t", input="a", output="b", long_format=True,
-                    tag_column="name", value_column="v", dt=1)
+    data = load_csv(path, time="t", input="a", output="b", long_format=True, tag_column="name", value_column="v", dt=1)
     np.testing.assert_allclose(data.u, [1, 3])
     np.testing.assert_allclose(data.y, [2, 4])
 
@@ -495,67 +526,148 @@ _SIXTEEN_ROWS = "time,u,y\n" + "".join(f"{t},1,2\n" for t in range(15))
 _LONG = {"long_format": True, "input": "a", "output": "b"}
 
 
-@pytest.mark.parametrize("text, kwargs, message", [
-    ("", {}, r"data\.csv: the file is empty; expected a header row and at least 2 data rows$"),
-    ("  \n\n \n", {}, r"data\.csv: the file is empty"),
-    ("time,u,y\n", {}, r"data\.csv: the file has a header \(row 1\) but no data rows; expected at least 2$"),
-    ("time,u,y\n\n,,\n", {}, r"the file has a header \(row 1\) but no data rows"),
-    ("time,u,y\n0,1,2\n", {}, r"data\.csv: the file has only one data row \(row 2\); expected at least 2"),
-    (_ROWS, {"output": "T"}, r"data\.csv: row 1 \(the header\) has no column 'T' \(given as output\); "
-                             r"available columns: 'time', 'u', 'y'$"),
-    (_ROWS, {"time": "t"}, r"no column 't' \(given as time\); available columns: 'time', 'u', 'y'$"),
-    ("0,1,2\n1,1,2\n2,1,2\n", {}, r"row 1 \(the header\) has no column 'time' .* available columns: '0', '1', '2' "
-                                  r"\(they are numbers: the file seems to lack a header row naming the columns\)$"),
-    ("time,u,y,y\n0,1,2,3\n1,1,2,3\n", {}, r"row 1 \(the header\) names 2 columns 'y'; expected one"),
-    (_SIXTEEN_ROWS + "15,1,abc\n", {}, r"data\.csv: row 17, column 'y': 'abc' is not a number; expected a number, "
-                                       r"or an empty cell, NaN, NA or null where the value is missing$"),
-    ("time;u;y\n0;1,5;2\n1;1;2\n", {}, r"row 2, column 'u': '1,5' is not a number \(decimals need a point"),
-    ("time,u,y\n0,1,2\n1,inf,2\n", {}, r"row 3, column 'u': 'inf' is not a finite number"),
-    ("time,u,y\n0,1,2\n1,1,2\n1.0,1,2\n", {}, r"row 4, column 'time': duplicate timestamp '1\.0', already on row 3; "
-                                              r"expected strictly increasing times$"),
-    ("time,u,y\n2024-01-01T00:00:01,1,2\n2024-01-01T00:00:01.000,1,2\n", {},
-     r"row 3, column 'time': duplicate timestamp"),
-    ("time,u,y\n0,1,2\n\n5,1,2\n3,1,2\n", {}, r"row 5, column 'time': '3' is earlier than '5' on row 4; "
-                                              r"expected strictly increasing times$"),
-    ("time,u,y\n0,1,2\ninf,1,2\n", {}, r"row 3, column 'time': 'inf' is not a finite time"),
-    ("time,u,y\n-1e308,1,2\n1e308,1,2\n", {}, r"row 3, column 'time': '1e308' is so far from '-1e308' on row 2 "
-                                                r"that the seconds between them overflow"),
-    ("time,u,y\n0,1,2\n1,1," + "9" * 200_000 + "\n", {}, r"data\.csv: row 3 cannot be read as CSV \(field larger"),
-    ("time,u,y\n0,1,2\n,1,2\n", {}, r"row 3, column 'time': the time is missing \(''\); expected a number of seconds "
-                                    r"or an ISO 8601 timestamp$"),
-    ("time,u,y\n0,1,2\nNaN,1,2\n", {}, r"row 3, column 'time': the time is missing \('NaN'\)"),
-    ("time,u,y\n0,1,2\n01.02.2024 10:00,1,2\n", {}, r"row 3, column 'time': '01\.02\.2024 10:00' is neither a "
-                                                    r"number of seconds nor an ISO 8601 timestamp"),
-    ("time,u,y\n0,1,2\n2024-01-01T00:00:00,1,2\n", {},
-     r"row 3, column 'time': '2024-01-01T00:00:00' is a timestamp without UTC offset, but row 2 holds a number "
-     r"of seconds \('0'\); expected one kind of time throughout$"),
-    ("time,u,y\n2024-01-01T00:00:00,1,2\n2024-01-01T00:00:01Z,1,2\n", {},
-     r"row 3, column 'time': '2024-01-01T00:00:01Z' is a timestamp with UTC offset, but row 2 holds a "
-     r"timestamp without UTC offset"),
-    ("time,u,y\n0,,2\n1,NA,2\n", {}, r"data\.csv: column 'u' has no value in rows 2 to 3; expected at least one "
-                                     r"number for the input$"),
-    ("time,u,y\n0,1,\n1,1,null\n", {}, r"column 'y' has no value in rows 2 to 3; expected at least one number "
-                                       r"for the output$"),
-    ("time,u,y\n0,1,2\n1,1,2,5\n", {}, r"data\.csv: row 3 has 4 cells but the header \(row 1\) names 3 columns; "
-                                       r"expected one cell per column"),
-    (_ROWS, {"dt": 5}, r"data\.csv: dt = 5 s is longer than the 1 s the data span; expected a dt that leaves at least "
-                       r"2 grid points$"),
-    (_ROWS, {"dt": 1e-8}, r"data\.csv: the grid would have 100 000 001 steps at dt = 1e-08 s over the 1 s the data "
-                          r"span \(limit 10 000 000\); pass a larger --dt / dt=$"),
-    ("time,tag,value\n0,a,1\n1,b,2\n2,a,3\n3,b,4\n", {**_LONG, "output": "c"},
-     r"data\.csv: column 'tag' holds no tag 'c' \(given as output\) in rows 2 to 5; tags present: 'a', 'b'$"),
-    ("time,tag,value\n0,a,1\n1,b,2\n2,a,3\n", _LONG, r"data\.csv: tag 'b' has only one data row \(row 3\)"),
-    ("time,tag,value\n0,a,1\n1,b,2\n2,a,3\n1,b,x\n", _LONG, r"row 5, column 'time': duplicate timestamp '1', "
-                                                            r"already on row 3"),
-    ("time,tag,value\n0,a,1\n1,b,2\n3,a,3\n2,a,4\n", _LONG, r"row 5, column 'time': '2' is earlier than '3' on row 4"),
-    ("time,tag,value\n0,a,1\n1,b,2\n2,a,3\n3,b,x\n", _LONG, r"row 5, column 'value': 'x' is not a number"),
-    ("time,tag,value\n0,a,1\n1,a,2\n5,b,2\n6,b,4\n", _LONG,
-     r"the output log \(tag 'b', 5 to 6\) does not overlap the input log \(tag 'a', 0 to 1\) of .*data\.csv in "
-     r"time; expected a stretch where both have data$"),
-    ("time,tag,value\n0,a,1\n1,a,2\n2024-01-01T00:00:00,b,2\n2024-01-01T00:00:01,b,4\n", _LONG,
-     r"row 4, column 'time': '2024-01-01T00:00:00' is a timestamp without UTC offset, but row 2 of .*data\.csv "
-     r"\(tag 'a'\) holds a number of seconds \('0'\); expected one kind of time for both signals$"),
-])
+@pytest.mark.parametrize(
+    "text, kwargs, message",
+    [
+        ("", {}, r"data\.csv: the file is empty; expected a header row and at least 2 data rows$"),
+        ("  \n\n \n", {}, r"data\.csv: the file is empty"),
+        ("time,u,y\n", {}, r"data\.csv: the file has a header \(row 1\) but no data rows; expected at least 2$"),
+        ("time,u,y\n\n,,\n", {}, r"the file has a header \(row 1\) but no data rows"),
+        ("time,u,y\n0,1,2\n", {}, r"data\.csv: the file has only one data row \(row 2\); expected at least 2"),
+        (
+            _ROWS,
+            {"output": "T"},
+            r"data\.csv: row 1 \(the header\) has no column 'T' \(given as output\); "
+            r"available columns: 'time', 'u', 'y'$",
+        ),
+        (_ROWS, {"time": "t"}, r"no column 't' \(given as time\); available columns: 'time', 'u', 'y'$"),
+        (
+            "0,1,2\n1,1,2\n2,1,2\n",
+            {},
+            r"row 1 \(the header\) has no column 'time' .* available columns: '0', '1', '2' "
+            r"\(they are numbers: the file seems to lack a header row naming the columns\)$",
+        ),
+        ("time,u,y,y\n0,1,2,3\n1,1,2,3\n", {}, r"row 1 \(the header\) names 2 columns 'y'; expected one"),
+        (
+            _SIXTEEN_ROWS + "15,1,abc\n",
+            {},
+            r"data\.csv: row 17, column 'y': 'abc' is not a number; expected a number, "
+            r"or an empty cell, NaN, NA or null where the value is missing$",
+        ),
+        ("time;u;y\n0;1,5;2\n1;1;2\n", {}, r"row 2, column 'u': '1,5' is not a number \(decimals need a point"),
+        ("time,u,y\n0,1,2\n1,inf,2\n", {}, r"row 3, column 'u': 'inf' is not a finite number"),
+        (
+            "time,u,y\n0,1,2\n1,1,2\n1.0,1,2\n",
+            {},
+            r"row 4, column 'time': duplicate timestamp '1\.0', already on row 3; "
+            r"expected strictly increasing times$",
+        ),
+        (
+            "time,u,y\n2024-01-01T00:00:01,1,2\n2024-01-01T00:00:01.000,1,2\n",
+            {},
+            r"row 3, column 'time': duplicate timestamp",
+        ),
+        (
+            "time,u,y\n0,1,2\n\n5,1,2\n3,1,2\n",
+            {},
+            r"row 5, column 'time': '3' is earlier than '5' on row 4; "
+            r"expected strictly increasing times$",
+        ),
+        ("time,u,y\n0,1,2\ninf,1,2\n", {}, r"row 3, column 'time': 'inf' is not a finite time"),
+        (
+            "time,u,y\n-1e308,1,2\n1e308,1,2\n",
+            {},
+            r"row 3, column 'time': '1e308' is so far from '-1e308' on row 2 "
+            r"that the seconds between them overflow",
+        ),
+        ("time,u,y\n0,1,2\n1,1," + "9" * 200_000 + "\n", {}, r"data\.csv: row 3 cannot be read as CSV \(field larger"),
+        (
+            "time,u,y\n0,1,2\n,1,2\n",
+            {},
+            r"row 3, column 'time': the time is missing \(''\); expected a number of seconds "
+            r"or an ISO 8601 timestamp$",
+        ),
+        ("time,u,y\n0,1,2\nNaN,1,2\n", {}, r"row 3, column 'time': the time is missing \('NaN'\)"),
+        (
+            "time,u,y\n0,1,2\n01.02.2024 10:00,1,2\n",
+            {},
+            r"row 3, column 'time': '01\.02\.2024 10:00' is neither a "
+            r"number of seconds nor an ISO 8601 timestamp",
+        ),
+        (
+            "time,u,y\n0,1,2\n2024-01-01T00:00:00,1,2\n",
+            {},
+            r"row 3, column 'time': '2024-01-01T00:00:00' is a timestamp without UTC offset, but row 2 holds a number "
+            r"of seconds \('0'\); expected one kind of time throughout$",
+        ),
+        (
+            "time,u,y\n2024-01-01T00:00:00,1,2\n2024-01-01T00:00:01Z,1,2\n",
+            {},
+            r"row 3, column 'time': '2024-01-01T00:00:01Z' is a timestamp with UTC offset, but row 2 holds a "
+            r"timestamp without UTC offset",
+        ),
+        (
+            "time,u,y\n0,,2\n1,NA,2\n",
+            {},
+            r"data\.csv: column 'u' has no value in rows 2 to 3; expected at least one "
+            r"number for the input$",
+        ),
+        (
+            "time,u,y\n0,1,\n1,1,null\n",
+            {},
+            r"column 'y' has no value in rows 2 to 3; expected at least one number "
+            r"for the output$",
+        ),
+        (
+            "time,u,y\n0,1,2\n1,1,2,5\n",
+            {},
+            r"data\.csv: row 3 has 4 cells but the header \(row 1\) names 3 columns; "
+            r"expected one cell per column",
+        ),
+        (
+            _ROWS,
+            {"dt": 5},
+            r"data\.csv: dt = 5 s is longer than the 1 s the data span; expected a dt that leaves at least "
+            r"2 grid points$",
+        ),
+        (
+            _ROWS,
+            {"dt": 1e-8},
+            r"data\.csv: the grid would have 100 000 001 steps at dt = 1e-08 s over the 1 s the data "
+            r"span \(limit 10 000 000\); pass a larger --dt / dt=$",
+        ),
+        (
+            "time,tag,value\n0,a,1\n1,b,2\n2,a,3\n3,b,4\n",
+            {**_LONG, "output": "c"},
+            r"data\.csv: column 'tag' holds no tag 'c' \(given as output\) in rows 2 to 5; tags present: 'a', 'b'$",
+        ),
+        ("time,tag,value\n0,a,1\n1,b,2\n2,a,3\n", _LONG, r"data\.csv: tag 'b' has only one data row \(row 3\)"),
+        (
+            "time,tag,value\n0,a,1\n1,b,2\n2,a,3\n1,b,x\n",
+            _LONG,
+            r"row 5, column 'time': duplicate timestamp '1', "
+            r"already on row 3",
+        ),
+        (
+            "time,tag,value\n0,a,1\n1,b,2\n3,a,3\n2,a,4\n",
+            _LONG,
+            r"row 5, column 'time': '2' is earlier than '3' on row 4",
+        ),
+        ("time,tag,value\n0,a,1\n1,b,2\n2,a,3\n3,b,x\n", _LONG, r"row 5, column 'value': 'x' is not a number"),
+        (
+            "time,tag,value\n0,a,1\n1,a,2\n5,b,2\n6,b,4\n",
+            _LONG,
+            r"the output log \(tag 'b', 5 to 6\) does not overlap the input log \(tag 'a', 0 to 1\) of .*data\.csv in "
+            r"time; expected a stretch where both have data$",
+        ),
+        (
+            "time,tag,value\n0,a,1\n1,a,2\n2024-01-01T00:00:00,b,2\n2024-01-01T00:00:01,b,4\n",
+            _LONG,
+            r"row 4, column 'time': '2024-01-01T00:00:00' is a timestamp without UTC offset, but row 2 of .*data\.csv "
+            r"\(tag 'a'\) holds a number of seconds \('0'\); expected one kind of time for both signals$",
+        ),
+    ],
+)
 def test_bad_input_is_one_line_naming_file_row_and_column(tmp_path, text, kwargs, message):
     path = _write(tmp_path, text)
     with pytest.raises(DataError, match=message) as caught:
@@ -584,8 +696,11 @@ def test_dt_must_be_a_finite_number_above_zero(tmp_path, dt):
 
 @pytest.mark.parametrize("max_gap", [1, 0.5, 0, -3, math.nan, -math.inf, "5", True])
 def test_max_gap_must_be_a_number_above_one_or_none(tmp_path, max_gap):
-    with pytest.raises(SettingsError, match=r"^max_gap must be a number of grid steps > 1, or None to interpolate "
-                                            r"across stretches without rows of any length; got ") as caught:
+    with pytest.raises(
+        SettingsError,
+        match=r"^max_gap must be a number of grid steps > 1, or None to interpolate "
+        r"across stretches without rows of any length; got ",
+    ) as caught:
         _load(_write(tmp_path, _ROWS), max_gap=max_gap)
     assert caught.value.setting == "max_gap"
 
@@ -593,12 +708,18 @@ def test_max_gap_must_be_a_number_above_one_or_none(tmp_path, max_gap):
 def test_errors_in_the_output_file_name_that_file(tmp_path):
     inputs = _write(tmp_path, "time,u\n0,1\n1,2\n", name="u.csv")
     outputs = _write(tmp_path, "stamp,y\n0,1\n1,2\n", name="y.csv")
-    with pytest.raises(DataError, match=r"y\.csv: row 1 \(the header\) has no column 'time' \(given as time\); "
-                                        r"available columns: 'stamp', 'y'$"):
+    with pytest.raises(
+        DataError,
+        match=r"y\.csv: row 1 \(the header\) has no column 'time' \(given as time\); "
+        r"available columns: 'stamp', 'y'$",
+    ):
         _load(inputs, output_path=outputs)
     outputs = _write(tmp_path, "time,y\n2024-01-01T00:00:00Z,1\n2024-01-01T00:00:01Z,2\n", name="y.csv")
-    with pytest.raises(DataError, match=r"y\.csv: row 2, column 'time': '2024-01-01T00:00:00Z' is a timestamp with "
-                                        r"UTC offset, but row 2 of .*u\.csv \(column 'u'\) holds a number of seconds"):
+    with pytest.raises(
+        DataError,
+        match=r"y\.csv: row 2, column 'time': '2024-01-01T00:00:00Z' is a timestamp with "
+        r"UTC offset, but row 2 of .*u\.csv \(column 'u'\) holds a number of seconds",
+    ):
         _load(inputs, output_path=outputs)
     outputs = _write(tmp_path, "time,y\n0,1\n", name="y.csv")
     with pytest.raises(DataError, match=r"y\.csv: column 'y' has only one data row \(row 2\)"):
@@ -611,37 +732,51 @@ _FINITE = st.floats(-1e6, 1e6, allow_nan=False, allow_infinity=False)
 
 
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(start=st.floats(-1e4, 1e4), spacing=st.floats(1e-3, 1e3),
-       values=st.lists(st.tuples(_FINITE, st.none() | _FINITE), min_size=2, max_size=40)
-       .filter(lambda rows: any(output is not None for _, output in rows)))
+@given(
+    start=st.floats(-1e4, 1e4),
+    spacing=st.floats(1e-3, 1e3),
+    values=st.lists(st.tuples(_FINITE, st.none() | _FINITE), min_size=2, max_size=40).filter(
+        lambda rows: any(output is not None for _, output in rows)
+    ),
+)
 def test_a_uniform_numeric_csv_round_trips_exactly(tmp_path, start, spacing, values):
     u = np.array([value for value, _ in values])
     y = np.array([np.nan if value is None else value for _, value in values])
     times = start + spacing * np.arange(u.size)
-    rows = "".join(f"{float(t)!r},{a!r},{'' if b is None else repr(b)}\n"
-                   for t, (a, b) in zip(times, values, strict=True))
+    rows = "".join(
+        f"{float(t)!r},{a!r},{'' if b is None else repr(b)}\n" for t, (a, b) in zip(times, values, strict=True)
+    )
     data = _load(_write(tmp_path, "time,u,y\n" + rows))
     np.testing.assert_array_equal(data.u, u)
     np.testing.assert_array_equal(data.y, y)
     np.testing.assert_allclose(data.dt, spacing, rtol=1e-6)
     np.testing.assert_array_equal(data.time, data.dt * np.arange(u.size))
     missing = int(np.isnan(y).sum())
-    assert data.notes == ((f"{missing} output value{'s' * (missing != 1)} missing, left as NaN in y",)
-                          if missing else ())
+    assert data.notes == (
+        (f"{missing} output value{'s' * (missing != 1)} missing, left as NaN in y",) if missing else ()
+    )
 
 
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(gaps=st.lists(st.integers(1, 5_000_000), min_size=1, max_size=30),  # microseconds, up to 5 s
-       slopes=st.tuples(st.floats(-10, 10), st.floats(-10, 10)), offsets=st.tuples(_FINITE, _FINITE),
-       dt=st.floats(0.01, 2.0), zone=st.sampled_from(["", "Z", "+05:30", "-08:00"]))
+@given(
+    gaps=st.lists(st.integers(1, 5_000_000), min_size=1, max_size=30),  # microseconds, up to 5 s
+    slopes=st.tuples(st.floats(-10, 10), st.floats(-10, 10)),
+    offsets=st.tuples(_FINITE, _FINITE),
+    dt=st.floats(0.01, 2.0),
+    zone=st.sampled_from(["", "Z", "+05:30", "-08:00"]),
+)
 def test_irregular_timestamps_of_a_linear_signal_resample_exactly(tmp_path, gaps, slopes, offsets, dt, zone):
     first = datetime.datetime(2024, 5, 1, 12, 0, 0)
     seconds = np.r_[0, np.cumsum(gaps)] / 1e6
-    stamps = [(first + datetime.timedelta(microseconds=int(micro))).isoformat(timespec="microseconds") + zone
-              for micro in np.r_[0, np.cumsum(gaps)]]
+    stamps = [
+        (first + datetime.timedelta(microseconds=int(micro))).isoformat(timespec="microseconds") + zone
+        for micro in np.r_[0, np.cumsum(gaps)]
+    ]
     (slope_u, slope_y), (offset_u, offset_y) = slopes, offsets
-    rows = "".join(f"{stamp},{float(offset_u + slope_u * t)!r},{float(offset_y + slope_y * t)!r}\n"
-                   for stamp, t in zip(stamps, seconds, strict=True))
+    rows = "".join(
+        f"{stamp},{float(offset_u + slope_u * t)!r},{float(offset_y + slope_y * t)!r}\n"
+        for stamp, t in zip(stamps, seconds, strict=True)
+    )
     if seconds[-1] < dt:
         dt = seconds[-1]  # the grid needs two points
     data = _load(_write(tmp_path, "time,u,y\n" + rows), dt=dt, max_gap=None)
@@ -674,8 +809,9 @@ def test_a_long_table_reads_as_the_same_two_logs_in_two_files(tmp_path, data):
     times_y = np.cumsum(data.draw(st.lists(st.integers(1, 9), min_size=2, max_size=15)))
     if max(times_u[0], times_y[0]) >= min(times_u[-1], times_y[-1]):
         times_y = times_y - times_y[0] + times_u[0]
-    records = ([(t, "in", float(k)) for k, t in enumerate(times_u)]
-               + [(t, "out", -3.0 * k) for k, t in enumerate(times_y)])
+    records = [(t, "in", float(k)) for k, t in enumerate(times_u)] + [
+        (t, "out", -3.0 * k) for k, t in enumerate(times_y)
+    ]
     order = data.draw(st.permutations(range(len(records))))
     by_time = sorted(order, key=lambda index: records[index][0])  # sorted by time, ties in random tag order
     long = _write(tmp_path, "time,tag,value\n" + "".join("{},{},{}\n".format(*records[i]) for i in by_time), "long.csv")

@@ -1,4 +1,5 @@
 """dynia.distributed.run against dynia.run: the same result bit for bit, whatever the chunks."""
+
 import operator
 import sys
 
@@ -12,6 +13,7 @@ from dynia.models import FOPDT, FirstOrder, TransferFunction
 
 distributed = pytest.importorskip("distributed")
 from dynia.distributed import run  # noqa: E402  (after the skip: needs dask.distributed)
+from dynia.pipeline import DroppedSamplesWarning  # noqa: E402
 
 STEPS = 160
 BOUNDS = {"K": (0.0, 7.0), "T": (0.0, 7.0)}
@@ -19,8 +21,10 @@ BOUNDS = {"K": (0.0, 7.0), "T": (0.0, 7.0)}
 
 @pytest.fixture(scope="module")
 def client():
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
-                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+    with (
+        distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as cluster,
+        distributed.Client(cluster) as client,
+    ):
         yield client
 
 
@@ -40,18 +44,22 @@ def assert_same(result, reference):
 
 
 @pytest.mark.parametrize("engine", ["numba", "numpy"])
-@pytest.mark.parametrize("sample_chunks, time_chunks", [
-    (None, None),
-    (300, STEPS),  # one task per stage
-    (64, 37),  # neither divides evenly
-    (101, 3),  # time chunks shorter than the halo n=5
-    (1000, 1),  # a sample chunk larger than the population, one-step time chunks
-])
+@pytest.mark.parametrize(
+    "sample_chunks, time_chunks",
+    [
+        (None, None),
+        (300, STEPS),  # one task per stage
+        (64, 37),  # neither divides evenly
+        (101, 3),  # time chunks shorter than the halo n=5
+        (1000, 1),  # a sample chunk larger than the population, one-step time chunks
+    ],
+)
 def test_first_order_equals_dynia_run(client, record, sample_chunks, time_chunks, engine):
     u, y = record
     options = dict(n_samples=300, n=5, rng=11, engine=engine)
-    result = run(u, y, FirstOrder(), BOUNDS, client=client, sample_chunks=sample_chunks,
-                 time_chunks=time_chunks, **options)
+    result = run(
+        u, y, FirstOrder(), BOUNDS, client=client, sample_chunks=sample_chunks, time_chunks=time_chunks, **options
+    )
     assert_same(result, dynia.run(u, y, FirstOrder(), BOUNDS, **options))
 
 
@@ -61,8 +69,16 @@ def test_fopdt_with_fractional_delays_equals_dynia_run(client, window):
     u = np.r_[np.full(30, 1.0), np.full(50, 3.0), np.full(40, 0.5)]
     y = FOPDT().simulate([[1.5, 4.0, 2.3]], u, dt=0.5, x0="steady")[0]
     bounds = {"theta": (0.0, 5.0), "K": (0.5, 3.0), "T": (0.1, 8.0)}  # not the model's order
-    options = dict(dt=0.5, x0="steady", sampler="lhs", n_samples=250, n=4, rng=5, window=window,
-                   engine="numba" if window == "centred" else "numpy")
+    options = dict(
+        dt=0.5,
+        x0="steady",
+        sampler="lhs",
+        n_samples=250,
+        n=4,
+        rng=5,
+        window=window,
+        engine="numba" if window == "centred" else "numpy",
+    )
     result = run(u, y, FOPDT(), bounds, client=client, sample_chunks=90, time_chunks=17, **options)
     assert_same(result, dynia.run(u, y, FOPDT(), bounds, **options))
 
@@ -82,10 +98,8 @@ def test_missing_measurements_equal_dynia_run(client, record):
 @pytest.mark.parametrize("engine", ["numba", "numpy"])
 def test_weighted_flavour_equals_dynia_run(client, record, capsys, engine):
     u, y = record
-    options = dict(n_samples=300, n=5, flavour="weighted", percentage=20, conf_level=80, bins=15, rng=4,
-                   engine=engine)
-    result = run(u, y, FirstOrder(), BOUNDS, client=client, sample_chunks=120, time_chunks=25,
-                 progress=True, **options)
+    options = dict(n_samples=300, n=5, flavour="weighted", percentage=20, conf_level=80, bins=15, rng=4, engine=engine)
+    result = run(u, y, FirstOrder(), BOUNDS, client=client, sample_chunks=120, time_chunks=25, progress=True, **options)
     assert_same(result, dynia.run(u, y, FirstOrder(), BOUNDS, **options))
     assert "DYNIA windows" in capsys.readouterr().err
 
@@ -110,8 +124,10 @@ def test_unstable_samples_are_dropped_as_dynia_run_drops_them(client):
     y = np.r_[np.zeros(10), 1 - np.exp(-np.arange(90) / 2.0)]
     bounds = {"K": (0.1, 2.0), "a": (-2.0, 12.0)}
     options = dict(n_samples=150, n=3, rng=2)
-    result = run(u, y, unstable_model(), bounds, client=client, sample_chunks=45, time_chunks=30, **options)
-    reference = dynia.run(u, y, unstable_model(), bounds, **options)
+    with pytest.warns(DroppedSamplesWarning, match="36 of 150 parameter sets"):
+        result = run(u, y, unstable_model(), bounds, client=client, sample_chunks=45, time_chunks=30, **options)
+    with pytest.warns(DroppedSamplesWarning, match="36 of 150 parameter sets"):
+        reference = dynia.run(u, y, unstable_model(), bounds, **options)
     drawn = dynia.sampling.uniform(150, [[0.1, 2.0], [-2.0, 12.0]], rng=2)
     with np.errstate(over="ignore", invalid="ignore"):
         finite = np.isfinite(unstable_model().simulate(drawn, u)).all(axis=1)
@@ -124,8 +140,7 @@ def test_unstable_samples_are_dropped_as_dynia_run_drops_them(client):
 def test_every_sample_overflowing_is_a_clear_error(client):
     u = np.ones(100)
     with pytest.raises(ValueError, match="every one of the 20 parameter sets overflowed"):
-        run(u, u, unstable_model(), {"K": (0.1, 2.0), "a": (900.0, 1000.0)}, client=client,
-            n_samples=20, n=3, rng=1)
+        run(u, u, unstable_model(), {"K": (0.1, 2.0), "a": (900.0, 1000.0)}, client=client, n_samples=20, n=3, rng=1)
 
 
 def test_a_model_error_on_a_worker_reaches_the_caller_with_its_sample_chunk(client, record):
@@ -137,12 +152,15 @@ def test_a_model_error_on_a_worker_reaches_the_caller_with_its_sample_chunk(clie
         run(u, y, FirstOrder(), bounds, client=client, sample_chunks=100, n_samples=300, n=5, rng=6)
 
 
-@pytest.mark.parametrize("name, value, message", [
-    ("sample_chunks", 0, "sample_chunks must be at least 1"),
-    ("time_chunks", -3, "time_chunks must be at least 1"),
-    ("time_chunks", 2.5, "time_chunks must be a whole number"),
-    ("sample_chunks", "10", "sample_chunks must be a whole number"),
-])
+@pytest.mark.parametrize(
+    "name, value, message",
+    [
+        ("sample_chunks", 0, "sample_chunks must be at least 1"),
+        ("time_chunks", -3, "time_chunks must be at least 1"),
+        ("time_chunks", 2.5, "time_chunks must be a whole number"),
+        ("sample_chunks", "10", "sample_chunks must be a whole number"),
+    ],
+)
 def test_bad_chunk_sizes_are_clear_errors(client, record, name, value, message):
     u, y = record
     with pytest.raises(ValueError, match=message):
@@ -176,9 +194,14 @@ def test_without_a_client_a_local_cluster_runs_and_is_closed(record):
     before = {child.pid for child in psutil.Process().children(recursive=True)}
     result = run(u, y, FirstOrder(), BOUNDS, n_samples=200, n=5, rng=9)
     assert_same(result, dynia.run(u, y, FirstOrder(), BOUNDS, n_samples=200, n=5, rng=9))
-    leftover = [child for child in psutil.Process().children(recursive=True)
-                if child.pid not in before and child.is_running() and child.status() != psutil.STATUS_ZOMBIE
-                and "resource_tracker" not in " ".join(child.cmdline())]
+    leftover = [
+        child
+        for child in psutil.Process().children(recursive=True)
+        if child.pid not in before
+        and child.is_running()
+        and child.status() != psutil.STATUS_ZOMBIE
+        and "resource_tracker" not in " ".join(child.cmdline())
+    ]
     assert leftover == []
 
 

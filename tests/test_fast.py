@@ -3,16 +3,16 @@
 Both paths perform the same floating-point operations in the same order (see
 the module docstring of dynia._fast), so every comparison here is exact.
 """
+
 import control
 import numpy as np
 import pytest
+from conftest import example_firstorder_input
 
 import dynia
-from dynia.engine import kernels
 from dynia.analysis import moving_window
+from dynia.engine import kernels
 from dynia.models import FOPDT, FirstOrder, SecondOrderDelay, TransferFunction
-
-from conftest import example_firstorder_input
 
 pytestmark = pytest.mark.skipif(not kernels.AVAILABLE, reason="numba is not installed")
 
@@ -38,15 +38,23 @@ def _assert_same(a, b):
 
 @pytest.mark.parametrize("flavour", ["thesis", "weighted"])
 @pytest.mark.parametrize("window", ["centred", "trailing"])
-@pytest.mark.parametrize("n, percentage, conf_level, min_points", [
-    (10, 10, 90, 1), (3, 0.5, 95, 4), (0, 20, 60, 1), (25, 5, 80, 30)])
+@pytest.mark.parametrize(
+    "n, percentage, conf_level, min_points", [(10, 10, 90, 1), (3, 0.5, 95, 4), (0, 20, 60, 1), (25, 5, 80, 30)]
+)
 def test_windows_equal_the_numpy_path(flavour, window, n, percentage, conf_level, min_points):
     u, y = _data()
     rng = np.random.default_rng(1)
     params = rng.uniform(0, 7, (1200, 2))
     sims = FirstOrder().simulate(params, u)
-    options = dict(n=n, percentage=percentage, conf_level=conf_level, flavour=flavour, window=window,
-                   min_points=min_points, bins=17)
+    options = dict(
+        n=n,
+        percentage=percentage,
+        conf_level=conf_level,
+        flavour=flavour,
+        window=window,
+        min_points=min_points,
+        bins=17,
+    )
     numpy_result = moving_window(y, sims, params, [[0, 7], [0, 7]], engine="numpy", **options)
     compiled = moving_window(y, sims, params, [[0, 7], [0, 7]], engine="numba", chunk_steps=37, **options)
     _assert_same(numpy_result, compiled)
@@ -60,16 +68,17 @@ def test_every_cost_tied_selects_the_lowest_indices():
     # The five lowest indices hold the values 0 .. 4/49: the band of a stable sort.
     np.testing.assert_array_equal(compiled.ci[0, :, 0], 0.0)
     np.testing.assert_array_equal(compiled.ci[0, :, 1], params[3, 0])
-    _assert_same(compiled, moving_window(np.zeros(12), sims, params, [[0, 1]], n=2, percentage=10,
-                                         engine="numpy"))
+    _assert_same(compiled, moving_window(np.zeros(12), sims, params, [[0, 1]], n=2, percentage=10, engine="numpy"))
 
 
 MODELS = [
     (FirstOrder(), {"K": (0, 7), "T": (0, 7)}),
     (FOPDT(), {"K": (0, 7), "T": (0, 7), "theta": (0, 3.5)}),
     (SecondOrderDelay(), {"K": (0, 7), "T1": (0, 7), "T2": (0, 3), "theta": (0, 3)}),
-    (TransferFunction(_lead_lag, names=("K", "a", "T", "theta"), delay="theta"),
-     {"K": (0.5, 3), "a": (0, 2), "T": (0.5, 5), "theta": (0, 2.5)}),
+    (
+        TransferFunction(_lead_lag, names=("K", "a", "T", "theta"), delay="theta"),
+        {"K": (0.5, 3), "a": (0, 2), "T": (0.5, 5), "theta": (0, 2.5)},
+    ),
 ]
 
 

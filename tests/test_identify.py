@@ -1,4 +1,5 @@
 """dynia.identify: select, fit and validate, on data with a known model."""
+
 import numpy as np
 import pytest
 
@@ -65,14 +66,17 @@ def test_to_dict_has_the_checked_keys():
     assert summary["segments"] == [[0.0, 838.0]]
 
 
-@pytest.mark.parametrize("options, message", [
-    (dict(method="random"), "method must be one of"),
-    (dict(method="given"), "segments are given exactly when"),
-    (dict(segments=[(0, 10)]), "segments are given exactly when"),
-    (dict(bounds={"K": (0, 7)}), r"missing: \['T'\]"),
-    (dict(model=SecondOrderDelay()), "unknown"),
-    (dict(ic_threshold=1.0, n_samples=200), "selected no data"),
-])
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        (dict(method="random"), "method must be one of"),
+        (dict(method="given"), "segments are given exactly when"),
+        (dict(segments=[(0, 10)]), "segments are given exactly when"),
+        (dict(bounds={"K": (0, 7)}), r"missing: \['T'\]"),
+        (dict(model=SecondOrderDelay()), "unknown"),
+        (dict(ic_threshold=1.0, n_samples=200), "selected no data"),
+    ],
+)
 def test_bad_requests_get_clear_errors(options, message):
     u, y = _record(steps=200)
     arguments = dict(model=FirstOrder(), bounds=BOUNDS)

@@ -122,7 +122,7 @@ def delayed_ode_reference(system, theta, u, dt, x0):
             break
         if a.shape[0]:
             piece = solve_ivp(
-                lambda t, x: a @ x + b * level,
+                lambda t, x, level=level: a @ x + b * level,
                 (start, stop),
                 state,
                 method="DOP853",
@@ -248,9 +248,7 @@ def test_input_and_params_forms_are_accepted():
 
 
 def test_transfer_function_factory_agrees_with_second_order_delay():
-    params = np.array(
-        [[2.0, 1.5, 0.7, 2.3], [1.0, 1.2, 1.2, 1.0], [-1.0, 0.6, 3.0, 0.45], [1.0, 2.0, 0.5, 0.0]]
-    )
+    params = np.array([[2.0, 1.5, 0.7, 2.3], [1.0, 1.2, 1.2, 1.0], [-1.0, 0.6, 3.0, 0.45], [1.0, 2.0, 0.5, 0.0]])
     model = TransferFunction(second_order_tf, names=SecondOrderDelay().names, delay="theta")
     for x0 in ("zero", "steady"):
         np.testing.assert_allclose(
@@ -262,9 +260,7 @@ def test_transfer_function_factory_agrees_with_second_order_delay():
 
 
 def test_static_transfer_function_uses_delayed_input_at_grid_points():
-    model = TransferFunction(
-        lambda p: control.tf([p[0]], [1.0]), names=("K", "theta"), delay="theta"
-    )
+    model = TransferFunction(lambda p: control.tf([p[0]], [1.0]), names=("K", "theta"), delay="theta")
     y = model.simulate([[2.0, 1.0], [2.0, 1.5]], U)
     np.testing.assert_array_equal(y[0], 2.0 * np.concatenate(([0.0], U[:-1])))
     np.testing.assert_array_equal(y[1], 2.0 * np.concatenate(([0.0, 0.0], U[:-2])))

@@ -4,6 +4,7 @@ nbval re-executes the reference notebooks and compares the cells marked
 NBVAL_CHECK_OUTPUT; that only tests the current notebooks if the references
 hold their code. `make references` regenerates them.
 """
+
 from pathlib import Path
 
 import jupytext
@@ -16,8 +17,11 @@ SOURCES = sorted((ROOT / "notebooks").glob("*.py"))
 
 
 def _code_cells(notebook):
-    return [cell.source.strip() for cell in notebook.cells
-            if cell.cell_type == "code" and "injected-parameters" not in cell.metadata.get("tags", [])]
+    return [
+        cell.source.strip()
+        for cell in notebook.cells
+        if cell.cell_type == "code" and "injected-parameters" not in cell.metadata.get("tags", [])
+    ]
 
 
 @pytest.mark.parametrize("source", SOURCES, ids=[path.stem for path in SOURCES])

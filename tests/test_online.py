@@ -1,4 +1,5 @@
 """Tests of dynia.online: the semi-online mode equals the batch trailing-window analysis."""
+
 import math
 
 import control
@@ -69,10 +70,13 @@ def model_columns(online, model):
     return online.samples[:, [online.names.index(name) for name in model.names]]
 
 
-@pytest.mark.parametrize("model, bounds, truth, n_samples, n", [
-    (FirstOrder(), FIRST_ORDER_BOUNDS, [2.0, 3.0], 1000, 6),
-    (FOPDT(), FOPDT_BOUNDS, [2.0, 3.0, 2.5], 600, 4),
-])
+@pytest.mark.parametrize(
+    "model, bounds, truth, n_samples, n",
+    [
+        (FirstOrder(), FIRST_ORDER_BOUNDS, [2.0, 3.0], 1000, 6),
+        (FOPDT(), FOPDT_BOUNDS, [2.0, 3.0, 2.5], 600, 4),
+    ],
+)
 def test_equals_a_plain_trailing_window_oracle(model, bounds, truth, n_samples, n):
     u, y = record(model, truth)
     online = OnlineDynia(model, bounds, n_samples=n_samples, n=n, bins=20, rng=3)
@@ -89,10 +93,13 @@ def test_equals_a_plain_trailing_window_oracle(model, bounds, truth, n_samples, 
 
 
 @pytest.mark.parametrize("flavour", ["thesis", "weighted", "mcat"])
-@pytest.mark.parametrize("model, bounds, truth", [
-    (FirstOrder(), FIRST_ORDER_BOUNDS, [2.0, 3.0]),
-    (FOPDT(), FOPDT_BOUNDS, [2.0, 3.0, 2.5]),
-])
+@pytest.mark.parametrize(
+    "model, bounds, truth",
+    [
+        (FirstOrder(), FIRST_ORDER_BOUNDS, [2.0, 3.0]),
+        (FOPDT(), FOPDT_BOUNDS, [2.0, 3.0, 2.5]),
+    ],
+)
 def test_equals_the_batch_trailing_engine_bit_for_bit(model, bounds, truth, flavour):
     u, y = record(model, truth)
     settings = dict(n_samples=800, n=5, percentage=10, bins=25, conf_level=80, flavour=flavour, rng=11)
@@ -156,8 +163,7 @@ def test_reset_starts_over_and_mcat_state_is_renewed():
 def test_same_seed_same_results_other_seed_other_samples():
     model = FirstOrder()
     u, y = record(model, [2.0, 3.0], steps=60)
-    runs = [OnlineDynia(model, FIRST_ORDER_BOUNDS, n_samples=300, n=3, rng=seed).replay(u, y)
-            for seed in (8, 8, 9)]
+    runs = [OnlineDynia(model, FIRST_ORDER_BOUNDS, n_samples=300, n=3, rng=seed).replay(u, y) for seed in (8, 8, 9)]
     assert_array_equal(runs[0].samples, runs[1].samples)
     assert_array_equal(runs[0].ic, runs[1].ic)
     assert_array_equal(runs[0].gradient, runs[1].gradient)
@@ -185,8 +191,7 @@ def test_diverging_sets_rank_last():
         diverged = ~np.isfinite(sims).all(axis=1)
         assert 40 < online.n_diverged == diverged.sum()
         sims[~np.isfinite(sims)] = 1e200
-        batch = moving_window(y, sims, online.samples, online.bounds, n=4, flavour=flavour,
-                              window="trailing")
+        batch = moving_window(y, sims, online.samples, online.bounds, n=4, flavour=flavour, window="trailing")
         assert_array_equal(result.ic, batch.ic)
         assert_array_equal(result.ci, batch.ci)
         assert_array_equal(result.gradient, batch.gradient)
@@ -207,8 +212,9 @@ def test_model_stepper_equals_simulate_bit_for_bit():
     """The per-step update the online mode uses is the batch simulation's own loop."""
     rng = np.random.default_rng(3)
     u = np.round(rng.uniform(-1, 1, 50), 2)
-    lead_lag = TransferFunction(lambda p: control.tf([p[0] * p[1], p[0]], [p[2], 1.0]),
-                                names=("K", "a", "T", "theta"), delay="theta")
+    lead_lag = TransferFunction(
+        lambda p: control.tf([p[0] * p[1], p[0]], [p[2], 1.0]), names=("K", "a", "T", "theta"), delay="theta"
+    )
     cases = [
         (FirstOrder(), rng.uniform(0, 5, (40, 2)), 1.0),
         (FOPDT(), np.c_[rng.uniform(0, 5, (40, 2)), rng.uniform(0, 7, 40)], 0.7),  # fractional delays
@@ -235,14 +241,17 @@ def test_stepper_rejects_bad_input():
     assert not stepper.step(1.0).flags.writeable
 
 
-@pytest.mark.parametrize("u_t, y_t, error, match", [
-    (float("nan"), 1.0, ValueError, "u_t must be finite"),
-    (float("inf"), 1.0, ValueError, "u_t must be finite"),
-    (1.0, float("inf"), ValueError, "y_t must be finite.*NaN marks a missing"),
-    ("1", 1.0, TypeError, "u_t must be a real number"),
-    (1.0, [1.0], TypeError, "y_t must be a real number"),
-    (True, 1.0, TypeError, "u_t must be a real number"),
-])
+@pytest.mark.parametrize(
+    "u_t, y_t, error, match",
+    [
+        (float("nan"), 1.0, ValueError, "u_t must be finite"),
+        (float("inf"), 1.0, ValueError, "u_t must be finite"),
+        (1.0, float("inf"), ValueError, "y_t must be finite.*NaN marks a missing"),
+        ("1", 1.0, TypeError, "u_t must be a real number"),
+        (1.0, [1.0], TypeError, "y_t must be a real number"),
+        (True, 1.0, TypeError, "u_t must be a real number"),
+    ],
+)
 def test_update_rejects_bad_values_without_advancing(u_t, y_t, error, match):
     online = OnlineDynia(FirstOrder(), FIRST_ORDER_BOUNDS, n_samples=100, n=2, rng=0)
     online.update(0.0, 0.0)
@@ -252,20 +261,23 @@ def test_update_rejects_bad_values_without_advancing(u_t, y_t, error, match):
     online.update(np.float32(1.0), np.array(0.5))  # numpy scalars are fine
 
 
-@pytest.mark.parametrize("kwargs, error, match", [
-    (dict(model="FirstOrder"), TypeError, "model must be a dynia.models.Model"),
-    (dict(bounds={"K": (0, 5)}), ValueError, "missing: \\['T'\\]"),
-    (dict(bounds=[(0, 5), (0, 8)]), ValueError, "bounds must map"),
-    (dict(sampler="iis"), ValueError, "OnlineDynia does not support sampler='iis'"),
-    (dict(flavour="glue"), ValueError, "flavour must be one of"),
-    (dict(n=-1), ValueError, "n must be at least 0"),
-    (dict(n_samples=2.5), ValueError, "n_samples must be a whole number"),
-    (dict(percentage=0.1), ValueError, "at least 2 are needed"),
-    (dict(conf_level=100), ValueError, r"conf_level is a percentage in \(50, 100\)"),
-    (dict(min_points=0), ValueError, "min_points must be at least 1"),
-    (dict(dt=0), ValueError, "dt must be a finite number > 0"),
-    (dict(x0="initial"), ValueError, "x0 must be one of"),
-])
+@pytest.mark.parametrize(
+    "kwargs, error, match",
+    [
+        (dict(model="FirstOrder"), TypeError, "model must be a dynia.models.Model"),
+        (dict(bounds={"K": (0, 5)}), ValueError, "missing: \\['T'\\]"),
+        (dict(bounds=[(0, 5), (0, 8)]), ValueError, "bounds must map"),
+        (dict(sampler="iis"), ValueError, "OnlineDynia does not support sampler='iis'"),
+        (dict(flavour="glue"), ValueError, "flavour must be one of"),
+        (dict(n=-1), ValueError, "n must be at least 0"),
+        (dict(n_samples=2.5), ValueError, "n_samples must be a whole number"),
+        (dict(percentage=0.1), ValueError, "at least 2 are needed"),
+        (dict(conf_level=100), ValueError, r"conf_level is a percentage in \(50, 100\)"),
+        (dict(min_points=0), ValueError, "min_points must be at least 1"),
+        (dict(dt=0), ValueError, "dt must be a finite number > 0"),
+        (dict(x0="initial"), ValueError, "x0 must be one of"),
+    ],
+)
 def test_constructor_rejects_bad_settings(kwargs, error, match):
     arguments = dict(model=FirstOrder(), bounds=FIRST_ORDER_BOUNDS, n_samples=100)
     arguments.update(kwargs)

@@ -1,4 +1,5 @@
 """dynia.outdir: results are written whole or not at all, and never in place of the user's own files."""
+
 import datetime
 import json
 import os
@@ -173,10 +174,12 @@ def test_out_that_is_or_contains_an_input_is_refused(place, how):
     Path("results/data.csv").write_text("t,y\n0,1\n")
     Path("results/sub").mkdir()
     os.symlink(os.path.realpath("results"), "link")
-    out, inputs = {"same file": ("results/data.csv", ["results/data.csv"]),
-                   "contains": ("results", ["results/data.csv"]),
-                   "contains, given through ..": ("results/sub/..", ["results/data.csv"]),
-                   "through a symlink": ("results", ["link/data.csv"])}[how]
+    out, inputs = {
+        "same file": ("results/data.csv", ["results/data.csv"]),
+        "contains": ("results", ["results/data.csv"]),
+        "contains, given through ..": ("results/sub/..", ["results/data.csv"]),
+        "through a symlink": ("results", ["link/data.csv"]),
+    }[how]
     before = tree(place)
     with pytest.raises(OutputError, match=rf"^--out {out} is or contains the input .*data\.csv; choose a directory"):
         OutputDirectory(out, overwrite=True, inputs=inputs)
@@ -251,8 +254,11 @@ def test_unwritable_parent_fails_on_entering(place):
     os.chmod("locked", 0o555)
     started = []
     try:
-        with pytest.raises(OutputError, match=r"^--out locked/results: cannot create or write in the directory "
-                                              r"\S*locked \(\[Errno 13\]"):
+        with pytest.raises(
+            OutputError,
+            match=r"^--out locked/results: cannot create or write in the directory "
+            r"\S*locked \(\[Errno 13\]",
+        ):
             with OutputDirectory("locked/results"):
                 started.append(True)
         assert not started and os.listdir("locked") == []
@@ -262,8 +268,11 @@ def test_unwritable_parent_fails_on_entering(place):
 
 @pytest.mark.skipif(os.geteuid() != 0 or not os.path.isdir("/sys"), reason="needs root and sysfs")
 def test_unwritable_parent_fails_on_entering_even_for_root():
-    with pytest.raises(OutputError, match=r"^--out /sys/dynia-outdir-test: cannot create or write in the directory "
-                                          r"/sys \("):
+    with pytest.raises(
+        OutputError,
+        match=r"^--out /sys/dynia-outdir-test: cannot create or write in the directory "
+        r"/sys \(",
+    ):
         with OutputDirectory("/sys/dynia-outdir-test"):
             pytest.fail("the block must not run")
     assert not os.path.lexists("/sys/dynia-outdir-test")
@@ -294,8 +303,9 @@ with OutputDirectory("results") as staging:
 
 
 def test_run_in_another_process_holds_the_lock(place):
-    child = subprocess.Popen([sys.executable, "-c", HOLDER], cwd=place, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                             text=True)
+    child = subprocess.Popen(
+        [sys.executable, "-c", HOLDER], cwd=place, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True
+    )
     try:
         assert child.stdout.readline() == "ready\n"
         with pytest.raises(OutputError, match="^another dynia run is writing --out results"):
@@ -328,8 +338,9 @@ def test_out_appearing_during_the_run_is_kept_and_results_go_beside_it(place, ap
     mine = tree(place)
     kept = [name for name in os.listdir() if name.startswith("results.dynia-")]
     assert len(kept) == 1 and re.fullmatch(r"results\.dynia-\d{8}-\d{6}", kept[0])
-    assert str(caught.value) == ("--out results appeared while dynia ran; left it as it is; the new results are in "
-                                 f"{os.path.realpath(kept[0])}")
+    assert str(caught.value) == (
+        f"--out results appeared while dynia ran; left it as it is; the new results are in {os.path.realpath(kept[0])}"
+    )
     assert sorted(os.listdir(kept[0])) == [MARKER, "ic.csv"] and Path(kept[0], "ic.csv").read_text() == "new"
     expected = {"file": {"results"}, "empty directory": {"results"}, "directory": {"results", "results/theirs.txt"}}
     assert {name for name in mine if not name.startswith("results.dynia-")} == expected[appears]
@@ -340,8 +351,11 @@ def test_out_appearing_during_the_run_is_kept_and_results_go_beside_it(place, ap
 @pytest.mark.parametrize("change", ["marker removed", "replaced by the user's directory", "replaced by a file"])
 def test_out_no_longer_dynias_at_the_rename_is_kept(place, change):
     earlier_run("results")
-    with pytest.raises(OutputError, match=r"^--out results changed while dynia ran and no longer holds dynia's results;"
-                                          r" left it as it is; the new results are in \S+results\.dynia-\d{8}-\d{6}$"):
+    with pytest.raises(
+        OutputError,
+        match=r"^--out results changed while dynia ran and no longer holds dynia's results;"
+        r" left it as it is; the new results are in \S+results\.dynia-\d{8}-\d{6}$",
+    ):
         with OutputDirectory("results", overwrite=True) as staging:
             (staging / "ic.csv").write_text("new")
             if change == "marker removed":
@@ -364,8 +378,7 @@ def test_out_no_longer_dynias_at_the_rename_is_kept(place, change):
 
 def test_kept_results_never_take_an_existing_name(place):
     now = datetime.datetime.now()
-    taken = [f"results.dynia-{(now + datetime.timedelta(seconds=step)).strftime('%Y%m%d-%H%M%S')}"
-             for step in range(4)]
+    taken = [f"results.dynia-{(now + datetime.timedelta(seconds=step)).strftime('%Y%m%d-%H%M%S')}" for step in range(4)]
     for name in taken:
         Path(name).mkdir()
     Path(taken[0], "theirs.txt").write_text("theirs")  # the others stay empty: os.replace would take them over
@@ -377,7 +390,8 @@ def test_kept_results_never_take_an_existing_name(place):
     kept = Path(str(caught.value).rsplit(" ", 1)[1])
     assert kept.name not in taken and (kept / "ic.csv").read_text() == "new"
     assert {name: entry for name, entry in tree(place).items() if name.split("/")[0] in taken} == {
-        name: entry for name, entry in before.items() if name.split("/")[0] in taken}
+        name: entry for name, entry in before.items() if name.split("/")[0] in taken
+    }
 
 
 INTERRUPTED = """
@@ -401,9 +415,14 @@ except KeyboardInterrupt:
 """
 
 
-@pytest.mark.parametrize("name, status, printed", [("SIGTERM", 3, "Interrupted SIGTERM True"),
-                                                    ("SIGHUP", 3, "Interrupted SIGHUP True"),
-                                                    ("SIGINT", 4, "KeyboardInterrupt True")])
+@pytest.mark.parametrize(
+    "name, status, printed",
+    [
+        ("SIGTERM", 3, "Interrupted SIGTERM True"),
+        ("SIGHUP", 3, "Interrupted SIGHUP True"),
+        ("SIGINT", 4, "KeyboardInterrupt True"),
+    ],
+)
 @pytest.mark.parametrize("existing", [False, True])
 def test_signal_in_the_block_cleans_up_and_restores_handlers(place, name, status, printed, existing):
     if existing:
@@ -516,6 +535,10 @@ def test_results_get_the_permissions_the_umask_allows(place, umask, directory_mo
         os.umask(previous)
     modes = {name: entry[-1] for name, entry in tree(place / "results").items() if entry[0] != "link"}
     assert stat.S_IMODE(os.stat("results").st_mode) == directory_mode
-    assert modes == {MARKER: file_mode, "ic.csv": file_mode, "second_run": directory_mode,
-                     "second_run/limits.csv": file_mode}
+    assert modes == {
+        MARKER: file_mode,
+        "ic.csv": file_mode,
+        "second_run": directory_mode,
+        "second_run/limits.csv": file_mode,
+    }
     assert stat.S_IMODE(os.stat("elsewhere.txt").st_mode) == 0o640

@@ -1,12 +1,12 @@
 """dynia.run end to end: the thesis's example 1, result objects, bad input."""
+
 import matplotlib
 import numpy as np
 import pytest
+from conftest import example_firstorder_input
 
 import dynia
 from dynia.models import FirstOrder
-
-from conftest import example_firstorder_input
 
 matplotlib.use("Agg")
 
@@ -16,8 +16,9 @@ def example1_run():
     u = example_firstorder_input()
     rng = np.random.default_rng(7)
     y = FirstOrder().simulate([[2.0, 3.0]], u)[0] + rng.normal(0, 0.5, u.size)
-    return dynia.run(u, y, FirstOrder(), {"K": (0, 7), "T": (0, 7)}, n_samples=2000, n=10,
-                     percentage=10, bins=40, rng=rng)
+    return dynia.run(
+        u, y, FirstOrder(), {"K": (0, 7), "T": (0, 7)}, n_samples=2000, n=10, percentage=10, bins=40, rng=rng
+    )
 
 
 def test_example1_gain_is_identified_while_the_input_is_steady_and_non_zero(example1_run):
@@ -50,8 +51,19 @@ def test_result_axes_follow_the_bounds_order():
 def test_same_seed_same_result_bit_for_bit():
     u = np.r_[np.zeros(10), np.ones(30)]
     y = FirstOrder().simulate([[2.0, 3.0]], u)[0] + 0.01
-    runs = [dynia.run(u, y, FirstOrder(), {"K": (0, 7), "T": (0, 7)}, n_samples=300, n=3,
-                      sampler="lhs", rng=np.random.default_rng(11)) for _ in range(2)]
+    runs = [
+        dynia.run(
+            u,
+            y,
+            FirstOrder(),
+            {"K": (0, 7), "T": (0, 7)},
+            n_samples=300,
+            n=3,
+            sampler="lhs",
+            rng=np.random.default_rng(11),
+        )
+        for _ in range(2)
+    ]
     np.testing.assert_array_equal(runs[0].ic, runs[1].ic)
     np.testing.assert_array_equal(runs[0].gradient, runs[1].gradient)
 
@@ -60,8 +72,7 @@ def test_same_seed_same_result_bit_for_bit():
 def test_run_equals_moving_window_on_the_same_samples(window):
     u = np.r_[np.zeros(10), np.ones(50)]
     y = FirstOrder().simulate([[2.0, 3.0]], u, dt=0.5)[0] + 0.05
-    res = dynia.run(u, y, FirstOrder(), {"T": (0, 7), "K": (0, 7)}, dt=0.5, n_samples=400, n=4, rng=2,
-                    window=window)
+    res = dynia.run(u, y, FirstOrder(), {"T": (0, 7), "K": (0, 7)}, dt=0.5, n_samples=400, n=4, rng=2, window=window)
     sims = FirstOrder().simulate(res.samples[:, [1, 0]], u, dt=0.5)
     direct = dynia.moving_window(y, sims, res.samples, res.bounds, n=4, window=window)
     np.testing.assert_array_equal(res.ic, direct.ic)
@@ -83,17 +94,20 @@ def test_to_dataframe_and_plots(example1_run):
         example1_run.plot_identifiability("tau")
 
 
-@pytest.mark.parametrize("change, message", [
-    (dict(bounds={"K": (0, 7)}), r"missing: \['T'\]"),
-    (dict(bounds={"K": (0, 7), "T": (0, 7), "theta": (0, 1)}), r"unknown: \['theta'\]"),
-    (dict(bounds=[(0, 7), (0, 7)]), "bounds must map each parameter name"),
-    (dict(bounds={"K": (7, 0), "T": (0, 7)}), r"bounds\['K'\]: need finite low < high"),
-    (dict(bounds={"K": "07", "T": (0, 7)}), r"bounds\['K'\] must be a \(low, high\) pair"),
-    (dict(u=np.ones(5)), "u has 5 samples but y has 40"),
-    (dict(sampler="grid"), "sampler must be one of"),
-    (dict(x0="warm"), "x0 must be one of"),
-    (dict(n_samples=0), "n_samples must be at least 1"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (dict(bounds={"K": (0, 7)}), r"missing: \['T'\]"),
+        (dict(bounds={"K": (0, 7), "T": (0, 7), "theta": (0, 1)}), r"unknown: \['theta'\]"),
+        (dict(bounds=[(0, 7), (0, 7)]), "bounds must map each parameter name"),
+        (dict(bounds={"K": (7, 0), "T": (0, 7)}), r"bounds\['K'\]: need finite low < high"),
+        (dict(bounds={"K": "07", "T": (0, 7)}), r"bounds\['K'\] must be a \(low, high\) pair"),
+        (dict(u=np.ones(5)), "u has 5 samples but y has 40"),
+        (dict(sampler="grid"), "sampler must be one of"),
+        (dict(x0="warm"), "x0 must be one of"),
+        (dict(n_samples=0), "n_samples must be at least 1"),
+    ],
+)
 def test_bad_input_gets_a_clear_error(change, message):
     args = dict(u=np.ones(40), y=np.ones(40), bounds={"K": (0, 7), "T": (0, 7)})
     args.update(change)
@@ -104,12 +118,15 @@ def test_bad_input_gets_a_clear_error(change, message):
 
 def test_parameter_sets_that_overflow_are_dropped_and_counted():
     import control
+
     from dynia.models import TransferFunction
+
     lag = TransferFunction(lambda p: control.tf([p[0]], [1.0, -p[1]]), names=("K", "a"))
     u = np.r_[np.zeros(5), np.ones(60)]
     y = lag.simulate([[1.0, -0.5]], u)[0]
     # a > ~12 overflows within 60 steps; about a third of [-1, 30] does
-    res = dynia.run(u, y, lag, {"K": (0, 2), "a": (-1, 30)}, n_samples=300, n=3, rng=3)
+    with pytest.warns(dynia.pipeline.DroppedSamplesWarning, match=r"were dropped .* not finite"):
+        res = dynia.run(u, y, lag, {"K": (0, 2), "a": (-1, 30)}, n_samples=300, n=3, rng=3)
     assert 0 < res.settings["n_dropped"] < 300
     assert res.samples.shape[0] == 300 - res.settings["n_dropped"]
     assert np.isfinite(res.ic).all()

@@ -1,4 +1,5 @@
 """Plot decimation: extremes and gaps survive, sizes are bounded, short records are untouched."""
+
 import matplotlib
 import numpy as np
 import pytest
@@ -19,8 +20,6 @@ pytestmark = pytest.mark.filterwarnings("error")
 def _close_figures():
     yield
     plt.close("all")
-
-
 
 
 def _walk(n_steps, seed=0):
@@ -127,13 +126,22 @@ def _result(n_steps, n_bins=40, seed=5):
     rng = np.random.default_rng(seed)
     time = np.arange(n_steps, dtype=float)
     ic = rng.uniform(size=(2, n_steps))
-    ic[:, n_steps // 2:n_steps // 2 + n_steps // 50] = np.nan
+    ic[:, n_steps // 2 : n_steps // 2 + n_steps // 50] = np.nan
     lower = rng.uniform(0, 1, size=(2, n_steps))
     ci = np.stack([lower, lower + 1], axis=2)
     gradient = rng.uniform(size=(2, n_bins, n_steps))
     bin_centres = np.tile(np.linspace(0.05, 1.95, n_bins), (2, 1))
-    return DyniaResult(names=("K", "T"), samples=rng.uniform(0, 2, (10, 2)), bounds=np.array([[0, 2.0], [0, 2.0]]),
-                       time=time, ic=ic, ci=ci, gradient=gradient, bin_centres=bin_centres, settings=dict(n=5))
+    return DyniaResult(
+        names=("K", "T"),
+        samples=rng.uniform(0, 2, (10, 2)),
+        bounds=np.array([[0, 2.0], [0, 2.0]]),
+        time=time,
+        ic=ic,
+        ci=ci,
+        gradient=gradient,
+        bin_centres=bin_centres,
+        settings=dict(n=5),
+    )
 
 
 def _mesh(ax):

@@ -1,4 +1,5 @@
 """Data quality: absurd magnitudes, glitches, outliers and stuck values, and the high-IC segments they fall in."""
+
 import math
 import statistics
 import warnings
@@ -27,6 +28,7 @@ def kinds(report, signal=None):
 
 # --- the thesis's case: one erroneous zero reading (section 3.1.3) -----------------------------
 
+
 @pytest.fixture(scope="module", params=[0, 1])
 def case_study(request):
     """Two days of the synthetic cooling-water loop on a 1-minute grid, and a second DYNIA run."""
@@ -41,8 +43,12 @@ def test_the_zero_readings_are_the_only_findings(case_study):
     report = check_quality(case_study["grid"], case_study["u"], case_study["y"])
     glitch_u = int(np.flatnonzero(case_study["grid"] == case_study["truth"].glitch_time)[0])
     glitch_y = glitch_u + 1  # the output's zero is stamped one minute later
-    assert kinds(report) == [("u", "glitch", glitch_u, glitch_u + 1), ("u", "outlier", glitch_u, glitch_u + 1),
-                             ("y", "glitch", glitch_y, glitch_y + 1), ("y", "outlier", glitch_y, glitch_y + 1)]
+    assert kinds(report) == [
+        ("u", "glitch", glitch_u, glitch_u + 1),
+        ("u", "outlier", glitch_u, glitch_u + 1),
+        ("y", "glitch", glitch_y, glitch_y + 1),
+        ("y", "outlier", glitch_y, glitch_y + 1),
+    ]
     assert all(f.value == 0.0 for f in report.findings)
     assert report.findings[0].start_time == report.findings[0].end_time == case_study["truth"].glitch_time
 
@@ -56,16 +62,29 @@ def test_the_highest_ic_of_the_time_constant_sits_on_the_glitch_until_it_is_excl
     hits = {segment: found for segment, found in report.findings_in(segments).items() if found}
     assert len(hits) == 1
     assert {(f.signal, f.kind) for f in next(iter(hits.values()))} == {
-        ("u", "glitch"), ("u", "outlier"), ("y", "glitch"), ("y", "outlier")}
+        ("u", "glitch"),
+        ("u", "outlier"),
+        ("y", "glitch"),
+        ("y", "outlier"),
+    }
 
-    cleaned = dynia.run(report.exclude(u, signal="u"), report.exclude(y, signal="y"), FirstOrder(),
-                        case_study["bounds"], n_samples=2000, n=2, x0="steady", rng=case_study["seed"])
+    cleaned = dynia.run(
+        report.exclude(u, signal="u"),
+        report.exclude(y, signal="y"),
+        FirstOrder(),
+        case_study["bounds"],
+        n_samples=2000,
+        n=2,
+        x0="steady",
+        rng=case_study["seed"],
+    )
     near_glitch = np.abs(grid - case_study["truth"].glitch_time) <= 5
     assert np.nanmax(cleaned.ic[1, near_glitch]) < 0.3 < 0.8 < best
     assert np.nanmax(cleaned.ic[1]) < 0.6 * best
 
 
 # --- glitches ---------------------------------------------------------------------------------
+
 
 def test_glitches_of_one_and_two_samples_are_found_exactly_and_real_events_are_not():
     rng = np.random.default_rng(5)
@@ -76,7 +95,10 @@ def test_glitches_of_one_and_two_samples_are_found_exactly_and_real_events_are_n
     report = check_quality(None, u, y)
     assert kinds(report, "u") == [("u", "glitch", 640, 641), ("u", "outlier", 640, 641)]
     assert [(f.start, f.stop) for f in report.findings if f.kind == "glitch" and f.signal == "y"] == [
-        (150, 151), (777, 778), (1234, 1236)]
+        (150, 151),
+        (777, 778),
+        (1234, 1236),
+    ]
     # steps of the input and of the output are not glitches; nor is a three-sample excursion
     y[1500:1503] += 15
     glitches = [(f.start, f.stop) for f in check_quality(None, u, y).findings if f.kind == "glitch"]
@@ -89,15 +111,17 @@ def glitch_reference(x, half=3, threshold=6.0, min_size=0.1, longest=2, quantile
     low = ordered[math.ceil(quantile * (len(x) - 1))]  # quantiles rounded inwards to a sample
     high = ordered[math.floor((1 - quantile) * (len(x) - 1))]
     floor = 1e-6 * max(high - low, abs(statistics.median(x)))
-    noise = 1.4826 * statistics.median(abs(b - a) for a, b in zip(x, x[1:], strict=False)) / 2 ** 0.5
+    noise = 1.4826 * statistics.median(abs(b - a) for a, b in zip(x, x[1:], strict=False)) / 2**0.5
     medians, scales = [], []
     for i in range(len(x)):
-        window = list(x[max(i - half, 0):i + half + 1])
+        window = list(x[max(i - half, 0) : i + half + 1])
         medians.append(statistics.median(window))
         mad = statistics.median(abs(v - medians[i]) for v in window)
         scales.append(max(1.4826 * mad, noise, floor))
-    far = [abs(x[i] - medians[i]) > threshold * scales[i] and abs(x[i] - medians[i]) >= min_size * (high - low)
-           for i in range(len(x))]
+    far = [
+        abs(x[i] - medians[i]) > threshold * scales[i] and abs(x[i] - medians[i]) >= min_size * (high - low)
+        for i in range(len(x))
+    ]
     found, i = [], 0
     while i < len(x):
         if not far[i]:
@@ -120,8 +144,11 @@ def test_glitches_match_a_sample_by_sample_reference(seed):
     x = np.cumsum(rng.normal(0, 0.2, 600)) + rng.standard_t(3, 600)  # wandering, heavy-tailed
     spikes = rng.choice(600, 12, replace=False)
     x[spikes] += rng.choice([-1, 1], 12) * rng.uniform(2, 30, 12)
-    found = [(f.start, f.stop) for f in check_quality(None, np.zeros(600), x).findings
-             if f.kind == "glitch" and f.signal == "y"]
+    found = [
+        (f.start, f.stop)
+        for f in check_quality(None, np.zeros(600), x).findings
+        if f.kind == "glitch" and f.signal == "y"
+    ]
     assert found == glitch_reference(x)
     assert len(found) >= 6  # the comparison is not empty
 
@@ -168,6 +195,7 @@ def test_max_glitch_length_zero_turns_the_glitch_test_off():
 
 # --- outliers ---------------------------------------------------------------------------------
 
+
 def test_a_run_of_outlying_values_is_one_outlier_finding():
     rng = np.random.default_rng(2)
     u, y = noisy_steps(rng)
@@ -191,6 +219,7 @@ def test_the_outlier_fence_is_where_the_docstring_puts_it():
 
 # --- stuck values -----------------------------------------------------------------------------
 
+
 def test_a_frozen_output_is_stuck_and_a_piecewise_constant_input_is_not():
     rng = np.random.default_rng(3)
     u, y = noisy_steps(rng)
@@ -208,7 +237,7 @@ def test_short_repeats_and_the_usual_runs_of_a_quantised_sensor_are_not_stuck():
     assert kinds(check_quality(None, u, y)) == []
     assert kinds(check_quality(None, u, quantised)) == []
     usual = np.quantile(np.diff(np.flatnonzero(np.r_[True, np.diff(quantised) != 0, True])), 0.95)
-    quantised[1000:1000 + int(4 * usual) + 10] = quantised[1000]
+    quantised[1000 : 1000 + int(4 * usual) + 10] = quantised[1000]
     assert [f.kind for f in check_quality(None, u, quantised).findings] == ["stuck"]
 
 
@@ -232,6 +261,7 @@ def test_stuck_tolerance_joins_readings_that_differ_by_less():
 
 # --- absurd magnitudes ------------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("signal", ["u", "y"])
 @pytest.mark.parametrize("value", [1e308, -1e308])
 def test_a_1e308_cell_is_a_magnitude_finding_and_leaves_the_other_tests_as_without_it(signal, value):
@@ -250,16 +280,19 @@ def test_a_1e308_cell_is_a_magnitude_finding_and_leaves_the_other_tests_as_witho
     magnitude = [f for f in report.findings if f.kind == "magnitude"]
     assert [(f.signal, f.start, f.stop, f.value) for f in magnitude] == [(signal, 1000, 1001, value)]
     assert magnitude[0].start_time == magnitude[0].end_time == 1000.0
-    assert magnitude[0].reason == (f"{value:.6g} is no plausible reading, its size exceeds max_magnitude = 1e+12: a "
-                                   "sentinel, a unit or parsing error or a corrupted reading; left out of the other "
-                                   "tests")
+    assert magnitude[0].reason == (
+        f"{value:.6g} is no plausible reading, its size exceeds max_magnitude = 1e+12: a "
+        "sentinel, a unit or parsing error or a corrupted reading; left out of the other "
+        "tests"
+    )
     others = [f for f in report.findings if f.kind != "magnitude"]
     assert others == list(check_quality(None, without["u"], without["y"]).findings)
     assert kinds(report) == sorted(kinds(report), key=lambda f: (f[0], dynia.quality.KINDS.index(f[1]), f[2]))
     assert ("u", "glitch", 640, 641) in kinds(report) and ("y", "glitch", 150, 151) in kinds(report)
     assert report.mask(signal, ["magnitude"]).sum() == 1 and report.mask(signal, ["magnitude"])[1000]
-    assert "1 magnitude" in report.summary() and f"  {signal} magnitude t=1000 (samples 1000-1000): " in \
-        report.summary()
+    assert (
+        "1 magnitude" in report.summary() and f"  {signal} magnitude t=1000 (samples 1000-1000): " in report.summary()
+    )
 
 
 def test_magnitudes_are_removed_by_exclude():
@@ -279,16 +312,16 @@ def test_the_magnitude_limit_and_the_overflow_limit():
     assert [(f.start, f.stop, f.value) for f in report.findings if f.kind == "magnitude"] == [(20, 24, 5e12)]
     assert ("y", "magnitude", 60, 61) not in kinds(report)  # 1e11: an outlier, no magnitude finding
     assert ("y", "outlier", 60, 61) in kinds(report)
-    assert [f.start for f in check_quality(None, np.ones(100), y, max_magnitude=1e10).findings
-            if f.kind == "magnitude"] == [20, 60]
-    assert not any(f.kind == "magnitude"
-                   for f in check_quality(None, np.ones(100), y, max_magnitude=1e13).findings)
+    assert [
+        f.start for f in check_quality(None, np.ones(100), y, max_magnitude=1e10).findings if f.kind == "magnitude"
+    ] == [20, 60]
+    assert not any(f.kind == "magnitude" for f in check_quality(None, np.ones(100), y, max_magnitude=1e13).findings)
     y[[20, 21, 23, 60]] = [1e140, 1e151, np.sin(23 / 7.0), np.sin(60 / 7.0)]
-    found = [f for f in check_quality(None, np.ones(100), y, max_magnitude=math.inf).findings
-             if f.kind == "magnitude"]
+    found = [f for f in check_quality(None, np.ones(100), y, max_magnitude=math.inf).findings if f.kind == "magnitude"]
     assert [(f.start, f.stop, f.value) for f in found] == [(21, 22, 1e151)]
-    assert found[0].reason.endswith("its size exceeds 1e+150, beyond which squaring it in a cost overflows; "
-                                    "left out of the other tests")
+    assert found[0].reason.endswith(
+        "its size exceeds 1e+150, beyond which squaring it in a cost overflows; left out of the other tests"
+    )
 
 
 def test_a_signal_of_nothing_but_absurd_values_has_only_magnitude_findings():
@@ -299,13 +332,17 @@ def test_a_signal_of_nothing_but_absurd_values_has_only_magnitude_findings():
 
 @pytest.mark.parametrize("limit", [0, -1.0, math.nan, "1e12", True, None])
 def test_max_magnitude_must_be_a_number_above_zero(limit):
-    with pytest.raises(SettingsError, match=r"^max_magnitude must be a number > 0 \(math\.inf: flag only values "
-                                            r"above 1e\+150\); got ") as caught:
+    with pytest.raises(
+        SettingsError,
+        match=r"^max_magnitude must be a number > 0 \(math\.inf: flag only values "
+        r"above 1e\+150\); got ",
+    ) as caught:
         check_quality(None, np.ones(5), np.ones(5), max_magnitude=limit)
     assert caught.value.setting == "max_magnitude"
 
 
 # --- missing samples --------------------------------------------------------------------------
+
 
 def test_missing_samples_are_never_flagged_and_tests_skip_them():
     rng = np.random.default_rng(7)
@@ -327,6 +364,7 @@ def test_an_all_missing_signal_has_no_findings():
 
 
 # --- the report -------------------------------------------------------------------------------
+
 
 @pytest.fixture()
 def glitchy():
@@ -368,8 +406,11 @@ def test_exclude_holds_the_nearest_value_at_the_ends_and_refuses_a_wholly_flagge
     assert report.exclude(u, signal="u")[0] == 5.0
     with pytest.raises(ValueError, match="values has 20 samples but the report covers 21"):
         report.exclude(u[:20], signal="u")
-    everything = QualityReport(findings=(Finding("u", "stuck", 0, 21, 0.0, 20.0, 5.0, "test"),),
-                               time=np.arange(21.0), missing={"u": np.zeros(21, bool), "y": np.zeros(21, bool)})
+    everything = QualityReport(
+        findings=(Finding("u", "stuck", 0, 21, 0.0, 20.0, 5.0, "test"),),
+        time=np.arange(21.0),
+        missing={"u": np.zeros(21, bool), "y": np.zeros(21, bool)},
+    )
     with pytest.raises(ValueError, match="every sample of u that is present is flagged"):
         everything.exclude(u, signal="u")
 
@@ -401,14 +442,23 @@ def test_to_dataframe_and_summary(glitchy):
 
 # --- informative segments of a result ---------------------------------------------------------
 
+
 def test_informative_segments_cover_the_samples_of_the_informative_windows():
     ic = np.full((2, 30), 0.1)
     ic[0, [5, 6, 20]] = 0.9
     ic[1, [9, 28]] = 0.8
     ic[1, 0] = np.nan
-    result = DyniaResult(names=("K", "T"), samples=np.zeros((1, 2)), bounds=np.array([[0, 1], [0, 1.0]]),
-                         time=np.arange(30.0), ic=ic, ci=np.zeros((2, 30, 2)), gradient=np.zeros((2, 1, 30)),
-                         bin_centres=np.zeros((2, 1)), settings={"n": 2})
+    result = DyniaResult(
+        names=("K", "T"),
+        samples=np.zeros((1, 2)),
+        bounds=np.array([[0, 1], [0, 1.0]]),
+        time=np.arange(30.0),
+        ic=ic,
+        ci=np.zeros((2, 30, 2)),
+        gradient=np.zeros((2, 1, 30)),
+        bin_centres=np.zeros((2, 1)),
+        settings={"n": 2},
+    )
     assert informative_segments(result) == [(3, 12), (18, 23), (26, 30)]
     assert informative_segments(result, parameter="K") == [(3, 9), (18, 23)]
     assert informative_segments(result, parameter="T", threshold=0.85) == []
@@ -421,20 +471,30 @@ def test_informative_segments_cover_the_samples_of_the_informative_windows():
 
 # --- bad input --------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("args, kwargs, message", [
-    ((None, np.ones(5), np.ones(6)), {}, "u has 5 samples but y has 6"),
-    ((np.arange(4.0), np.ones(5), np.ones(5)), {}, "time has 4 values but u and y have 5"),
-    ((np.array([0, 1, 1, 2, 3.0]), np.ones(5), np.ones(5)), {}, r"time must increase strictly; time\[2\] = 1.0"),
-    ((None, np.ones(5), np.r_[1, 1, np.inf, 1, 1]), {}, "y holds a non-finite value at index 2"),
-    ((None, np.ones((5, 2)), np.ones(5)), {}, "u must be 1-D"),
-    ((None, np.ones(5), np.ones(5)), dict(half_window=1, max_glitch_length=2),
-     "half_window \\(1\\) must be at least"),
-    ((None, np.ones(5), np.ones(5)), dict(outlier_quantile=0.5),
-     "outlier_quantile must lie strictly between 0 and 0.5"),
-    ((None, np.ones(5), np.ones(5)), dict(glitch_threshold=-1), "glitch_threshold must lie strictly between"),
-    ((None, np.ones(5), np.ones(5)), dict(min_stuck=1), "min_stuck must be at least 2"),
-    ((None, np.ones(5), np.ones(5)), dict(stuck_tolerance=-0.1), "stuck_tolerance must lie strictly between"),
-])
+
+@pytest.mark.parametrize(
+    "args, kwargs, message",
+    [
+        ((None, np.ones(5), np.ones(6)), {}, "u has 5 samples but y has 6"),
+        ((np.arange(4.0), np.ones(5), np.ones(5)), {}, "time has 4 values but u and y have 5"),
+        ((np.array([0, 1, 1, 2, 3.0]), np.ones(5), np.ones(5)), {}, r"time must increase strictly; time\[2\] = 1.0"),
+        ((None, np.ones(5), np.r_[1, 1, np.inf, 1, 1]), {}, "y holds a non-finite value at index 2"),
+        ((None, np.ones((5, 2)), np.ones(5)), {}, "u must be 1-D"),
+        (
+            (None, np.ones(5), np.ones(5)),
+            dict(half_window=1, max_glitch_length=2),
+            "half_window \\(1\\) must be at least",
+        ),
+        (
+            (None, np.ones(5), np.ones(5)),
+            dict(outlier_quantile=0.5),
+            "outlier_quantile must lie strictly between 0 and 0.5",
+        ),
+        ((None, np.ones(5), np.ones(5)), dict(glitch_threshold=-1), "glitch_threshold must lie strictly between"),
+        ((None, np.ones(5), np.ones(5)), dict(min_stuck=1), "min_stuck must be at least 2"),
+        ((None, np.ones(5), np.ones(5)), dict(stuck_tolerance=-0.1), "stuck_tolerance must lie strictly between"),
+    ],
+)
 def test_bad_input_is_named(args, kwargs, message):
     with pytest.raises(ValueError, match=message):
         check_quality(*args, **kwargs)

@@ -1,4 +1,5 @@
 """The automatic second run of the thesis (3.1.1-3.1.3)."""
+
 import numpy as np
 import pytest
 
@@ -38,10 +39,13 @@ def test_nothing_identified_nothing_narrowed(example1_twice):
     assert narrowed == [] and new == {"K": (0.0, 7.0), "T": (0.0, 7.0)}
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    (dict(threshold=1.5), "threshold must lie strictly between"),
-    (dict(margin=-1), "margin must be >= 0"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(threshold=1.5), "threshold must lie strictly between"),
+        (dict(margin=-1), "margin must be >= 0"),
+    ],
+)
 def test_bad_narrowing_options(example1_twice, kwargs, message):
     with pytest.raises(ValueError, match=message):
         narrowed_bounds(example1_twice[0], {"K": (0, 7), "T": (0, 7)}, **kwargs)
@@ -52,14 +56,23 @@ def _hand_result(bands, bounds=(0.0, 7.0)):
     ci = np.concatenate([np.tile([lower, upper], (count, 1)) for count, lower, upper, _ in bands])
     ic = np.concatenate([np.full(count, value) for count, _, _, value in bands])
     steps = ci.shape[0]
-    return dynia.DyniaResult(names=("T",), samples=np.zeros((1, 1)), bounds=np.array([bounds]),
-                             time=np.arange(steps, dtype=float), ic=ic[None], ci=ci[None],
-                             gradient=np.zeros((1, 40, steps)), bin_centres=np.zeros((1, 40)), settings={})
+    return dynia.DyniaResult(
+        names=("T",),
+        samples=np.zeros((1, 1)),
+        bounds=np.array([bounds]),
+        time=np.arange(steps, dtype=float),
+        ic=ic[None],
+        ci=ci[None],
+        gradient=np.zeros((1, 40, steps)),
+        bin_centres=np.zeros((1, 40)),
+        settings={},
+    )
 
 
 def test_a_lone_sharp_window_does_not_block_the_narrowing():
-    result = _hand_result([(20, 2.9, 3.1, 0.9), (5, 1, 6, 0.3), (1, 5.0, 5.2, 0.9), (5, 1, 6, 0.3),
-                           (20, 2.8, 3.2, 0.9)])
+    result = _hand_result(
+        [(20, 2.9, 3.1, 0.9), (5, 1, 6, 0.3), (1, 5.0, 5.2, 0.9), (5, 1, 6, 0.3), (20, 2.8, 3.2, 0.9)]
+    )
     new, narrowed = narrowed_bounds(result, {"T": (0, 7)})
     assert narrowed == ["T"] and new["T"] == pytest.approx((2.8, 3.2))
     # Counted as informative, the lone window disagrees with the rest: nothing is narrowed.

@@ -1,4 +1,5 @@
 """Samplers: shapes, ranges, stratification, determinism through rng."""
+
 import numpy as np
 import pytest
 
@@ -37,12 +38,15 @@ def test_sobol_of_a_power_of_two_is_balanced():
     np.testing.assert_array_equal(counts, 16)
 
 
-@pytest.mark.parametrize("call, message", [
-    (lambda: sampling.sample("grid", 5, BOUNDS), "sampler must be one of"),
-    (lambda: sampling.uniform(0, BOUNDS), "n_samples must be at least 1"),
-    (lambda: sampling.uniform(5, [[1, 0]]), "lower bound 1.0 must be below"),
-    (lambda: sampling.uniform(5, [[0, 1, 2]]), "bounds must have 2 columns"),
-])
+@pytest.mark.parametrize(
+    "call, message",
+    [
+        (lambda: sampling.sample("grid", 5, BOUNDS), "sampler must be one of"),
+        (lambda: sampling.uniform(0, BOUNDS), "n_samples must be at least 1"),
+        (lambda: sampling.uniform(5, [[1, 0]]), "lower bound 1.0 must be below"),
+        (lambda: sampling.uniform(5, [[0, 1, 2]]), "bounds must have 2 columns"),
+    ],
+)
 def test_bad_arguments_are_named(call, message):
     with pytest.raises(ValueError, match=message):
         call()

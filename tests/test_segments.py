@@ -1,4 +1,5 @@
 """Segments from IC curves, least squares on segments, validation on held-out data."""
+
 import json
 
 import numpy as np
@@ -6,9 +7,18 @@ import pytest
 
 from dynia.models import FOPDT, FirstOrder
 from dynia.result import DyniaResult
-from dynia.segments import (check_segments, fit_segments, holdout_split, intersect_segments,
-                            mask_to_segments, random_segments, segments_from_ic, segments_to_mask,
-                            segments_to_times, validation_error)
+from dynia.segments import (
+    check_segments,
+    fit_segments,
+    holdout_split,
+    intersect_segments,
+    mask_to_segments,
+    random_segments,
+    segments_from_ic,
+    segments_to_mask,
+    segments_to_times,
+    validation_error,
+)
 
 FIRST_ORDER_BOUNDS = {"K": (0.0, 7.0), "T": (0.0, 7.0)}
 FOPDT_BOUNDS = {"K": (0.0, 5.0), "T": (0.0, 10.0), "theta": (0.0, 8.0)}
@@ -18,10 +28,17 @@ def hand_built(ic, names=("K", "T"), **settings):
     """A DyniaResult holding only the IC curves that matter here."""
     ic = np.asarray(ic, dtype=float)
     n_params, n_steps = ic.shape
-    return DyniaResult(names=tuple(names), samples=np.zeros((1, n_params)),
-                       bounds=np.tile([0.0, 1.0], (n_params, 1)), time=np.arange(n_steps) * 2.0, ic=ic,
-                       ci=np.zeros((n_params, n_steps, 2)), gradient=np.zeros((n_params, 1, n_steps)),
-                       bin_centres=np.zeros((n_params, 1)), settings=settings)
+    return DyniaResult(
+        names=tuple(names),
+        samples=np.zeros((1, n_params)),
+        bounds=np.tile([0.0, 1.0], (n_params, 1)),
+        time=np.arange(n_steps) * 2.0,
+        ic=ic,
+        ci=np.zeros((n_params, n_steps, 2)),
+        gradient=np.zeros((n_params, 1, n_steps)),
+        bin_centres=np.zeros((n_params, 1)),
+        settings=settings,
+    )
 
 
 def reference_clean(mask, merge_gap, min_length):
@@ -54,13 +71,11 @@ def reference_clean(mask, merge_gap, min_length):
 
 
 def test_joint_any_and_per_parameter_with_a_missing_window():
-    ic = [[0.9, 0.9, 0.2, 0.9, 0.9, np.nan, 0.6, 0.6],
-          [0.1, 0.8, 0.8, 0.8, 0.1, 0.7, 0.7, 0.2]]
+    ic = [[0.9, 0.9, 0.2, 0.9, 0.9, np.nan, 0.6, 0.6], [0.1, 0.8, 0.8, 0.8, 0.1, 0.7, 0.7, 0.2]]
     result = hand_built(ic)
     assert segments_from_ic(result, mode="joint") == [(1, 2), (3, 4), (6, 7)]
     assert segments_from_ic(result, mode="any") == [(0, 8)]
-    assert segments_from_ic(result, mode="per_parameter") == {"K": [(0, 2), (3, 5), (6, 8)],
-                                                               "T": [(1, 4), (5, 7)]}
+    assert segments_from_ic(result, mode="per_parameter") == {"K": [(0, 2), (3, 5), (6, 8)], "T": [(1, 4), (5, 7)]}
     # NaN is never informative, whatever the threshold
     assert segments_from_ic(result, parameters=["K"], threshold=0.0) == [(0, 5), (6, 8)]
     assert segments_from_ic(result, threshold=0.85, mode="any") == [(0, 2), (3, 5)]
@@ -88,8 +103,9 @@ def test_the_selection_matches_a_step_by_step_reference(seed):
     informative = ic >= 0.4
     for mode, combined in (("joint", informative.all(0)), ("any", informative.any(0))):
         expected = mask_to_segments(np.array(reference_clean(combined, merge_gap, min_length)))
-        assert segments_from_ic(result, threshold=0.4, merge_gap=merge_gap, min_length=min_length,
-                                mode=mode) == expected
+        assert (
+            segments_from_ic(result, threshold=0.4, merge_gap=merge_gap, min_length=min_length, mode=mode) == expected
+        )
 
 
 def test_defaults_follow_the_window_of_the_run():
@@ -99,18 +115,25 @@ def test_defaults_follow_the_window_of_the_run():
     # without n in the settings nothing is merged or dropped
     assert segments_from_ic(hand_built(ic, names=("K",))) == [(0, 3), (4, 6), (8, 12), (13, 14)]
     # a trailing window's IC at t belongs to step t - n
-    assert segments_from_ic(hand_built(ic, names=("K",), n=2, window="trailing"), min_length=1,
-                            merge_gap=0) == [(0, 1), (2, 4), (6, 10), (11, 12)]
+    assert segments_from_ic(hand_built(ic, names=("K",), n=2, window="trailing"), min_length=1, merge_gap=0) == [
+        (0, 1),
+        (2, 4),
+        (6, 10),
+        (11, 12),
+    ]
 
 
-@pytest.mark.parametrize("kwargs, error, message", [
-    (dict(parameters=["K", "gain"]), ValueError, r"unknown: \['gain'\]"),
-    (dict(threshold=1.5), ValueError, r"threshold of K must be a number in \[0, 1\]"),
-    (dict(threshold={"K": 0.5}), ValueError, r"missing: \['T'\]"),
-    (dict(mode="all"), ValueError, "mode must be one of"),
-    (dict(min_length=0), ValueError, "min_length must be at least 1"),
-    (dict(merge_gap=1.5), ValueError, "merge_gap must be a whole number"),
-])
+@pytest.mark.parametrize(
+    "kwargs, error, message",
+    [
+        (dict(parameters=["K", "gain"]), ValueError, r"unknown: \['gain'\]"),
+        (dict(threshold=1.5), ValueError, r"threshold of K must be a number in \[0, 1\]"),
+        (dict(threshold={"K": 0.5}), ValueError, r"missing: \['T'\]"),
+        (dict(mode="all"), ValueError, "mode must be one of"),
+        (dict(min_length=0), ValueError, "min_length must be at least 1"),
+        (dict(merge_gap=1.5), ValueError, "merge_gap must be a whole number"),
+    ],
+)
 def test_bad_selection_options(kwargs, error, message):
     with pytest.raises(error, match=message):
         segments_from_ic(hand_built(np.ones((2, 5))), **kwargs)
@@ -129,15 +152,18 @@ def test_segments_to_times_ends_at_the_last_step():
     assert segments_to_times([(0, 1), (3, 10)], time) == [[0.0, 0.0], [6.0, 18.0]]
 
 
-@pytest.mark.parametrize("segments, message", [
-    ([(0, 11)], r"segments\[0\] = \(0, 11\) is not a segment of a record of 10 steps"),
-    ([(5, 5)], r"need 0 <= start < stop"),
-    ([(-1, 3)], r"need 0 <= start < stop"),
-    ([(0, 5), (4, 8)], r"segments\[1\] = \(4, 8\) overlaps segments\[0\]"),
-    ([(5, 8), (0, 2)], r"starts before"),
-    ([(0.5, 3)], "whole step indices"),
-    ([(1, 2, 3)], r"must be a \(start, stop\) pair"),
-])
+@pytest.mark.parametrize(
+    "segments, message",
+    [
+        ([(0, 11)], r"segments\[0\] = \(0, 11\) is not a segment of a record of 10 steps"),
+        ([(5, 5)], r"need 0 <= start < stop"),
+        ([(-1, 3)], r"need 0 <= start < stop"),
+        ([(0, 5), (4, 8)], r"segments\[1\] = \(4, 8\) overlaps segments\[0\]"),
+        ([(5, 8), (0, 2)], r"starts before"),
+        ([(0.5, 3)], "whole step indices"),
+        ([(1, 2, 3)], r"must be a \(start, stop\) pair"),
+    ],
+)
 def test_bad_segments(segments, message):
     with pytest.raises(ValueError, match=message):
         check_segments(segments, 10)
@@ -238,8 +264,9 @@ def test_standard_errors_match_a_monte_carlo_of_noise_realisations():
     rng = np.random.default_rng(5)
     estimates, errors = [], []
     for _ in range(150):
-        fit = fit_segments(u, clean + rng.normal(0, 0.1, u.size), FirstOrder(), [(5, 45), (65, 90)],
-                           bounds=FIRST_ORDER_BOUNDS)
+        fit = fit_segments(
+            u, clean + rng.normal(0, 0.1, u.size), FirstOrder(), [(5, 45), (65, 90)], bounds=FIRST_ORDER_BOUNDS
+        )
         estimates.append([fit.parameters["K"], fit.parameters["T"]])
         errors.append([fit.std_errors["K"], fit.std_errors["T"]])
     estimates, errors = np.array(estimates), np.array(errors)
@@ -336,19 +363,16 @@ def test_multistart_escapes_a_local_minimum_of_the_dead_time():
     bounds = {"K": (0.1, 3), "T": (0.1, 5), "theta": (0, 50)}
     one = fit_segments(u, y, FOPDT(), [(50, 320)], bounds=bounds, initial={"theta": 35})
     assert one.parameters["theta"] > 20  # stuck
-    several = fit_segments(u, y, FOPDT(), [(50, 320)], bounds=bounds, initial={"theta": 35}, n_starts=8,
-                           rng=3)
+    several = fit_segments(u, y, FOPDT(), [(50, 320)], bounds=bounds, initial={"theta": 35}, n_starts=8, rng=3)
     assert several.parameters["theta"] == pytest.approx(13.0, abs=1e-6)
-    again = fit_segments(u, y, FOPDT(), [(50, 320)], bounds=bounds, initial={"theta": 35}, n_starts=8,
-                         rng=3)
+    again = fit_segments(u, y, FOPDT(), [(50, 320)], bounds=bounds, initial={"theta": 35}, n_starts=8, rng=3)
     assert again.parameters == several.parameters
 
 
 def test_to_dict_is_json_ready():
     u = steps_input()
     y = FirstOrder().simulate([[2.0, 3.0]], u)[0] + np.random.default_rng(0).normal(0, 0.1, u.size)
-    fit = fit_segments(u, y, FirstOrder(), [(15, 60)], bounds={"K": (0, np.inf), "T": (0, 7)},
-                       initial={"K": 1.0})
+    fit = fit_segments(u, y, FirstOrder(), [(15, 60)], bounds={"K": (0, np.inf), "T": (0, 7)}, initial={"K": 1.0})
     record = json.loads(json.dumps(fit.to_dict(), allow_nan=False))
     assert record["parameters"] == pytest.approx(fit.parameters)
     assert record["settings"]["bounds"]["K"] == [0.0, None]
@@ -356,24 +380,27 @@ def test_to_dict_is_json_ready():
     assert record["settings"]["warmup"] is None and record["settings"]["x0"] == "steady"
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    (dict(segments=[(0, 400)]), r"is not a segment of a record of 200 steps"),
-    (dict(segments=[(0, 50), (40, 60)]), "overlaps"),
-    (dict(segments=[]), "segments is empty"),
-    (dict(bounds={"K": (0, 7), "tau": (0, 7)}), r"bounds names unknown parameters \['tau'\]"),
-    (dict(bounds={"K": (0, 7)}), r"parameter 'T' needs finite bounds .* or an initial value"),
-    (dict(bounds={"K": (7, 0), "T": (0, 7)}), r"bounds\['K'\]: need low < high"),
-    (dict(initial={"K": 9.0}), r"initial\['K'\] = 9.0 lies outside its bounds"),
-    (dict(initial={"gain": 1.0}), r"initial names unknown parameters \['gain'\]"),
-    (dict(fixed={"K": 2.0, "T": 3.0}), "nothing is left to fit"),
-    (dict(fixed={"K": 2.0}, initial={"K": 2.0}), "either fitted or fixed"),
-    (dict(segments=[(185, 195)]), r"segments\[0\] = \(185, 195\) has no measured output"),
-    (dict(offset="mean"), "offset must be one of"),
-    (dict(x0="rest"), "x0 must be one of"),
-    (dict(dt=0), "dt must be a finite number > 0"),
-    (dict(warmup=-1), "warmup must be at least 0"),
-    (dict(bounds={"K": (0, np.inf), "T": (0, 7)}, initial={"K": 1.0}, n_starts=3), "must then be finite"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(segments=[(0, 400)]), r"is not a segment of a record of 200 steps"),
+        (dict(segments=[(0, 50), (40, 60)]), "overlaps"),
+        (dict(segments=[]), "segments is empty"),
+        (dict(bounds={"K": (0, 7), "tau": (0, 7)}), r"bounds names unknown parameters \['tau'\]"),
+        (dict(bounds={"K": (0, 7)}), r"parameter 'T' needs finite bounds .* or an initial value"),
+        (dict(bounds={"K": (7, 0), "T": (0, 7)}), r"bounds\['K'\]: need low < high"),
+        (dict(initial={"K": 9.0}), r"initial\['K'\] = 9.0 lies outside its bounds"),
+        (dict(initial={"gain": 1.0}), r"initial names unknown parameters \['gain'\]"),
+        (dict(fixed={"K": 2.0, "T": 3.0}), "nothing is left to fit"),
+        (dict(fixed={"K": 2.0}, initial={"K": 2.0}), "either fitted or fixed"),
+        (dict(segments=[(185, 195)]), r"segments\[0\] = \(185, 195\) has no measured output"),
+        (dict(offset="mean"), "offset must be one of"),
+        (dict(x0="rest"), "x0 must be one of"),
+        (dict(dt=0), "dt must be a finite number > 0"),
+        (dict(warmup=-1), "warmup must be at least 0"),
+        (dict(bounds={"K": (0, np.inf), "T": (0, 7)}, initial={"K": 1.0}, n_starts=3), "must then be finite"),
+    ],
+)
 def test_bad_fit_arguments(kwargs, message):
     u = steps_input()
     y = FirstOrder().simulate([[2.0, 3.0]], u)[0]
@@ -408,7 +435,7 @@ def test_validation_error_of_the_true_model_is_the_noise_on_the_held_out_part():
     noise = np.random.default_rng(8).normal(0, 0.2, u.size)
     y = clean + noise
     fit_part, held_out = holdout_split(u.size)
-    (start, stop), = held_out
+    ((start, stop),) = held_out
     truth = validation_error(u, y, FirstOrder(), {"K": 2.0, "T": 3.0}, held_out)
     assert truth == pytest.approx(np.sqrt(np.mean(noise[start:stop] ** 2)), rel=1e-12)
     assert truth == pytest.approx(0.2, rel=0.1)  # 480 points: 3 standard deviations
@@ -430,12 +457,15 @@ def test_simulate_reproduces_the_fitted_output():
     assert np.allclose(fit.simulate(u), y, atol=1e-6)
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    (dict(parameters={"K": 2.0}), r"parameters lacks \['T'\]"),
-    (dict(segments=[(0, 300)]), "is not a segment"),
-    (dict(segments=np.zeros(10, dtype=bool)), r"mask must have shape \(200,\)"),
-    (dict(segments=[(185, 195)]), "hold no measured output"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(parameters={"K": 2.0}), r"parameters lacks \['T'\]"),
+        (dict(segments=[(0, 300)]), "is not a segment"),
+        (dict(segments=np.zeros(10, dtype=bool)), r"mask must have shape \(200,\)"),
+        (dict(segments=[(185, 195)]), "hold no measured output"),
+    ],
+)
 def test_bad_validation_arguments(kwargs, message):
     u = steps_input()
     y = FirstOrder().simulate([[2.0, 3.0]], u)[0]

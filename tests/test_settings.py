@@ -1,4 +1,5 @@
 """AnalysisSettings: checked once, strictly typed, and honoured (or refused) by every front-end."""
+
 import numpy as np
 import pytest
 
@@ -18,32 +19,38 @@ def test_every_error_is_a_dynia_error_and_a_value_error(error):
     assert issubclass(error, DyniaError) and issubclass(error, ValueError)
 
 
-@pytest.mark.parametrize("field, value, message", [
-    ("percentage", "10", r"percentage must be a finite number; got '10' \(str\)"),
-    ("n", 2.5, r"n must be a whole number; got 2.5 \(float\)"),
-    ("n_samples", True, r"n_samples must be a whole number; got True \(bool\)"),
-    ("conf_level", 0.9, r"conf_level is a percentage in \(50, 100\); got 0.9 \(did you mean 90\?\)"),
-    ("conf_level", 50, r"conf_level is a percentage in \(50, 100\); got 50$"),
-    ("conf_level", 100, r"conf_level is a percentage in \(50, 100\)"),
-    ("bins", MAX_BINS + 1, "bins must be at most 1000"),
-    ("min_points", 22, r"min_points 22 is more than a window holds \(2n\+1 = 21"),
-    ("workers", 0, "workers must be at least 1"),
-    ("flavour", "glue", "flavour must be one of 'thesis', 'mcat', 'weighted'"),
-    ("dt", "1", "dt must be a finite number > 0"),
-])
+@pytest.mark.parametrize(
+    "field, value, message",
+    [
+        ("percentage", "10", r"percentage must be a finite number; got '10' \(str\)"),
+        ("n", 2.5, r"n must be a whole number; got 2.5 \(float\)"),
+        ("n_samples", True, r"n_samples must be a whole number; got True \(bool\)"),
+        ("conf_level", 0.9, r"conf_level is a percentage in \(50, 100\); got 0.9 \(did you mean 90\?\)"),
+        ("conf_level", 50, r"conf_level is a percentage in \(50, 100\); got 50$"),
+        ("conf_level", 100, r"conf_level is a percentage in \(50, 100\)"),
+        ("bins", MAX_BINS + 1, "bins must be at most 1000"),
+        ("min_points", 22, r"min_points 22 is more than a window holds \(2n\+1 = 21"),
+        ("workers", 0, "workers must be at least 1"),
+        ("flavour", "glue", "flavour must be one of 'thesis', 'mcat', 'weighted'"),
+        ("dt", "1", "dt must be a finite number > 0"),
+    ],
+)
 def test_a_bad_setting_is_one_clear_error_naming_it(field, value, message):
     with pytest.raises(SettingsError, match=message) as caught:
         AnalysisSettings(**{field: value})
     assert caught.value.setting == field
 
 
-@pytest.mark.parametrize("changes, message", [
-    (dict(sampler="iis", engine="numba"), "which the compiled engine does not take"),
-    (dict(sampler="de", flavour="mcat"), "which the mcat flavour cannot use"),
-    (dict(engine="numba", flavour="mcat"), "engine 'numba' covers the 'thesis' and 'weighted'"),
-    (dict(flavour="mcat", percentage=30), "does not divide 100"),
-    (dict(n_samples=15, percentage=10), "keeps 1 parameter sets per window"),
-])
+@pytest.mark.parametrize(
+    "changes, message",
+    [
+        (dict(sampler="iis", engine="numba"), "which the compiled engine does not take"),
+        (dict(sampler="de", flavour="mcat"), "which the mcat flavour cannot use"),
+        (dict(engine="numba", flavour="mcat"), "engine 'numba' covers the 'thesis' and 'weighted'"),
+        (dict(flavour="mcat", percentage=30), "does not divide 100"),
+        (dict(n_samples=15, percentage=10), "keeps 1 parameter sets per window"),
+    ],
+)
 def test_settings_that_cannot_go_together_are_refused(changes, message):
     with pytest.raises(SettingsError, match=message):
         AnalysisSettings(**changes)
@@ -80,11 +87,14 @@ def test_a_settings_object_and_keywords_give_the_same_run():
     assert by_object.settings["conf_level"] == 80 and by_object.settings["n_sampled"] == 300
 
 
-@pytest.mark.parametrize("changes, message", [
-    (dict(window="centred"), "OnlineDynia does not support window='centred'"),
-    (dict(workers=2), "OnlineDynia does not support workers=2"),
-    (dict(engine="numba"), "OnlineDynia does not support engine='numba'"),
-])
+@pytest.mark.parametrize(
+    "changes, message",
+    [
+        (dict(window="centred"), "OnlineDynia does not support window='centred'"),
+        (dict(workers=2), "OnlineDynia does not support workers=2"),
+        (dict(engine="numba"), "OnlineDynia does not support engine='numba'"),
+    ],
+)
 def test_online_refuses_what_it_cannot_honour(changes, message):
     settings = AnalysisSettings(n_samples=100, window="trailing").replace(**changes)
     with pytest.raises(SettingsError, match=message):
@@ -100,10 +110,8 @@ def test_online_takes_a_settings_object_and_equals_the_batch_run():
 
 def test_a_lag_model_whose_pole_underflows_runs_on_both_engines():
     # T far below dt: exp(-dt/T) is 0 for every sample, so the model has no state term.
-    compiled = dynia.run(U, Y, FirstOrder(), {"K": (0, 7), "T": (0, 0.001)}, n_samples=200, n=3, rng=1,
-                         engine="numba")
-    plain = dynia.run(U, Y, FirstOrder(), {"K": (0, 7), "T": (0, 0.001)}, n_samples=200, n=3, rng=1,
-                      engine="numpy")
+    compiled = dynia.run(U, Y, FirstOrder(), {"K": (0, 7), "T": (0, 0.001)}, n_samples=200, n=3, rng=1, engine="numba")
+    plain = dynia.run(U, Y, FirstOrder(), {"K": (0, 7), "T": (0, 0.001)}, n_samples=200, n=3, rng=1, engine="numpy")
     assert compiled.settings["engine"] == "numba"
     assert np.array_equal(compiled.ic, plain.ic, equal_nan=True)
     assert np.array_equal(compiled.ci, plain.ci, equal_nan=True)

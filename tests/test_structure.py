@@ -1,4 +1,5 @@
 """Model-structure warnings (thesis 4.4): a constant parameter whose CLD-gradient maximum moves."""
+
 import numpy as np
 import pytest
 
@@ -47,8 +48,10 @@ def record(seed, gain_after=2.0, time_constant_after=3.0):
 
 # --- DYNIA runs on synthetic data -------------------------------------------------------------
 
-@pytest.mark.parametrize("bounds, identified", [(NARROW_GAIN, [0, 1]), (WIDE_GAIN, [0])],
-                         ids=["narrow-gain", "wide-gain"])
+
+@pytest.mark.parametrize(
+    "bounds, identified", [(NARROW_GAIN, [0, 1]), (WIDE_GAIN, [0])], ids=["narrow-gain", "wide-gain"]
+)
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_a_first_order_model_of_first_order_data_draws_no_warning(seed, bounds, identified):
     u, y = record(seed)
@@ -100,7 +103,7 @@ def test_a_linear_model_of_a_nonlinear_plant_goes_back_and_forth_with_the_level(
     # A static square law before the lag: the apparent gain is u/15, 0.67 at u = 10 and 2 at 30.
     rng = np.random.default_rng(3)
     u = level_steps(rng, levels=[10.0, 30.0])
-    y = FirstOrder().simulate([[1.0, 3.0]], u ** 2 / 15)[0] + rng.normal(0, 0.2, N_STEPS)
+    y = FirstOrder().simulate([[1.0, 3.0]], u**2 / 15)[0] + rng.normal(0, 0.2, N_STEPS)
     warnings = structure_warnings(analyse(u, y, WIDE_GAIN, 3))
     assert [w.parameter for w in warnings] == ["K"]
     low, high = warnings[0].compared
@@ -123,9 +126,17 @@ def hand_built(peak_bin, *, ic=0.9, half_width=0.1, n=2):
     gradient[0, peak_bin, np.arange(steps)] = 1.0
     centre = CENTRES[peak_bin]
     band = np.stack([centre - half_width, centre + half_width], axis=-1)[None]
-    return DyniaResult(names=("p",), samples=np.zeros((1, 1)), bounds=np.array([[0.0, 1.0]]),
-                       time=np.arange(steps, dtype=float), ic=np.broadcast_to(ic, (1, steps)).copy(),
-                       ci=band, gradient=gradient, bin_centres=CENTRES[None], settings={"n": n})
+    return DyniaResult(
+        names=("p",),
+        samples=np.zeros((1, 1)),
+        bounds=np.array([[0.0, 1.0]]),
+        time=np.arange(steps, dtype=float),
+        ic=np.broadcast_to(ic, (1, steps)).copy(),
+        ci=band,
+        gradient=gradient,
+        bin_centres=CENTRES[None],
+        settings={"n": n},
+    )
 
 
 def two_regimes(first, second, steps=100):
@@ -175,7 +186,7 @@ def odd_blocks(steps, starts):
     """Location bin 6, except one block of 2n+1 = 5 windows at bin 13 from each start, set apart by a gap."""
     peaks = np.full(steps, 6)
     for start in starts:
-        peaks[start:start + 5] = 13
+        peaks[start : start + 5] = 13
     result = hand_built(peaks)
     for start in starts:
         result.ic[0, [start - 1, start + 5]] = 0.1
@@ -241,21 +252,30 @@ def test_ignored_samples_remove_every_window_that_uses_them():
 
 def test_every_parameter_is_checked_separately():
     steady, moving = hand_built(np.full(100, 6)), hand_built(two_regimes(6, 13))
-    two = DyniaResult(names=("steady", "moving"), samples=np.zeros((1, 2)),
-                      bounds=np.array([[0.0, 1.0], [0.0, 1.0]]), time=moving.time,
-                      ic=np.repeat(moving.ic, 2, axis=0), ci=np.concatenate([steady.ci, moving.ci]),
-                      gradient=np.concatenate([steady.gradient, moving.gradient]),
-                      bin_centres=np.repeat(moving.bin_centres, 2, axis=0), settings={"n": 2})
+    two = DyniaResult(
+        names=("steady", "moving"),
+        samples=np.zeros((1, 2)),
+        bounds=np.array([[0.0, 1.0], [0.0, 1.0]]),
+        time=moving.time,
+        ic=np.repeat(moving.ic, 2, axis=0),
+        ci=np.concatenate([steady.ci, moving.ci]),
+        gradient=np.concatenate([steady.gradient, moving.gradient]),
+        bin_centres=np.repeat(moving.bin_centres, 2, axis=0),
+        settings={"n": 2},
+    )
     assert [w.parameter for w in structure_warnings(two)] == ["moving"]
 
 
-@pytest.mark.parametrize("kwargs, error, message", [
-    (dict(ic_threshold=1.0), ValueError, "ic_threshold must lie strictly between 0 and 1"),
-    (dict(min_windows=0), ValueError, "min_windows must be at least 1"),
-    (dict(drift_tolerance=0), ValueError, "drift_tolerance must lie strictly between"),
-    (dict(ignore=np.zeros(99, dtype=bool)), ValueError, r"ignore must be a boolean array of shape \(100,\)"),
-    (dict(ignore=np.zeros(100)), ValueError, "got dtype float64"),
-])
+@pytest.mark.parametrize(
+    "kwargs, error, message",
+    [
+        (dict(ic_threshold=1.0), ValueError, "ic_threshold must lie strictly between 0 and 1"),
+        (dict(min_windows=0), ValueError, "min_windows must be at least 1"),
+        (dict(drift_tolerance=0), ValueError, "drift_tolerance must lie strictly between"),
+        (dict(ignore=np.zeros(99, dtype=bool)), ValueError, r"ignore must be a boolean array of shape \(100,\)"),
+        (dict(ignore=np.zeros(100)), ValueError, "got dtype float64"),
+    ],
+)
 def test_bad_options_are_named(kwargs, error, message):
     with pytest.raises(error, match=message):
         structure_warnings(hand_built(np.full(100, 6)), **kwargs)

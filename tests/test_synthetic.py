@@ -1,4 +1,5 @@
 """cooling_water_loop: determinism, the properties the case study relies on, exact dynamics, errors."""
+
 import numpy as np
 import pytest
 
@@ -66,8 +67,9 @@ def test_levels_gains_and_the_change_of_mode(month):
     # y = K u in steady state, no offset: K = 2 before the change of mode, 1.8 after it
     assert abs(np.median(y[before] / u[before]) - 2.0) < 0.01
     assert abs(np.median(y[after] / u[after]) - 1.8) < 0.01
-    np.testing.assert_allclose(truth.gain_at([0.0, truth.drift_start, truth.drift_end, truth.end]),
-                               [2.0, 2.0, 1.8, 1.8])
+    np.testing.assert_allclose(
+        truth.gain_at([0.0, truth.drift_start, truth.drift_end, truth.end]), [2.0, 2.0, 1.8, 1.8]
+    )
     middle = (truth.drift_start + truth.drift_end) / 2
     assert truth.gain_at(middle) * truth.base_input_at(middle) == pytest.approx(72.0)
 
@@ -119,21 +121,23 @@ def test_exception_log_stores_the_reading_before_an_exception_and_a_heartbeat():
     # 4 passes the deadband (0.2) from 0: 3 is stored with it; 9 is the heartbeat (5 after 4)
     np.testing.assert_array_equal(_exception_log(times, values, 0.2, 5.0), [0, 3, 4, 9, 11])
     # consecutive exceptions are each stored once
-    np.testing.assert_array_equal(_exception_log(times[:4], np.array([0.0, 1.0, 2.0, 2.0]), 0.5, 100.0),
-                                  [0, 1, 2, 3])
+    np.testing.assert_array_equal(_exception_log(times[:4], np.array([0.0, 1.0, 2.0, 2.0]), 0.5, 100.0), [0, 1, 2, 3])
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    (dict(days=0), "days must lie strictly between 0 and inf"),
-    (dict(days=np.nan), "days must be a finite number"),
-    (dict(n_steps=0), "n_steps must be at least 1"),
-    (dict(scan=1.5), "scan must lie strictly between 0 and 1"),
-    (dict(glitch_lag=-1.0), "glitch_lag must lie strictly between 0 and inf"),
-    (dict(step_offset=(2.0, 1.0)), r"step_offset must satisfy 0 <= low <= high"),
-    (dict(step_offset=3.0), r"step_offset must be a \(low, high\) pair"),
-    (dict(sensor_noise=-0.1), "sensor_noise must lie strictly between 0 and inf"),
-    (dict(days=0.05), "days = 0.05 is too short"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(days=0), "days must lie strictly between 0 and inf"),
+        (dict(days=np.nan), "days must be a finite number"),
+        (dict(n_steps=0), "n_steps must be at least 1"),
+        (dict(scan=1.5), "scan must lie strictly between 0 and 1"),
+        (dict(glitch_lag=-1.0), "glitch_lag must lie strictly between 0 and inf"),
+        (dict(step_offset=(2.0, 1.0)), r"step_offset must satisfy 0 <= low <= high"),
+        (dict(step_offset=3.0), r"step_offset must be a \(low, high\) pair"),
+        (dict(sensor_noise=-0.1), "sensor_noise must lie strictly between 0 and inf"),
+        (dict(days=0.05), "days = 0.05 is too short"),
+    ],
+)
 def test_bad_arguments_are_named(kwargs, message):
     with pytest.raises(ValueError, match=message):
         cooling_water_loop(np.random.default_rng(0), **kwargs)

@@ -1,4 +1,5 @@
 """The one-to-one port of the thesis's MATLAB, checked on hand-worked cases."""
+
 import numpy as np
 import pytest
 
@@ -40,8 +41,9 @@ def test_calc_likelihood_with_one_row_fails_where_matlab_does():
 def test_cumul_likelihood_accumulates_in_parameter_order():
     lhood = np.array([0.5, 0.3, 0.2])
     par_sorted = np.array([1.0, 2.0, 3.0])
-    cumulated, c_all = thesis.cumul_likelihood(5, np.array([0.5, 1.0, 2.0, 3.0, 4.0]), par_sorted,
-                                               np.array([2, 0, 1]), lhood)
+    cumulated, c_all = thesis.cumul_likelihood(
+        5, np.array([0.5, 1.0, 2.0, 3.0, 4.0]), par_sorted, np.array([2, 0, 1]), lhood
+    )
     np.testing.assert_allclose(cumulated, [0.2, 0.7, 1.0])
     # MATLAB: 0 below the set, the loop skips values in [min, max), then the CLD, then ones
     assert c_all[0] == 0
@@ -92,13 +94,16 @@ def test_moving_window_calcs_identifies_a_gain_when_the_input_is_large():
     assert CI_t[-1, 0] <= 0.4 <= CI_t[-1, 1]
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    (dict(ns=2000 // 3 * 3 + 1), "not a whole number"),
-    (dict(percentage=2), "leaves 1 behavioural sets"),
-    (dict(n=20), "TIME >= 2n"),
-    (dict(lb=1, ub=1), "lb must be below ub"),
-    (dict(bins=1), "bins must be at least 2"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(ns=2000 // 3 * 3 + 1), "not a whole number"),
+        (dict(percentage=2), "leaves 1 behavioural sets"),
+        (dict(n=20), "TIME >= 2n"),
+        (dict(lb=1, ub=1), "lb must be below ub"),
+        (dict(bins=1), "bins must be at least 2"),
+    ],
+)
 def test_moving_window_calcs_rejects_what_matlab_cannot_run(kwargs, message):
     args = dict(TIME=30, lb=0, ub=1, ns=50, bins=10, percentage=20, n=2)
     args.update(kwargs)
@@ -106,8 +111,9 @@ def test_moving_window_calcs_rejects_what_matlab_cannot_run(kwargs, message):
     if "ns" in kwargs:
         args["percentage"] = 10.1
     with pytest.raises(ValueError, match=message):
-        thesis.moving_window_calcs(args["TIME"], par, args["lb"], args["ub"], args["ns"], mct, y,
-                                   args["bins"], args["percentage"], args["n"])
+        thesis.moving_window_calcs(
+            args["TIME"], par, args["lb"], args["ub"], args["ns"], mct, y, args["bins"], args["percentage"], args["n"]
+        )
 
 
 def test_moving_window_calcs_checks_shapes():

@@ -1,4 +1,5 @@
 """Verdicts on real and synthetic records: each rule fires where it should and only there."""
+
 import math
 from pathlib import Path
 
@@ -21,11 +22,17 @@ def codes(verdict):
 def handmade(ic, lower, upper, bounds=(0.0, 10.0), n=2, window="centred"):
     """A one-parameter result whose IC and band are given per step."""
     steps = len(ic)
-    return DyniaResult(names=("a",), samples=np.zeros((3, 1)), bounds=np.array([bounds]),
-                       time=np.arange(steps) * 0.5, ic=np.array([ic], dtype=float),
-                       ci=np.stack([lower, upper], axis=-1)[None].astype(float),
-                       gradient=np.zeros((1, 1, steps)), bin_centres=np.zeros((1, 1)),
-                       settings=dict(n=n, window=window))
+    return DyniaResult(
+        names=("a",),
+        samples=np.zeros((3, 1)),
+        bounds=np.array([bounds]),
+        time=np.arange(steps) * 0.5,
+        ic=np.array([ic], dtype=float),
+        ci=np.stack([lower, upper], axis=-1)[None].astype(float),
+        gradient=np.zeros((1, 1, steps)),
+        bin_centres=np.zeros((1, 1)),
+        settings=dict(n=n, window=window),
+    )
 
 
 def example1(seed):
@@ -37,6 +44,7 @@ def example1(seed):
 
 
 # ---- rules on hand-made results ------------------------------------------------------------------------------
+
 
 def test_clean_peak_away_from_edges_and_bounds_is_identified():
     ic = np.full(30, 0.2)
@@ -53,9 +61,12 @@ def test_band_within_one_percent_of_a_bound_is_suspect(lower, upper, side):
     verdict = assess(result)["a"]
     assert verdict["verdict"] == "suspect"
     bound = "0" if side == "lower" else "10"
-    assert verdict["reasons"] == [{"code": "band_at_bound",
-                                   "text": f"the band [{lower:.4g}, {upper:.4g}] at max IC touches the {side} "
-                                           f"bound {bound}"}]
+    assert verdict["reasons"] == [
+        {
+            "code": "band_at_bound",
+            "text": f"the band [{lower:.4g}, {upper:.4g}] at max IC touches the {side} bound {bound}",
+        }
+    ]
 
 
 def test_band_just_beyond_one_percent_of_a_bound_is_not_suspect():
@@ -64,16 +75,19 @@ def test_band_just_beyond_one_percent_of_a_bound_is_not_suspect():
     assert assess(handmade(ic, np.full(30, 0.11), np.full(30, 9.89)))["a"]["verdict"] == "identified"
 
 
-@pytest.mark.parametrize("peak, truncated, edge", [(0, True, "start"), (1, True, "start"), (4, False, "start"),
-                                                   (25, False, "end"), (29, True, "end")])
+@pytest.mark.parametrize(
+    "peak, truncated, edge",
+    [(0, True, "start"), (1, True, "start"), (4, False, "start"), (25, False, "end"), (29, True, "end")],
+)
 def test_peak_within_one_window_of_the_edge_is_suspect(peak, truncated, edge):
     ic = np.full(30, 0.2)
     ic[peak] = 0.9
     verdict = assess(handmade(ic, np.full(30, 4.0), np.full(30, 5.0), n=2))["a"]
     assert verdict["verdict"] == "suspect"
     assert codes(verdict) == ["record_edge"]
-    assert verdict["reasons"][0]["text"].endswith(f"of the record's {edge}" + ("; its window is truncated"
-                                                                               if truncated else ""))
+    assert verdict["reasons"][0]["text"].endswith(
+        f"of the record's {edge}" + ("; its window is truncated" if truncated else "")
+    )
 
 
 @pytest.mark.parametrize("peak", [5, 24])
@@ -102,8 +116,9 @@ def test_low_ic_is_weak_and_keeps_its_suspicions():
 
 def test_missing_ic_everywhere_is_weak():
     result = handmade(np.full(30, np.nan), np.full(30, np.nan), np.full(30, np.nan))
-    assert assess(result) == {"a": {"verdict": "weak", "reasons": [
-        {"code": "no_ic", "text": "no window had enough measured points"}]}}
+    assert assess(result) == {
+        "a": {"verdict": "weak", "reasons": [{"code": "no_ic", "text": "no window had enough measured points"}]}
+    }
 
 
 def test_verdicts_are_the_three_documented_words():
@@ -111,6 +126,7 @@ def test_verdicts_are_the_three_documented_words():
 
 
 # ---- the noise rule ------------------------------------------------------------------------------------------
+
 
 def test_noise_sigma_is_robust_to_steps_and_skips_missing_samples():
     rng = np.random.default_rng(5)
@@ -159,6 +175,7 @@ def test_steady_state_with_zero_input_fits_noise_and_a_step_response_does_not():
 
 # ---- assess on runs ------------------------------------------------------------------------------------------
 
+
 def test_gain_on_a_long_clean_step_is_identified():
     u = np.r_[np.zeros(30), np.ones(200), np.zeros(70)]
     model = dynia.models.FirstOrder()
@@ -173,8 +190,7 @@ def test_heating_time_constant_peaks_with_its_band_at_the_bound():
     data = dynia.data.load_csv(HEATING, time="time", input="u", output="y")
     u, y = data.u - 6.0, data.y - data.y[0]
     model = dynia.models.FirstOrder()
-    result = dynia.run(u, y, model, {"K": (0, 40), "T": (0, 200)}, dt=data.dt, n=10, n_samples=2000, x0="zero",
-                       rng=1)
+    result = dynia.run(u, y, model, {"K": (0, 40), "T": (0, 200)}, dt=data.dt, n=10, n_samples=2000, x0="zero", rng=1)
     summary = result.summary()
     assert summary["T"]["time_of_max_ic"] == 1580.0
     assert summary["T"]["max_ic"] == pytest.approx(0.92, abs=0.01)
@@ -193,8 +209,7 @@ def fopdt_step(step_time):
     t = np.arange(0, 40, dt)
     u = np.where(t >= step_time, 1.0, 0.0)
     y = model.simulate([[2.0, 3.0, 2.0]], u, dt=dt)[0] + np.random.default_rng(3).normal(0, 0.02, t.size)
-    result = dynia.run(u, y, model, {"K": (0, 4), "T": (0, 10), "theta": (0, 5)}, dt=dt, n=4, n_samples=2000,
-                       rng=1)
+    result = dynia.run(u, y, model, {"K": (0, 4), "T": (0, 10), "theta": (0, 5)}, dt=dt, n=4, n_samples=2000, rng=1)
     return u, y, model, result
 
 
@@ -231,10 +246,17 @@ def test_samples_are_simulated_in_the_models_parameter_order():
     # Result columns (T, K), model columns (K, T); every set has K = 2, so in steady state all give y exactly.
     ic = np.full((2, 60), 0.2)
     ic[:, 40] = 0.9
-    result = DyniaResult(names=("T", "K"), samples=np.array([[1.0, 2.0], [2.0, 2.0], [3.0, 2.0]]),
-                         bounds=np.array([[0.0, 10.0], [0.0, 10.0]]), time=np.arange(60.0), ic=ic,
-                         ci=np.tile([4.0, 5.0], (2, 60, 1)), gradient=np.zeros((2, 1, 60)),
-                         bin_centres=np.zeros((2, 1)), settings=dict(n=2, dt=1.0, x0="steady"))
+    result = DyniaResult(
+        names=("T", "K"),
+        samples=np.array([[1.0, 2.0], [2.0, 2.0], [3.0, 2.0]]),
+        bounds=np.array([[0.0, 10.0], [0.0, 10.0]]),
+        time=np.arange(60.0),
+        ic=ic,
+        ci=np.tile([4.0, 5.0], (2, 60, 1)),
+        gradient=np.zeros((2, 1, 60)),
+        bin_centres=np.zeros((2, 1)),
+        settings=dict(n=2, dt=1.0, x0="steady"),
+    )
     u, y = np.ones(60), np.full(60, 2.0)
     found = assess(result, u=u, y=y, model=dynia.models.FirstOrder())
     assert list(found) == ["T", "K"]

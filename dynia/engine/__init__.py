@@ -6,6 +6,7 @@
 :mod:`~dynia.engine.cld` holds the likelihood and CLD arithmetic and
 :mod:`~dynia.engine.kernels` the compiled (numba) versions of the hot loops.
 """
+
 from . import cld, flavours, kernels, selection, windows
 from .flavours import ENGINES, FLAVOURS
 from .windows import WINDOWS, moving_window

@@ -17,12 +17,12 @@ array([0.444, 0.222, 0.333])
 >>> cld.weighted_limits(np.array([1.0, 3.0, 2.0]), w, 50).tolist()
 [1.0, 2.0]
 """
+
 import math
 
 import numpy as np
 
-__all__ = ["likelihood", "limits", "weighted_limits", "binned_mass", "cumulative",
-           "weighted_quantiles"]
+__all__ = ["likelihood", "limits", "weighted_limits", "binned_mass", "cumulative", "weighted_quantiles"]
 
 
 def likelihood(cost):
@@ -79,9 +79,13 @@ def weighted_limits(values, weights, conf_level):
     ndarray (..., 2): lower, upper.
     """
     ordered, cumulative_likelihood = cumulative(values, weights)
-    return np.concatenate([_first_reaching(ordered, cumulative_likelihood, level)
-                           for level in ((100 - conf_level) / 200, (100 + conf_level) / 200)],
-                          axis=-1)
+    return np.concatenate(
+        [
+            _first_reaching(ordered, cumulative_likelihood, level)
+            for level in ((100 - conf_level) / 200, (100 + conf_level) / 200)
+        ],
+        axis=-1,
+    )
 
 
 def _first_reaching(ordered, cumulative_likelihood, level):
@@ -89,8 +93,7 @@ def _first_reaching(ordered, cumulative_likelihood, level):
     # The CLD never decreases, so the count of points below the level is the
     # first index reaching it; rounding can leave the total a hair under a
     # level close to 1, hence the clip to the last value.
-    first = np.minimum((cumulative_likelihood < level).sum(axis=-1, keepdims=True),
-                       ordered.shape[-1] - 1)
+    first = np.minimum((cumulative_likelihood < level).sum(axis=-1, keepdims=True), ordered.shape[-1] - 1)
     return np.take_along_axis(ordered, first, axis=-1)
 
 
@@ -124,8 +127,7 @@ def binned_mass(values, weights, low, high, bins):
     rows = values.reshape(-1, values.shape[-1])
     which = np.clip(((rows - low) / (high - low) * bins).astype(np.intp), 0, bins - 1)
     flat = which + bins * np.arange(rows.shape[0])[:, None]
-    mass = np.bincount(flat.ravel(), weights=weights.reshape(rows.shape).ravel(),
-                       minlength=rows.shape[0] * bins)
+    mass = np.bincount(flat.ravel(), weights=weights.reshape(rows.shape).ravel(), minlength=rows.shape[0] * bins)
     return mass.reshape(values.shape[:-1] + (bins,))
 
 
@@ -147,5 +149,4 @@ def weighted_quantiles(outputs, weights, levels):
     cumulative likelihood reaches each level.
     """
     ordered, cumulative_likelihood = cumulative(np.asarray(outputs, dtype=float).T, weights)
-    return np.array([_first_reaching(ordered, cumulative_likelihood, level)[:, 0]
-                     for level in levels])
+    return np.array([_first_reaching(ordered, cumulative_likelihood, level)[:, 0] for level in levels])

@@ -6,6 +6,7 @@
 importance-weighted samples take :class:`ImportanceFlavour`; ``"mcat"`` is
 :class:`McatFlavour`. See :mod:`dynia.engine.windows` for what each computes.
 """
+
 import math
 
 import numpy as np
@@ -20,9 +21,20 @@ from .selection import (
     stable_rank_mask,
 )
 
-__all__ = ["FLAVOURS", "ENGINES", "FLAVOUR_CLASSES", "compiled_engine", "flavour_analysis", "bin_centres_of",
-           "importance_weights", "ThesisFlavour", "WeightedFlavour", "CompiledFlavour", "ImportanceFlavour",
-           "McatFlavour"]
+__all__ = [
+    "FLAVOURS",
+    "ENGINES",
+    "FLAVOUR_CLASSES",
+    "compiled_engine",
+    "flavour_analysis",
+    "bin_centres_of",
+    "importance_weights",
+    "ThesisFlavour",
+    "WeightedFlavour",
+    "CompiledFlavour",
+    "ImportanceFlavour",
+    "McatFlavour",
+]
 
 FLAVOURS = ("thesis", "mcat", "weighted")
 ENGINES = ("auto", "numba", "numpy")
@@ -37,8 +49,10 @@ def compiled_engine(engine, flavour, weights=None):
         if not kernels.AVAILABLE:
             raise SettingsError("engine='numba' needs numba, which is not installed (pip install numba)")
         if not supported:
-            raise SettingsError("engine='numba' covers the 'thesis' and 'weighted' flavours without "
-                             "importance weights; use engine='numpy' or 'auto' for this analysis")
+            raise SettingsError(
+                "engine='numba' covers the 'thesis' and 'weighted' flavours without "
+                "importance weights; use engine='numpy' or 'auto' for this analysis"
+            )
     return engine != "numpy" and supported and kernels.AVAILABLE
 
 
@@ -52,10 +66,13 @@ def flavour_analysis(flavour, compiled, params, bounds, percentage, bins, conf_l
     """
     if weights is not None:
         if flavour == "mcat":
-            raise SettingsError("weights are not supported by the mcat flavour, whose behavioural set "
-                                "is a block of the sorted population; use 'thesis' or 'weighted'")
-        return ImportanceFlavour(params, bounds, percentage, bins, conf_level,
-                                 importance_weights(weights, params.shape[0]), flavour)
+            raise SettingsError(
+                "weights are not supported by the mcat flavour, whose behavioural set "
+                "is a block of the sorted population; use 'thesis' or 'weighted'"
+            )
+        return ImportanceFlavour(
+            params, bounds, percentage, bins, conf_level, importance_weights(weights, params.shape[0]), flavour
+        )
     if compiled:
         return CompiledFlavour(params, bounds, percentage, bins, conf_level, flavour, min_points)
     return FLAVOUR_CLASSES[flavour](params, bounds, percentage, bins, conf_level)
@@ -89,7 +106,8 @@ class ThesisFlavour:
         if self.count < 2:
             raise SettingsError(
                 f"percentage={percentage} of {n_samples} samples leaves {self.count} behavioural "
-                "sets per window; at least 2 are needed (raise percentage or the number of samples)")
+                "sets per window; at least 2 are needed (raise percentage or the number of samples)"
+            )
         self.columns = np.ascontiguousarray(params.T)
         self.bounds = bounds
         self.bins = bins
@@ -99,7 +117,7 @@ class ThesisFlavour:
 
     def analyse(self, mae, usable):
         with np.errstate(over="ignore"):  # an error beyond 1e154 costs inf: still the worst
-            cost = mae ** 2
+            cost = mae**2
         cost[~usable] = 0.0  # any finite value: these windows are blanked below
         selected = lowest_stable(cost, self.count)
         weights = cld.likelihood(np.take_along_axis(cost, selected, axis=1))
@@ -136,17 +154,34 @@ class CompiledFlavour:
         self.lows = np.ascontiguousarray(bounds[:, 0])
         self.highs = np.ascontiguousarray(bounds[:, 1])
         lower_share = (1 - conf_level / 100) / 2
-        self.positions = np.array([math.floor(lower_share * (self.count - 1)),
-                                   math.floor((1 - lower_share) * (self.count - 1))], dtype=np.int64)
+        self.positions = np.array(
+            [math.floor(lower_share * (self.count - 1)), math.floor((1 - lower_share) * (self.count - 1))],
+            dtype=np.int64,
+        )
         self.levels = np.array([(100 - conf_level) / 200, (100 + conf_level) / 200])
         self.weighted = flavour == "weighted"
         self.min_points = float(min_points)
 
     def analyse_rows(self, window_errors, measured, m, slots):
         ic, ci, gradient = _chunk_arrays(self.columns.shape[0], self.n_bins, m)
-        kernels.analyse_windows(window_errors, measured, m, slots, self.count, self.columns, self.lows,
-                              self.highs, self.n_bins, self.positions, self.levels, self.weighted,
-                              self.min_points, ic, ci, gradient)
+        kernels.analyse_windows(
+            window_errors,
+            measured,
+            m,
+            slots,
+            self.count,
+            self.columns,
+            self.lows,
+            self.highs,
+            self.n_bins,
+            self.positions,
+            self.levels,
+            self.weighted,
+            self.min_points,
+            ic,
+            ci,
+            gradient,
+        )
         return ic, ci, gradient
 
 
@@ -186,7 +221,7 @@ class ImportanceFlavour:
 
     def analyse(self, mae, usable):
         with np.errstate(over="ignore"):
-            cost = mae ** 2
+            cost = mae**2
         cost[~usable] = 0.0
         order, behavioural = lowest_weighted(cost, self.prior_weights, self.fraction)
         prior = np.where(behavioural, self.prior_weights[order], 0.0)
@@ -217,20 +252,23 @@ class McatFlavour:
         if abs(grouping - round(grouping)) > 1e-9 * grouping:
             raise SettingsError(
                 "the mcat flavour splits the population into 100/percentage blocks; "
-                f"percentage={percentage} does not divide 100 into a whole number of blocks")
+                f"percentage={percentage} does not divide 100 into a whole number of blocks"
+            )
         grouping = round(grouping)
         self.count = n_samples // grouping
         if self.count < 1:
             raise SettingsError(
                 f"percentage={percentage} of {n_samples} samples leaves no behavioural set "
-                "(raise percentage or the number of samples)")
+                "(raise percentage or the number of samples)"
+            )
         self.block = (self.count * (grouping - 1), self.count * grouping)
         lowest, highest = params.min(axis=0), params.max(axis=0)
         if (lowest < 0).any():
             column = int(np.argmax(lowest < 0))
             raise SettingsError(
                 f"the mcat flavour needs non-negative parameters (MCAT's CDF knot sits at "
-                f"max(min - 0.001, 0)); parameter column {column} has samples down to {lowest[column]}")
+                f"max(min - 0.001, 0)); parameter column {column} has samples down to {lowest[column]}"
+            )
         self.columns = np.ascontiguousarray(params.T)
         self.n_bins = bins + 1
         self.bin_centres = np.linspace(lowest, highest, bins + 1, axis=1)
@@ -301,9 +339,7 @@ def _nudge_ties(ordered):
             continue
         visited.add(k)
         tie = nudged[:, k] == nudged[:, k + 1]
-        nudged[:, k + 1] = np.where(tie, nudged[:, k + 1] + (nudged[:, k + 2] - nudged[:, k]) / 1000,
-                                    nudged[:, k + 1])
+        nudged[:, k + 1] = np.where(tie, nudged[:, k + 1] + (nudged[:, k + 2] - nudged[:, k]) / 1000, nudged[:, k + 1])
         if tie.any() and k + 1 <= last and k + 1 not in visited:
             pending = sorted(set(pending) | {k + 1})
     return nudged
-

@@ -22,6 +22,7 @@ sorting), which cannot change their value.
 The kernels release the GIL, so the engine's thread pool runs them on every
 core. This module needs numba; :data:`AVAILABLE` says whether it imported.
 """
+
 import numpy as np
 
 from ..errors import ModelError, SettingsError
@@ -65,9 +66,25 @@ def _combine(target, coefficients, used, sources, start, stop):
 
 
 @_jit
-def simulate_errors(phi, gamma_now, gamma_prev, c, feed_now, feed_prev, delays, state_terms,
-                    output_terms, padded_input, measured, first_step, last_step, state, errors,
-                    sample_start, sample_stop):
+def simulate_errors(
+    phi,
+    gamma_now,
+    gamma_prev,
+    c,
+    feed_now,
+    feed_prev,
+    delays,
+    state_terms,
+    output_terms,
+    padded_input,
+    measured,
+    first_step,
+    last_step,
+    state,
+    errors,
+    sample_start,
+    sample_stop,
+):
     """Advance samples [sample_start, sample_stop) through steps [first_step, first_step + m).
 
     ``state`` (n_states, n_samples) holds the state at ``first_step`` and is
@@ -105,9 +122,25 @@ def simulate_errors(phi, gamma_now, gamma_prev, c, feed_now, feed_prev, delays, 
     # underflows to 0 (a time constant far below dt) the general loop, which
     # skips unused terms as the numpy path does, gives the same numbers.
     if n_states == 1 and common_delay and state_terms[0, 0] and output_terms[0]:
-        return _simulate_lag(phi[0, 0], gamma_now[0], gamma_prev[0], c[0], feed_now, feed_prev,
-                             delays[0], state_terms[0], output_terms, padded_input, measured,
-                             first_step, last_step, state[0], errors, lo, hi)
+        return _simulate_lag(
+            phi[0, 0],
+            gamma_now[0],
+            gamma_prev[0],
+            c[0],
+            feed_now,
+            feed_prev,
+            delays[0],
+            state_terms[0],
+            output_terms,
+            padded_input,
+            measured,
+            first_step,
+            last_step,
+            state[0],
+            errors,
+            lo,
+            hi,
+        )
     bad_step, bad_sample = -1, -1
     for j in range(m):
         k = first_step + j
@@ -143,8 +176,25 @@ def simulate_errors(phi, gamma_now, gamma_prev, c, feed_now, feed_prev, delays, 
 
 
 @_jit
-def _simulate_lag(phi, gamma_now, gamma_prev, c, feed_now, feed_prev, delay, state_terms,
-                  output_terms, padded_input, measured, first_step, last_step, state, errors, lo, hi):
+def _simulate_lag(
+    phi,
+    gamma_now,
+    gamma_prev,
+    c,
+    feed_now,
+    feed_prev,
+    delay,
+    state_terms,
+    output_terms,
+    padded_input,
+    measured,
+    first_step,
+    last_step,
+    state,
+    errors,
+    lo,
+    hi,
+):
     """:func:`simulate_errors` for one state and one common dead time (the lag models), fused.
 
     The same products and sums in the same order, with each term present
@@ -299,8 +349,24 @@ def _stable_argsort(values, length, order, buffer):
 
 
 @_jit
-def analyse_windows(errors, measured, m, slots, count, columns, lows, highs, bins, positions,
-                    levels, weighted, min_points, ic, ci, gradient):
+def analyse_windows(
+    errors,
+    measured,
+    m,
+    slots,
+    count,
+    columns,
+    lows,
+    highs,
+    bins,
+    positions,
+    levels,
+    weighted,
+    min_points,
+    ic,
+    ci,
+    gradient,
+):
     """Analyse the m windows of a block; see :mod:`dynia.analysis` for the method.
 
     ``errors`` (m + slots - 1, n_samples) and ``measured`` (m + slots - 1,)
@@ -411,7 +477,6 @@ class CompiledErrors:
     def __init__(self, model, params, u, y, *, dt, x0, workers):
         from concurrent.futures import ThreadPoolExecutor
 
-
         params = model.check_params(params)
         dt, x0 = check_dt(dt), check_x0(x0)
         system = model.discretise(params, dt, u.shape[0], steady=x0 == "steady")
@@ -419,20 +484,24 @@ class CompiledErrors:
         self._system = system
         n_states, n_samples = system.c.shape
         self._n_samples = n_samples
-        coefficients = [[system.phi[i, j] for j in range(n_states)] + [system.gamma_now[i], system.gamma_prev[i]]
-                        for i in range(n_states)]
-        self._state_terms = np.array([[bool(np.any(term != 0)) for term in row] for row in coefficients],
-                                     dtype=np.bool_).reshape(n_states, n_states + 2)
+        coefficients = [
+            [system.phi[i, j] for j in range(n_states)] + [system.gamma_now[i], system.gamma_prev[i]]
+            for i in range(n_states)
+        ]
+        self._state_terms = np.array(
+            [[bool(np.any(term != 0)) for term in row] for row in coefficients], dtype=np.bool_
+        ).reshape(n_states, n_states + 2)
         self._output_terms = np.array(
             [bool(np.any(system.c[i] != 0)) for i in range(n_states)]
-            + [bool(np.any(system.feed_now != 0)), bool(np.any(system.feed_prev != 0))], dtype=np.bool_)
+            + [bool(np.any(system.feed_now != 0)), bool(np.any(system.feed_prev != 0))],
+            dtype=np.bool_,
+        )
         self._padded_input = np.concatenate(([u[0] if x0 == "steady" else 0.0], u))
-        self._state = (system.steady_state * u[0] if x0 == "steady" else np.zeros((n_states, n_samples)))
+        self._state = system.steady_state * u[0] if x0 == "steady" else np.zeros((n_states, n_samples))
         self._state = np.ascontiguousarray(self._state, dtype=float)
         delays = system.delay_steps
         # One common dead time makes the delayed input one value per step, as in the numpy path.
-        self._delays = np.ascontiguousarray(delays[:1] if np.all(delays == delays[0]) else delays,
-                                            dtype=np.int64)
+        self._delays = np.ascontiguousarray(delays[:1] if np.all(delays == delays[0]) else delays, dtype=np.int64)
         self._start = 0
         self._buffer = np.zeros((0, n_samples))
         self._workers = max(1, min(workers, n_samples))
@@ -443,14 +512,16 @@ class CompiledErrors:
     def rows(self, start, stop):
         """Errors for times [start, stop), shape (stop - start, n_samples)."""
         if start < self._start:
-            raise SettingsError(f"rows from step {start} were requested after rows from step {self._start}; "
-                             "requests must move forward in time")
-        self._buffer = self._buffer[start - self._start:]
+            raise SettingsError(
+                f"rows from step {start} were requested after rows from step {self._start}; "
+                "requests must move forward in time"
+            )
+        self._buffer = self._buffer[start - self._start :]
         self._start = start
         computed = self._start + self._buffer.shape[0]
         if computed < stop:
             self._buffer = np.concatenate([self._buffer, self._simulate(computed, stop)])
-        return self._buffer[:stop - start]
+        return self._buffer[: stop - start]
 
     def _simulate(self, first, stop):
         system = self._system
@@ -458,10 +529,24 @@ class CompiledErrors:
         measured = np.ascontiguousarray(self.y[first:stop])
 
         def block(sample_range):
-            return simulate_errors(system.phi, system.gamma_now, system.gamma_prev, system.c,
-                                   system.feed_now, system.feed_prev, self._delays, self._state_terms,
-                                   self._output_terms, self._padded_input, measured, first,
-                                   self.y.shape[0] - 1, self._state, errors, *sample_range)
+            return simulate_errors(
+                system.phi,
+                system.gamma_now,
+                system.gamma_prev,
+                system.c,
+                system.feed_now,
+                system.feed_prev,
+                self._delays,
+                self._state_terms,
+                self._output_terms,
+                self._padded_input,
+                measured,
+                first,
+                self.y.shape[0] - 1,
+                self._state,
+                errors,
+                *sample_range,
+            )
 
         if self._pool is None:
             outcomes = [block(self._sample_ranges[0])]

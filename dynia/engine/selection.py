@@ -1,4 +1,5 @@
 """Choosing each window's behavioural set: the lowest costs, ties broken as a stable sort does."""
+
 import numpy as np
 
 __all__ = ["lowest_stable", "stable_rank_mask", "selected_columns", "lowest_weighted"]
@@ -61,5 +62,3 @@ def lowest_weighted(cost, prior_weights, fraction):
     order = np.argsort(cost, axis=1, kind="stable")
     reached = (np.cumsum(prior_weights[order], axis=1) < fraction).sum(axis=1, keepdims=True)
     return order, np.arange(order.shape[1]) <= np.minimum(reached, order.shape[1] - 1)
-
-

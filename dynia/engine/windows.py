@@ -55,6 +55,7 @@ Flavours
     cumulative likelihood reaches ``(100-conf_level)/200`` and
     ``(100+conf_level)/200``.
 """
+
 from collections import deque
 from concurrent.futures import ThreadPoolExecutor
 
@@ -66,8 +67,19 @@ from ..result import DyniaResult
 from ..settings import AnalysisSettings
 from .flavours import FLAVOURS, compiled_engine, flavour_analysis
 
-__all__ = ["moving_window", "analyse_stream", "window_costs", "window_halos", "default_chunk_steps",
-           "window_inputs", "window_mean", "StreamedErrors", "ArrayErrors", "FLAVOURS", "WINDOWS"]
+__all__ = [
+    "moving_window",
+    "analyse_stream",
+    "window_costs",
+    "window_halos",
+    "default_chunk_steps",
+    "window_inputs",
+    "window_mean",
+    "StreamedErrors",
+    "ArrayErrors",
+    "FLAVOURS",
+    "WINDOWS",
+]
 
 WINDOWS = ("centred", "trailing")
 
@@ -76,9 +88,28 @@ WINDOWS = ("centred", "trailing")
 # samples the four-halo floor of default_chunk_steps sets the size instead.
 _CHUNK_VALUES = 250_000
 
-def moving_window(y, sims, params, bounds, *, n=10, percentage=10, bins=40, conf_level=90,
-                  flavour="thesis", names=None, time=None, min_points=1, chunk_steps=None,
-                  workers=None, progress=False, weights=None, window="centred", engine="auto"):
+
+def moving_window(
+    y,
+    sims,
+    params,
+    bounds,
+    *,
+    n=10,
+    percentage=10,
+    bins=40,
+    conf_level=90,
+    flavour="thesis",
+    names=None,
+    time=None,
+    min_points=1,
+    chunk_steps=None,
+    workers=None,
+    progress=False,
+    weights=None,
+    window="centred",
+    engine="auto",
+):
     """Moving-window DYNIA of every parameter at once.
 
     Parameters
@@ -158,16 +189,32 @@ def moving_window(y, sims, params, bounds, *, n=10, percentage=10, bins=40, conf
         raise DataError(f"sims must be 2-D (n_samples, n_steps); got shape {sims.shape}")
     y = _checks.as_1d_float(y, "y", allow_nan=True)
     if sims.shape[1] != y.size:
-        raise SettingsError(
-            f"sims has {sims.shape[1]} steps (columns) but y has {y.size}; they must match")
+        raise SettingsError(f"sims has {sims.shape[1]} steps (columns) but y has {y.size}; they must match")
     params = _checks.as_2d_float(params, "params")
     if params.shape[0] != sims.shape[0]:
         raise SettingsError(
-            f"params has {params.shape[0]} rows but sims has {sims.shape[0]}; one row per parameter set")
-    return _analyse(y, ArrayErrors(y, sims), params, bounds, n=n, percentage=percentage, bins=bins,
-                    conf_level=conf_level, flavour=flavour, names=names, time=time,
-                    min_points=min_points, chunk_steps=chunk_steps, workers=workers,
-                    progress=progress, weights=weights, window=window, engine=engine)
+            f"params has {params.shape[0]} rows but sims has {sims.shape[0]}; one row per parameter set"
+        )
+    return _analyse(
+        y,
+        ArrayErrors(y, sims),
+        params,
+        bounds,
+        n=n,
+        percentage=percentage,
+        bins=bins,
+        conf_level=conf_level,
+        flavour=flavour,
+        names=names,
+        time=time,
+        min_points=min_points,
+        chunk_steps=chunk_steps,
+        workers=workers,
+        progress=progress,
+        weights=weights,
+        window=window,
+        engine=engine,
+    )
 
 
 def default_chunk_steps(n_samples, halo):
@@ -179,9 +226,28 @@ def default_chunk_steps(n_samples, halo):
     return max(1, 4 * halo, _CHUNK_VALUES // max(n_samples, 1) - halo)
 
 
-def analyse_stream(y, sim_chunks, params, bounds, *, n, percentage, bins, conf_level, flavour,
-                   names=None, time=None, min_points=1, chunk_steps=None, workers=None,
-                   progress=False, settings=None, weights=None, window="centred", engine="auto"):
+def analyse_stream(
+    y,
+    sim_chunks,
+    params,
+    bounds,
+    *,
+    n,
+    percentage,
+    bins,
+    conf_level,
+    flavour,
+    names=None,
+    time=None,
+    min_points=1,
+    chunk_steps=None,
+    workers=None,
+    progress=False,
+    settings=None,
+    weights=None,
+    window="centred",
+    engine="auto",
+):
     """Moving-window DYNIA fed by simulated output in consecutive time chunks.
 
     ``sim_chunks`` yields (n_samples, m) arrays in time order that together
@@ -192,11 +258,27 @@ def analyse_stream(y, sim_chunks, params, bounds, *, n, percentage, bins, conf_l
     y = _checks.as_1d_float(y, "y", allow_nan=True)
     params = _checks.as_2d_float(params, "params")
     errors = sim_chunks if hasattr(sim_chunks, "rows") else StreamedErrors(y, sim_chunks, params.shape[0])
-    return _analyse(y, errors, params, bounds, n=n,
-                    percentage=percentage, bins=bins, conf_level=conf_level, flavour=flavour,
-                    names=names, time=time, min_points=min_points, chunk_steps=chunk_steps,
-                    workers=workers, progress=progress, settings=settings, weights=weights,
-                    window=window, engine=engine)
+    return _analyse(
+        y,
+        errors,
+        params,
+        bounds,
+        n=n,
+        percentage=percentage,
+        bins=bins,
+        conf_level=conf_level,
+        flavour=flavour,
+        names=names,
+        time=time,
+        min_points=min_points,
+        chunk_steps=chunk_steps,
+        workers=workers,
+        progress=progress,
+        settings=settings,
+        weights=weights,
+        window=window,
+        engine=engine,
+    )
 
 
 def window_halos(n, window):
@@ -206,9 +288,28 @@ def window_halos(n, window):
     return (n, n) if window == "centred" else (2 * n, 0)
 
 
-def _analyse(y, errors, params, bounds, *, n, percentage, bins, conf_level, flavour, names,
-             time, min_points, chunk_steps, progress, workers=None, settings=None, weights=None,
-             window="centred", engine="auto"):
+def _analyse(
+    y,
+    errors,
+    params,
+    bounds,
+    *,
+    n,
+    percentage,
+    bins,
+    conf_level,
+    flavour,
+    names,
+    time,
+    min_points,
+    chunk_steps,
+    progress,
+    workers=None,
+    settings=None,
+    weights=None,
+    window="centred",
+    engine="auto",
+):
     n_samples, n_params = params.shape
     bounds = _checks.bounds_array(bounds, n_params)
     outside = (params < bounds[:, 0]) | (params > bounds[:, 1])
@@ -216,11 +317,22 @@ def _analyse(y, errors, params, bounds, *, n, percentage, bins, conf_level, flav
         row, col = np.argwhere(outside)[0]
         raise SettingsError(
             f"params row {row}, column {col} = {params[row, col]} lies outside its bounds "
-            f"[{bounds[col, 0]}, {bounds[col, 1]}]; samples must come from the ranges analysed")
+            f"[{bounds[col, 0]}, {bounds[col, 1]}]; samples must come from the ranges analysed"
+        )
     # One place checks every setting; weighted samples are what the adaptive samplers produce.
-    checked = AnalysisSettings(n_samples=n_samples, sampler="uniform" if weights is None else "iis", n=n,
-                               percentage=percentage, bins=bins, conf_level=conf_level, flavour=flavour,
-                               min_points=min_points, window=window, engine=engine, workers=workers)
+    checked = AnalysisSettings(
+        n_samples=n_samples,
+        sampler="uniform" if weights is None else "iis",
+        n=n,
+        percentage=percentage,
+        bins=bins,
+        conf_level=conf_level,
+        flavour=flavour,
+        min_points=min_points,
+        window=window,
+        engine=engine,
+        workers=workers,
+    )
     n, percentage, bins, conf_level = checked.n, checked.percentage, checked.bins, checked.conf_level
     min_points, workers = checked.min_points, checked.workers
     before, after = window_halos(n, window)
@@ -234,8 +346,9 @@ def _analyse(y, errors, params, bounds, *, n, percentage, bins, conf_level, flav
     workers = 1 if flavour == "mcat" else workers or _checks.default_workers()
 
     compiled = compiled_engine(engine, flavour, weights)
-    flavour_impl = flavour_analysis(flavour, compiled, params, bounds, percentage, bins, conf_level, min_points,
-                                    weights=weights)
+    flavour_impl = flavour_analysis(
+        flavour, compiled, params, bounds, percentage, bins, conf_level, min_points, weights=weights
+    )
     n_steps = y.size
     ic = np.full((n_params, n_steps), np.nan)
     ci = np.full((n_params, n_steps, 2), np.nan)
@@ -258,6 +371,7 @@ def _analyse(y, errors, params, bounds, *, n, percentage, bins, conf_level, flav
     starts = range(0, n_steps, chunk_steps)
     if progress:
         from tqdm.auto import tqdm
+
         starts = tqdm(starts, desc="DYNIA windows", unit="chunk")
     # Errors are pulled in time order (a simulation stream is sequential); the
     # windows of each chunk are then analysed on a worker. MCAT's likelihood
@@ -266,9 +380,14 @@ def _analyse(y, errors, params, bounds, *, n, percentage, bins, conf_level, flav
         pending = deque()
         for start in starts:
             stop = min(start + chunk_steps, n_steps)
-            pending.append(pool.submit(analyse_chunk, start, stop,
-                                       *window_inputs(errors, start, stop, before, after, n_steps,
-                                                       time_major=compiled)))
+            pending.append(
+                pool.submit(
+                    analyse_chunk,
+                    start,
+                    stop,
+                    *window_inputs(errors, start, stop, before, after, n_steps, time_major=compiled),
+                )
+            )
             while len(pending) > workers:  # bounds the chunks held in memory
                 store(pending.popleft())
         while pending:
@@ -277,11 +396,29 @@ def _analyse(y, errors, params, bounds, *, n, percentage, bins, conf_level, flav
     # What the engine did wins over what the caller asked: the samples analysed
     # (after any were dropped) and the engine that ran ("auto" resolved).
     recorded = dict(settings or {})
-    recorded.update(n=n, window=window, percentage=percentage, bins=bins, conf_level=conf_level,
-                    flavour=flavour, min_points=min_points, n_samples=n_samples,
-                    n_behavioural=flavour_impl.count, engine="numba" if compiled else "numpy")
-    return DyniaResult(names=names, samples=params, bounds=bounds, time=time, ic=ic, ci=ci,
-                       gradient=gradient, bin_centres=flavour_impl.bin_centres, settings=recorded)
+    recorded.update(
+        n=n,
+        window=window,
+        percentage=percentage,
+        bins=bins,
+        conf_level=conf_level,
+        flavour=flavour,
+        min_points=min_points,
+        n_samples=n_samples,
+        n_behavioural=flavour_impl.count,
+        engine="numba" if compiled else "numpy",
+    )
+    return DyniaResult(
+        names=names,
+        samples=params,
+        bounds=bounds,
+        time=time,
+        ic=ic,
+        ci=ci,
+        gradient=gradient,
+        bin_centres=flavour_impl.bin_centres,
+        settings=recorded,
+    )
 
 
 def _parameter_names(names, n_params):
@@ -311,7 +448,7 @@ class StreamedErrors:
 
     def columns(self, start, stop):
         """Errors for times [start, stop), shape (n_samples, stop - start)."""
-        self._buffer = self._buffer[:, start - self._start:]
+        self._buffer = self._buffer[:, start - self._start :]
         self._start = start
         pieces = [self._buffer]
         buffered = self._buffer.shape[1]
@@ -321,7 +458,7 @@ class StreamedErrors:
             buffered += chunk.shape[1]
         if len(pieces) > 1:
             self._buffer = np.concatenate(pieces, axis=1)
-        return self._buffer[:, :stop - start]
+        return self._buffer[:, : stop - start]
 
     def rows(self, start, stop):
         """Errors for times [start, stop), time-major: shape (stop - start, n_samples)."""
@@ -334,10 +471,11 @@ class StreamedErrors:
             raise SettingsError(f"the simulation ended at step {at}, before the {self.y.size} steps of y") from None
         if sims.ndim != 2 or sims.shape[0] != self._n_samples or sims.shape[1] == 0:
             raise SettingsError(
-                f"a simulation chunk at step {at} has shape {sims.shape}; expected ({self._n_samples}, m>0)")
+                f"a simulation chunk at step {at} has shape {sims.shape}; expected ({self._n_samples}, m>0)"
+            )
         if at + sims.shape[1] > self.y.size:
             raise SettingsError(f"the simulation runs past the {self.y.size} steps of y")
-        return _absolute_errors(self.y[at:at + sims.shape[1]], sims, at)
+        return _absolute_errors(self.y[at : at + sims.shape[1]], sims, at)
 
 
 class ArrayErrors:
@@ -385,9 +523,9 @@ def window_inputs(errors, start, stop, before, after, n_steps, time_major=False)
     offset = lo - (start - before)
     if offset or hi - lo < width:
         padded = np.zeros((window_errors.shape[0], width))
-        padded[:, offset:offset + (hi - lo)] = window_errors
+        padded[:, offset : offset + (hi - lo)] = window_errors
         counts = np.zeros(width)
-        counts[offset:offset + (hi - lo)] = measured
+        counts[offset : offset + (hi - lo)] = measured
         window_errors, measured = padded, counts
     return (np.ascontiguousarray(window_errors.T) if time_major else window_errors), measured
 
@@ -403,8 +541,8 @@ def window_mean(window_errors, measured, m, slots):
     total = window_errors[:, 0:m].copy()
     present = measured[0:m].copy()
     for shift in range(1, slots):
-        total += window_errors[:, shift:shift + m]
-        present += measured[shift:shift + m]
+        total += window_errors[:, shift : shift + m]
+        present += measured[shift : shift + m]
     with np.errstate(invalid="ignore", divide="ignore"):
         total /= present
     return np.ascontiguousarray(total.T), present
@@ -417,9 +555,8 @@ def window_costs(y, sims, n, start, stop, window="centred"):
     """
     errors = ArrayErrors(_checks.as_1d_float(y, "y", allow_nan=True), np.asarray(sims, dtype=float))
     before, after = window_halos(n, window)
-    mae, _ = window_mean(*window_inputs(errors, start, stop, before, after, errors.y.size),
-                          stop - start, before + after + 1)
+    mae, _ = window_mean(
+        *window_inputs(errors, start, stop, before, after, errors.y.size), stop - start, before + after + 1
+    )
     with np.errstate(over="ignore"):
-        return mae ** 2
-
-
+        return mae**2

@@ -4,6 +4,7 @@
 (Appendix B); :mod:`~dynia.reference.mcat` ports the DYNIA of the MCAT
 toolbox (``id_time.m``). Both are slow on purpose: loops as written.
 """
+
 from . import mcat, thesis
 
 __all__ = ["mcat", "thesis"]

@@ -51,6 +51,7 @@ Deviations
 - The knot at ``max(min - 0.001, 0)`` lies above the smallest values when a
   parameter can be negative, which breaks the CDF; that raises ``ValueError``.
 """
+
 import math
 
 import numpy as np
@@ -107,8 +108,8 @@ def id_time(mct, obs, dat, p1, window, *, containers=20, percentage=10, conf_lev
     high_level = (100 + conf_level) / 200
     if dat[:, p1].min() < 0:
         raise SettingsError(
-            f"parameter column {p1} has negative samples; MCAT's CDF knot at max(min-0.001, 0) "
-            "then lies above them")
+            f"parameter column {p1} has negative samples; MCAT's CDF knot at max(min-0.001, 0) then lies above them"
+        )
 
     residual = np.zeros((n_samples, t))
     lcl = np.zeros(t)
@@ -120,7 +121,7 @@ def id_time(mct, obs, dat, p1, window, *, containers=20, percentage=10, conf_lev
         for no in range(n_samples):
             start, stop = max(dt - window, 0), min(dt + window + 1, t)
             residual[no, dt] = np.cumsum(np.abs(mct[start:stop, no] - obs[start:stop]))[-1] / (stop - start)
-        if np.all(residual[:, :dt + 1].max(axis=0) != 0):
+        if np.all(residual[:, : dt + 1].max(axis=0) != 0):
             L = residual[:, dt] / residual[:, dt].max()
         else:
             L = residual[:, dt].copy()
@@ -131,7 +132,7 @@ def id_time(mct, obs, dat, p1, window, *, containers=20, percentage=10, conf_lev
         J = np.argsort(L, kind="stable")
         pop = dat[J, :]
         cls = math.floor(len(pop) / grouping)
-        tm = pop[cls * (grouping - 1):cls * grouping, p1]
+        tm = pop[cls * (grouping - 1) : cls * grouping, p1]
         tmx = np.sort(tm, kind="stable")
         tmy = np.arange(1, len(tmx) + 1) / cls
 
@@ -145,8 +146,7 @@ def id_time(mct, obs, dat, p1, window, *, containers=20, percentage=10, conf_lev
         for kk in range(len(tmx) - 2):
             if tmx[kk] == tmx[kk + 1]:
                 tmx[kk + 1] = tmx[kk + 1] + (tmx[kk + 2] - tmx[kk]) / 1000
-        YI = np.interp(XI, np.concatenate([[temp1], tmx, [temp2]]),
-                       np.concatenate([[0.0], tmy, [1.0]]))
+        YI = np.interp(XI, np.concatenate([[temp1], tmx, [temp2]]), np.concatenate([[0.0], tmy, [1.0]]))
         FX = np.gradient(YI)
         dtcolor[:, dt] = np.nan_to_num(FX, nan=0.0)
     infocontent = 1 - (ucl - lcl) / (high - low)
@@ -159,5 +159,6 @@ def _grouping(percentage):
     if abs(grouping - round(grouping)) > 1e-9 * grouping or round(grouping) < 1:
         raise SettingsError(
             f"the mcat flavour splits the population into 100/percentage blocks; "
-            f"percentage={percentage} does not divide 100 into a whole number of blocks")
+            f"percentage={percentage} does not divide 100 into a whole number of blocks"
+        )
     return round(grouping)

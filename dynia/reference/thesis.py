@@ -77,6 +77,7 @@ edge (``lhood_cumulated(0)``).
 ``bins == 1`` an infinite width.       Raises ``ValueError`` (``bins >= 2``).
 =====================================  =============================================
 """
+
 import math
 
 import numpy as np
@@ -154,20 +155,19 @@ def moving_window_calcs(TIME, par, lb, ub, ns, mct, y, bins, percentage, n, *, c
         # The three windows of the MATLAB: truncated at the start, full, truncated at the end.
         if t + 1 <= n:
             for k in range(ns):
-                wMAE[k] = _sum_left_to_right(np.abs(y[0:t + 1 + n] - mct[k, 0:t + 1 + n])) / (t + 1 + n)
+                wMAE[k] = _sum_left_to_right(np.abs(y[0 : t + 1 + n] - mct[k, 0 : t + 1 + n])) / (t + 1 + n)
         if t + 1 > n and t + 1 <= TIME - n:
             for k in range(ns):
-                wMAE[k] = _sum_left_to_right(np.abs(y[t - n:t + n + 1] - mct[k, t - n:t + n + 1])) / (2 * n + 1)
+                wMAE[k] = _sum_left_to_right(np.abs(y[t - n : t + n + 1] - mct[k, t - n : t + n + 1])) / (2 * n + 1)
         if t + 1 > TIME - n:
             for k in range(ns):
-                wMAE[k] = _sum_left_to_right(np.abs(y[t - n:TIME] - mct[k, t - n:TIME])) / (TIME - t + n)
-        wCost = wMAE ** 2
+                wMAE[k] = _sum_left_to_right(np.abs(y[t - n : TIME] - mct[k, t - n : TIME])) / (TIME - t + n)
+        wCost = wMAE**2
 
         count_max = math.floor(len(wCost) * (percentage / 100))
         best_mat, best_indices = select_best_parameters(wCost, wPar, count_max)
 
-        lhood_cumulated, CI, lhood, gradient_vec = run_dynia(
-            ns, par, best_mat, lb, ub, bins, conf_level=conf_level)
+        lhood_cumulated, CI, lhood, gradient_vec = run_dynia(ns, par, best_mat, lb, ub, bins, conf_level=conf_level)
 
         CI_t[t, 0] = CI[0]
         CI_t[t, 1] = CI[1]
@@ -198,17 +198,18 @@ def _check_port_arguments(TIME, par, lb, ub, ns, mct, y, bins, percentage, n):
     if bins < 2:
         raise SettingsError(f"bins must be at least 2 (the bin width is (ub-lb)/(bins-1)); got {bins}")
     if n < 0 or TIME < 2 * n or TIME < 1:
-        raise SettingsError(
-            f"the MATLAB windows need 0 <= n and TIME >= 2n (and TIME >= 1); got TIME={TIME}, n={n}")
+        raise SettingsError(f"the MATLAB windows need 0 <= n and TIME >= 2n (and TIME >= 1); got TIME={TIME}, n={n}")
     rows = ns * (percentage / 100)
     if rows != math.floor(rows):
         raise SettingsError(
             f"ns*percentage/100 = {rows!r} is not a whole number; the MATLAB's "
-            "best = zeros(TIME, ns*(percentage/100), 2) fails for it")
+            "best = zeros(TIME, ns*(percentage/100), 2) fails for it"
+        )
     if math.floor(rows) < 2:
         raise SettingsError(
             f"percentage={percentage} of ns={ns} leaves {math.floor(rows)} behavioural sets; "
-            "calcLikelihood needs at least 2")
+            "calcLikelihood needs at least 2"
+        )
 
 
 def select_best_parameters(wCost, wPar, count_max):
@@ -237,8 +238,7 @@ def run_dynia(ns, par, best_mat, lb, ub, bins, *, conf_level=90):
     par_sorted_indices = np.argsort(best_mat[:, 1], kind="stable")
     par_sorted = best_mat[par_sorted_indices, 1]
     all_par_sorted = np.sort(par, kind="stable")
-    lhood_cumulated, lhood_c_all = cumul_likelihood(
-        ns, all_par_sorted, par_sorted, par_sorted_indices, lhood)
+    lhood_cumulated, lhood_c_all = cumul_likelihood(ns, all_par_sorted, par_sorted, par_sorted_indices, lhood)
     gradient_vec = cld_gradient(bins, ub, lb, par_sorted, lhood_cumulated, size)
     CI = conf_limits(par_sorted, size, conf_level)
     return lhood_cumulated, CI, lhood, gradient_vec
@@ -251,7 +251,8 @@ def calc_likelihood(best_mat):
     if size > best_mat.shape[0]:
         raise SettingsError(
             f"calcLikelihood reads {size} rows of a {best_mat.shape[0]}-row best_mat "
-            "(MATLAB length() of a matrix with fewer than 2 rows); need at least 2 behavioural sets")
+            "(MATLAB length() of a matrix with fewer than 2 rows); need at least 2 behavioural sets"
+        )
     lhood = np.zeros(size)
     for it in range(size):
         lhood[it] = 1 - best_mat[it, 0]
@@ -318,7 +319,8 @@ def cld_gradient(bins, ub, lb, par_sorted, lhood_cumulated, size):
         if end_index < 0:
             raise SettingsError(
                 f"cld_gradient: the smallest behavioural value {par_sorted[0]!r} lies exactly on a "
-                "bin edge, where the MATLAB reads lhood_cumulated(0) and stops")
+                "bin edge, where the MATLAB reads lhood_cumulated(0) and stops"
+            )
         next_limit = next_limit + (ub - lb) / (bins - 1)
         gradient_vec[b, 0] = lhood_cumulated[end_index] - lhood_cumulated[start_index]
         gradient_vec[b, 1:] = [prev_limit, (prev_limit + next_limit) / 2, next_limit]
