@@ -91,10 +91,16 @@ def default_workers():
     return os.cpu_count() or 1
 
 
-def record(u, y):
-    """Input and output of one record as 1-D float arrays of equal length (NaN in ``y`` marks a missing sample)."""
-    u = as_1d_float(u, "u")
+def record(u, y, n_inputs=1):
+    """Input and output of one record: ``u`` (n_steps,) or (n_steps, n_inputs), ``y`` (n_steps,).
+
+    NaN in ``y`` marks a missing sample; ``u`` must be finite.
+    """
+    if n_inputs == 1:
+        u = as_1d_float(u, "u")
+    else:
+        u = as_2d_float(u, "u", columns=n_inputs)
     y = as_1d_float(y, "y", allow_nan=True)
-    if u.size != y.size:
-        raise DataError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
+    if u.shape[0] != y.size:
+        raise DataError(f"u has {u.shape[0]} samples but y has {y.size}; they must be logged on the same steps")
     return u, y

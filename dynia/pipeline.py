@@ -9,8 +9,9 @@ from . import _checks
 from .adaptive import adaptive_run
 from .engine.flavours import compiled_engine
 from .engine.kernels import CompiledErrors
-from .engine.windows import analyse_stream, default_chunk_steps
+from .engine.windows import ArrayErrors, analyse_stream, default_chunk_steps
 from .errors import ModelError
+from .models import LinearModel, Model
 from .sampling import sample
 from .settings import ADAPTIVE_SAMPLERS, AnalysisSettings, parameter_box
 from .verdicts import assess
@@ -138,26 +139,41 @@ def run(
         engine=engine,
         workers=workers,
     )
-    u, y = _checks.record(u, y)
-    names, box = parameter_box(bounds, model.names, type(model).__name__)
+    if not isinstance(model, Model):
+        raise ModelError(
+            f"model must be a dynia.models.Model (e.g. FirstOrder(), FunctionModel(fn, names) or "
+            f"StateSpaceModel(...)); got {type(model).__name__}"
+        )
+    u, y = _checks.record(u, y, n_inputs=model.n_inputs)
+    names, box = parameter_box(bounds, model.names, repr(model))
     if settings.sampler in ADAPTIVE_SAMPLERS:
         return adaptive_run(
             u, y, model, dict(zip(names, map(tuple, box))), scheme=settings.sampler, settings=settings, rng=rng
         )
     samples = sample(settings.sampler, settings.n_samples, box, np.random.default_rng(rng))
     model_order = [names.index(name) for name in model.names]
-    finite = model.finite_samples(samples[:, model_order], u, dt=settings.dt, x0=settings.x0)
+    sims = None
+    if getattr(model, "streams", True):
+        finite = model.finite_samples(samples[:, model_order], u, dt=settings.dt, x0=settings.x0)
+    else:
+        # A model that simulates the whole record at once is called once: its output is what is analysed.
+        with np.errstate(over="ignore", invalid="ignore"):
+            sims = model.simulate(samples[:, model_order], u, dt=settings.dt, x0=settings.x0)
+        finite = np.isfinite(sims).all(axis=1)
     if not finite.any():
         raise ModelError(
-            f"the simulation of every one of the {settings.n_samples} parameter sets overflowed; "
-            "check the model and the parameter ranges"
+            f"{model!r}: the simulation of every one of the {settings.n_samples} parameter sets is not finite "
+            "(NaN or overflow); check the model and the parameter ranges"
         )
     samples = samples[finite]
     n_dropped = int(settings.n_samples - samples.shape[0])
     warn_dropped(n_dropped, settings.n_samples)
     chunk_steps = default_chunk_steps(samples.shape[0], 2 * settings.n)
     workers = settings.workers or _checks.default_workers()
-    if compiled_engine(settings.engine, settings.flavour):
+    if sims is not None:
+        sims = sims[finite] if n_dropped else sims
+        errors = ArrayErrors(y, sims)
+    elif compiled_simulation(model) and compiled_engine(settings.engine, settings.flavour):
         errors = CompiledErrors(model, samples[:, model_order], u, y, dt=settings.dt, x0=settings.x0, workers=workers)
     else:
         errors = model.simulate_chunks(
@@ -189,7 +205,12 @@ def run(
         if isinstance(errors, CompiledErrors):
             errors.close()
     with np.errstate(over="ignore", invalid="ignore"):
-        return dataclasses.replace(result, verdicts=assess(result, u=u, y=y, model=model))
+        return dataclasses.replace(result, verdicts=assess(result, u=u, y=y, model=model, simulations=sims))
+
+
+def compiled_simulation(model):
+    """Whether the compiled kernels can simulate ``model`` (the single-input linear models)."""
+    return isinstance(model, LinearModel) and model.n_inputs == 1
 
 
 def warn_dropped(n_dropped, n_sampled):

@@ -112,7 +112,7 @@ def _judge(mae, m, sigma, multiple):
     return spread <= threshold, spread, threshold
 
 
-def assess(result, *, u=None, y=None, model=None, dt=None, x0=None, weak_below=0.5):
+def assess(result, *, u=None, y=None, model=None, dt=None, x0=None, weak_below=0.5, simulations=None):
     """Verdict and reasons for every parameter of a DYNIA result.
 
     Parameters
@@ -129,6 +129,10 @@ def assess(result, *, u=None, y=None, model=None, dt=None, x0=None, weak_below=0
         ``result.settings["x0"]``, else the model's defaults.
     weak_below : float, default 0.5
         Highest IC under which a parameter is ``"weak"``.
+    simulations : ndarray (n_samples, n_steps), optional
+        The model's output for ``result.samples``, when already at hand (a
+        model that simulates the whole record at once); spares simulating
+        again.
 
     Returns
     -------
@@ -149,7 +153,7 @@ def assess(result, *, u=None, y=None, model=None, dt=None, x0=None, weak_below=0
         raise SettingsError("assess needs u, y and model together for the noise_only rule, or none of them")
     best = {p: int(np.nanargmax(result.ic[p])) for p in range(len(result.names)) if not np.isnan(result.ic[p]).all()}
     windows = {step: result.window_range(step) for step in set(best.values())}
-    noise = {} if model is None else _noise_windows(result, u, y, model, dt, x0, windows)
+    noise = {} if model is None else _noise_windows(result, u, y, model, dt, x0, windows, simulations)
     verdicts = {}
     for p, name in enumerate(result.names):
         if p not in best:
@@ -201,7 +205,7 @@ def _edge_reasons(result, step, window):
     ]
 
 
-def _noise_windows(result, u, y, model, dt, x0, windows):
+def _noise_windows(result, u, y, model, dt, x0, windows, simulations):
     """Text of the noise_only reason of each window that fits noise only, else None.
 
     The samples are simulated once, streamed in time chunks of about
@@ -209,7 +213,7 @@ def _noise_windows(result, u, y, model, dt, x0, windows):
     windows' columns are kept.
     """
     u, y = np.asarray(u, dtype=float), np.asarray(y, dtype=float)
-    if y.shape != result.time.shape or u.shape != result.time.shape:
+    if y.shape != result.time.shape or u.shape[:1] != result.time.shape:
         raise SettingsError(f"u and y must have the result's {result.time.size} steps; got {u.shape} and {y.shape}")
     if sorted(model.names) != sorted(result.names):
         raise ModelError(f"model parameters {list(model.names)} do not match the result's {list(result.names)}")
@@ -231,7 +235,11 @@ def _noise_windows(result, u, y, model, dt, x0, windows):
     position = np.cumsum(needed) - 1  # column of step k among the kept ones
     kept = np.empty((params.shape[0], int(needed.sum())))
     at = 0
-    for chunk in model.simulate_chunks(params, u[:end], chunk_steps=max(1, _MAX_VALUES // params.shape[0]), **options):
+    if simulations is not None:
+        chunks = [np.asarray(simulations)[:, :end]]
+    else:
+        chunks = model.simulate_chunks(params, u[:end], chunk_steps=max(1, _MAX_VALUES // params.shape[0]), **options)
+    for chunk in chunks:
         inside = needed[at : at + chunk.shape[1]]
         kept[:, position[at : at + chunk.shape[1]][inside]] = chunk[:, inside]
         at += chunk.shape[1]

@@ -415,7 +415,7 @@ def test_bad_fit_types():
     u = steps_input()
     with pytest.raises(TypeError, match="model must be a dynia.models.Model"):
         fit_segments(u, u, "first-order", [(0, 10)], bounds=FIRST_ORDER_BOUNDS)
-    with pytest.raises(ValueError, match="u has 200 steps but y has 10"):
+    with pytest.raises(ValueError, match="u has 200 samples but y has 10"):
         fit_segments(u, u[:10], FirstOrder(), [(0, 10)], bounds=FIRST_ORDER_BOUNDS)
 
 

@@ -1,4 +1,4 @@
-"""Exact batched simulation of many parameter sets of a linear model at once.
+"""The linear models: exact batched simulation of many parameter sets at once.
 
 A DYNIA run simulates the same single-input single-output model for tens of
 thousands of parameter sets on the same input record. The models here
@@ -48,16 +48,12 @@ import control
 import numpy as np
 import scipy.linalg
 
-from .errors import DataError, ModelError
-from .settings import check_dt, check_x0
+from ..errors import DataError, ModelError
+from ..settings import check_dt, check_x0
+from .base import Model
 
-__all__ = ["Model", "Stepper", "FirstOrder", "FOPDT", "SecondOrderDelay", "TransferFunction"]
+__all__ = ["LinearModel", "Stepper", "FirstOrder", "FOPDT", "SecondOrderDelay", "TransferFunction"]
 
-
-# Default chunk size: 4e6 float64 values are 32 MB per output chunk, large
-# enough that the per-chunk overhead is negligible and small enough that the
-# chunk plus the gathered inputs stay far below typical memory limits.
-_VALUES_PER_CHUNK = 4_000_000
 
 # Time constants are clamped to this fraction of dt. Below it every factor
 # exp(-tau/T) used by the discretisation is exactly 0.0 in float64: tau is dt
@@ -105,156 +101,28 @@ class _DiscreteSystem:
     steady_state: np.ndarray | None  # (n_states, n_samples), per unit input
 
 
-class Model:
-    """Base class of the batched models.
+class LinearModel(Model):
+    """Base class of the linear models: exact zero-order-hold discretisation of every sample.
 
     Subclasses set the parameter names and implement ``discretise``; the
-    validation, the chunking and the time loop live here, shared by all.
-
-    Parameters
-    ----------
-    names : sequence of str
-        Parameter names, in the column order of ``params``.
+    chunking and the time loop live here, shared by all. The compiled engine
+    (:mod:`dynia.engine.kernels`) simulates these models in compiled code.
     """
-
-    def __init__(self, names: Sequence[str]):
-        self._names = _check_names(names)
-
-    @property
-    def names(self) -> tuple[str, ...]:
-        """Parameter names, in the column order of ``params``."""
-        return self._names
-
-    @property
-    def n_params(self) -> int:
-        """Number of parameters (columns of ``params``)."""
-        return len(self._names)
-
-    def __repr__(self) -> str:
-        return f"{type(self).__name__}()"
-
-    def simulate(self, params, u, dt: float = 1.0, x0: str = "zero") -> np.ndarray:
-        """Simulate every parameter set on the input ``u``.
-
-        Parameters
-        ----------
-        params : array_like, shape (n_samples, n_params)
-            One parameter set per row, columns in the order of `names`.
-        u : array_like, shape (n_steps,)
-            Input samples, held constant over each interval of length `dt`.
-        dt : float, default 1.0
-            Sampling interval, > 0.
-        x0 : {"zero", "steady"}, default "zero"
-            Initial state: zero, or the steady state at ``u[0]``.
-
-        Returns
-        -------
-        ndarray, shape (n_samples, n_steps)
-            ``y[i, k]`` is the output of sample ``i`` at ``t = k*dt``.
-
-        Raises
-        ------
-        ValueError
-            If an argument has the wrong shape or value (the message names
-            it), or ``x0="steady"`` for a sample without a steady state.
-
-        Examples
-        --------
-        >>> from dynia.models import FirstOrder
-        >>> FirstOrder().simulate([[2.0, 1.0], [1.0, 0.5]], [1.0, 1.0, 1.0]).round(4)
-        array([[0.    , 1.2642, 1.7293],
-               [0.    , 0.8647, 0.9817]])
-        """
-        u = _check_input(u)
-        output = None
-        start = 0
-        for chunk in self.simulate_chunks(params, u, dt=dt, x0=x0):
-            if output is None:
-                output = np.empty((chunk.shape[0], u.shape[0]))
-            output[:, start : start + chunk.shape[1]] = chunk
-            start += chunk.shape[1]
-        return output
 
     def simulate_chunks(
         self, params, u, dt: float = 1.0, x0: str = "zero", chunk_steps: int | None = None
     ) -> Iterator[np.ndarray]:
-        """Simulate like `simulate`, yielding the output a block of steps at a time.
-
-        Only the state and one chunk are held in memory, so arbitrarily many
-        samples times steps can be processed. Concatenating the chunks along
-        axis 1 gives exactly (bit for bit) the result of `simulate`.
-        Arguments are validated immediately, not on the first ``next()``.
-
-        Parameters
-        ----------
-        params, u, dt, x0
-            As for `simulate`.
-        chunk_steps : int, optional
-            Time steps per chunk (the last one may be shorter). By default
-            about 4e6 values per chunk, i.e. ``4e6 // n_samples`` steps, at
-            least 1.
-
-        Yields
-        ------
-        ndarray, shape (n_samples, m)
-            Consecutive blocks of the output.
-
-        Raises
-        ------
-        ValueError
-            As for `simulate`, or for a `chunk_steps` that is not a positive
-            integer; raised by this call, before any chunk is produced.
-
-        Examples
-        --------
-        >>> from dynia.models import FirstOrder
-        >>> chunks = FirstOrder().simulate_chunks([1.0, 1.0], [1.0] * 5, chunk_steps=2)
-        >>> [chunk.shape for chunk in chunks]
-        [(1, 2), (1, 2), (1, 1)]
-        """
         params = self.check_params(params)
-        u = _check_input(u)
+        u = self.check_input(u)
         dt = check_dt(dt)
         x0 = check_x0(x0)
-        n_samples = params.shape[0]
-        if chunk_steps is None:
-            chunk_steps = max(1, _VALUES_PER_CHUNK // n_samples)
-        else:
-            chunk_steps = _check_chunk_steps(chunk_steps)
+        chunk_steps = self.chunk_steps(params.shape[0], chunk_steps)
         system = self.discretise(params, dt, u.shape[0], steady=x0 == "steady")
         return _run(system, u, x0, chunk_steps)
 
+    simulate_chunks.__doc__ = Model.simulate_chunks.__doc__
+
     def stepper(self, params, dt: float = 1.0, x0: str = "zero") -> Stepper:
-        """Simulate every parameter set one input sample at a time, as it is logged.
-
-        Parameters
-        ----------
-        params, dt, x0
-            As for `simulate`; ``x0="steady"`` starts in the steady state at
-            the first input stepped.
-
-        Returns
-        -------
-        Stepper
-            ``stepper.step(u_k)`` returns the output of every sample at step
-            k, bit for bit column k of `simulate` on the inputs stepped so far.
-            (One exception: `simulate` caps dead times longer than its record,
-            which only see the input before t=0; with ``x0="steady"`` such a
-            sample's output can then differ in the last bits.)
-
-        Raises
-        ------
-        ValueError
-            As for `simulate`, or for a dead time of more than 10 million steps
-            (the stepper keeps the input history of the longest dead time).
-
-        Examples
-        --------
-        >>> from dynia.models import FOPDT
-        >>> stepper = FOPDT().stepper([[1.0, 0.0, 2.0]])
-        >>> [float(stepper.step(u_k)[0]) for u_k in [1.0, 2.0, 3.0, 4.0]]
-        [0.0, 0.0, 0.0, 1.0]
-        """
         params = self.check_params(params)
         dt = check_dt(dt)
         x0 = check_x0(x0)
@@ -267,53 +135,7 @@ class Model:
             )
         return Stepper(system, x0)
 
-    def finite_samples(self, params, u, dt: float = 1.0, x0: str = "zero") -> np.ndarray:
-        """Which parameter sets simulate to finite output over the whole record.
-
-        A model with unstable or huge coefficients can overflow; such sets
-        must be left out of a DYNIA run rather than rank as anything. This
-        default simulates once, streaming, and keeps only the verdict; the
-        lag models, which cannot grow beyond their gain times the input,
-        answer from that bound without simulating.
-
-        Returns
-        -------
-        ndarray of bool, shape (n_samples,)
-
-        Examples
-        --------
-        >>> import control
-        >>> from dynia.models import TransferFunction
-        >>> unstable = TransferFunction(lambda p: control.tf([1.0], [1.0, -p[0]]), names=("a",))
-        >>> unstable.finite_samples([[0.5], [800.0]], [1.0] * 5).tolist()
-        [True, False]
-        """
-        finite = np.ones(self.check_params(params).shape[0], dtype=bool)
-        with np.errstate(over="ignore", invalid="ignore"):
-            for chunk in self.simulate_chunks(params, u, dt=dt, x0=x0):
-                finite &= np.isfinite(chunk).all(axis=1)
-        return finite
-
-    def check_params(self, params) -> np.ndarray:
-        """Return ``params`` as a finite float (n_samples, n_params) array."""
-        expected = f"(n_samples, {self.n_params}) with columns {self.names}"
-        try:
-            params = np.asarray(params, dtype=float)
-        except (TypeError, ValueError):
-            raise ModelError(f"params must be a numeric array of shape {expected}") from None
-        if params.ndim == 1 and params.shape[0] == self.n_params:
-            params = params.reshape(1, -1)
-        if params.ndim != 2 or params.shape[1] != self.n_params:
-            raise ModelError(f"params must have shape {expected}; got shape {params.shape}")
-        if params.shape[0] == 0:
-            raise ModelError("params must contain at least one sample (row)")
-        bad = ~np.isfinite(params)
-        if bad.any():
-            sample, column = np.argwhere(bad)[0]
-            raise DataError(
-                f"params must be finite; sample {sample} has {self.names[column]} = {params[sample, column]}"
-            )
-        return params
+    stepper.__doc__ = Model.stepper.__doc__
 
     def _require_nonnegative(self, params: np.ndarray, names: Sequence[str]) -> None:
         """Raise for the first sample with a negative value of one of ``names``."""
@@ -325,7 +147,8 @@ class Model:
                 raise ModelError(f"{name} must be >= 0; sample {sample} has {name} = {column[sample]}")
 
     def discretise(self, params: np.ndarray, dt: float, n_steps: int, steady: bool) -> _DiscreteSystem:
-        raise NotImplementedError
+        """The exact discretisation of every sample (see :class:`_DiscreteSystem`)."""
+        raise NotImplementedError(f"{type(self).__name__} must implement discretise(params, dt, n_steps, steady)")
 
 
 class Stepper:
@@ -392,7 +215,7 @@ class Stepper:
         return np.take(self._history, self._index, out=self._delayed[extra])
 
 
-class _Lag(Model):
+class _Lag(LinearModel):
     """Models whose output never exceeds |K| times the largest input in magnitude.
 
     Lags with non-negative time constants and a dead time have no overshoot,
@@ -401,7 +224,7 @@ class _Lag(Model):
 
     def finite_samples(self, params, u, dt: float = 1.0, x0: str = "zero") -> np.ndarray:
         params = self.check_params(params)
-        peak = np.abs(_check_input(u)).max()
+        peak = np.abs(self.check_input(u)).max()
         with np.errstate(over="ignore"):
             return np.isfinite(np.abs(params[:, self.names.index("K")]) * peak * 2.0)
 
@@ -514,7 +337,7 @@ class SecondOrderDelay(_Lag):
         )
 
 
-class TransferFunction(Model):
+class TransferFunction(LinearModel):
     """Any SISO continuous-time LTI model built by python-control from the parameters.
 
     Parameters
@@ -828,33 +651,3 @@ def _to_sample_major(time_major: np.ndarray) -> np.ndarray:
         block = slice(start, start + _TRANSPOSE_BLOCK)
         sample_major[block] = time_major[:, block].T
     return sample_major
-
-
-def _check_names(names) -> tuple[str, ...]:
-    if isinstance(names, str) or not all(isinstance(name, str) for name in names):
-        raise ModelError(f"names must be a sequence of strings; got {names!r}")
-    names = tuple(names)
-    if not names or len(set(names)) != len(names):
-        raise ModelError(f"names must be non-empty and unique; got {names}")
-    return names
-
-
-def _check_input(u) -> np.ndarray:
-    try:
-        u = np.asarray(u, dtype=float)
-    except (TypeError, ValueError):
-        raise DataError("u must be a 1-D sequence of numbers, shape (n_steps,)") from None
-    if u.ndim != 1:
-        raise DataError(f"u must be 1-D with shape (n_steps,); got shape {u.shape}")
-    if u.shape[0] == 0:
-        raise DataError("u must contain at least one step; got an empty array")
-    bad = np.flatnonzero(~np.isfinite(u))
-    if bad.size:
-        raise DataError(f"u must be finite; u[{bad[0]}] = {u[bad[0]]}")
-    return u
-
-
-def _check_chunk_steps(chunk_steps) -> int:
-    if isinstance(chunk_steps, bool) or not isinstance(chunk_steps, numbers.Integral) or chunk_steps < 1:
-        raise ModelError(f"chunk_steps must be None or an integer >= 1; got {chunk_steps!r}")
-    return int(chunk_steps)

@@ -1,0 +1,38 @@
+"""Models DYNIA simulates: the built-in linear ones, and any model you bring.
+
+:mod:`~dynia.models.base` defines what a model offers (:class:`Model`: batched
+simulation of many parameter sets, streamed in time chunks) and the shape
+convention every model follows; :mod:`~dynia.models.linear` the exact
+zero-order-hold linear models (:class:`FirstOrder`, :class:`FOPDT`,
+:class:`SecondOrderDelay`, :class:`TransferFunction` for any python-control
+model); :mod:`~dynia.models.custom` wraps your own simulator
+(:class:`FunctionModel`) or state update (:class:`StateSpaceModel`).
+
+Examples
+--------
+>>> import numpy as np
+>>> from dynia.models import FOPDT
+>>> model = FOPDT()
+>>> model.names
+('K', 'T', 'theta')
+>>> params = np.array([[2.0, 1.0, 0.0], [2.0, 1.0, 1.5]])
+>>> model.simulate(params, np.ones(4)).round(3)
+array([[0.   , 1.264, 1.729, 1.9  ],
+       [0.   , 0.   , 0.787, 1.554]])
+"""
+
+from .base import Model
+from .custom import FunctionModel, StateSpaceModel
+from .linear import FOPDT, FirstOrder, LinearModel, SecondOrderDelay, Stepper, TransferFunction
+
+__all__ = [
+    "Model",
+    "LinearModel",
+    "Stepper",
+    "FirstOrder",
+    "FOPDT",
+    "SecondOrderDelay",
+    "TransferFunction",
+    "FunctionModel",
+    "StateSpaceModel",
+]

@@ -1,0 +1,264 @@
+"""What every model offers DYNIA: batched simulation of many parameter sets, streamed in time.
+
+A model simulates the same record for many parameter sets at once. It must
+provide :meth:`Model.simulate_chunks` (the output a block of steps at a
+time, so that memory does not grow with the record); :meth:`Model.stepper`
+(one logged sample at a time, for :class:`dynia.online.OnlineDynia`) is
+optional. :meth:`Model.simulate`, :meth:`Model.finite_samples` and the
+argument checks are shared.
+
+Shape convention
+----------------
+``params``
+    ``(n_samples, n_params)``; the columns follow ``model.names``. A 1-D
+    array of length ``n_params`` is accepted as a single sample.
+``u``
+    ``(n_steps,)`` for a single-input model, ``(n_steps, n_inputs)`` for a
+    model with ``n_inputs > 1``; the input sampled every ``dt``.
+outputs
+    ``(n_samples, n_steps)``; ``simulate_chunks`` yields consecutive
+    ``(n_samples, m)`` pieces of it.
+"""
+
+from __future__ import annotations
+
+import numbers
+from collections.abc import Iterator, Sequence
+
+import numpy as np
+
+from ..errors import DataError, ModelError
+
+__all__ = ["Model", "VALUES_PER_CHUNK", "check_names"]
+
+# Default chunk size: 4e6 float64 values are 32 MB per output chunk, large
+# enough that the per-chunk overhead is negligible and small enough that the
+# chunk plus the gathered inputs stay far below typical memory limits.
+VALUES_PER_CHUNK = 4_000_000
+
+
+class Model:
+    """Base class of every model DYNIA simulates.
+
+    Subclasses implement :meth:`simulate_chunks` (and :meth:`stepper` for
+    online use). Most users need none: :class:`dynia.models.FunctionModel`
+    wraps a function and :class:`dynia.models.StateSpaceModel` a discrete
+    state update.
+
+    Parameters
+    ----------
+    names : sequence of str
+        Parameter names, in the column order of ``params``.
+    n_inputs : int, default 1
+        Number of input signals (columns of ``u``).
+    """
+
+    def __init__(self, names: Sequence[str], n_inputs: int = 1):
+        self._names = check_names(names)
+        if isinstance(n_inputs, bool) or not isinstance(n_inputs, numbers.Integral) or n_inputs < 1:
+            raise ModelError(f"n_inputs must be a whole number >= 1; got {n_inputs!r}")
+        self._n_inputs = int(n_inputs)
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Parameter names, in the column order of ``params``."""
+        return self._names
+
+    @property
+    def n_params(self) -> int:
+        """Number of parameters (columns of ``params``)."""
+        return len(self._names)
+
+    @property
+    def n_inputs(self) -> int:
+        """Number of input signals (columns of ``u``; 1 means ``u`` is 1-D)."""
+        return self._n_inputs
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}()"
+
+    def simulate(self, params, u, dt: float = 1.0, x0: str = "zero") -> np.ndarray:
+        """Simulate every parameter set on the input ``u``.
+
+        Parameters
+        ----------
+        params : array_like, shape (n_samples, n_params)
+            One parameter set per row, columns in the order of `names`.
+        u : array_like, shape (n_steps,) or (n_steps, n_inputs)
+            Input samples, held constant over each interval of length `dt`.
+        dt : float, default 1.0
+            Sampling interval, > 0.
+        x0 : {"zero", "steady"}, default "zero"
+            Initial state: zero, or the steady state at ``u[0]`` (where the
+            model has one).
+
+        Returns
+        -------
+        ndarray, shape (n_samples, n_steps)
+            ``y[i, k]`` is the output of sample ``i`` at ``t = k*dt``.
+
+        Raises
+        ------
+        DataError, ModelError
+            If an argument has the wrong shape or value (the message names
+            it), or the model cannot simulate as asked.
+
+        Examples
+        --------
+        >>> from dynia.models import FirstOrder
+        >>> FirstOrder().simulate([[2.0, 1.0], [1.0, 0.5]], [1.0, 1.0, 1.0]).round(4)
+        array([[0.    , 1.2642, 1.7293],
+               [0.    , 0.8647, 0.9817]])
+        """
+        u = self.check_input(u)
+        output = None
+        start = 0
+        for chunk in self.simulate_chunks(params, u, dt=dt, x0=x0):
+            if output is None:
+                output = np.empty((chunk.shape[0], u.shape[0]))
+            output[:, start : start + chunk.shape[1]] = chunk
+            start += chunk.shape[1]
+        return output
+
+    def simulate_chunks(
+        self, params, u, dt: float = 1.0, x0: str = "zero", chunk_steps: int | None = None
+    ) -> Iterator[np.ndarray]:
+        """Simulate like `simulate`, yielding the output a block of steps at a time.
+
+        Only the state and one chunk are held in memory, so arbitrarily many
+        samples times steps can be processed. Concatenating the chunks along
+        axis 1 gives exactly (bit for bit) the result of `simulate`.
+        Arguments are validated immediately, not on the first ``next()``.
+
+        Parameters
+        ----------
+        params, u, dt, x0
+            As for `simulate`.
+        chunk_steps : int, optional
+            Time steps per chunk (the last one may be shorter). By default
+            about 4e6 values per chunk, i.e. ``4e6 // n_samples`` steps, at
+            least 1.
+
+        Yields
+        ------
+        ndarray, shape (n_samples, m)
+            Consecutive blocks of the output.
+
+        Examples
+        --------
+        >>> from dynia.models import FirstOrder
+        >>> chunks = FirstOrder().simulate_chunks([1.0, 1.0], [1.0] * 5, chunk_steps=2)
+        >>> [chunk.shape for chunk in chunks]
+        [(1, 2), (1, 2), (1, 1)]
+        """
+        raise NotImplementedError(
+            f"{type(self).__name__} must implement simulate_chunks(params, u, dt, x0, chunk_steps); "
+            "dynia.models.FunctionModel and StateSpaceModel wrap a function or a state update without subclassing"
+        )
+
+    def stepper(self, params, dt: float = 1.0, x0: str = "zero"):
+        """Simulate every parameter set one input sample at a time, as it is logged.
+
+        Parameters
+        ----------
+        params, dt, x0
+            As for `simulate`; ``x0="steady"`` starts in the steady state at
+            the first input stepped.
+
+        Returns
+        -------
+        object with ``step(u_k) -> ndarray (n_samples,)``
+            ``stepper.step(u_k)`` returns the output of every sample at step
+            k, bit for bit column k of `simulate` on the inputs stepped so far.
+
+        Examples
+        --------
+        >>> from dynia.models import FOPDT
+        >>> stepper = FOPDT().stepper([[1.0, 0.0, 2.0]])
+        >>> [float(stepper.step(u_k)[0]) for u_k in [1.0, 2.0, 3.0, 4.0]]
+        [0.0, 0.0, 0.0, 1.0]
+        """
+        raise ModelError(f"{type(self).__name__} cannot be simulated one sample at a time (it has no stepper)")
+
+    def finite_samples(self, params, u, dt: float = 1.0, x0: str = "zero") -> np.ndarray:
+        """Which parameter sets simulate to finite output over the whole record.
+
+        A model with unstable or huge coefficients can overflow; such sets
+        must be left out of a DYNIA run rather than rank as anything. This
+        default simulates once, streaming, and keeps only the verdict.
+
+        Returns
+        -------
+        ndarray of bool, shape (n_samples,)
+
+        Examples
+        --------
+        >>> import control
+        >>> from dynia.models import TransferFunction
+        >>> unstable = TransferFunction(lambda p: control.tf([1.0], [1.0, -p[0]]), names=("a",))
+        >>> unstable.finite_samples([[0.5], [800.0]], [1.0] * 5).tolist()
+        [True, False]
+        """
+        finite = np.ones(self.check_params(params).shape[0], dtype=bool)
+        with np.errstate(over="ignore", invalid="ignore"):
+            for chunk in self.simulate_chunks(params, u, dt=dt, x0=x0):
+                finite &= np.isfinite(chunk).all(axis=1)
+        return finite
+
+    def check_params(self, params) -> np.ndarray:
+        """Return ``params`` as a finite float (n_samples, n_params) array."""
+        expected = f"(n_samples, {self.n_params}) with columns {self.names}"
+        try:
+            params = np.asarray(params, dtype=float)
+        except (TypeError, ValueError):
+            raise ModelError(f"params must be a numeric array of shape {expected}") from None
+        if params.ndim == 1 and params.shape[0] == self.n_params:
+            params = params.reshape(1, -1)
+        if params.ndim != 2 or params.shape[1] != self.n_params:
+            raise ModelError(f"params must have shape {expected}; got shape {params.shape}")
+        if params.shape[0] == 0:
+            raise ModelError("params must contain at least one sample (row)")
+        bad = ~np.isfinite(params)
+        if bad.any():
+            sample, column = np.argwhere(bad)[0]
+            raise DataError(
+                f"params must be finite; sample {sample} has {self.names[column]} = {params[sample, column]}"
+            )
+        return params
+
+    def check_input(self, u) -> np.ndarray:
+        """Return ``u`` as finite floats, (n_steps,) for one input or (n_steps, n_inputs)."""
+        expected = "(n_steps,)" if self.n_inputs == 1 else f"(n_steps, {self.n_inputs})"
+        try:
+            u = np.asarray(u, dtype=float)
+        except (TypeError, ValueError):
+            raise DataError(f"u must be an array of numbers of shape {expected}") from None
+        if self.n_inputs == 1 and u.ndim == 2 and u.shape[1] == 1:
+            u = u[:, 0]
+        if (self.n_inputs == 1 and u.ndim != 1) or (self.n_inputs > 1 and (u.ndim != 2 or u.shape[1] != self.n_inputs)):
+            raise DataError(f"u must have shape {expected} for {type(self).__name__}; got shape {u.shape}")
+        if u.shape[0] == 0:
+            raise DataError("u must contain at least one step; got an empty array")
+        bad = np.argwhere(~np.isfinite(u))
+        if bad.size:
+            where = tuple(int(i) for i in bad[0])
+            raise DataError(f"u must be finite; u[{', '.join(map(str, where))}] = {u[where]}")
+        return u
+
+    def chunk_steps(self, n_samples: int, chunk_steps: int | None) -> int:
+        """Steps per chunk: ``chunk_steps`` checked, or about VALUES_PER_CHUNK values by default."""
+        if chunk_steps is None:
+            return max(1, VALUES_PER_CHUNK // n_samples)
+        if isinstance(chunk_steps, bool) or not isinstance(chunk_steps, numbers.Integral) or chunk_steps < 1:
+            raise ModelError(f"chunk_steps must be None or an integer >= 1; got {chunk_steps!r}")
+        return int(chunk_steps)
+
+
+def check_names(names) -> tuple[str, ...]:
+    """Parameter names as a tuple of unique strings, or a :class:`ModelError`."""
+    if isinstance(names, str) or not all(isinstance(name, str) for name in names):
+        raise ModelError(f"names must be a sequence of strings; got {names!r}")
+    names = tuple(names)
+    if not names or len(set(names)) != len(names):
+        raise ModelError(f"names must be non-empty and unique; got {names}")
+    return names

@@ -1,0 +1,406 @@
+"""Bring your own model: a simulation function, or a discrete-time state update.
+
+:class:`FunctionModel` wraps any function that simulates many parameter sets
+at once, ``fn(params, u, dt) -> sims``: a wrapper around an existing
+simulator, a vectorised formula, a call into compiled code.
+:class:`StateSpaceModel` takes a nonlinear state update and an output map,
+both vectorised over the samples, and streams them through the record in
+time chunks, so memory stays bounded as for the built-in models; it also
+steps one logged sample at a time for :class:`dynia.online.OnlineDynia`.
+When both functions are ``numba.njit`` functions the time loop runs compiled.
+
+Shapes follow :mod:`dynia.models.base`: ``params`` (n_samples, n_params)
+with columns in the order of ``names``, ``u`` (n_steps,) or (n_steps,
+n_inputs), outputs (n_samples, n_steps).
+
+A model that returns the wrong shape, raises, gives non-finite output for
+every parameter set or ignores ``params`` is stopped with one
+:class:`~dynia.errors.ModelError` line naming the model and what was wrong.
+
+Examples
+--------
+A static gain as a function, and a first-order lag as a state update:
+
+>>> import numpy as np
+>>> from dynia.models import FunctionModel, StateSpaceModel
+>>> gain = FunctionModel(lambda params, u, dt: params[:, :1] * u, ["K"])
+>>> gain.simulate([[2.0], [3.0]], [1.0, 2.0])
+array([[2., 4.],
+       [3., 6.]])
+>>> lag = StateSpaceModel(
+...     step=lambda x, u_k, p, dt: x + dt / p[:, 1:2] * (p[:, 0:1] * u_k - x),
+...     output=lambda x, u_k, p: x[:, 0],
+...     x0=[0.0], names=["K", "T"], n_states=1)
+>>> lag.simulate([[2.0, 4.0]], [1.0, 1.0, 1.0])
+array([[0.   , 0.5  , 0.875]])
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Sequence
+
+import numpy as np
+
+from ..errors import DyniaError, ModelError
+from ..settings import check_dt, check_x0
+from .base import Model
+
+try:
+    import numba
+    from numba.core.registry import CPUDispatcher
+except ImportError:  # the Python time loop serves
+    numba = None
+    CPUDispatcher = ()
+
+__all__ = ["FunctionModel", "StateSpaceModel"]
+
+
+def _label(function):
+    return getattr(function, "__qualname__", None) or getattr(function, "__name__", None) or repr(function)
+
+
+class FunctionModel(Model):
+    """A model given as a function that simulates many parameter sets at once.
+
+    Parameters
+    ----------
+    fn : callable
+        ``fn(params, u, dt) -> sims``: ``params`` (n_samples, n_params) with
+        columns in the order of ``names``, ``u`` (n_steps,) or (n_steps,
+        n_inputs), ``dt`` the sample time; returns (n_samples, n_steps).
+        With ``state`` given, ``fn(params, u_chunk, dt, state) -> (sims_chunk,
+        state)`` instead, called on consecutive chunks of the record.
+    names : sequence of str
+        Parameter names.
+    n_inputs : int, default 1
+        Number of input signals.
+    state : callable, optional
+        ``state(params) -> initial state`` (any object ``fn`` understands).
+        Given, the model streams through the record chunk by chunk, carrying
+        the state, so memory does not grow with the record and the model can
+        step one sample at a time (online use). Without it ``fn`` sees the
+        whole record at once.
+
+    Notes
+    -----
+    The model has no notion of ``x0``: ``fn`` (or ``state``) sets the
+    initial state, and ``x0="steady"`` is refused rather than ignored.
+
+    Examples
+    --------
+    >>> import numpy as np, dynia
+    >>> def tank_level(params, u, dt):
+    ...     return params[:, :1] * np.cumsum(u) * dt        # a pure integrator, gain K
+    >>> model = dynia.models.FunctionModel(tank_level, ["K"])
+    >>> u = np.r_[np.zeros(10), np.ones(30)]
+    >>> y = tank_level(np.array([[0.5]]), u, 1.0)[0]
+    >>> res = dynia.run(u, y, model, {"K": (0, 2)}, n_samples=200, n=3, rng=1)
+    >>> sims = tank_level(res.samples, u, 1.0)
+    >>> same = dynia.moving_window(y, sims, res.samples, [[0, 2]], n=3)
+    >>> bool(np.array_equal(res.ic, same.ic))
+    True
+    """
+
+    def __init__(self, fn, names: Sequence[str], *, n_inputs: int = 1, state=None):
+        if not callable(fn):
+            raise ModelError(f"FunctionModel needs a callable fn(params, u, dt); got {type(fn).__name__}")
+        if state is not None and not callable(state):
+            raise ModelError(f"state must be a callable state(params) -> initial state; got {type(state).__name__}")
+        super().__init__(names, n_inputs)
+        self.fn = fn
+        self.state = state
+
+    @property
+    def streams(self) -> bool:
+        """Whether the model simulates chunk by chunk (``state`` given) or the whole record at once."""
+        return self.state is not None
+
+    def __repr__(self) -> str:
+        return f"FunctionModel({_label(self.fn)})"
+
+    def simulate_chunks(
+        self, params, u, dt: float = 1.0, x0: str = "zero", chunk_steps: int | None = None
+    ) -> Iterator[np.ndarray]:
+        params, u, dt = self._arguments(params, u, dt, x0)
+        chunk_steps = self.chunk_steps(params.shape[0], chunk_steps)
+        if not self.streams:
+            sims = self._called(params, u, dt)
+            return (sims[:, start : start + chunk_steps] for start in range(0, u.shape[0], chunk_steps))
+        return self._streamed(params, u, dt, chunk_steps)
+
+    simulate_chunks.__doc__ = Model.simulate_chunks.__doc__
+
+    def stepper(self, params, dt: float = 1.0, x0: str = "zero"):
+        if not self.streams:
+            raise ModelError(
+                f"{self!r} simulates the whole record at once, so it cannot step one sample at a time; "
+                "give state=... (fn then simulates chunk by chunk) for online use"
+            )
+        params, _, dt = self._arguments(params, None, dt, x0)
+        return _ChunkStepper(self, params, dt)
+
+    stepper.__doc__ = Model.stepper.__doc__
+
+    def _arguments(self, params, u, dt, x0):
+        params = self.check_params(params)
+        if check_x0(x0) != "zero":
+            raise ModelError(f"{self!r} sets its own initial state; x0={x0!r} is not available for it")
+        return params, None if u is None else self.check_input(u), check_dt(dt)
+
+    def _streamed(self, params, u, dt, chunk_steps):
+        state = self._initial_state(params)
+        for start in range(0, u.shape[0], chunk_steps):
+            sims, state = self._called(params, u[start : start + chunk_steps], dt, state)
+            yield sims
+
+    def _initial_state(self, params):
+        try:
+            return self.state(params)
+        except DyniaError:
+            raise
+        except Exception as error:
+            raise ModelError(f"{self!r}: state(params) raised {type(error).__name__}: {error}") from error
+
+    def _called(self, params, u, dt, *state):
+        """``fn`` on one piece of the record, its answer checked."""
+        try:
+            answer = self.fn(params, u, dt, *state)
+        except DyniaError:
+            raise
+        except Exception as error:
+            raise ModelError(f"{self!r}: fn raised {type(error).__name__}: {error}") from error
+        if state:
+            if not (isinstance(answer, tuple) and len(answer) == 2):
+                raise ModelError(
+                    f"{self!r}: with state given, fn must return (sims, state); got {type(answer).__name__}"
+                )
+            sims, new_state = answer
+            return _checked_output(self, sims, params, u, whole_record=False), new_state
+        return _checked_output(self, answer, params, u, whole_record=True)
+
+
+class StateSpaceModel(Model):
+    """A discrete-time (nonlinear) state-space model, vectorised over the parameter sets.
+
+    ``x[k+1] = step(x[k], u[k], params, dt)`` and ``y[k] = output(x[k],
+    u[k], params)``, from ``x[0] = x0``: as for the built-in models, ``y[0]``
+    is the output of the initial state.
+
+    Parameters
+    ----------
+    step : callable
+        ``step(x, u_k, params, dt) -> x_next``, ``x`` and ``x_next``
+        (n_samples, n_states), ``u_k`` a float (one input) or (n_inputs,),
+        ``params`` (n_samples, n_params).
+    output : callable
+        ``output(x, u_k, params) -> y_k`` (n_samples,).
+    x0 : array_like (n_states,) or callable
+        The initial state of every sample, or ``x0(params) -> (n_samples,
+        n_states)``.
+    names : sequence of str
+        Parameter names.
+    n_states : int
+        Length of the state vector.
+    n_inputs : int, default 1
+        Number of input signals.
+
+    Notes
+    -----
+    When ``step`` and ``output`` are both ``numba.njit`` functions, the time
+    loop over each chunk runs in compiled code calling them; otherwise it is
+    a Python loop with one vectorised call of each per step, which costs a
+    few microseconds per step whatever the number of samples. The run's
+    ``x0`` setting must stay "zero" (the model's own ``x0`` applies);
+    "steady" is refused rather than ignored.
+
+    Examples
+    --------
+    A tank with square-root outflow, level h, inflow u, area A, outflow
+    coefficient c (explicit Euler):
+
+    >>> import numpy as np
+    >>> from dynia.models import StateSpaceModel
+    >>> tank = StateSpaceModel(
+    ...     step=lambda x, u_k, p, dt: np.maximum(x + dt * (u_k - p[:, 1:2] * np.sqrt(x)) / p[:, 0:1], 0.0),
+    ...     output=lambda x, u_k, p: x[:, 0], x0=[1.0], names=["A", "c"], n_states=1)
+    >>> tank.simulate([[2.0, 0.5]], np.full(3, 0.5)).round(3)
+    array([[1., 1., 1.]])
+    """
+
+    def __init__(self, step, output, x0, names: Sequence[str], *, n_states: int, n_inputs: int = 1):
+        for name, function in (("step", step), ("output", output)):
+            if not callable(function):
+                raise ModelError(f"StateSpaceModel needs a callable {name}; got {type(function).__name__}")
+        super().__init__(names, n_inputs)
+        if isinstance(n_states, bool) or not isinstance(n_states, (int, np.integer)) or n_states < 1:
+            raise ModelError(f"n_states must be a whole number >= 1; got {n_states!r}")
+        self.n_states = int(n_states)
+        self.step_function = step
+        self.output_function = output
+        if callable(x0):
+            self.x0 = x0
+        else:
+            state = np.asarray(x0, dtype=float)
+            if state.shape != (self.n_states,) or not np.isfinite(state).all():
+                raise ModelError(f"x0 must be {self.n_states} finite numbers (n_states) or a callable; got {x0!r}")
+            self.x0 = state
+        self.compiled = numba is not None and isinstance(step, CPUDispatcher) and isinstance(output, CPUDispatcher)
+
+    def __repr__(self) -> str:
+        return f"StateSpaceModel({_label(self.step_function)}, {_label(self.output_function)})"
+
+    def simulate_chunks(
+        self, params, u, dt: float = 1.0, x0: str = "zero", chunk_steps: int | None = None
+    ) -> Iterator[np.ndarray]:
+        params = self.check_params(params)
+        u = self.check_input(u)
+        dt = check_dt(dt)
+        self._check_x0_setting(x0)
+        chunk_steps = self.chunk_steps(params.shape[0], chunk_steps)
+        state = self.initial_state(params)
+        return self._chunks(params, u, dt, chunk_steps, state)
+
+    simulate_chunks.__doc__ = Model.simulate_chunks.__doc__
+
+    def stepper(self, params, dt: float = 1.0, x0: str = "zero"):
+        params = self.check_params(params)
+        self._check_x0_setting(x0)
+        return _ChunkStepper(self, params, check_dt(dt))
+
+    stepper.__doc__ = Model.stepper.__doc__
+
+    def initial_state(self, params):
+        """The state at step 0 of every sample, (n_samples, n_states), checked."""
+        n_samples = params.shape[0]
+        if callable(self.x0):
+            try:
+                state = np.asarray(self.x0(params), dtype=float)
+            except DyniaError:
+                raise
+            except Exception as error:
+                raise ModelError(f"{self!r}: x0(params) raised {type(error).__name__}: {error}") from error
+            if state.shape != (n_samples, self.n_states):
+                raise ModelError(
+                    f"{self!r}: x0(params) returned shape {state.shape}; expected (n_samples, n_states) = "
+                    f"({n_samples}, {self.n_states})"
+                )
+            return np.ascontiguousarray(state)
+        return np.tile(self.x0, (n_samples, 1))
+
+    def _check_x0_setting(self, x0):
+        if check_x0(x0) != "zero":
+            raise ModelError(f"{self!r} starts from its own x0; x0={x0!r} is not available for it")
+
+    def _chunks(self, params, u, dt, chunk_steps, state):
+        first = True
+        for start in range(0, u.shape[0], chunk_steps):
+            piece = u[start : start + chunk_steps]
+            if first:  # the first step in Python: clear errors for wrong shapes before any compiled loop
+                sims = np.empty((params.shape[0], piece.shape[0]))
+                sims[:, 0], state = self.advance(state, piece[0], params, dt)
+                rest = piece[1:]
+                if rest.shape[0]:
+                    sims[:, 1:], state = self._loop(state, rest, params, dt)
+                first = False
+            else:
+                sims, state = self._loop(state, piece, params, dt)
+            yield sims
+
+    def _loop(self, state, piece, params, dt):
+        if self.compiled:
+            sims = np.empty((params.shape[0], piece.shape[0]))
+            try:
+                state = _compiled_loop(self.step_function, self.output_function, state, piece, params, dt, sims)
+            except Exception as error:
+                raise ModelError(f"{self!r}: the compiled time loop failed: {type(error).__name__}: {error}") from error
+            return sims, state
+        sims = np.empty((params.shape[0], piece.shape[0]))
+        for k in range(piece.shape[0]):
+            sims[:, k], state = self.advance(state, piece[k], params, dt)
+        return sims, state
+
+    def advance(self, state, u_k, params, dt):
+        """One step: ``(y_k, x_next)`` of every sample, both checked."""
+        try:
+            y_k = self.output_function(state, u_k, params)
+            following = self.step_function(state, u_k, params, dt)
+        except DyniaError:
+            raise
+        except Exception as error:
+            raise ModelError(f"{self!r}: step or output raised {type(error).__name__}: {error}") from error
+        y_k = np.asarray(y_k, dtype=float)
+        following = np.asarray(following, dtype=float)
+        n_samples = params.shape[0]
+        if y_k.shape != (n_samples,):
+            raise ModelError(f"{self!r}: output returned shape {y_k.shape}; expected (n_samples,) = ({n_samples},)")
+        if following.shape != (n_samples, self.n_states):
+            raise ModelError(
+                f"{self!r}: step returned shape {following.shape}; expected (n_samples, n_states) = "
+                f"({n_samples}, {self.n_states})"
+            )
+        return y_k, following
+
+
+if numba is not None:
+
+    @numba.njit(cache=False)
+    def _compiled_loop(step, output, state, piece, params, dt, sims):
+        for k in range(piece.shape[0]):
+            sims[:, k] = output(state, piece[k], params)
+            state = step(state, piece[k], params, dt)
+        return state
+
+else:  # pragma: no cover - StateSpaceModel.compiled is False without numba
+    _compiled_loop = None
+
+
+class _ChunkStepper:
+    """One logged sample at a time through a streaming model: its chunks of one step."""
+
+    def __init__(self, model, params, dt):
+        self._model = model
+        self._params = params
+        self._dt = dt
+        self._state = None
+        self.steps = 0
+
+    def step(self, u_k):
+        """Take the input of step k (a float, or (n_inputs,)) and return every sample's output y[k]."""
+        u_k = self._model.check_input(np.reshape(np.asarray(u_k, dtype=float), (1, -1)))
+        if isinstance(self._model, StateSpaceModel):
+            if self._state is None:
+                self._state = self._model.initial_state(self._params)
+            y_k, self._state = self._model.advance(self._state, u_k[0], self._params, self._dt)
+        else:
+            if self._state is None:
+                self._state = self._model._initial_state(self._params)
+            sims, self._state = self._model._called(self._params, u_k, self._dt, self._state)
+            y_k = sims[:, 0]
+        self.steps += 1
+        return y_k
+
+
+def _checked_output(model, sims, params, u, *, whole_record):
+    """``sims`` as a float (n_samples, n_steps) array, or a one-line ModelError naming what is wrong.
+
+    Only on a whole record is one output for every parameter set a mistake: a
+    chunk before the first input change may well be the same for all.
+    """
+    expected = (params.shape[0], u.shape[0])
+    try:
+        sims = np.asarray(sims, dtype=float)
+    except (TypeError, ValueError):
+        raise ModelError(f"{model!r}: fn returned {type(sims).__name__}, not an array of numbers") from None
+    if sims.shape != expected:
+        raise ModelError(
+            f"{model!r}: fn returned shape {sims.shape}; expected (n_samples, n_steps) = {expected}"
+            + (" (transposed?)" if sims.shape == expected[::-1] else "")
+        )
+    if whole_record and expected[0] > 1 and np.array_equal(sims, np.broadcast_to(sims[:1], expected)):
+        distinct = np.unique(params, axis=0).shape[0]
+        if distinct > 1:
+            raise ModelError(
+                f"{model!r}: fn returned the same output for all {expected[0]} parameter sets; it must use "
+                "params (one row per set, columns in the order of names), or the input never excites the model"
+            )
+    return sims
