@@ -205,7 +205,7 @@ def adaptive_run(
     if settings.sampler not in SCHEMES:
         raise SettingsError(f"adaptive_run takes sampler (scheme) 'iis' or 'de'; got {settings.sampler!r}")
     scheme, dt, x0, window, n = settings.sampler, settings.dt, settings.x0, settings.window, settings.n
-    u, y = _checks.record(u, y)
+    u, y = _checks.record(u, y, n_inputs=model.n_inputs)
     names, prior = parameter_box(bounds, model.names, type(model).__name__)
     order = [names.index(name) for name in model.names]
     rng = np.random.default_rng(rng)

@@ -74,7 +74,7 @@ from .engine.flavours import compiled_engine, flavour_analysis
 from .engine.kernels import CompiledErrors
 from .engine.windows import StreamedErrors, window_halos, window_inputs, window_mean
 from .errors import DyniaError, ModelError
-from .pipeline import warn_dropped
+from .pipeline import compiled_simulation, warn_dropped
 from .result import DyniaResult
 from .sampling import sample
 from .settings import SAMPLERS, AnalysisSettings, parameter_box
@@ -184,7 +184,7 @@ def run(
         raise TypeError(
             f"client must be a distributed.Client, or None for a local cluster; got {type(client).__name__}"
         )
-    u, y = _checks.record(u, y)
+    u, y = _checks.record(u, y, n_inputs=model.n_inputs)
     settings = AnalysisSettings.build(
         settings,
         dt=dt,
@@ -404,7 +404,7 @@ class _Windows:
 
     def errors(self, model, params, u, y, dt, x0, time_chunks):
         """The absolute errors of simulating ``params``, served in time order."""
-        if self.compiled:
+        if self.compiled and compiled_simulation(model):
             # One thread: the cluster's workers are the parallelism (and no pool needs closing).
             return CompiledErrors(model, params, u, y, dt=dt, x0=x0, workers=1)
         sims = model.simulate_chunks(params, u, dt=dt, x0=x0, chunk_steps=time_chunks)

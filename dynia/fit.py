@@ -178,20 +178,20 @@ class FitResult:
         ``x0``; with them, each segment by the fit's initial-state scheme
         (``warmup``, ``x0``), NaN outside. Returns shape (n_steps,).
         """
-        u = _checks.as_1d_float(u, "u")
+        u = self.model.check_input(u)
         settings = self.settings
         if segments is None:
-            segments = [(0, u.size)]
+            segments = [(0, u.shape[0])]
         simulator = _SegmentSimulator(
             u,
-            np.zeros(u.size),
+            np.zeros(u.shape[0]),
             self.model,
-            check_segments(segments, u.size),
+            check_segments(segments, u.shape[0]),
             dt=settings["dt"],
             x0=settings["x0"],
             warmup=settings["warmup"],
         )
-        output = np.full(u.size, np.nan)
+        output = np.full(u.shape[0], np.nan)
         output[simulator.steps] = simulator.outputs(self._vector()[None, :])[0]
         return output
 
@@ -410,8 +410,8 @@ def fit_segments(
     """
     if not isinstance(model, Model):
         raise TypeError(f"model must be a dynia.models.Model, e.g. FirstOrder(); got {type(model).__name__}")
-    u, y = _record(u, y)
-    segments = check_segments(segments, u.size)
+    u, y = _checks.record(u, y, n_inputs=model.n_inputs)
+    segments = check_segments(segments, u.shape[0])
     if not segments:
         raise SettingsError("segments is empty; give at least one (start, stop) segment to fit")
     dt, x0, warmup, offset = _scheme(dt, x0, warmup, offset)
@@ -491,11 +491,6 @@ def fit_segments(
             n_starts=n_starts,
         ),
     )
-
-
-def _record(u, y):
-    u, y = _checks.record(u, y)
-    return u, y
 
 
 def _scheme(dt, x0, warmup, offset):
@@ -605,9 +600,9 @@ def _summarise(solution, nfev, residuals, simulator, u, model, free_names, lower
 
     params = residuals.full(theta[None, :])
     every_step = _SegmentSimulator(
-        u, np.zeros(u.size), model, segments, dt=settings["dt"], x0=settings["x0"], warmup=settings["warmup"]
+        u, np.zeros(u.shape[0]), model, segments, dt=settings["dt"], x0=settings["x0"], warmup=settings["warmup"]
     )
-    fitted = np.full(u.size, np.nan)
+    fitted = np.full(u.shape[0], np.nan)
     fitted[every_step.steps] = every_step.outputs(params)[0]
     offsets = tuple(
         float(np.mean(simulator.observed[part] - fitted[simulator.steps[part]])) if with_offsets else 0.0
@@ -704,13 +699,13 @@ def validation_error(u, y, model, parameters, segments, *, dt=1.0, x0="steady", 
     """
     if not isinstance(model, Model):
         raise TypeError(f"model must be a dynia.models.Model, e.g. FirstOrder(); got {type(model).__name__}")
-    u, y = _record(u, y)
+    u, y = _checks.record(u, y, n_inputs=model.n_inputs)
     mask = np.asarray(segments) if isinstance(segments, np.ndarray) else None
     if mask is not None and mask.dtype == bool:
-        if mask.shape != u.shape:
-            raise SettingsError(f"the validation mask must have shape {u.shape}; got {mask.shape}")
+        if mask.shape != u.shape[:1]:
+            raise SettingsError(f"the validation mask must have shape {u.shape[:1]}; got {mask.shape}")
         segments = mask_to_segments(mask)
-    segments = check_segments(segments, u.size)
+    segments = check_segments(segments, u.shape[0])
     dt, x0, warmup, offset = _scheme(dt, x0, warmup, offset)
     values = _named_values(parameters, "parameters", model.names)
     missing = [name for name in model.names if name not in values]

@@ -221,9 +221,13 @@ def identify(
     -------
     Identification
     """
-    u, y = _checks.record(u, y)
+    u, y = _checks.record(u, y, n_inputs=model.n_inputs)
     if method not in METHODS:
         raise SettingsError(f"method must be one of {METHODS}; got {method!r}")
+    if model.n_inputs > 1 and (method == "baseline" or quality or exclude_flagged):
+        raise SettingsError(
+            f"the baseline interval search and the data-quality checks take one input; {model!r} has {model.n_inputs}"
+        )
     if (segments is None) != (method != "given"):
         raise SettingsError("segments are given exactly when method='given'")
     analysis = AnalysisSettings.build(
@@ -241,7 +245,7 @@ def identify(
     names, box = parameter_box(bounds, model.names, type(model).__name__)
     bounds = {name: tuple(map(float, row)) for name, row in zip(names, box)}
     rng = np.random.default_rng(rng)
-    time = np.arange(u.size) * dt
+    time = np.arange(y.size) * dt
 
     report = None
     if quality or exclude_flagged:
@@ -249,8 +253,8 @@ def identify(
         if exclude_flagged:
             u, y = report.exclude(u, signal="u"), report.exclude(y, signal="y")
 
-    fit_part, validation = holdout_split(u.size, held_out)
-    y_fit = np.where(segments_to_mask(validation, u.size), np.nan, y)
+    fit_part, validation = holdout_split(y.size, held_out)
+    y_fit = np.where(segments_to_mask(validation, y.size), np.nan, y)
     notes = []
     dynia_result = baseline_result = None
     if method == "dynia":
@@ -263,13 +267,13 @@ def identify(
         )
         notes += [str(warning) for warning in structure_warnings(dynia_result)]
     elif method == "baseline":
-        fitting = segments_to_mask(fit_part, u.size)
+        fitting = segments_to_mask(fit_part, y.size)
         baseline_result = find_intervals(np.where(fitting, u, np.nan), y_fit, dt=dt, **(baseline_options or {}))
         chosen = intersect_segments([tuple(map(int, pair)) for pair in baseline_result.accepted], fit_part)
     elif method == "whole":
         chosen = list(fit_part)
     else:
-        chosen = intersect_segments(check_segments(segments, u.size), fit_part)
+        chosen = intersect_segments(check_segments(segments, y.size), fit_part)
     if not chosen:
         raise SettingsError(
             f"method {method!r} selected no data to fit on"

@@ -248,7 +248,12 @@ class OnlineDynia:
             The results of the window ending at this step, also kept as
             ``.ic``, ``.ci`` and ``.gradient``; new arrays at every update.
         """
-        u_t = _scalar(u_t, "u_t", self.steps, allow_nan=False)
+        if self._model.n_inputs == 1:
+            u_t = _scalar(u_t, "u_t", self.steps, allow_nan=False)
+        else:
+            u_t = _checks.as_1d_float(u_t, f"u_t at step {self.steps}")
+            if u_t.size != self._model.n_inputs:
+                raise DataError(f"u_t at step {self.steps} must hold {self._model.n_inputs} inputs; got {u_t.size}")
         y_t = _scalar(y_t, "y_t", self.steps, allow_nan=True)
         width = self._errors.shape[0]
         slot = self.steps % width
@@ -289,20 +294,20 @@ class OnlineDynia:
             from the steps fed before; comparable with
             ``dynia.run(..., window="trailing")`` on the same record.
         """
-        u, y = _checks.record(u, y)
+        u, y = _checks.record(u, y, n_inputs=self._model.n_inputs)
         n_params, n_bins = self.bin_centres.shape
-        ic = np.empty((n_params, u.size))
-        ci = np.empty((n_params, u.size, 2))
-        gradient = np.empty((n_params, n_bins, u.size))
+        ic = np.empty((n_params, y.size))
+        ci = np.empty((n_params, y.size, 2))
+        gradient = np.empty((n_params, n_bins, y.size))
         first = self.steps
-        for step, (u_t, y_t) in enumerate(zip(u.tolist(), y.tolist())):
+        for step, (u_t, y_t) in enumerate(zip(u.tolist(), y.tolist())):  # u_t a list for several inputs
             ic[:, step], ci[:, step], gradient[:, :, step] = self.update(u_t, y_t)
         settings = dict(self._settings, n_diverged=self.n_diverged)
         return DyniaResult(
             names=self.names,
             samples=np.array(self.samples),
             bounds=self.bounds.copy(),
-            time=(first + np.arange(u.size)) * self._dt,
+            time=(first + np.arange(y.size)) * self._dt,
             ic=ic,
             ci=ci,
             gradient=gradient,
