@@ -99,6 +99,9 @@ def record(u, y, n_inputs=1):
     if n_inputs == 1:
         u = as_1d_float(u, "u")
     else:
+        shape = np.shape(u)
+        if len(shape) != 2 or shape[1] != n_inputs:
+            raise DataError(f"u must have shape (n_steps, {n_inputs}) for a model with {n_inputs} inputs; got {shape}")
         u = as_2d_float(u, "u", columns=n_inputs)
     y = as_1d_float(y, "y", allow_nan=True)
     if u.shape[0] != y.size:

@@ -12,13 +12,17 @@ Bad input ends the command with one line on stderr and exit status 2.
 """
 
 import argparse
+import dataclasses
 import importlib.metadata
+import importlib.util
 import math
+import os
 import platform
 import signal
 import sys
 import tomllib
 import warnings
+from pathlib import Path
 
 import numpy as np
 
@@ -259,9 +263,10 @@ def _add_data_and_model_options(command):
     model = command.add_argument_group("model")
     model.add_argument(
         "--model",
-        choices=sorted(MODELS),
+        metavar="MODEL",
         help="first-order: K/(T s+1); fopdt: K e^(-theta s)/(T s+1); "
-        "second-order-delay: K e^(-theta s)/((T1 s+1)(T2 s+1))",
+        "second-order-delay: K e^(-theta s)/((T1 s+1)(T2 s+1)); or your own, MODULE:NAME or FILE.py:NAME, "
+        "a dynia.models.Model or a function returning one (e.g. mymodels.py:tank)",
     )
     model.add_argument(
         "--param",
@@ -380,18 +385,19 @@ def _options(args):
         if not options.get(key):
             option = "DATA.csv" if key == "data" else f"--{key}"
             raise UsageError(f"{option} is required (on the command line or in --config)")
-    options["input"] = _one_column(options["input"], "--input")
+    model = options["model_object"] = _model(options["model"])
+    options["input"] = _input_columns(options["input"], model)
     options["output"] = _one_column(options["output"], "--output")
-    if options["input"] == options["output"] and not options["long"]:
+    if options["output"] in options["input"] and not options["long"]:
         raise UsageError(
-            f"--input and --output name the same column {options['input']!r}; "
+            f"--input and --output name the same column {options['output']!r}; "
             "the output must be logged apart from the input"
         )
+    if model.n_inputs > 1 and options["quality"]:
+        raise UsageError(f"--quality checks one input; the model {model!r} has {model.n_inputs}")
     if not options.get("param"):
         raise UsageError("give a range for every model parameter with --param NAME=LOW:HIGH")
-    if options["model"] not in MODELS:
-        raise UsageError(f"--model must be one of {', '.join(sorted(MODELS))}; got {options['model']!r}")
-    options["bounds"] = _bounds(options["param"], MODELS[options["model"]]())
+    options["bounds"] = _bounds(options["param"], model)
     options["analysis"] = _analysis_settings(options)
     _check_command_options(options)
     options["offset"] = _offset(options["offset"], "--offset")
@@ -411,11 +417,79 @@ def _one_column(names, option):
     if isinstance(names, str):
         names = [names]
     if len(names) != 1:
-        raise UsageError(
-            f"give one {option}: the models take one input and one output (multi-input models are "
-            f"not supported yet); got {', '.join(map(repr, names))}"
-        )
+        raise UsageError(f"give one {option}; got {', '.join(map(repr, names))}")
     return names[0]
+
+
+def _input_columns(names, model):
+    """The input columns in the model's input order: as many as the model has inputs, each once."""
+    if isinstance(names, str):
+        names = [names]
+    if len(names) != model.n_inputs:
+        raise UsageError(
+            f"--input is given {len(names)} time(s) ({', '.join(map(repr, names))}) but the model {model!r} takes "
+            f"{model.n_inputs} input(s); give one --input per model input, in the model's order"
+        )
+    repeated = sorted({name for name in names if names.count(name) > 1})
+    if repeated:
+        raise UsageError(f"--input names {', '.join(map(repr, repeated))} more than once")
+    return list(names)
+
+
+def _model(spec):
+    """A built-in model by name, or MODULE:NAME / FILE.py:NAME naming a Model or a function returning one."""
+    if spec in MODELS:
+        return MODELS[spec]()
+    where, colon, attribute = str(spec).rpartition(":")
+    if not colon or not where or not attribute:
+        raise UsageError(
+            f"--model must be one of {', '.join(sorted(MODELS))}, or MODULE:NAME or FILE.py:NAME for your own; "
+            f"got {spec!r}"
+        )
+    module = _import_model_module(where, spec)
+    try:
+        found = getattr(module, attribute)
+    except AttributeError:
+        raise UsageError(f"--model {spec}: {where} has no {attribute!r}") from None
+    if not isinstance(found, models.Model):
+        if not callable(found):
+            raise UsageError(f"--model {spec}: {attribute} is a {type(found).__name__}, not a dynia.models.Model")
+        try:
+            found = found()
+        except DyniaError:
+            raise
+        except Exception as error:
+            raise UsageError(f"--model {spec}: calling {attribute}() raised {type(error).__name__}: {error}") from None
+        if not isinstance(found, models.Model):
+            raise UsageError(
+                f"--model {spec}: {attribute}() returned a {type(found).__name__}, not a dynia.models.Model"
+            )
+    return found
+
+
+def _import_model_module(where, spec):
+    """Import a module by dotted name (from the working directory too) or a .py file by path."""
+    try:
+        if where.endswith(".py") or os.sep in where:
+            path = Path(where)
+            if not path.is_file():
+                raise UsageError(f"--model {spec}: {where}: no such file")
+            module_spec = importlib.util.spec_from_file_location(f"dynia_user_model_{path.stem}", path)
+            module = importlib.util.module_from_spec(module_spec)
+            module_spec.loader.exec_module(module)
+            return module
+        # The dynia script does not put the working directory on the path; a user's module usually lives there.
+        sys.path.insert(0, os.getcwd())
+        try:
+            return importlib.import_module(where)
+        finally:
+            sys.path.remove(os.getcwd())
+    except DyniaError:
+        raise
+    except ImportError as error:
+        raise UsageError(f"--model {spec}: cannot import {where}: {error}") from None
+    except Exception as error:
+        raise UsageError(f"--model {spec}: importing {where} raised {type(error).__name__}: {error}") from None
 
 
 def _analysis_settings(options):
@@ -563,19 +637,34 @@ def _offset(value, option):
 
 
 def _load(options):
-    """The data, checked against the window, and the output and input offsets."""
-    data = load_csv(
-        options["data"],
-        time=options["time"],
-        input=options["input"],
-        output=options["output"],
-        output_path=options.get("output_file"),
-        long_format=options["long"],
-        tag_column=options["tag_column"],
-        value_column=options["value_column"],
-        dt=options.get("dt"),
-        max_gap=None if math.isinf(options["max_gap"]) else options["max_gap"],
-    )
+    """The data (u (n_steps,) or (n_steps, n_inputs)), checked against the window, and the offsets."""
+    loads = [
+        load_csv(
+            options["data"],
+            time=options["time"],
+            input=column,
+            output=options["output"],
+            output_path=options.get("output_file"),
+            long_format=options["long"],
+            tag_column=options["tag_column"],
+            value_column=options["value_column"],
+            dt=options.get("dt"),
+            max_gap=None if math.isinf(options["max_gap"]) else options["max_gap"],
+        )
+        for column in options["input"]
+    ]
+    data = loads[0]
+    if len(loads) > 1:
+        # One load per input; every load grids the same output, so the grids agree unless the
+        # inputs are logged over different spans or at different times.
+        for column, other in zip(options["input"][1:], loads[1:]):
+            if other.time.shape != data.time.shape or not np.array_equal(other.time, data.time):
+                raise UsageError(
+                    f"{options['data']}: the input {column!r} gives another time grid than {options['input'][0]!r} "
+                    "(logged over another span or at other times); resample the inputs onto one grid first, or "
+                    "give --dt"
+                )
+        data = dataclasses.replace(data, u=np.column_stack([load.u for load in loads]))
     window = 2 * options["n"] + 1
     if data.y.size < window:
         raise UsageError(
@@ -583,7 +672,13 @@ def _load(options):
             f"2n+1 = {window} (--n {options['n']})"
         )
     offset = _offset_value(options["offset"], data.y, options["data"], "--offset")
-    input_offset = _offset_value(options["input_offset"], data.u, options["data"], "--input-offset")
+    input_offset = (
+        _offset_value(options["input_offset"], data.u, options["data"], "--input-offset")
+        if data.u.ndim == 1
+        else np.array(
+            [_offset_value(options["input_offset"], column, options["data"], "--input-offset") for column in data.u.T]
+        )
+    )
     return data, offset, input_offset
 
 
@@ -664,6 +759,8 @@ def _recorded(options, analysis, offset, input_offset):
     """Exactly the options of this command as used, and the analysis settings."""
     command_keys = [key for key in OPTIONS if key in options]
     recorded = {key: options[key] for key in command_keys if key not in ("param",)}
+    if len(recorded["input"]) == 1:
+        recorded["input"] = recorded["input"][0]
     recorded.update(
         bounds={name: list(pair) for name, pair in options["bounds"].items()},
         offset_value=offset,
@@ -674,7 +771,7 @@ def _recorded(options, analysis, offset, input_offset):
 
 
 def _analyse(options, command_line, caught):
-    model = MODELS[options["model"]]()
+    model = options["model_object"]
     with options["destination"] as staging:
         data, offset, input_offset = _load(options)
         u, y = data.u - input_offset, data.y - offset
@@ -740,7 +837,7 @@ def _analyse(options, command_line, caught):
 
 
 def _identify(options, command_line, caught):
-    model = MODELS[options["model"]]()
+    model = options["model_object"]
     with options["destination"] as staging:
         data, offset, input_offset = _load(options)
         u, y = data.u - input_offset, data.y - offset

@@ -24,7 +24,7 @@ import numpy as np
 from ._checks import whole_number
 from .errors import DataError
 
-__all__ = ["envelope", "decimated_columns", "plot_data"]
+__all__ = ["envelope", "decimated_columns", "plot_data", "plot_inputs"]
 
 
 def envelope(time, values, max_points=4000):
@@ -171,8 +171,7 @@ def plot_data(time, u, y, *, offset=0.0, xlabel="time"):
     import matplotlib.pyplot as plt
 
     fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(9, 5))
-    top.plot(*envelope(time, u), color="tab:blue")
-    top.set_ylabel("input")
+    plot_inputs(top, time, u)
     bottom.plot(*envelope(time, y), color="tab:orange")
     bottom.set_ylabel("output" + (f" (offset {offset:g} removed in the analysis)" if offset else ""))
     bottom.set_xlabel(xlabel)
@@ -207,3 +206,15 @@ def _bucket_extreme(values, width, extreme):
         found.append(best)
         start += block.size
     return np.concatenate(found), np.concatenate(steps)
+
+
+def plot_inputs(ax, time, u):
+    """Draw the input, (n_steps,) or one line per column of (n_steps, n_inputs), thinned by :func:`envelope`."""
+    u = np.asarray(u, dtype=float)
+    columns = u.reshape(u.shape[0], -1).T
+    for number, column in enumerate(columns):
+        label = f"input {number + 1}" if len(columns) > 1 else None
+        ax.plot(*envelope(time, column), color=None if len(columns) > 1 else "tab:blue", label=label)
+    ax.set_ylabel("input" if len(columns) == 1 else "inputs")
+    if len(columns) > 1:
+        ax.legend(loc="best", fontsize=8)

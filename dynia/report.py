@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .plotting import envelope, plot_data
+from .plotting import envelope, plot_data, plot_inputs
 from .serial import json_ready
 
 __all__ = ["write_analysis", "write_identification", "verdict_table", "file_times", "sha256", "write_json"]
@@ -157,8 +157,7 @@ def _write_fit_figure(path, found, data, u, y, offset):
     plt = _figure_module()
     grid_time = data.time - data.time[0]
     fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(9, 5))
-    top.plot(*envelope(grid_time, data.u), color="tab:blue")
-    top.set_ylabel("input")
+    plot_inputs(top, grid_time, data.u)
     bottom.plot(*envelope(grid_time, y), color="tab:orange", label="measured")
     bottom.plot(*envelope(grid_time, found.fit.simulate(u)), color="k", linewidth=1, label="fitted model")
     for number, (start, stop) in enumerate(found.segments):
