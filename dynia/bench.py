@@ -23,6 +23,13 @@ process so that its peak resident memory (``ru_maxrss``) is its own.
 8. The command line on a long record: ``dynia analyse`` of a 500 000-row
    CSV (first-order response to random steps, with noise) with plots on,
    500 samples; target peak resident memory <= 1.5 GB.
+9. Your own model: a :class:`dynia.models.StateSpaceModel` with numba-compiled
+   step and output (the same first-order lag) against the built-in
+   :class:`dynia.models.FirstOrder`, complete runs at 20 000 samples x 20 000
+   steps; target >= 1/3 of the built-in sample-steps/s. And the overhead of
+   :func:`dynia.run` on a pure-numpy :class:`dynia.models.FunctionModel` over
+   calling the function and :func:`dynia.moving_window` by hand (5 000
+   samples x 5 000 steps); target < 10 %.
 """
 
 import argparse
@@ -211,6 +218,62 @@ def _case_cli_long_record(n_rows=500_000):
     return dict(rows=n_rows, seconds=seconds, status=status, figures=figures)
 
 
+def _lag_functions():
+    """A first-order lag (ZOH-exact, as FirstOrder) as numba step/output functions and as a numpy simulator."""
+    import numba
+
+    @numba.njit
+    def step(x, u_k, p, dt):
+        following = np.empty_like(x)
+        for i in range(x.shape[0]):
+            decay = np.exp(-dt / p[i, 1])
+            following[i, 0] = decay * x[i, 0] + (1.0 - decay) * p[i, 0] * u_k
+        return following
+
+    @numba.njit
+    def output(x, u_k, p):
+        return x[:, 0].copy()
+
+    def simulate(params, u, dt):
+        decay = np.exp(-dt / params[:, 1])
+        gain = (1.0 - decay) * params[:, 0]
+        sims = np.empty((params.shape[0], u.shape[0]))
+        state = np.zeros(params.shape[0])
+        for k, u_k in enumerate(u):
+            sims[:, k] = state
+            state = decay * state + gain * u_k
+        return sims
+
+    return step, output, simulate
+
+
+def _case_custom_models():
+    from .engine.windows import moving_window
+    from .models import FunctionModel, StateSpaceModel
+    from .pipeline import run
+
+    step, output, simulate = _lag_functions()
+    lag = StateSpaceModel(step, output, [0.0], ["K", "T"], n_states=1)
+    bounds = {"K": (0, 7), "T": (0.5, 7)}
+    u, y, _, model = _example1(1, 20_000)
+    run(u[:200], y[:200], lag, bounds, n_samples=100, rng=1)  # compile outside the timing
+    result = {}
+    for name, candidate in (("built-in FirstOrder", model), ("StateSpaceModel (numba)", lag)):
+        seconds = best_of(lambda candidate=candidate: run(u, y, candidate, bounds, n_samples=20_000, rng=1), 2)
+        result[name] = dict(seconds=seconds, sample_steps_per_s=20_000 * 20_000 / seconds)
+    result["ratio"] = (
+        result["StateSpaceModel (numba)"]["sample_steps_per_s"] / result["built-in FirstOrder"]["sample_steps_per_s"]
+    )
+    u, y, _, _ = _example1(1, 5_000)
+    function_model = FunctionModel(simulate, ["K", "T"])
+    by_run = best_of(lambda: run(u, y, function_model, bounds, n_samples=5_000, rng=1), 3)
+    samples = run(u, y, function_model, bounds, n_samples=5_000, rng=1).samples
+    box = np.array(list(bounds.values()))
+    by_hand = best_of(lambda: moving_window(y, simulate(samples, u, 1.0), samples, box), 3)
+    result["function_model"] = dict(run_s=by_run, by_hand_s=by_hand, overhead=by_run / by_hand - 1)
+    return result
+
+
 CASES = {
     "port-vs-engine": _case_port_vs_engine,
     "engine-20000x2000": lambda: _case_engine(20_000, 2_000),
@@ -221,6 +284,7 @@ CASES = {
     "online-10000": _case_online,
     "sampling-example1": _case_sampling,
     "cli-500000-rows": _case_cli_long_record,
+    "custom-models": _case_custom_models,
 }
 
 
@@ -278,6 +342,17 @@ def _describe(name, r):
             f"OnlineDynia.update, 10 000 samples, first order, n=10 ({r['updates']} updates): mean "
             f"{r['mean_ms']:.3f} ms, median {r['median_ms']:.3f} ms, 99th percentile {r['p99_ms']:.3f} ms "
             f"(target <= 1 ms); peak RSS {r['peak_rss_mb']:.0f} MB"
+        )
+    if name == "custom-models":
+        built_in, custom = r["built-in FirstOrder"], r["StateSpaceModel (numba)"]
+        function = r["function_model"]
+        return (
+            f"20 000 samples x 20 000 steps, complete runs: built-in FirstOrder {built_in['seconds']:.2f} s = "
+            f"{built_in['sample_steps_per_s']:.3g} sample-steps/s, StateSpaceModel with numba step/output "
+            f"{custom['seconds']:.2f} s = {custom['sample_steps_per_s']:.3g} -> {r['ratio']:.2f} of the built-in "
+            f"(target >= 0.33); pure-numpy FunctionModel at 5 000 x 5 000: dynia.run {function['run_s']:.2f} s, fn + "
+            f"moving_window by hand {function['by_hand_s']:.2f} s -> overhead {100 * function['overhead']:.1f} % "
+            f"(target < 10 %); peak RSS {r['peak_rss_mb']:.0f} MB"
         )
     if name == "cli-500000-rows":
         return (

@@ -11,7 +11,8 @@ from .engine.flavours import compiled_engine
 from .engine.kernels import CompiledErrors
 from .engine.windows import ArrayErrors, analyse_stream, default_chunk_steps
 from .errors import ModelError
-from .models import LinearModel, Model
+from .models import LinearModel, Model, StateSpaceModel
+from .models.custom import StateErrors
 from .sampling import sample
 from .settings import ADAPTIVE_SAMPLERS, AnalysisSettings, parameter_box
 from .verdicts import assess
@@ -152,60 +153,78 @@ def run(
         )
     samples = sample(settings.sampler, settings.n_samples, box, np.random.default_rng(rng))
     model_order = [names.index(name) for name in model.names]
+    compiled = compiled_engine(settings.engine, settings.flavour)
+    workers = settings.workers or _checks.default_workers()
     sims = None
-    if getattr(model, "streams", True):
-        finite = model.finite_samples(samples[:, model_order], u, dt=settings.dt, x0=settings.x0)
-    else:
+    if not getattr(model, "streams", True):
         # A model that simulates the whole record at once is called once: its output is what is analysed.
         with np.errstate(over="ignore", invalid="ignore"):
             sims = model.simulate(samples[:, model_order], u, dt=settings.dt, x0=settings.x0)
         finite = np.isfinite(sims).all(axis=1)
-    if not finite.any():
-        raise ModelError(
-            f"{model!r}: the simulation of every one of the {settings.n_samples} parameter sets is not finite "
-            "(NaN or overflow); check the model and the parameter ranges"
-        )
-    samples = samples[finite]
-    n_dropped = int(settings.n_samples - samples.shape[0])
-    warn_dropped(n_dropped, settings.n_samples)
-    chunk_steps = default_chunk_steps(samples.shape[0], 2 * settings.n)
-    workers = settings.workers or _checks.default_workers()
-    if sims is not None:
-        sims = sims[finite] if n_dropped else sims
-        errors = ArrayErrors(y, sims)
-    elif compiled_simulation(model) and compiled_engine(settings.engine, settings.flavour):
-        errors = CompiledErrors(model, samples[:, model_order], u, y, dt=settings.dt, x0=settings.x0, workers=workers)
+    elif compiled and _compiled_state_space(model):
+        # Unstable sets are found during the analysis (StateErrors.diverged), saving a simulation pass.
+        finite = np.ones(samples.shape[0], dtype=bool)
     else:
-        errors = model.simulate_chunks(
-            samples[:, model_order], u, dt=settings.dt, x0=settings.x0, chunk_steps=chunk_steps
-        )
-    recorded = settings.record(model, names, box, n_sampled=settings.n_samples, n_dropped=n_dropped)
-    try:
-        result = analyse_stream(
-            y,
-            errors,
-            samples,
-            box,
-            n=settings.n,
-            percentage=settings.percentage,
-            bins=settings.bins,
-            conf_level=settings.conf_level,
-            flavour=settings.flavour,
-            names=names,
-            time=np.arange(y.size) * settings.dt,
-            chunk_steps=chunk_steps,
-            progress=progress,
-            min_points=settings.min_points,
-            settings=recorded,
-            window=settings.window,
-            engine=settings.engine,
-            workers=workers,
-        )
-    finally:
-        if isinstance(errors, CompiledErrors):
-            errors.close()
+        finite = model.finite_samples(samples[:, model_order], u, dt=settings.dt, x0=settings.x0)
+    while True:
+        if not finite.any():
+            raise ModelError(
+                f"{model!r}: the simulation of every one of the {settings.n_samples} parameter sets is not "
+                "finite (NaN or overflow); check the model and the parameter ranges"
+            )
+        analysed = samples[finite]
+        if sims is not None and not finite.all():
+            sims = sims[finite]
+        chunk_steps = default_chunk_steps(analysed.shape[0], 2 * settings.n)
+        if sims is not None:
+            errors = ArrayErrors(y, sims)
+        elif compiled and compiled_simulation(model):
+            errors = CompiledErrors(
+                model, analysed[:, model_order], u, y, dt=settings.dt, x0=settings.x0, workers=workers
+            )
+        elif compiled and _compiled_state_space(model):
+            errors = StateErrors(model, analysed[:, model_order], u, y, dt=settings.dt, workers=workers)
+        else:
+            errors = model.simulate_chunks(
+                analysed[:, model_order], u, dt=settings.dt, x0=settings.x0, chunk_steps=chunk_steps
+            )
+        n_dropped = int(settings.n_samples - analysed.shape[0])
+        recorded = settings.record(model, names, box, n_sampled=settings.n_samples, n_dropped=n_dropped)
+        try:
+            result = analyse_stream(
+                y,
+                errors,
+                analysed,
+                box,
+                n=settings.n,
+                percentage=settings.percentage,
+                bins=settings.bins,
+                conf_level=settings.conf_level,
+                flavour=settings.flavour,
+                names=names,
+                time=np.arange(y.size) * settings.dt,
+                chunk_steps=chunk_steps,
+                progress=progress,
+                min_points=settings.min_points,
+                settings=recorded,
+                window=settings.window,
+                engine=settings.engine,
+                workers=workers,
+            )
+        finally:
+            if isinstance(errors, (CompiledErrors, StateErrors)):
+                errors.close()
+        if not (isinstance(errors, StateErrors) and errors.diverged.any()):
+            break
+        # Some sets overflowed: their costs were not finite, so the analysis is redone without them.
+        finite[np.flatnonzero(finite)[errors.diverged]] = False
+    warn_dropped(n_dropped, settings.n_samples)
     with np.errstate(over="ignore", invalid="ignore"):
         return dataclasses.replace(result, verdicts=assess(result, u=u, y=y, model=model, simulations=sims))
+
+
+def _compiled_state_space(model):
+    return isinstance(model, StateSpaceModel) and model.compiled
 
 
 def compiled_simulation(model):

@@ -120,7 +120,9 @@ def test_several_inputs_reach_a_state_space_model():
     for name, truth in (("K1", 2.0), ("K2", 0.5)):
         low, high = res.summary()[name]["band"]
         assert low <= truth <= high and res.summary()[name]["max_ic"] > 0.7, name
-    with pytest.raises(dynia.DyniaError, match=r"u must have shape \(n_steps, 2\) for a model with 2 inputs; got \(400,\)"):
+    with pytest.raises(
+        dynia.DyniaError, match=r"u must have shape \(n_steps, 2\) for a model with 2 inputs; got \(400,\)"
+    ):
         dynia.run(u[:, 0], y, mixer, {"K1": (0, 5), "K2": (0, 5), "T": (0.5, 10)}, n_samples=100, rng=8)
 
 
@@ -250,3 +252,29 @@ def test_first_order_still_runs_compiled_and_custom_models_do_not_claim_to():
     assert dynia.pipeline.compiled_simulation(FirstOrder())
     assert not dynia.pipeline.compiled_simulation(LAG)
     assert not dynia.pipeline.compiled_simulation(FunctionModel(whole_record, ["K", "T"]))
+
+
+@numba.njit
+def growing_step(x, u_k, p, dt):
+    following = np.empty_like(x)
+    for i in range(x.shape[0]):
+        following[i, 0] = x[i, 0] * p[i, 1] + p[i, 0] * u_k
+    return following
+
+
+def test_unstable_sets_of_a_compiled_state_space_model_are_dropped_as_on_the_plain_path():
+    # |a| > 1 grows without bound: sets with a large a overflow within the record and must be dropped.
+    compiled = StateSpaceModel(growing_step, compiled_output, [0.0], ["K", "a"], n_states=1)
+    plain = StateSpaceModel(
+        lambda x, u_k, p, dt: x * p[:, 1:2] + p[:, 0:1] * u_k, first_state, [0.0], ["K", "a"], n_states=1
+    )
+    u = np.ones(600)
+    y = plain.simulate([[1.0, 0.5]], u)[0]
+    bounds = {"K": (0, 2), "a": (0, 5)}
+    with pytest.warns(dynia.pipeline.DroppedSamplesWarning):
+        fast = dynia.run(u, y, compiled, bounds, n_samples=400, n=3, rng=1)
+    with pytest.warns(dynia.pipeline.DroppedSamplesWarning):
+        slow = dynia.run(u, y, plain, bounds, n_samples=400, n=3, rng=1, engine="numpy")
+    assert 0 < fast.settings["n_dropped"] == slow.settings["n_dropped"] < 400
+    assert np.array_equal(fast.samples, slow.samples)
+    assert np.array_equal(fast.ic, slow.ic, equal_nan=True)

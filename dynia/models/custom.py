@@ -38,6 +38,7 @@ array([[0.   , 0.5  , 0.875]])
 from __future__ import annotations
 
 from collections.abc import Iterator, Sequence
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
@@ -52,7 +53,7 @@ except ImportError:  # the Python time loop serves
     numba = None
     CPUDispatcher = ()
 
-__all__ = ["FunctionModel", "StateSpaceModel"]
+__all__ = ["FunctionModel", "StateSpaceModel", "StateErrors"]
 
 
 def _label(function):
@@ -117,6 +118,14 @@ class FunctionModel(Model):
 
     def __repr__(self) -> str:
         return f"FunctionModel({_label(self.fn)})"
+
+    def simulate(self, params, u, dt: float = 1.0, x0: str = "zero") -> np.ndarray:
+        if self.streams:
+            return super().simulate(params, u, dt=dt, x0=x0)
+        # fn already answers for the whole record: no chunks to gather, no copy.
+        return self._called(*self._arguments(params, u, dt, x0))
+
+    simulate.__doc__ = Model.simulate.__doc__
 
     def simulate_chunks(
         self, params, u, dt: float = 1.0, x0: str = "zero", chunk_steps: int | None = None
@@ -350,8 +359,99 @@ if numba is not None:
             state = step(state, piece[k], params, dt)
         return state
 
+    @numba.njit(nogil=True, cache=False)
+    def _compiled_errors(step, output, state, piece, params, dt, measured, errors, diverged):
+        """Advance through ``piece``, writing |y_k - measured_k| time-major (0 where not measured)."""
+        for k in range(piece.shape[0]):
+            y_k = output(state, piece[k], params)
+            missing = np.isnan(measured[k])
+            for i in range(y_k.shape[0]):
+                if not np.isfinite(y_k[i]):
+                    diverged[i] = True
+                errors[k, i] = 0.0 if missing else abs(y_k[i] - measured[k])
+            state = step(state, piece[k], params, dt)
+        return state
+
 else:  # pragma: no cover - StateSpaceModel.compiled is False without numba
-    _compiled_loop = None
+    _compiled_loop = _compiled_errors = None
+
+
+class StateErrors:
+    """Absolute errors of a compiled StateSpaceModel, time-major, one block of steps at a time.
+
+    A source for the engine's compiled windows (like
+    :class:`dynia.engine.kernels.CompiledErrors` for the linear models):
+    ``rows(start, stop)`` gives (stop - start, n_samples) errors, requests
+    moving forward in time. The samples are split over ``workers`` threads,
+    each advancing its own slice of the state. Instead of simulating once
+    more to find unstable sets, it marks in ``diverged`` every set whose
+    output was not finite, so the caller can drop them and start again.
+    """
+
+    def __init__(self, model, params, u, y, *, dt, workers):
+        params = model.check_params(params)
+        u = model.check_input(u)
+        state = model.initial_state(params)
+        model.advance(state.copy(), u[0], params, dt)  # clear errors for wrong shapes, before compiled code
+        self.y = y
+        self._model = model
+        self._u = u
+        self._dt = dt
+        n_samples = params.shape[0]
+        self.diverged = np.zeros(n_samples, dtype=np.bool_)
+        edges = np.linspace(0, n_samples, max(1, min(workers, n_samples)) + 1).astype(int)
+        self._ranges = list(zip(edges[:-1], edges[1:]))
+        self._params = [np.ascontiguousarray(params[lo:hi]) for lo, hi in self._ranges]
+        self._states = [np.ascontiguousarray(state[lo:hi]) for lo, hi in self._ranges]
+        self._pool = ThreadPoolExecutor(max_workers=len(self._ranges)) if len(self._ranges) > 1 else None
+        self._start = 0
+        self._buffer = np.zeros((0, n_samples))
+
+    def rows(self, start, stop):
+        """Errors for times [start, stop), shape (stop - start, n_samples)."""
+        if start < self._start:
+            raise ModelError(f"rows from step {start} were requested after rows from step {self._start}")
+        self._buffer = self._buffer[start - self._start :]
+        self._start = start
+        computed = self._start + self._buffer.shape[0]
+        if computed < stop:
+            self._buffer = np.concatenate([self._buffer, self._simulate(computed, stop)])
+        return self._buffer[: stop - start]
+
+    def _simulate(self, first, stop):
+        errors = np.empty((stop - first, self.diverged.shape[0]))
+        piece = self._u[first:stop]
+        measured = np.ascontiguousarray(self.y[first:stop])
+        model = self._model
+
+        def block(number):
+            lo, hi = self._ranges[number]
+            self._states[number] = _compiled_errors(
+                model.step_function,
+                model.output_function,
+                self._states[number],
+                piece,
+                self._params[number],
+                self._dt,
+                measured,
+                errors[:, lo:hi],
+                self.diverged[lo:hi],
+            )
+
+        try:
+            if self._pool is None:
+                block(0)
+            else:
+                list(self._pool.map(block, range(len(self._ranges))))
+        except DyniaError:
+            raise
+        except Exception as error:
+            raise ModelError(f"{model!r}: the compiled time loop failed: {type(error).__name__}: {error}") from error
+        return errors
+
+    def close(self):
+        if self._pool is not None:
+            self._pool.shutdown()
 
 
 class _ChunkStepper:
@@ -396,7 +496,13 @@ def _checked_output(model, sims, params, u, *, whole_record):
             f"{model!r}: fn returned shape {sims.shape}; expected (n_samples, n_steps) = {expected}"
             + (" (transposed?)" if sims.shape == expected[::-1] else "")
         )
-    if whole_record and expected[0] > 1 and np.array_equal(sims, np.broadcast_to(sims[:1], expected)):
+    # Two rows that differ settle it at once; only then is the whole array compared.
+    if (
+        whole_record
+        and expected[0] > 1
+        and np.array_equal(sims[1], sims[0])
+        and np.array_equal(sims, np.broadcast_to(sims[:1], expected))
+    ):
         distinct = np.unique(params, axis=0).shape[0]
         if distinct > 1:
             raise ModelError(
