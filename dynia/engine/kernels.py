@@ -4,7 +4,7 @@ Two kernels cover the work of a :func:`dynia.run` with the ``"thesis"`` or
 ``"weighted"`` flavour:
 
 - :func:`simulate_errors` advances every sample's discretised model (the
-  recursion of :class:`dynia.models._DiscreteSystem`) through a block of
+  recursion of the linear models, ``dynia.models.linear``) through a block of
   steps and writes the absolute errors against the measurement, time-major;
 - :func:`analyse_windows` forms each window's costs, selects its behavioural
   set and reads off limits, IC and gradient.

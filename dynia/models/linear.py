@@ -1,7 +1,7 @@
 """The linear models: exact batched simulation of many parameter sets at once.
 
-A DYNIA run simulates the same single-input single-output model for tens of
-thousands of parameter sets on the same input record. The models here
+A DYNIA run simulates the same single-output model for tens of thousands of
+parameter sets on the same input record. The models here
 discretise every parameter set exactly (zero-order hold, fractional dead
 times included) and then advance all samples together, one vectorised update
 per time step.
@@ -12,7 +12,8 @@ Shape convention
     ``(n_samples, n_params)``; the columns follow ``model.names``. A 1-D
     array of length ``n_params`` is accepted as a single sample.
 ``u``
-    ``(n_steps,)``, the input sampled every ``dt``.
+    ``(n_steps,)``, the input sampled every ``dt``; ``(n_steps, n_inputs)``
+    for a :class:`TransferFunction` with ``n_inputs > 1``.
 outputs
     ``(n_samples, n_steps)``; ``simulate_chunks`` yields consecutive
     ``(n_samples, m)`` pieces of it.
@@ -89,16 +90,34 @@ class _DiscreteSystem:
 
     Keeping samples on the last axis makes each coefficient row used in the
     time loop one contiguous vector over samples.
+
+    With several inputs (one dead time common to all), the input-dependent
+    fields gain a leading input axis: ``gamma_now[j]`` is input j's
+    ``(n_states, n_samples)`` column, ``feed_now[j]`` its ``(n_samples,)``
+    feedthrough, ``steady_state[j]`` the state per unit of input j. One
+    input keeps the layout without that axis, which the compiled kernels
+    read.
     """
 
     phi: np.ndarray  # (n_states, n_states, n_samples)
-    gamma_now: np.ndarray  # (n_states, n_samples)
-    gamma_prev: np.ndarray  # (n_states, n_samples)
+    gamma_now: np.ndarray  # (n_states, n_samples) or (n_inputs, n_states, n_samples)
+    gamma_prev: np.ndarray  # as gamma_now
     c: np.ndarray  # (n_states, n_samples)
-    feed_now: np.ndarray  # (n_samples,)
-    feed_prev: np.ndarray  # (n_samples,)
+    feed_now: np.ndarray  # (n_samples,) or (n_inputs, n_samples)
+    feed_prev: np.ndarray  # as feed_now
     delay_steps: np.ndarray  # (n_samples,) int64
-    steady_state: np.ndarray | None  # (n_states, n_samples), per unit input
+    steady_state: np.ndarray | None  # as gamma_now, per unit input
+
+    @property
+    def n_inputs(self) -> int:
+        return 1 if self.feed_now.ndim == 1 else self.feed_now.shape[0]
+
+    def input_columns(self) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+        """``(gamma_now, gamma_prev, feed_now, feed_prev)`` of each input, in input order."""
+        fields = (self.gamma_now, self.gamma_prev, self.feed_now, self.feed_prev)
+        if self.n_inputs == 1:
+            return [fields]
+        return list(zip(*fields))
 
 
 class LinearModel(Model):
@@ -164,17 +183,22 @@ class Stepper:
     steps : int
         Number of input samples stepped so far (the next one is step
         ``steps``, at ``t = steps*dt``).
+    n_inputs : int
+        Number of inputs: ``step`` takes a number for one, a sequence of
+        ``n_inputs`` numbers otherwise.
     """
 
     def __init__(self, system: _DiscreteSystem, x0: str):
         self._system = system
         self._x0 = x0
+        self.n_inputs = system.n_inputs
         delays = system.delay_steps
         # With one common delay the delayed input is a scalar, as in _run.
         self._delays = delays[:1] if np.all(delays == delays[0]) else delays
-        self._history = np.empty(int(delays.max()) + 2)
+        # One row of input history per input; the delay is common to all inputs.
+        self._history = np.empty((self.n_inputs, int(delays.max()) + 2))
         self._index = np.empty(self._delays.shape, dtype=np.int64)
-        self._delayed = [np.empty(self._delays.shape), np.empty(self._delays.shape)]
+        self._delayed = [np.empty((self.n_inputs, *self._delays.shape)) for _ in range(2)]
         self._output = np.empty(system.c.shape[1])
         self._view = self._output.view()
         self._view.flags.writeable = False
@@ -184,35 +208,61 @@ class Stepper:
     def step(self, u_k) -> np.ndarray:
         """Take the input ``u_k`` of step k and return every sample's output y[k].
 
+        Parameters
+        ----------
+        u_k : float, or sequence of `n_inputs` floats
+            The input at step k (every input's value, in input order, for
+            a multi-input model).
+
         Returns
         -------
         ndarray, shape (n_samples,)
             A read-only view that the next call overwrites; copy it to keep it.
         """
-        if isinstance(u_k, bool) or not isinstance(u_k, numbers.Real):
-            raise TypeError(f"u_k must be a real number; got {type(u_k).__name__}")
-        u_k = float(u_k)
-        if not np.isfinite(u_k):
-            raise DataError(f"u_k must be finite; got {u_k} at step {self.steps}")
+        u_k = self._checked(u_k)
         if self._recursion is None:
             self._recursion = _Recursion(self._system, _initial_state(self._system, self._x0, u_k))
             # Slots not yet written stand for the input before t=0.
-            self._history.fill(u_k if self._x0 == "steady" else 0.0)
-        self._history[self.steps % self._history.shape[0]] = u_k
-        inputs = [self._delayed_input(0)]
+            self._history[:] = np.reshape(u_k, (-1, 1)) if self._x0 == "steady" else 0.0
+        self._history[:, self.steps % self._history.shape[1]] = u_k
+        inputs = self._delayed_inputs(0)
         if self._recursion.needs_prev:
-            inputs.append(self._delayed_input(1))
+            inputs += self._delayed_inputs(1)
         self._recursion.step(self._output, inputs)
         self.steps += 1
         return self._view
 
-    def _delayed_input(self, extra: int):
-        """u[k - d - extra] per sample (a scalar for one common delay)."""
+    def _checked(self, u_k):
+        """``u_k`` as a finite float (one input) or a finite (n_inputs,) array."""
+        if self.n_inputs == 1:
+            if isinstance(u_k, bool) or not isinstance(u_k, numbers.Real):
+                raise TypeError(f"u_k must be a real number; got {type(u_k).__name__}")
+            u_k = float(u_k)
+            if not np.isfinite(u_k):
+                raise DataError(f"u_k must be finite; got {u_k} at step {self.steps}")
+            return u_k
+        values = np.asarray(u_k)
+        if values.dtype.kind not in "iuf":
+            raise TypeError(f"u_k must be a sequence of {self.n_inputs} real numbers; got {values.dtype} values")
+        if values.shape != (self.n_inputs,):
+            raise DataError(
+                f"u_k must hold one value per input, shape ({self.n_inputs},); got shape {values.shape} "
+                f"at step {self.steps}"
+            )
+        values = values.astype(float)
+        if not np.isfinite(values).all():
+            raise DataError(f"u_k must be finite; got {values.tolist()} at step {self.steps}")
+        return values
+
+    def _delayed_inputs(self, extra: int) -> list:
+        """u_j[k - d - extra] of every input j, per sample (a scalar each for one common delay)."""
+        length = self._history.shape[1]
         if self._delays.shape[0] == 1:
-            return self._history[(self.steps - int(self._delays[0]) - extra) % self._history.shape[0]]
+            slot = (self.steps - int(self._delays[0]) - extra) % length
+            return [row[slot] for row in self._history]
         np.subtract(self.steps - extra, self._delays, out=self._index)
-        np.remainder(self._index, self._history.shape[0], out=self._index)
-        return np.take(self._history, self._index, out=self._delayed[extra])
+        np.remainder(self._index, length, out=self._index)
+        return [np.take(row, self._index, out=out) for row, out in zip(self._history, self._delayed[extra])]
 
 
 class _Lag(LinearModel):
@@ -338,23 +388,33 @@ class SecondOrderDelay(_Lag):
 
 
 class TransferFunction(LinearModel):
-    """Any SISO continuous-time LTI model built by python-control from the parameters.
+    """Any single-output continuous-time LTI model built by python-control from the parameters.
 
     Parameters
     ----------
     factory : callable
         ``factory(p)`` receives one sample's parameters as a 1-D float array
-        (in `names` order) and returns a continuous-time, single-input
-        single-output ``control.TransferFunction`` or ``control.StateSpace``.
-        Every sample must give the same number of states. Direct feedthrough
-        (proper, not strictly proper models) is supported.
+        (in `names` order) and returns a continuous-time, single-output
+        ``control.TransferFunction`` or ``control.StateSpace`` with
+        `n_inputs` inputs (a 1 x n_inputs transfer function, or B with
+        n_inputs columns). Every sample must give the same number of
+        states. Direct feedthrough (proper, not strictly proper models) is
+        supported. A transfer function with several inputs is realised
+        with one block of states per input (return a ``control.ss`` for a
+        realisation with shared states).
     names : sequence of str
         Parameter names, in the column order of ``params``.
     delay : str, optional
         Name of the parameter (one of `names`) that is an input dead time in
         time units. python-control has no exact delay element; this one is
         simulated exactly, including fractions of ``dt``. The factory still
-        receives it but should not model it.
+        receives it but should not model it. With several inputs the one
+        dead time delays every input alike; separate dead times per input
+        are not available.
+    n_inputs : int, default 1
+        Number of inputs, i.e. columns of ``u``, which is then
+        ``(n_steps, n_inputs)``. Every system the factory returns must have
+        this many inputs (a :class:`ModelError` says so otherwise).
 
     Notes
     -----
@@ -363,6 +423,11 @@ class TransferFunction(LinearModel):
     once per sample in a Python loop, so building the model costs what
     python-control needs per system (~0.15 ms, about 3 s for 20 000
     samples); the time loop itself is vectorised like the other models.
+    With several inputs the output is the sum of each input's response,
+    added in input order; ``x0="steady"`` starts in the steady state at the
+    first input vector ``u[0]``. Only single-input models are simulated by
+    the compiled engine of :func:`dynia.run`; multi-input ones use this
+    numpy time loop.
 
     Examples
     --------
@@ -373,6 +438,14 @@ class TransferFunction(LinearModel):
     ... )
     >>> model.simulate([[1.0, 1.0, 1.0]], [1.0, 1.0, 1.0, 1.0]).round(4)
     array([[0.    , 0.    , 0.6321, 0.8647]])
+
+    Two inputs, ``y = K1/(s + 1) u1 + K2/(2 s + 1) u2``:
+
+    >>> two = TransferFunction(
+    ...     lambda p: control.tf([[[p[0]], [p[1]]]], [[[1.0, 1.0], [2.0, 1.0]]]), names=("K1", "K2"), n_inputs=2
+    ... )
+    >>> two.simulate([[1.0, 3.0]], [[1.0, 0.0], [1.0, 0.0], [0.0, 1.0]]).round(4)
+    array([[0.    , 0.6321, 0.8647]])
     """
 
     def __init__(
@@ -380,8 +453,10 @@ class TransferFunction(LinearModel):
         factory: Callable[[np.ndarray], control.TransferFunction | control.StateSpace],
         names: Sequence[str],
         delay: str | None = None,
+        *,
+        n_inputs: int = 1,
     ):
-        super().__init__(names)
+        super().__init__(names, n_inputs=n_inputs)
         if not callable(factory):
             raise TypeError(f"factory must be callable; got {type(factory).__name__}")
         if delay is not None and delay not in self.names:
@@ -396,7 +471,8 @@ class TransferFunction(LinearModel):
 
     def __repr__(self) -> str:
         factory = getattr(self._factory, "__name__", repr(self._factory))
-        return f"TransferFunction({factory}, names={self.names}, delay={self._delay!r})"
+        inputs = f", n_inputs={self.n_inputs}" if self.n_inputs > 1 else ""
+        return f"TransferFunction({factory}, names={self.names}, delay={self._delay!r}{inputs})"
 
     def discretise(self, params, dt, n_steps, steady):
         if self._delay is None:
@@ -405,13 +481,13 @@ class TransferFunction(LinearModel):
             self._require_nonnegative(params, (self._delay,))
             delay = params[:, self.names.index(self._delay)]
         a, b, c, d = self._state_space(params)
-        n_samples, n_states = b.shape
+        n_samples, n_states, n_inputs = b.shape
         delay_steps, fraction = _split_delay(delay, dt, n_steps)
 
-        augmented = np.zeros((n_samples, n_states + 1, n_states + 1))
+        augmented = np.zeros((n_samples, n_states + n_inputs, n_states + n_inputs))
         augmented[:, :n_states, :n_states] = a
-        augmented[:, :n_states, n_states] = b
-        # expm([[A, B], [0, 0]] tau) = [[e^{A tau}, int_0^tau e^{As} B ds], [0, 1]]
+        augmented[:, :n_states, n_states:] = b
+        # expm([[A, B], [0, 0]] tau) = [[e^{A tau}, int_0^tau e^{As} B ds], [0, I]]
         # Overflow is detected below, per sample, so numpy need not warn of it.
         with np.errstate(over="ignore", invalid="ignore"):
             late = scipy.linalg.expm(augmented * ((1.0 - fraction) * dt)[:, None, None])
@@ -419,9 +495,11 @@ class TransferFunction(LinearModel):
             late_transition = late[:, :n_states, :n_states]
             # For fraction == 0 `early` is the identity, so phi equals e^{A dt} exactly.
             phi = late_transition @ early[:, :n_states, :n_states]
-            gamma_now = late[:, :n_states, n_states]
-            gamma_prev = (late_transition @ early[:, :n_states, n_states:])[:, :, 0]
-        discretised = np.concatenate((phi.reshape(n_samples, -1), gamma_now, gamma_prev), axis=1)
+            gamma_now = late[:, :n_states, n_states:]
+            gamma_prev = late_transition @ early[:, :n_states, n_states:]
+        discretised = np.concatenate(
+            (phi.reshape(n_samples, -1), gamma_now.reshape(n_samples, -1), gamma_prev.reshape(n_samples, -1)), axis=1
+        )
         # A pole far in the right half-plane overflows e^{A dt}. Such a sample
         # cannot be simulated; NaN coefficients make its output NaN (quietly:
         # NaN arithmetic raises no floating-point warning), which
@@ -431,20 +509,20 @@ class TransferFunction(LinearModel):
         gamma_now[overflowed] = np.nan
         gamma_prev[overflowed] = np.nan
 
-        feed_now, feed_prev = _split_feedthrough(d, fraction)
+        feed_now, feed_prev = _split_feedthrough(d, fraction[:, None])
         return _DiscreteSystem(
             phi=np.moveaxis(phi, 0, -1).copy(),
-            gamma_now=gamma_now.T.copy(),
-            gamma_prev=gamma_prev.T.copy(),
+            gamma_now=_input_major(gamma_now),
+            gamma_prev=_input_major(gamma_prev),
             c=c.T.copy(),
-            feed_now=feed_now,
-            feed_prev=feed_prev,
+            feed_now=_input_major(feed_now),
+            feed_prev=_input_major(feed_prev),
             delay_steps=delay_steps,
-            steady_state=_steady_state(a, b) if steady else None,
+            steady_state=_input_major(_steady_state(a, b)) if steady else None,
         )
 
     def _state_space(self, params: np.ndarray):
-        """Stack A (n, s, s), B (n, s), C (n, s), D (n,) of every sample's system."""
+        """Stack A (n, s, s), B (n, s, n_inputs), C (n, s), D (n, n_inputs) of every sample's system."""
         matrices = []
         for sample, values in enumerate(params):
             system = self._factory(values.copy())
@@ -455,25 +533,46 @@ class TransferFunction(LinearModel):
                 )
             if not system.isctime():
                 raise ModelError(f"factory must return a continuous-time system; sample {sample} gave dt={system.dt}")
-            if system.ninputs != 1 or system.noutputs != 1:
+            if system.ninputs != self.n_inputs or system.noutputs != 1:
+                expected = "single-input" if self.n_inputs == 1 else f"{self.n_inputs}-input"
+                hint = f" (set n_inputs={system.ninputs} for such a system)" if system.noutputs == 1 else ""
                 raise ModelError(
-                    f"factory must return a single-input single-output system; sample "
-                    f"{sample} has {system.ninputs} inputs and {system.noutputs} outputs"
+                    f"factory must return a {expected} single-output system (n_inputs={self.n_inputs}); sample "
+                    f"{sample} has {system.ninputs} inputs and {system.noutputs} outputs{hint}"
                 )
-            try:
-                system = control.ss(system)
-            except ValueError as error:
-                raise ModelError(
-                    f"the system of sample {sample} cannot be converted to state space: {error}"
-                ) from error
-            if matrices and system.nstates != matrices[0][0].shape[0]:
+            realised = _realisation(system, sample)
+            if matrices and realised[0].shape[0] != matrices[0][0].shape[0]:
                 raise ModelError(
                     f"all samples must have the same state dimension; sample {sample} has "
-                    f"{system.nstates} states, sample 0 has {matrices[0][0].shape[0]}"
+                    f"{realised[0].shape[0]} states, sample 0 has {matrices[0][0].shape[0]}"
                 )
-            matrices.append((system.A, system.B[:, 0], system.C[0], system.D[0, 0]))
+            matrices.append(realised)
         a, b, c, d = (np.array(stack, dtype=float) for stack in zip(*matrices))
         return a, b, c, d
+
+
+def _realisation(system, sample):
+    """A (s, s), B (s, n_inputs), C (s,), D (n_inputs,) of one single-output system.
+
+    python-control realises a transfer function with several inputs only
+    with the optional slycot; without it such a one is realised input by
+    input, one block of states per input column, stacked. That realisation
+    is exact, though not minimal when columns share poles, and does not
+    depend on whether slycot is installed.
+    """
+    if isinstance(system, control.TransferFunction) and system.ninputs > 1:
+        columns = [_realisation(system[0, j], sample) for j in range(system.ninputs)]
+        return (
+            scipy.linalg.block_diag(*(a for a, _, _, _ in columns)),
+            scipy.linalg.block_diag(*(b for _, b, _, _ in columns)),
+            np.concatenate([c for _, _, c, _ in columns]),
+            np.concatenate([d for _, _, _, d in columns]),
+        )
+    try:
+        system = control.ss(system)
+    except ValueError as error:
+        raise ModelError(f"the system of sample {sample} cannot be converted to state space: {error}") from error
+    return system.A, system.B, system.C[0], system.D[0]
 
 
 def _first_order_system(gain, time_constant, delay, dt, n_steps) -> _DiscreteSystem:
@@ -531,32 +630,44 @@ def _split_delay(delay, dt, n_steps):
 
 
 def _split_feedthrough(feedthrough, fraction):
-    """Direct feedthrough sees the delayed input at t = k*dt: u[k-d-1] if f > 0 else u[k-d]."""
+    """Direct feedthrough sees the delayed input at t = k*dt: u[k-d-1] if f > 0 else u[k-d].
+
+    ``fraction`` broadcasts against ``feedthrough``.
+    """
     fractional = fraction > 0
     return np.where(fractional, 0.0, feedthrough), np.where(fractional, feedthrough, 0.0)
 
 
 def _steady_state(a, b):
-    """Per-sample state -A^{-1} B for a unit constant input, shape (n_states, n_samples)."""
-    n_samples, n_states = b.shape
+    """Per-sample state -A^{-1} B for a unit constant input, (n_samples, n_states, n_inputs)."""
+    n_samples, n_states, n_inputs = b.shape
     if n_states == 0:
-        return np.zeros((0, n_samples))
+        return np.zeros((n_samples, 0, n_inputs))
     singular = np.linalg.matrix_rank(a) < n_states
     if singular.any():
         raise ModelError(
             f'x0="steady" needs a steady state, but A of sample {np.flatnonzero(singular)[0]} '
             f"is singular (the model has an integrator or a pole at 0)"
         )
-    return -np.linalg.solve(a, b[:, :, None])[:, :, 0].T
+    return -np.linalg.solve(a, b)
+
+
+def _input_major(per_sample: np.ndarray) -> np.ndarray:
+    """(n_samples, ..., n_inputs) to the _DiscreteSystem layout: (n_inputs, ..., n_samples), no input axis for one."""
+    moved = np.moveaxis(per_sample, (0, -1), (-1, 0))
+    return np.ascontiguousarray(moved[0] if moved.shape[0] == 1 else moved)
 
 
 def _run(system: _DiscreteSystem, u: np.ndarray, x0: str, chunk_steps: int) -> Iterator[np.ndarray]:
     """Advance all samples through ``u`` and yield (n_samples, m) output chunks."""
     n_samples = system.c.shape[1]
     n_steps = u.shape[0]
-    # Slot 0 stands for every time before t=0, so clipping indices at -1 and
-    # shifting by one gathers the pre-history without padding by the delay.
-    padded_input = np.concatenate(([u[0] if x0 == "steady" else 0.0], u))
+    # One row per input; slot 0 stands for every time before t=0, so clipping
+    # indices at -1 and shifting by one gathers the pre-history without
+    # padding by the delay.
+    by_input = u.reshape(n_steps, -1).T
+    before = by_input[:, :1] if x0 == "steady" else np.zeros((by_input.shape[0], 1))
+    padded_input = np.concatenate((before, by_input), axis=1)
     recursion = _Recursion(system, _initial_state(system, x0, u[0]))
     time_major = np.empty((min(chunk_steps, n_steps), n_samples))
 
@@ -567,22 +678,29 @@ def _run(system: _DiscreteSystem, u: np.ndarray, x0: str, chunk_steps: int) -> I
     for start in range(0, n_steps, chunk_steps):
         stop = min(start + chunk_steps, n_steps)
         source_index = np.arange(start, stop)[:, None] - offsets[None, :]
-        inputs = [padded_input[np.maximum(source_index, -1) + 1]]
+        # Each gathered block is (n_inputs, steps, offsets): u_j[k-d], then u_j[k-d-1].
+        gathered = [padded_input[:, np.maximum(source_index, -1) + 1]]
         if recursion.needs_prev:
-            inputs.append(padded_input[np.maximum(source_index - 1, -1) + 1])
+            gathered.append(padded_input[:, np.maximum(source_index - 1, -1) + 1])
         if offsets.shape[0] == 1:
-            inputs = [column[:, 0] for column in inputs]
+            gathered = [block[:, :, 0] for block in gathered]
+        inputs = [rows for block in gathered for rows in block]
         for step in range(stop - start):
             # The state after the record is never output; advancing to it could only overflow.
             recursion.step(time_major[step], [rows[step] for rows in inputs], advance=start + step + 1 < n_steps)
         yield _to_sample_major(time_major[: stop - start])
 
 
-def _initial_state(system: _DiscreteSystem, x0: str, first_input: float) -> np.ndarray:
-    """State at t=0, (n_states, n_samples): zero, or the steady state at the first input."""
-    if x0 == "steady":
+def _initial_state(system: _DiscreteSystem, x0: str, first_input) -> np.ndarray:
+    """State at t=0, (n_states, n_samples): zero, or the steady state at the first input (vector)."""
+    if x0 != "steady":
+        return np.zeros(system.c.shape)
+    if system.n_inputs == 1:
         return system.steady_state * first_input
-    return np.zeros(system.c.shape)
+    state = system.steady_state[0] * first_input[0]
+    for per_unit, value in zip(system.steady_state[1:], first_input[1:]):
+        state += per_unit * value
+    return state
 
 
 class _Recursion:
@@ -594,21 +712,34 @@ class _Recursion:
 
     def __init__(self, system: _DiscreteSystem, state: np.ndarray):
         n_states, n_samples = system.c.shape
-        # Sources of the linear combinations: the states, then u[k-d], u[k-d-1].
-        now_source, prev_source = n_states, n_states + 1
+        n_inputs = system.n_inputs
+        # Sources of the linear combinations: the states, then u_j[k-d] of
+        # every input j, then u_j[k-d-1]. The input terms are summed input by
+        # input, now before prev, which for one input is the order the
+        # compiled kernels follow.
+        columns = system.input_columns()
+        first_prev = n_states + n_inputs
         self._state_terms = [
             _nonzero_terms(
                 [(system.phi[i, j], j) for j in range(n_states)]
-                + [(system.gamma_now[i], now_source), (system.gamma_prev[i], prev_source)]
+                + [
+                    term
+                    for j, (gamma_now, gamma_prev, _, _) in enumerate(columns)
+                    for term in ((gamma_now[i], n_states + j), (gamma_prev[i], first_prev + j))
+                ]
             )
             for i in range(n_states)
         ]
         self._output_terms = _nonzero_terms(
             [(system.c[i], i) for i in range(n_states)]
-            + [(system.feed_now, now_source), (system.feed_prev, prev_source)]
+            + [
+                term
+                for j, (_, _, feed_now, feed_prev) in enumerate(columns)
+                for term in ((feed_now, n_states + j), (feed_prev, first_prev + j))
+            ]
         )
         self.needs_prev = any(
-            source == prev_source for terms in [*self._state_terms, self._output_terms] for _, source in terms
+            source >= first_prev for terms in [*self._state_terms, self._output_terms] for _, source in terms
         )
         self._current, self._upcoming = list(state), list(np.empty_like(state))
         self._scratch = np.empty(n_samples)
@@ -616,8 +747,9 @@ class _Recursion:
     def step(self, out: np.ndarray, inputs: list, advance: bool = True) -> None:
         """Write y[k] into ``out`` and, if ``advance``, move the state to x[k+1].
 
-        ``inputs`` is ``[u[k-d]]``, or ``[u[k-d], u[k-d-1]]`` when
-        `needs_prev`; each a scalar (one common delay) or (n_samples,).
+        ``inputs`` is ``[u_0[k-d], ..., u_m[k-d]]`` for the inputs 0..m,
+        followed by ``[u_0[k-d-1], ..., u_m[k-d-1]]`` when `needs_prev`;
+        each a scalar (one common delay) or (n_samples,).
         """
         sources = self._current + inputs
         _combine(out, self._output_terms, sources, self._scratch)
