@@ -48,12 +48,14 @@ from .pipeline import run
 from .refine import second_run
 from .result import DyniaResult
 from .settings import AnalysisSettings
+from .store import load
 
 __version__ = "0.1.0"
 
 __all__ = [
     "run",
     "second_run",
+    "load",
     "moving_window",
     "DyniaResult",
     "AnalysisSettings",

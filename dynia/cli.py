@@ -49,7 +49,7 @@ at an input of 6 V, so the model works in deviations from that operating point):
       --model first-order --param K=0:40 --param T=0:200 \\
       --input-offset 6 --offset first --x0 zero --seed 1 --out results/heating
 
-  writes results/heating/: ic.csv, limits.csv, samples.csv, summary.json and
+  writes results/heating/: ic.csv, limits.csv, samples.csv, summary.json, result.nc and
   PNG figures (the data, and per parameter its information content and its
   identifiability plot). All settings can also come from a TOML file:
   dynia analyse --config run.toml (keys as the long options, e.g. samples = 5000,
@@ -244,6 +244,11 @@ def _add_data_and_model_options(command):
         "left missing, not interpolated (default 5; inf interpolates across everything)",
     )
     data.add_argument(
+        "--duplicates",
+        choices=("error", "mean"),
+        help="rows that repeat a timestamp: an error (default), or mean: average their values",
+    )
+    data.add_argument(
         "--quality",
         action="store_true",
         help="check the data for absurd magnitudes, glitches, outliers and stuck values and report them",
@@ -298,6 +303,7 @@ OPTIONS = {
     "value_column": ("text", "value", _BOTH),
     "dt": ("number", None, _BOTH),
     "max_gap": ("number", 5.0, _BOTH),
+    "duplicates": ("text", "error", _BOTH),
     "offset": ("offset", "none", _BOTH),
     "input_offset": ("offset", "none", _BOTH),
     "model": ("text", None, _BOTH),
@@ -539,6 +545,7 @@ def _check_command_options(options):
         ("x0", ("zero", "steady")),
         ("method", IDENTIFY_METHODS),
         ("mode", ("any", "joint")),
+        ("duplicates", ("error", "mean")),
     ):
         if key in options and options[key] not in choices:
             raise UsageError(f"--{key} must be one of {', '.join(choices)}; got {options[key]!r}")
@@ -650,6 +657,7 @@ def _load(options):
             value_column=options["value_column"],
             dt=options.get("dt"),
             max_gap=None if math.isinf(options["max_gap"]) else options["max_gap"],
+            duplicates=options["duplicates"],
         )
         for column in options["input"]
     ]

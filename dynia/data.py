@@ -77,6 +77,9 @@ _SHOWN_CHARS = 40
 # How many column or tag names a message lists before it only counts the rest.
 _LISTED_NAMES = 20
 
+# What load_csv does with rows of one log that share a time: stop, or average them.
+_DUPLICATES = ("error", "mean")
+
 # The three kinds of time a time column may hold; one column holds one kind.
 _SECONDS = "a number of seconds"
 _NAIVE = "a timestamp without UTC offset"
@@ -147,6 +150,7 @@ def load_csv(
     value_column="value",
     dt=None,
     max_gap=5.0,
+    duplicates="error",
 ):
     """Read logged process data from CSV into a uniform :class:`ProcessData`.
 
@@ -164,12 +168,15 @@ def load_csv(
 
     Parameters
     ----------
-    path : str or os.PathLike
-        The CSV file (the input file when ``output_path`` is given).
+    path : str, os.PathLike or file-like
+        The CSV file (the input file when ``output_path`` is given), or an
+        open text or binary stream of it (anything with a ``read`` method,
+        read to its end; the caller closes it). Messages name a stream by its
+        ``name`` attribute when that is a str, else as ``<stream>``.
     time, input, output : str
         Column names, matched exactly after stripping whitespace; in the long
         layout ``input`` and ``output`` are tag names.
-    output_path : str or os.PathLike, optional
+    output_path : str, os.PathLike or file-like, optional
         A second CSV file holding the output's event log.
     long_format : bool, default False
         Read ``path`` as a long (time, tag, value) table.
@@ -183,6 +190,12 @@ def load_csv(
         steps (``max_gap * dt`` seconds): a number > 1, or None (or
         ``math.inf``) to interpolate across stretches of any length. Inside a
         longer stretch ``y`` is NaN (see Notes).
+    duplicates : {"error", "mean"}, default "error"
+        Rows of one log that share a time: a DataError naming them, or
+        "mean": one row per time holding the mean of their values, per
+        signal, missing values ignored (missing when all are); a note counts
+        the rows averaged. Only consecutive rows can share a time: times that
+        go back are always an error.
 
     Returns
     -------
@@ -196,13 +209,13 @@ def load_csv(
         not a number, a time that is missing, not finite, not a timestamp or
         of another kind than the rows before (seconds, timestamps with or
         without UTC offset), times that do not strictly increase (duplicates
-        included), fewer than 2 rows, an input or output without any value,
+        included, unless ``duplicates="mean"``), fewer than 2 rows or times, an input or output without any value,
         logs that do not overlap in time, or a ``dt`` that gives fewer than
         2 grid points or more than 10 000 000.
     SettingsError
         ``output_path`` given together with ``long_format``, a ``dt`` that is
-        not a finite number > 0, or a ``max_gap`` that is not a number > 1
-        or None.
+        not a finite number > 0, a ``max_gap`` that is not a number > 1
+        or None, or a ``duplicates`` other than "error" and "mean".
 
     Notes
     -----
@@ -315,13 +328,18 @@ def load_csv(
     if dt is not None:
         dt = _grid_spacing(dt)
     max_gap = _gap_limit(max_gap)
+    if duplicates not in _DUPLICATES:
+        raise SettingsError(
+            f"duplicates must be one of {', '.join(map(repr, _DUPLICATES))}; got {duplicates!r}", "duplicates"
+        )
+    average = duplicates == "mean"
     if long_format:
-        input_log, output_log = _tag_logs(_read_table(path), time, tag_column, value_column, input, output)
+        input_log, output_log = _tag_logs(_read_table(path), time, tag_column, value_column, input, output, average)
     elif output_path is not None:
-        input_log = _column_log(_read_table(path), time, input, "input")
-        output_log = _column_log(_read_table(output_path), time, output, "output")
+        input_log = _column_log(_read_table(path), time, input, "input", average)
+        output_log = _column_log(_read_table(output_path), time, output, "output", average)
     else:
-        return _from_rows(_read_table(path), time, input, output, dt, max_gap)
+        return _from_rows(_read_table(path), time, input, output, dt, max_gap, average)
     return _from_logs(input_log, output_log, dt, max_gap)
 
 
@@ -542,21 +560,26 @@ class _Log:
     rows: list
     timeline: _Timeline
     values: np.ndarray
+    notes: list
 
 
 def _read_table(path):
-    """Header and data records of a CSV file, or a DataError saying why there are none."""
-    name = os.fspath(path)
-    try:
-        with open(path, "rb") as file:
-            raw = file.read()
-    except FileNotFoundError:
-        raise DataError(f"{name}: no such file; expected a CSV file with a header row") from None
-    except OSError as error:
-        raise DataError(f"{name}: cannot be read ({error.strerror or error}); expected a CSV file") from None
+    """Header and data records of a CSV file or stream, or a DataError saying why there are none."""
+    if hasattr(path, "read"):
+        name, raw = _read_stream(path)
+    else:
+        name = os.fspath(path)
+        try:
+            with open(path, "rb") as file:
+                raw = file.read()
+        except FileNotFoundError:
+            raise DataError(f"{name}: no such file; expected a CSV file with a header row") from None
+        except OSError as error:
+            raise DataError(f"{name}: cannot be read ({error.strerror or error}); expected a CSV file") from None
     notes = ()
     try:
-        text = raw.decode("utf-8-sig")
+        # A text stream is already decoded; only its byte order mark is left to drop, as utf-8-sig does.
+        text = raw.removeprefix("\ufeff") if isinstance(raw, str) else raw.decode("utf-8-sig")
     except UnicodeDecodeError:
         # Excel on Windows saves "CSV" in the ANSI code page; a degree sign in
         # a column name should not stop a load.
@@ -591,6 +614,20 @@ def _read_table(path):
     return _Table(name, header_row, header, rows, records, notes)
 
 
+def _read_stream(stream):
+    """The name messages give an open stream, and all it holds from where it stands: str or bytes."""
+    name = getattr(stream, "name", None)
+    name = name if isinstance(name, str) else "<stream>"
+    try:
+        raw = stream.read()
+    except (OSError, ValueError) as error:
+        # ValueError: a closed stream.
+        raise DataError(f"{name}: cannot be read ({error}); expected an open CSV stream") from None
+    if not isinstance(raw, (str, bytes, bytearray)):
+        raise DataError(f"{name}: read() gave a {type(raw).__name__}; expected a text or binary CSV stream")
+    return name, raw
+
+
 def _delimiter(header_line):
     """Comma, unless the header holds (outside quotes) no comma and exactly one of semicolon and tab."""
     bare = re.sub(r'"[^"]*"', "", header_line)
@@ -599,15 +636,21 @@ def _delimiter(header_line):
     return ","
 
 
-def _from_rows(table, time, input, output, dt, max_gap):
-    """A wide table: its rows as they are when uniformly spaced at ``dt``, else resampled."""
+def _from_rows(table, time, input, output, dt, max_gap, average=False):
+    """A wide table: its rows as they are when uniformly spaced at ``dt``, else resampled.
+
+    With ``average``, rows sharing a time are first merged into their mean.
+    """
     rows = table.rows
     _at_least_two_rows(table, "the file", rows)
-    timeline = _timeline(table, time, rows, table.cells(time, "time"))
-    seconds = timeline.seconds
+    timeline = _timeline(table, time, rows, table.cells(time, "time"), average)
     u = _values(table, input, rows, table.cells(input, "input"))
     y = _values(table, output, rows, table.cells(output, "output"))
     notes = list(table.notes)
+    if average:
+        rows, timeline, (u, y), note = _averaged_repeats(table, "the file", rows, timeline, (u, y))
+        notes += [note] if note else []
+    seconds = timeline.seconds
     u = _filled_input(table, f"column {input.strip()!r}", rows, seconds, u, notes)
     missing = _output_gaps(table, f"column {output.strip()!r}", rows, y)
     start = timeline.first
@@ -643,7 +686,7 @@ def _from_logs(input_log, output_log, dt, max_gap):
             f"{output_log.table.path}: the output log ({_described(output_log)}) does not overlap the input log "
             f"({_described(input_log)}) of {input_log.table.path} in time; expected a stretch where both have data"
         )
-    notes = list(dict.fromkeys(input_log.table.notes + output_log.table.notes))
+    notes = list(dict.fromkeys(input_log.table.notes + output_log.table.notes)) + input_log.notes + output_log.notes
     u = _filled_input(input_log.table, input_log.label, input_log.rows, times_u, input_log.values, notes)
     missing = _output_gaps(output_log.table, output_log.label, output_log.rows, output_log.values)
     grid, u_grid, y_grid, step = _resampled(output_log.table.path, times_u, u, times_y, output_log.values, dt)
@@ -663,13 +706,13 @@ def _from_logs(input_log, output_log, dt, max_gap):
     return ProcessData(grid, u_grid, y_grid, step, origin, tuple(notes), gaps)
 
 
-def _column_log(table, time, column, argument):
+def _column_log(table, time, column, argument, average=False):
     """The log of one column of a two-file layout: every data row of ``table``."""
     label = f"column {column.strip()!r}"
-    return _event_log(table, label, time, column, argument, range(len(table.rows)))
+    return _event_log(table, label, time, column, argument, range(len(table.rows)), average)
 
 
-def _tag_logs(table, time, tag_column, value_column, input, output):
+def _tag_logs(table, time, tag_column, value_column, input, output, average=False):
     """The input and output logs of a long table: the rows of each tag."""
     tags = [cell.strip() for cell in table.cells(tag_column, "tag_column")]
     logs = []
@@ -683,18 +726,59 @@ def _tag_logs(table, time, tag_column, value_column, input, output):
                 f"(given as {argument}) in rows {table.rows[0]} to {table.rows[-1]}; "
                 f"tags present: {_listed(present)}"
             )
-        logs.append(_event_log(table, f"tag {wanted!r}", time, value_column, "value_column", picks))
+        logs.append(_event_log(table, f"tag {wanted!r}", time, value_column, "value_column", picks, average))
     return logs
 
 
-def _event_log(table, label, time, column, argument, picks):
-    """The log of the records ``picks`` of ``table``: their times and the values of ``column``."""
+def _event_log(table, label, time, column, argument, picks, average=False):
+    """The log of the records ``picks`` of ``table``: their times and the values of ``column``.
+
+    With ``average``, records sharing a time are merged into their mean.
+    """
     rows = [table.rows[index] for index in picks]
     _at_least_two_rows(table, label, rows)
     time_cells, value_cells = table.cells(time, "time"), table.cells(column, argument)
-    timeline = _timeline(table, time, rows, [time_cells[index] for index in picks])
+    timeline = _timeline(table, time, rows, [time_cells[index] for index in picks], average)
     values = _values(table, column, rows, [value_cells[index] for index in picks])
-    return _Log(table, label, rows, timeline, values)
+    notes = []
+    if average:
+        rows, timeline, (values,), note = _averaged_repeats(table, label, rows, timeline, (values,))
+        notes += [f"{note} ({label} of {table.path})"] if note else []
+    return _Log(table, label, rows, timeline, values, notes)
+
+
+def _averaged_repeats(table, label, rows, timeline, columns):
+    """Rows sharing a time as one row: its first row number and cell, each column's mean with NaN ignored.
+
+    The mean is NaN where all the rows' values are. Returns the rows, the
+    timeline and the columns left, and a note (None when no time repeats).
+    """
+    first = np.r_[True, np.diff(timeline.seconds) > 0]
+    if first.all():
+        return rows, timeline, columns, None
+    kept = np.flatnonzero(first)
+    if kept.size < 2:
+        raise DataError(
+            f"{table.path}: {label} has {len(rows)} rows (rows {rows[0]} to {rows[-1]}) but all at one time "
+            f"{_shown(timeline.first_cell)}; expected at least 2 times"
+        )
+    group = np.cumsum(first) - 1
+    averaged = []
+    for values in columns:
+        present = ~np.isnan(values)
+        totals = np.bincount(group, weights=np.where(present, values, 0.0))
+        counts = np.bincount(group, weights=present)
+        with np.errstate(invalid="ignore"):  # 0 / 0 where every value of the time is missing: NaN
+            averaged.append(totals / counts)
+    sizes = np.bincount(group)
+    note = (
+        f"{int(sizes[sizes > 1].sum())} rows with repeated timestamps averaged into "
+        f"{_counted(int((sizes > 1).sum()), 'row')}"
+    )
+    merged = dataclasses.replace(
+        timeline, cells=tuple(timeline.cells[index] for index in kept), seconds=timeline.seconds[kept]
+    )
+    return [rows[index] for index in kept], merged, tuple(averaged), note
 
 
 def _at_least_two_rows(table, label, rows):
@@ -704,8 +788,11 @@ def _at_least_two_rows(table, label, rows):
         )
 
 
-def _timeline(table, column, rows, cells):
-    """Parse a time column: one kind of time throughout, strictly increasing; seconds from its first row."""
+def _timeline(table, column, rows, cells, repeats=False):
+    """Parse a time column: one kind of time throughout, strictly increasing; seconds from its first row.
+
+    With ``repeats`` consecutive rows may share a time (non-decreasing).
+    """
     column = column.strip()
     stamps = [_time_stamp(table.path, column, row, cell) for row, cell in zip(rows, cells, strict=True)]
     kind = _kind(stamps[0])
@@ -730,8 +817,9 @@ def _timeline(table, column, rows, cells):
             "expected times of one record"
         )
     steps = np.diff(seconds)
-    if not (steps > 0).all():
-        later = int(np.argmax(steps <= 0)) + 1
+    backwards = steps < 0 if repeats else steps <= 0
+    if backwards.any():
+        later = int(np.argmax(backwards)) + 1
         where = f"{table.path}: row {rows[later]}, column {column!r}"
         if steps[later - 1] == 0:
             raise DataError(

@@ -11,6 +11,7 @@ from .engine.flavours import compiled_engine
 from .engine.kernels import CompiledErrors
 from .engine.windows import ArrayErrors, analyse_stream, default_chunk_steps
 from .errors import ModelError
+from .frames import unpack
 from .models import LinearModel, Model, StateSpaceModel
 from .models.custom import StateErrors
 from .sampling import sample
@@ -66,9 +67,13 @@ def run(
 
     Parameters
     ----------
-    u, y : array_like, shape (n_steps,)
+    u, y : array_like, shape (n_steps,), or pandas Series / DataFrame
         Input and measured output, one value per sample time ``k*dt``. NaN in
-        ``y`` marks a missing measurement.
+        ``y`` marks a missing measurement. ``u`` is (n_steps, n_inputs) for a
+        model with several inputs (a DataFrame: its columns in order). With a
+        DatetimeIndex (shared by both, uniformly spaced) ``dt`` is its
+        spacing and the index becomes ``result.timestamps``
+        (:func:`dynia.frames.unpack`).
     model : dynia.models.Model
         For example ``dynia.models.FirstOrder()``.
     bounds : mapping of str to (low, high)
@@ -124,6 +129,9 @@ def run(
     >>> res.ic.shape
     (2, 80)
     """
+    # pandas in: a DatetimeIndex gives dt and becomes the result's time axis.
+    u, y, dt_of_index, timestamps = unpack(u, y, dt if dt is not None else getattr(settings, "dt", None))
+    dt = dt if dt is not None else (dt_of_index if timestamps is not None else None)
     settings = AnalysisSettings.build(
         settings,
         dt=dt,
@@ -148,8 +156,11 @@ def run(
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
     names, box = parameter_box(bounds, model.names, repr(model))
     if settings.sampler in ADAPTIVE_SAMPLERS:
-        return adaptive_run(
-            u, y, model, dict(zip(names, map(tuple, box))), scheme=settings.sampler, settings=settings, rng=rng
+        return _dated(
+            adaptive_run(
+                u, y, model, dict(zip(names, map(tuple, box))), scheme=settings.sampler, settings=settings, rng=rng
+            ),
+            timestamps,
         )
     samples = sample(settings.sampler, settings.n_samples, box, np.random.default_rng(rng))
     model_order = [names.index(name) for name in model.names]
@@ -220,7 +231,12 @@ def run(
         finite[np.flatnonzero(finite)[errors.diverged]] = False
     warn_dropped(n_dropped, settings.n_samples)
     with np.errstate(over="ignore", invalid="ignore"):
-        return dataclasses.replace(result, verdicts=assess(result, u=u, y=y, model=model, simulations=sims))
+        verdicts = assess(result, u=u, y=y, model=model, simulations=sims)
+    return _dated(dataclasses.replace(result, verdicts=verdicts), timestamps)
+
+
+def _dated(result, timestamps):
+    return result if timestamps is None else dataclasses.replace(result, timestamps=timestamps)
 
 
 def _compiled_state_space(model):

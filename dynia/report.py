@@ -46,10 +46,11 @@ def write_json(path, content):
 
 
 def write_analysis(directory, result, data, summary, *, offset=0.0, plots=True):
-    """Write one analysis into ``directory``: ic.csv, limits.csv, samples.csv, summary.json and figures.
+    """Write one analysis into ``directory``: ic.csv, limits.csv, samples.csv, summary.json, result.nc and figures.
 
     ``summary`` is the finished content of ``summary.json``; the per-parameter
-    times in it are already the file's.
+    times in it are already the file's. ``result.nc`` is the whole result
+    (:meth:`dynia.result.DyniaResult.save`), which ``dynia.load`` reads back.
     """
     directory = Path(directory)
     names = list(result.names)
@@ -64,6 +65,7 @@ def write_analysis(directory, result, data, summary, *, offset=0.0, plots=True):
     )
     _write_csv(directory / "samples.csv", names, result.samples)
     write_json(directory / "summary.json", summary)
+    result.save(directory / "result.nc")
     if plots:
         _write_figures(directory, result, data, offset)
 

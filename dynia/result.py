@@ -47,6 +47,12 @@ class DyniaResult:
         :func:`dynia.run` attaches them; None for results built without
         them (then :meth:`summary` applies the rules that need the result
         only).
+    timestamps : ndarray of datetime64[ns] or None
+        The time axis as datetimes, one per step (``time`` stays seconds):
+        :func:`dynia.run` sets it from a pandas DatetimeIndex (in UTC when
+        the index had a time zone), see :func:`dynia.frames.unpack`. When
+        present, :meth:`to_dataframe` and :meth:`to_xarray` carry it and the
+        plots draw against it. None otherwise.
     """
 
     names: tuple
@@ -59,6 +65,7 @@ class DyniaResult:
     bin_centres: np.ndarray
     settings: dict = field(default_factory=dict)
     verdicts: dict | None = None
+    timestamps: np.ndarray | None = None
 
     def index(self, name):
         """Position of parameter ``name`` on the parameter axis."""
@@ -214,6 +221,7 @@ class DyniaResult:
     def to_dataframe(self):
         """Long table: one row per (time, parameter) with ic, lower and upper.
 
+        With :attr:`timestamps` a ``timestamp`` column follows ``time``.
         Needs pandas (``pip install dynia[pandas]``).
         """
         try:
@@ -221,9 +229,11 @@ class DyniaResult:
         except ImportError:
             raise ImportError("to_dataframe needs pandas: pip install 'dynia[pandas]'") from None
         n_params, n_steps = self.ic.shape
+        stamps = {} if self.timestamps is None else {"timestamp": np.tile(self.timestamps, n_params)}
         return pd.DataFrame(
             {
                 "time": np.tile(self.time, n_params),
+                **stamps,
                 "parameter": np.repeat(self.names, n_steps),
                 "ic": self.ic.ravel(),
                 "lower": self.ci[:, :, 0].ravel(),
@@ -241,9 +251,10 @@ class DyniaResult:
 
         p = self.index(name)
         ax = ax if ax is not None else plt.figure().add_subplot()
-        ax.plot(*envelope(self.time, self.ic[p]), color="k", linewidth=1)
+        axis = self._plot_axis(ax)
+        ax.plot(*envelope(axis, self.ic[p]), color="k", linewidth=1)
         ax.set_ylim(0, 1)
-        ax.set_xlim(self.time[0], self.time[-1])
+        ax.set_xlim(axis[0], axis[-1])
         ax.set_xlabel("time")
         ax.set_ylabel("information content")
         ax.set_title(f"Information content of {name}")
@@ -262,19 +273,58 @@ class DyniaResult:
 
         p = self.index(name)
         ax = ax if ax is not None else plt.figure().add_subplot()
-        columns_time, columns = decimated_columns(self.time, self.gradient[p])
+        axis = self._plot_axis(ax)
+        columns_time, columns = decimated_columns(axis, self.gradient[p])
         ax.pcolormesh(
             columns_time, self.bin_centres[p], columns, cmap="Greys", shading="nearest", vmin=0, rasterized=True
         )
-        ax.plot(*envelope(self.time, self.ci[p, :, 0]), color="tab:blue", linewidth=1, label="lower limit")
-        ax.plot(*envelope(self.time, self.ci[p, :, 1]), color="tab:red", linewidth=1, label="upper limit")
+        ax.plot(*envelope(axis, self.ci[p, :, 0]), color="tab:blue", linewidth=1, label="lower limit")
+        ax.plot(*envelope(axis, self.ci[p, :, 1]), color="tab:red", linewidth=1, label="upper limit")
         if true_value is not None:
             ax.axhline(true_value, color="k", linestyle="--", linewidth=1, label="true value")
         low, high = self.bounds[p]
         ax.set_ylim(min(low, self.bin_centres[p].min()), max(high, self.bin_centres[p].max()))
-        ax.set_xlim(self.time[0], self.time[-1])
+        ax.set_xlim(axis[0], axis[-1])
         ax.set_xlabel("time")
         ax.set_ylabel(name)
         ax.set_title(f"Uncertainty band and CLD gradient of {name}")
         ax.legend(loc="upper right", fontsize="small")
         return ax
+
+    def _plot_axis(self, ax):
+        """The x values of the plots: ``time``, or with timestamps matplotlib's date numbers on a date axis.
+
+        Date numbers are floats, so the decimation of :mod:`dynia.plotting` works on them as on seconds.
+        """
+        if self.timestamps is None:
+            return self.time
+        from matplotlib import dates
+
+        ax.xaxis_date()
+        return dates.date2num(self.timestamps)
+
+    def to_xarray(self):
+        """The result as an :class:`xarray.Dataset`: dimensions, coordinates and attributes as :mod:`dynia.store` says.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> res = DyniaResult(names=("K", "T"), samples=np.zeros((5, 2)), bounds=np.array([[0.0, 1.0], [0.0, 2.0]]),
+        ...                   time=np.arange(3.0), ic=np.zeros((2, 3)), ci=np.zeros((2, 3, 2)),
+        ...                   gradient=np.zeros((2, 4, 3)), bin_centres=np.zeros((2, 4)))
+        >>> ds = res.to_xarray()
+        >>> dict(ds.sizes), ds.ci.dims, ds.parameter.values.tolist()
+        ({'parameter': 2, 'time': 3, 'side': 2, 'bin': 4, 'sample': 5}, ('parameter', 'time', 'side'), ['K', 'T'])
+        """
+        from .store import to_xarray
+
+        return to_xarray(self)
+
+    def save(self, path):
+        """Write the result to the netCDF-4 file ``path``; ``dynia.load(path)`` gives it back exactly.
+
+        See :func:`dynia.store.save` for what is written and what it raises.
+        """
+        from .store import save
+
+        save(self, path)

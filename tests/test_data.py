@@ -6,6 +6,7 @@ values, and one DataError line naming file, row and column per bad input.
 """
 
 import datetime
+import io
 import math
 import pathlib
 
@@ -822,3 +823,100 @@ def test_a_long_table_reads_as_the_same_two_logs_in_two_files(tmp_path, data):
     for name in ("time", "u", "y"):
         np.testing.assert_array_equal(getattr(from_long, name), getattr(from_files, name))
     assert from_long.dt == from_files.dt
+
+
+# Streams and repeated timestamps (issue 12).
+
+
+def test_a_text_or_binary_stream_reads_like_the_file(tmp_path):
+    text = "time;u;y\n0;1;0.5\n2;1;0.75\n4;2;\n6;2;1.25\n"
+    from_file = _load(_write(tmp_path, text))
+    for stream in (io.StringIO(text), io.BytesIO(text.encode()), io.BytesIO(b"\xef\xbb\xbf" + text.encode())):
+        data = _load(stream)
+        assert data.dt == from_file.dt == 2.0 and data.notes == from_file.notes
+        for name in ("time", "u", "y"):
+            np.testing.assert_array_equal(getattr(data, name), getattr(from_file, name))
+
+
+def test_a_binary_stream_that_is_not_utf8_is_read_as_windows_1252():
+    data = load_csv(
+        io.BytesIO("time,u,T \u00b0C\n0,1,20\n1,1,21\n".encode("cp1252")), time="time", input="u", output="T \u00b0C"
+    )
+    assert data.y.tolist() == [20.0, 21.0]
+    assert data.notes == ("read <stream> as Windows-1252 text, since it is not valid UTF-8",)
+
+
+def test_errors_in_a_stream_name_it(tmp_path):
+    with pytest.raises(DataError, match=r"^<stream>: row 3, column 'y': 'abc' is not a number; "):
+        _load(io.StringIO("time,u,y\n0,1,2\n1,1,abc\n"))
+    named = io.StringIO("time,u\n0,1\n1,1\n")
+    named.name = "plant/loop7.csv"
+    with pytest.raises(DataError, match=r"^plant/loop7\.csv: row 1 \(the header\) has no column 'y'"):
+        _load(named)
+    with open(_write(tmp_path, "time,u,y\n0,1,2\n0,1,2\n"), encoding="utf-8") as handle:
+        with pytest.raises(DataError, match=r"data\.csv: row 3, column 'time': duplicate timestamp '0'"):
+            _load(handle)
+    closed = io.StringIO(_ROWS)
+    closed.close()
+    with pytest.raises(DataError, match=r"^<stream>: cannot be read \(I/O operation on closed file\.?\); "):
+        _load(closed)
+
+
+def test_two_event_logs_from_streams():
+    inputs = io.StringIO("time,u\n0,0\n4,4\n")
+    outputs = io.BytesIO(b"time,y\n0,10\n2,12\n4,14\n")
+    data = _load(inputs, output_path=outputs)
+    assert data.time.tolist() == [0.0, 2.0, 4.0] and data.u.tolist() == [0.0, 2.0, 4.0]
+    assert data.y.tolist() == [10.0, 12.0, 14.0]
+    assert data.notes[0].startswith(
+        "resampled the input log (column 'u' of <stream>, 2 rows) and the output log (column 'y' of <stream>, 3 rows)"
+    )
+
+
+def test_repeated_timestamps_average_per_signal_ignoring_missing_values(tmp_path):
+    text = "time,u,y\n0,1,10\n1,2,\n1,4,11\n1,,13\n2,5,\n2,7,\n3,1,1\n"
+    with pytest.raises(DataError, match=r"row 4, column 'time': duplicate timestamp '1', already on row 3"):
+        _load(_write(tmp_path, text))
+    data = _load(_write(tmp_path, text), duplicates="mean")
+    assert data.time.tolist() == [0.0, 1.0, 2.0, 3.0] and data.dt == 1.0
+    assert data.u.tolist() == [1.0, 3.0, 6.0, 1.0]  # (2 + 4) / 2 with the empty cell left out; (5 + 7) / 2
+    assert np.array_equal(data.y, [10.0, 12.0, np.nan, 1.0], equal_nan=True)  # no value at time 2: missing
+    assert data.notes == (
+        "5 rows with repeated timestamps averaged into 2 rows",
+        "1 output value missing, left as NaN in y",
+    )
+
+
+def test_repeated_timestamps_average_exactly():
+    values = [0.1, 0.2, 0.7, 1e-17]
+    text = "time,u,y\n" + "".join(f"5,1,{value!r}\n" for value in values) + "6,1,0\n7,1,0\n"
+    data = _load(io.StringIO(text), duplicates="mean")
+    assert data.y[0] == np.nanmean(values) == (0.1 + 0.2 + 0.7 + 1e-17) / 4
+    assert data.time.tolist() == [0.0, 1.0, 2.0]
+
+
+def test_repeated_timestamps_average_in_each_tag_of_a_long_table():
+    text = "time,tag,value\n0,a,1\n0,b,10\n2,a,2\n2,a,5\n2,b,20\n4,a,6\n4,b,30\n4,b,31\n"
+    data = load_csv(io.StringIO(text), time="time", input="a", output="b", long_format=True, duplicates="mean")
+    assert data.time.tolist() == [0.0, 2.0, 4.0]
+    assert data.u.tolist() == [1.0, 3.5, 6.0] and data.y.tolist() == [10.0, 20.0, 30.5]
+    assert data.notes[:2] == (
+        "2 rows with repeated timestamps averaged into 1 row (tag 'a' of <stream>)",
+        "2 rows with repeated timestamps averaged into 1 row (tag 'b' of <stream>)",
+    )
+
+
+def test_repeated_timestamps_still_need_increasing_times_and_two_of_them(tmp_path):
+    with pytest.raises(DataError, match=r"row 5, column 'time': '0' is earlier than '1' on row 4"):
+        _load(_write(tmp_path, "time,u,y\n0,1,2\n1,1,2\n1,1,2\n0,1,2\n"), duplicates="mean")
+    with pytest.raises(
+        DataError, match=r"data\.csv: the file has 3 rows \(rows 2 to 4\) but all at one time '7'; expected at least 2"
+    ):
+        _load(_write(tmp_path, "time,u,y\n7,1,2\n7,1,2\n7.0,1,2\n"), duplicates="mean")
+
+
+@pytest.mark.parametrize("duplicates", ["first", "Mean", None, True])
+def test_duplicates_must_be_error_or_mean(duplicates):
+    with pytest.raises(SettingsError, match=r"^duplicates must be one of 'error', 'mean'; got ") as caught:
+        _load(io.StringIO(_ROWS), duplicates=duplicates)
+    assert caught.value.setting == "duplicates"
