@@ -353,3 +353,18 @@ def test_transfer_function_rejects_inconsistent_systems():
 def test_models_share_the_base_class():
     for model in (FirstOrder(), FOPDT(), SecondOrderDelay(), lead_lag_model()):
         assert isinstance(model, Model)
+
+
+@pytest.mark.parametrize("time_constant", [0.5, 1.0, 2.0])
+def test_the_time_convention_is_zero_order_hold_as_the_docstring_says(time_constant):
+    # Equal to control's response of the ZOH-discretised system; not to its response of the
+    # continuous system, which interpolates the input linearly between samples.
+    u = np.zeros(20)
+    u[2] = 1.0
+    time = np.arange(20.0)
+    system = control.tf([1.0], [time_constant, 1.0])
+    ours = FirstOrder().simulate([[1.0, time_constant]], u)[0]
+    held = control.forced_response(control.c2d(system, 1.0, "zoh"), time, u).outputs
+    interpolated = control.forced_response(system, time, u).outputs
+    np.testing.assert_allclose(ours, held, atol=1e-12)
+    assert np.abs(ours - interpolated).max() > 0.2
