@@ -366,9 +366,13 @@ if numba is not None:
             y_k = output(state, piece[k], params)
             missing = np.isnan(measured[k])
             for i in range(y_k.shape[0]):
-                if not np.isfinite(y_k[i]):
+                if np.isfinite(y_k[i]):
+                    errors[k, i] = 0.0 if missing else abs(y_k[i] - measured[k])
+                else:
+                    # inf, never NaN: the selection kernels order costs and NaN has no order.
+                    # The set is dropped and the analysis redone, so the value only has to be safe.
                     diverged[i] = True
-                errors[k, i] = 0.0 if missing else abs(y_k[i] - measured[k])
+                    errors[k, i] = np.inf
             state = step(state, piece[k], params, dt)
         return state
 
