@@ -8,6 +8,10 @@ runs :func:`dynia.run` and writes tables, a JSON summary and figures to DIR.
 ``--method {dynia,baseline,whole}``, fits the model by least squares on the
 data the method selects and validates it on the held-out end of the record
 (:mod:`dynia.identify`), writing ``identified.json`` and ``fit.png``.
+``dynia suggest DATA.csv`` with the same data and model options proposes a
+window, a behavioural share and a number of samples for ``analyse`` and says
+why (:mod:`dynia.suggest`); ``--json`` prints it for machines. ``--window
+60s`` (or ``2min``, ``1h``) gives the window in time units instead of ``--n``.
 Bad input ends the command with one line on stderr and exit status 2.
 """
 
@@ -15,9 +19,11 @@ import argparse
 import dataclasses
 import importlib.metadata
 import importlib.util
+import json
 import math
 import os
 import platform
+import shlex
 import signal
 import sys
 import tomllib
@@ -35,6 +41,7 @@ from .pipeline import DroppedSamplesWarning, run
 from .quality import check_quality
 from .refine import narrowed_bounds
 from .settings import FLAVOURS, MAX_PARAMETER, SAMPLERS, AnalysisSettings
+from .suggest import parse_duration, suggest, window_half_width
 
 __all__ = ["main"]
 
@@ -65,6 +72,14 @@ example (the heating-system record; the last 30 % of it is held out for validati
 
   writes results/heating-fit/identified.json (parameters, std_errors, segments as
   [start_time, end_time] pairs, validation_error, settings) and fit.png.
+"""
+
+
+SUGGEST_EXAMPLE = """\
+example (proposes --n, --percentage and --samples for dynia analyse, with the reasons):
+  dynia suggest data/heating_system/heating_system.csv --time time --input u --output y \\
+      --model first-order --param K=0:40 --param T=0:200 \\
+      --input-offset 6 --offset first --x0 zero --seed 1
 """
 
 
@@ -101,6 +116,7 @@ def _parser():
     method.add_argument("--samples", type=int, metavar="N", help="Monte Carlo parameter sets (default 2000)")
     method.add_argument("--sampler", choices=sorted(SAMPLERS), help="uniform (default), lhs or sobol")
     method.add_argument("--n", type=int, help="half window: each window holds 2n+1 steps (default 10)")
+    method.add_argument("--window", metavar="DURATION", help=_WINDOW_HELP)
     method.add_argument(
         "--percentage", type=float, metavar="P", help="behavioural share of the samples in percent (default 10)"
     )
@@ -185,6 +201,7 @@ def _parser():
     )
     selection.add_argument("--samples", type=int, metavar="N", help="dynia: Monte Carlo parameter sets (default 2000)")
     selection.add_argument("--n", type=int, help="dynia: half window, each window holds 2n+1 steps (default 10)")
+    selection.add_argument("--window", metavar="DURATION", help="dynia: " + _WINDOW_HELP)
     selection.add_argument(
         "--percentage", type=float, metavar="P", help="dynia: behavioural share of the samples in percent (default 10)"
     )
@@ -192,7 +209,31 @@ def _parser():
         "--seed", type=int, metavar="S", help="seed of every random draw (default: drawn at random and recorded)"
     )
     _add_output_options(identify)
+
+    proposal = commands.add_parser(
+        "suggest",
+        help="propose a window, a behavioural share and a number of samples for analyse, and say why",
+        description="Estimate the record's dominant time constant, choose a window of about one time constant, "
+        "a behavioural share that lets the IC reach high values, and the number of samples that brings a "
+        "pilot run's IC standard error to 0.02; check the parameter ranges against a least-squares fit. "
+        "Writes nothing; prints the proposal (--json: as JSON).",
+        epilog=SUGGEST_EXAMPLE,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    _add_data_and_model_options(proposal)
+    pilot = proposal.add_argument_group("pilot and output")
+    pilot.add_argument(
+        "--seed", type=int, metavar="S", help="seed of the pilot runs (default: drawn at random and printed)"
+    )
+    pilot.add_argument("--json", action="store_true", help="print the proposal as JSON")
+    pilot.add_argument("--config", metavar="FILE.toml", help="read the settings from a TOML file")
     return parser
+
+
+_WINDOW_HELP = (
+    "the window as a duration, e.g. 60s, 2min or 1h (a bare number is seconds), instead of --n: "
+    "n = round(DURATION / (2 dt)) on the data's grid"
+)
 
 
 def _add_output_options(command):
@@ -290,30 +331,32 @@ def _add_data_and_model_options(command):
 # One table, so that a config key of the wrong type is refused the same way as a
 # command-line value, and a summary records exactly the options of its command.
 _BOTH = ("analyse", "identify")
+_ALL = ("analyse", "identify", "suggest")
 _ANALYSE = ("analyse",)
 _IDENTIFY = ("identify",)
 OPTIONS = {
-    "data": ("text", None, _BOTH),
-    "time": ("text", None, _BOTH),
-    "input": ("names", None, _BOTH),
-    "output": ("names", None, _BOTH),
-    "output_file": ("text", None, _BOTH),
-    "long": ("flag", False, _BOTH),
-    "tag_column": ("text", "tag", _BOTH),
-    "value_column": ("text", "value", _BOTH),
-    "dt": ("number", None, _BOTH),
-    "max_gap": ("number", 5.0, _BOTH),
-    "duplicates": ("text", "error", _BOTH),
-    "offset": ("offset", "none", _BOTH),
-    "input_offset": ("offset", "none", _BOTH),
-    "model": ("text", None, _BOTH),
-    "param": ("names", None, _BOTH),
-    "x0": ("text", "zero", _BOTH),
+    "data": ("text", None, _ALL),
+    "time": ("text", None, _ALL),
+    "input": ("names", None, _ALL),
+    "output": ("names", None, _ALL),
+    "output_file": ("text", None, _ALL),
+    "long": ("flag", False, _ALL),
+    "tag_column": ("text", "tag", _ALL),
+    "value_column": ("text", "value", _ALL),
+    "dt": ("number", None, _ALL),
+    "max_gap": ("number", 5.0, _ALL),
+    "duplicates": ("text", "error", _ALL),
+    "offset": ("offset", "none", _ALL),
+    "input_offset": ("offset", "none", _ALL),
+    "model": ("text", None, _ALL),
+    "param": ("names", None, _ALL),
+    "x0": ("text", "zero", _ALL),
     "samples": ("whole", 2000, _BOTH),
     "n": ("whole", 10, _BOTH),
+    "window": ("text", None, _BOTH),
     "percentage": ("number", 10.0, _BOTH),
-    "seed": ("whole", None, _BOTH),
-    "quality": ("flag", False, _BOTH),
+    "seed": ("whole", None, _ALL),
+    "quality": ("flag", False, _ALL),
     "no_plots": ("flag", False, _BOTH),
     "out": ("text", None, _BOTH),
     "overwrite": ("flag", False, _BOTH),
@@ -331,6 +374,7 @@ OPTIONS = {
     "held_out": ("number", 0.3, _IDENTIFY),
     "exclude_flagged": ("flag", False, _IDENTIFY),
     "starts": ("whole", 1, _IDENTIFY),
+    "json": ("flag", False, ("suggest",)),
 }
 
 # The command line's name of each AnalysisSettings field, for error messages.
@@ -357,7 +401,7 @@ def main(argv=None):
                 parser.print_help()
                 return 2
             options = _options(args)
-            run_command = _identify if args.command == "identify" else _analyse
+            run_command = {"analyse": _analyse, "identify": _identify, "suggest": _suggest}[args.command]
             return run_command(options, command_line, caught)
     except DyniaError as error:
         print(f"dynia: error: {_one_line(error)}", file=sys.stderr)
@@ -383,11 +427,17 @@ def _options(args):
         if value is not None and key not in ("command", "config") and value is not False
     }
     options = {key: default for key, (_, default, commands) in OPTIONS.items() if command in commands}
+    configured = {}
     if args.config:
-        options.update(_read_config(args.config, command))
+        configured = _read_config(args.config, command)
+        options.update(configured)
         options["config"] = args.config
     options.update(given)
-    for key in ("data", "time", "input", "output", "model", "out"):
+    if options.get("window") is not None:
+        if "n" in given or "n" in configured:
+            raise UsageError("--window and --n both set the window; give one of them")
+        options["window_seconds"] = parse_duration(options["window"], "--window")
+    for key in ("data", "time", "input", "output", "model") + (("out",) if command != "suggest" else ()):
         if not options.get(key):
             option = "DATA.csv" if key == "data" else f"--{key}"
             raise UsageError(f"{option} is required (on the command line or in --config)")
@@ -404,7 +454,8 @@ def _options(args):
     if not options.get("param"):
         raise UsageError("give a range for every model parameter with --param NAME=LOW:HIGH")
     options["bounds"] = _bounds(options["param"], model)
-    options["analysis"] = _analysis_settings(options)
+    if command != "suggest":  # suggest proposes the analysis settings
+        options["analysis"] = _analysis_settings(options)
     _check_command_options(options)
     options["offset"] = _offset(options["offset"], "--offset")
     options["input_offset"] = _offset(options["input_offset"], "--input-offset")
@@ -412,6 +463,8 @@ def _options(args):
         options["seed"] = int(np.random.SeedSequence().entropy % 2**63)
     inputs = [path for path in (options["data"], options.get("output_file"), options.get("config")) if path]
     options["inputs"] = inputs
+    if command == "suggest":
+        return options
     # Checked now, before the data are read: an --out that could cost the user files is refused at once.
     options["destination"] = OutputDirectory(
         options["out"], overwrite=options["overwrite"], inputs=inputs, command=command
@@ -507,7 +560,8 @@ def _analysis_settings(options):
             bins=options["bins"],
             conf_level=options["conf_level"],
             flavour=options["flavour"],
-            min_points=options["min_points"],
+            # With --window the window's length is known only on the data's grid; checked then (_load).
+            min_points=options["min_points"] if options.get("window") is None else 1,
         )
     try:
         return AnalysisSettings(**fields)
@@ -644,7 +698,11 @@ def _offset(value, option):
 
 
 def _load(options):
-    """The data (u (n_steps,) or (n_steps, n_inputs)), checked against the window, and the offsets."""
+    """The data (u (n_steps,) or (n_steps, n_inputs)), checked against the window, and the offsets.
+
+    A ``--window`` duration becomes the half window n on the data's grid
+    here: ``options["n"]`` and ``options["analysis"]`` are updated.
+    """
     loads = [
         load_csv(
             options["data"],
@@ -673,7 +731,10 @@ def _load(options):
                     "give --dt"
                 )
         data = dataclasses.replace(data, u=np.column_stack([load.u for load in loads]))
-    window = 2 * options["n"] + 1
+    if options.get("window_seconds") is not None:
+        options["n"] = window_half_width(options["window_seconds"], data.dt, data.y.size, "--window")
+        options["analysis"] = options["analysis"].replace(n=options["n"], min_points=options.get("min_points", 1))
+    window = 2 * options.get("n", 0) + 1
     if data.y.size < window:
         raise UsageError(
             f"{options['data']}: {data.y.size} time steps, fewer than one window of "
@@ -869,7 +930,7 @@ def _identify(options, command_line, caught):
             rng=options["seed"],
         )
         dropped = _dynia_warnings(caught)
-        for line in dropped:
+        for line in dropped + found.warnings:
             print(f"dynia: warning: {line}", file=sys.stderr)
         summary = found.to_dict(data.time)
 
@@ -894,7 +955,7 @@ def _identify(options, command_line, caught):
         summary.update(
             settings=recorded,
             version=__version__,
-            warnings=notices + dropped,
+            warnings=notices + dropped + summary["warnings"],
             data=dict(
                 n_steps=int(data.time.size), dt=data.dt, start=report.file_times(data, [0.0])[0], notes=list(data.notes)
             ),
@@ -902,6 +963,45 @@ def _identify(options, command_line, caught):
         )
         report.write_identification(staging, found, data, u, y, summary, offset=offset, plots=not options["no_plots"])
     return _done(options)
+
+
+def _suggest(options, command_line, caught):
+    data, offset, input_offset = _load(options)
+    u, y = data.u - input_offset, data.y - offset
+    notices, _ = _data_warnings(data, u, y, options)
+    for line in notices:
+        print(f"dynia: warning: {line}", file=sys.stderr)
+    found = suggest(u, y, options["model_object"], options["bounds"], dt=data.dt, x0=options["x0"], rng=options["seed"])
+    dropped = _dynia_warnings(caught)
+    for line in dropped:
+        print(f"dynia: warning: {line}", file=sys.stderr)
+    # The analyse command this proposal is for: the same data and model options, the proposed settings.
+    kept, words = [], iter(command_line[2:])
+    for word in words:
+        if word == "--seed":
+            next(words, None)
+        elif word != "--json" and not word.startswith("--seed="):
+            kept.append(word)
+    analyse = ["dynia", "analyse", *kept, *found.arguments(), "--seed", str(options["seed"]), "--out", "RESULTS"]
+    if options["json"]:
+        print(
+            json.dumps(
+                dict(
+                    found.to_dict(),
+                    seed=options["seed"],
+                    command=analyse,
+                    warnings=notices + dropped,
+                    version=__version__,
+                    command_line=command_line,
+                ),
+                indent=2,
+                allow_nan=False,
+            )
+        )
+    else:
+        print(found.text())
+        print("run:\n  " + shlex.join(analyse))
+    return 0
 
 
 def _done(options):

@@ -25,6 +25,16 @@ With ``quality=True`` the data are checked first (:func:`dynia.quality.check_qua
 and, with ``exclude_flagged=True``, flagged output samples are treated as
 missing and flagged input samples interpolated before anything else.
 
+A held-out part can validate only what happens in it. When its input hardly
+varies (standard deviation below 10 % of the input's in the fitted data)
+and the fitted model's output there changes by no more than the noise
+(its standard deviation over the held-out points below twice the fit's
+residual standard deviation ``sigma``), ``validation_error`` measures noise
+and a level, not the dynamics, and ``warnings`` says so. Both must hold: an
+input that stopped changing just before the held-out part still tests the
+model through the response that follows, and a model whose output is flat
+everywhere is a bad fit, not a quiet held-out part.
+
 Shapes follow :mod:`dynia.analysis`: ``u`` and ``y`` are (n_steps,).
 
 Examples
@@ -76,8 +86,11 @@ class Identification:
     ----------
     method : str
     parameters, std_errors : dict of str to float
-        Least-squares estimates and their standard errors (inf where the
-        segments do not determine a parameter).
+        Least-squares estimates and their classical standard errors (inf
+        where the segments do not determine a parameter).
+    std_errors_hac : dict of str to float
+        Standard errors robust to autocorrelated residuals
+        (:attr:`dynia.fit.FitResult.std_errors_hac`); judge the estimates by these.
     segments : list of (start, stop)
         The steps fitted on (stop exclusive).
     validation : list of (start, stop)
@@ -91,7 +104,8 @@ class Identification:
         The interval search ("baseline" only).
     quality : dynia.quality.QualityReport or None
     warnings : list of str
-        Model-structure warnings and notes on the selection.
+        Model-structure warnings, notes on the selection, and a held-out part
+        too quiet to validate the model (see the module documentation).
     settings : dict
     """
 
@@ -107,6 +121,7 @@ class Identification:
     quality: object = field(default=None, repr=False)
     warnings: list = field(default_factory=list)
     settings: dict = field(default_factory=dict)
+    std_errors_hac: dict = field(default_factory=dict)
 
     def to_dict(self, time):
         """JSON-ready summary; segments as [start_time, end_time] on ``time`` (n_steps,)."""
@@ -115,6 +130,8 @@ class Identification:
             method=self.method,
             parameters=fit["parameters"],
             std_errors=fit["std_errors"],
+            std_errors_hac=fit["std_errors_hac"],
+            hac_lags=fit["hac_lags"],
             segments=segments_to_times(self.segments, time),
             validation_segments=segments_to_times(self.validation, time),
             validation_error=json_number(self.validation_error),
@@ -288,6 +305,7 @@ def identify(
             )
 
     fit = fit_segments(u, y_fit, model, chosen, bounds=bounds, dt=dt, x0=x0, n_starts=n_starts, rng=rng)
+    notes += _quiet_held_out(u, y, fit, validation)
     recorded = dict(
         method=method,
         dt=dt,
@@ -312,6 +330,7 @@ def identify(
         method=method,
         parameters=dict(fit.parameters),
         std_errors=dict(fit.std_errors),
+        std_errors_hac=dict(fit.std_errors_hac),
         segments=list(fit.segments),
         validation=list(validation),
         validation_error=fit.validation_error(u, y, validation),
@@ -322,3 +341,34 @@ def identify(
         warnings=notes,
         settings=recorded,
     )
+
+
+# A held-out part too quiet to validate anything (module docs): its input's
+# standard deviation below this share of the fitted data's ...
+_QUIET_INPUT_SHARE = 0.1
+# ... and the fitted model's output there varying by less than this many residual standard deviations.
+_QUIET_NOISE_MULTIPLE = 2.0
+
+
+def _quiet_held_out(u, y, fit, validation):
+    """A warning (in a list) when the held-out part has too little excitation to validate the model, else []."""
+    held = segments_to_mask(validation, y.size) & ~np.isnan(y)
+    fitted = segments_to_mask(fit.segments, y.size)
+    if not held.any() or not np.isfinite(fit.sigma):
+        return []
+    columns = u.reshape(u.shape[0], -1)
+    spread_fitted = columns[fitted].std(axis=0)
+    if not (spread_fitted > 0).any():
+        return []
+    # With several inputs the most varied one counts: any input changing is excitation.
+    share = float(np.max(columns[held].std(axis=0)[spread_fitted > 0] / spread_fitted[spread_fitted > 0]))
+    response = float(np.std(fit.simulate(u, segments=validation)[held]))
+    if share >= _QUIET_INPUT_SHARE or response >= _QUIET_NOISE_MULTIPLE * fit.sigma:
+        return []
+    return [
+        f"the held-out part has too little excitation to validate the model: its input varies "
+        f"{100 * share:.1f} % as much as in the fitted data (standard deviation), and the fitted model's output "
+        f"there varies by {response:.3g}, within {_QUIET_NOISE_MULTIPLE:g} residual standard deviations "
+        f"({fit.sigma:.3g}); validation_error there measures noise and level, not the dynamics; hold out a "
+        "part of the record with input changes"
+    ]

@@ -173,9 +173,9 @@ def _write_fit_figure(path, found, data, u, y, offset):
             )
     start, _ = found.validation[0]
     bottom.axvspan(grid_time[start], grid_time[-1], color="0.5", alpha=0.15, label="held out")
-    estimates = ", ".join(
-        f"{name} = {value:.4g} \u00b1 {found.std_errors[name]:.2g}" for name, value in found.parameters.items()
-    )
+    # The robust errors: residuals of process data are rarely independent.
+    robust = getattr(found.fit, "std_errors_hac", None) or found.std_errors
+    estimates = ", ".join(f"{name} = {value:.4g} \u00b1 {robust[name]:.2g}" for name, value in found.parameters.items())
     top.set_title(f"{found.method}: {estimates}; validation RMSE {found.validation_error:.3g}")
     bottom.set_ylabel("output" + (f" (minus {offset:g})" if offset else ""))
     bottom.set_xlabel("time (s from the first grid point)")

@@ -1,0 +1,568 @@
+"""Settings that let DYNIA see what a record holds, proposed from the record itself, with the reasons.
+
+The defaults of :func:`dynia.run` (a window of 21 steps, the best 10 % of
+2000 samples) suit the thesis's examples, whose time constants are a few
+steps. On a heater step test sampled every second with a time constant of
+three minutes they identify nothing, and nothing says why. :func:`suggest`
+(``dynia suggest DATA.csv ...`` on the command line) proposes a window, a
+behavioural share and a number of samples, and checks the parameter ranges,
+by the reasoning below.
+
+The dominant time constant
+--------------------------
+A first-order model ``y = c + sum_j K_j r_j(T)`` is fitted to the whole
+record, ``r_j(T)`` being the unit-gain first-order response (zero-order
+hold) of input j from rest at its first value. For a given T the output is
+linear in the gains and the level c, which ordinary least squares gives
+exactly (variable projection), so only T is searched: on a logarithmic grid
+from dt to the record's length, then refined between the neighbours of the
+best grid point. This needs no starting value and finds the best T on the
+grid, not a local minimum; it uses every measured point, so the noise
+averages out over the record; it takes any input (steps that never settle,
+several inputs) and missing output values. A dead time or a second, faster
+lag adds roughly its length to the fitted T, which is what a window must
+span anyway. Rejected: reading the time to 63 % after each step (needs
+clean steps that settle, and reads one noisy crossing per step) and the
+decay of the autocorrelation of the output's increments (at fast sampling
+they are mostly measurement noise).
+
+The window
+----------
+A window of about one time constant, ``2n+1 = T/dt``, so ``n = round(T /
+(2 dt))`` (at least 1). The window centred on a step then holds the settled
+level before it and the first half time constant of the response, where the
+response bends most: there gain and time constant act differently on the
+output. A much shorter window sees a straight line, along which gain and
+time constant trade off (only their ratio, the initial slope, shows); a
+much longer one averages the transient with settled stretches, which
+inform the gain only, or with the response to the next input change
+(several regimes in one window). Input changes closer together than one
+window are reported.
+
+The behavioural share
+---------------------
+The information content is ``1 - (band width)/(range)``, and the band is
+read from the behavioural set: the ``percentage`` % of the samples with the
+lowest cost in the window, i.e. a fixed share of the volume of the
+parameter box, however many samples are drawn. When a window pins each of
+d parameters alike, that share spans about ``(percentage/100)^(1/d)`` of
+every range, and much more along a ridge of correlated parameters (gain and
+time constant in a transient), so the share caps the IC: the default 10 %
+with two parameters lets the best window reach about 0.3 for a time
+constant on a heater step test. The share proposed is ``100 * 0.1^d`` %
+(capped at 10 %), a tenth of each range: 10 % for one parameter (the
+thesis's choice), 1 % for two, 0.1 % for three, the s^d law of the thesis's
+section 4.2.
+
+The number of samples
+---------------------
+A pilot :func:`dynia.run` at the proposed window and share with few samples
+(enough for 25 behavioural sets, at least 500) gives the Monte Carlo
+standard error of each parameter's IC near its highest value: from
+``result.ic_se`` when :func:`dynia.run` offers ``ic_error=True``, otherwise
+from the spread of that many samples over five seeds. The band's limits are
+quantiles of a behavioural set whose size grows with the samples, so the
+error shrinks as ``1/sqrt(N)``; the proposal is the N that brings the
+largest of them to ``ic_se_target`` (0.02), rounded up to two significant
+digits, and at least enough for 50 behavioural sets.
+
+The parameter ranges
+--------------------
+The model itself is fitted by least squares to the whole record within the
+ranges (:func:`dynia.fit.fit_segments`, from the middle of the ranges and
+two random starts, in the initial state of the analysis). An estimate on a
+bound means the range excludes the best fit: the band of every window would
+lean on that bound; the proposal says which range to widen. A parameter the
+record does not determine is named too.
+
+Examples
+--------
+>>> import numpy as np
+>>> from dynia.models import FirstOrder
+>>> u = np.repeat([0.0, 50.0, 20.0, 70.0], 600)
+>>> y = FirstOrder().simulate([[0.6, 60.0]], u)[0]
+>>> round(dominant_time_constant(u, y).time_constant, 3)
+60.0
+>>> window_half_width(parse_duration("1min"), dt=1.0, n_steps=u.size)
+30
+"""
+
+import inspect
+import math
+import re
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+from scipy.signal import lfilter
+
+from . import _checks
+from .errors import DataError, SettingsError
+from .fit import fit_segments
+from .pipeline import run
+from .serial import json_number
+from .settings import check_dt, check_x0, parameter_box
+
+__all__ = [
+    "Suggestion",
+    "TimeScale",
+    "suggest",
+    "dominant_time_constant",
+    "parse_duration",
+    "window_half_width",
+    "IC_SE_TARGET",
+]
+
+# The Monte Carlo standard error of the IC the proposed number of samples aims at.
+IC_SE_TARGET = 0.02
+
+_UNITS = {
+    "s": 1.0,
+    "sec": 1.0,
+    "second": 1.0,
+    "seconds": 1.0,
+    "min": 60.0,
+    "minute": 60.0,
+    "minutes": 60.0,
+    "h": 3600.0,
+    "hour": 3600.0,
+    "hours": 3600.0,
+    "d": 86400.0,
+    "day": 86400.0,
+    "days": 86400.0,
+}
+_DURATION = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*([a-zA-Z]*)\s*$")
+
+# Trial time constants of the first-order fit: this many, log-spaced from dt to the record's length.
+_GRID_POINTS = 60
+# A share 1/_RANGE_SHARE_INVERSE of each range is the aim of the proposed percentage (module docs);
+# an integer, so that 100 / 10**d is the float nearest the intended 1 % or 0.1 %.
+_RANGE_SHARE_INVERSE = 10
+_MAX_PERCENTAGE = 10.0
+# The pilot holds this many behavioural sets (and at least _PILOT_MIN samples); the proposal at least _MIN_BEHAVIOURAL.
+_PILOT_BEHAVIOURAL = 25
+_PILOT_MIN = 500
+_MIN_BEHAVIOURAL = 50
+# Without result.ic_se, the pilot is repeated with this many seeds.
+_PILOT_SEEDS = 5
+# The IC standard error is pooled over the steps whose pilot IC lies within this of the parameter's highest.
+_PEAK_MARGIN = 0.05
+# An input change counts when it exceeds this share of the input's range; the input is step-like when
+# fewer than _STEP_LIKE of its steps change.
+_CHANGE_SHARE = 0.01
+_STEP_LIKE = 0.1
+
+
+def parse_duration(text, name="window"):
+    """Seconds in a duration such as ``"60s"``, ``"2min"``, ``"1.5h"``, ``"1d"`` or ``"90"`` (seconds).
+
+    Raises :class:`~dynia.errors.SettingsError` naming ``name`` for anything
+    else, or a duration that is not positive and finite.
+
+    >>> parse_duration("2min"), parse_duration("1h"), parse_duration("90")
+    (120.0, 3600.0, 90.0)
+    """
+    match = _DURATION.match(str(text))
+    unit = match.group(2).lower() if match else None
+    if match is None or (unit and unit not in _UNITS):
+        raise SettingsError(
+            f"{name} must be a duration such as 60s, 2min or 1h (units s, min, h, d; a bare number is seconds); "
+            f"got {text!r}",
+            name,
+        )
+    seconds = float(match.group(1)) * _UNITS.get(unit, 1.0)
+    if not (math.isfinite(seconds) and seconds > 0):
+        raise SettingsError(f"{name} must be a positive, finite duration; got {text!r}", name)
+    return seconds
+
+
+def window_half_width(seconds, dt, n_steps, name="window"):
+    """Half window n of a window lasting ``seconds``: ``round(seconds / (2 dt))``, rounded half up.
+
+    Raises :class:`~dynia.errors.SettingsError` naming ``name`` when the
+    window is shorter than 3 steps or when its 2n+1 steps exceed the
+    record's ``n_steps``.
+
+    >>> window_half_width(171.0, dt=1.0, n_steps=7200), window_half_width(60.0, dt=2.0, n_steps=100)
+    (86, 15)
+    """
+    dt = check_dt(dt)
+    steps = seconds / dt
+    if steps < 3:
+        raise SettingsError(
+            f"{name} {seconds:g} s is {steps:.3g} steps of {dt:g} s; a window needs at least 3 steps ({3 * dt:g} s)",
+            name,
+        )
+    n = math.floor(steps / 2 + 0.5)
+    if 2 * n + 1 > n_steps:
+        raise SettingsError(
+            f"{name} {seconds:g} s is {2 * n + 1} steps of {dt:g} s (2n+1 with n = {n}), longer than the record's "
+            f"{n_steps} steps ({n_steps * dt:g} s)",
+            name,
+        )
+    return n
+
+
+@dataclass(frozen=True)
+class TimeScale:
+    """The first-order fit of :func:`dominant_time_constant`.
+
+    Attributes
+    ----------
+    time_constant : float
+        T, in the units of dt.
+    gains : tuple of float
+        K of each input.
+    level : float
+        The output's level c at the inputs' first values.
+    rmse : float
+        Root mean square of the residuals.
+    explained : float
+        Share of the output's variance the fit explains (1 - RSS/TSS).
+    edge : str or None
+        "fast" when T came out at the grid's lower end (the output follows
+        the input within a sample), "slow" at its upper end (slower than the
+        record); None otherwise.
+    """
+
+    time_constant: float
+    gains: tuple
+    level: float
+    rmse: float
+    explained: float
+    edge: str | None = None
+
+
+def dominant_time_constant(u, y, dt=1.0):
+    """The time constant of a first-order fit to the whole record (module docs).
+
+    Parameters
+    ----------
+    u : array_like, shape (n_steps,) or (n_steps, n_inputs)
+    y : array_like, shape (n_steps,)
+        NaN marks a missing value.
+    dt : float, default 1.0
+
+    Returns
+    -------
+    TimeScale
+    """
+    dt = check_dt(dt)
+    columns = np.asarray(u, dtype=float)
+    n_inputs = 1 if columns.ndim == 1 else columns.shape[1]
+    u, y = _checks.record(u, y, n_inputs=n_inputs)
+    columns = u.reshape(u.shape[0], -1) - u.reshape(u.shape[0], -1)[0]
+    measured = ~np.isnan(y)
+    if measured.sum() < n_inputs + 2:
+        raise DataError(f"y has {int(measured.sum())} measured values; a first-order fit needs {n_inputs + 2}")
+    observed = y[measured]
+
+    def solve(log_tau):
+        pole = math.exp(-dt / math.exp(log_tau))
+        responses = lfilter([0.0, 1.0 - pole], [1.0, -pole], columns, axis=0)[measured]
+        design = np.column_stack([np.ones(observed.size), responses])
+        coefficients, *_ = np.linalg.lstsq(design, observed, rcond=None)
+        residual = observed - design @ coefficients
+        return float(residual @ residual), coefficients
+
+    grid = np.linspace(math.log(dt), math.log(max(u.shape[0] * dt, 2 * dt)), _GRID_POINTS)
+    costs = [solve(point)[0] for point in grid]
+    best = int(np.argmin(costs))
+    low, high = grid[max(best - 1, 0)], grid[min(best + 1, grid.size - 1)]
+    refined = minimize_scalar(lambda point: solve(point)[0], bounds=(low, high), method="bounded")
+    log_tau = refined.x if refined.fun < costs[best] else grid[best]
+    rss, coefficients = solve(log_tau)
+    spread = float(np.sum((observed - observed.mean()) ** 2))
+    edge = "fast" if best == 0 else "slow" if best == grid.size - 1 else None
+    return TimeScale(
+        time_constant=float(math.exp(log_tau)),
+        gains=tuple(float(value) for value in coefficients[1:]),
+        level=float(coefficients[0]),
+        rmse=math.sqrt(rss / observed.size),
+        explained=1.0 - rss / spread if spread > 0 else 0.0,
+        edge=edge,
+    )
+
+
+@dataclass(frozen=True)
+class Suggestion:
+    """Settings proposed by :func:`suggest`, and why.
+
+    Attributes
+    ----------
+    n : int
+        Half window; the window holds 2n+1 steps.
+    window : float
+        The window's duration, (2n+1) dt.
+    percentage : float
+        Behavioural share in percent.
+    n_samples : int
+        Monte Carlo samples.
+    time_scale : TimeScale
+        The first-order fit that set the window.
+    pilot : dict
+        ``n_samples``, ``seeds``, ``source`` ("ic_se" or "seeds") and per
+        parameter ``max_ic`` and ``ic_se`` of the pilot run.
+    fit : dict
+        Per parameter the least-squares ``estimate``, its ``std_error``
+        (robust, :attr:`dynia.fit.FitResult.std_errors_hac`), its ``range``,
+        and ``at_bound`` / ``identifiable``.
+    reasons : list of str
+        Why each setting, one sentence each.
+    notes : list of str
+        What the user should look at: ranges that exclude the fit, input
+        changes closer than a window, a time scale the record cannot resolve.
+    dt : float
+    """
+
+    n: int
+    window: float
+    percentage: float
+    n_samples: int
+    time_scale: TimeScale
+    pilot: dict
+    fit: dict
+    reasons: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+    dt: float = 1.0
+
+    def arguments(self):
+        """The ``dynia analyse`` options of this suggestion, as a list of strings."""
+        return ["--n", str(self.n), "--percentage", f"{self.percentage:g}", "--samples", str(self.n_samples)]
+
+    def to_dict(self):
+        """JSON-ready: the settings, the reasons and the evidence."""
+        scale = self.time_scale
+        return dict(
+            settings=dict(n=self.n, window=self.window, percentage=self.percentage, n_samples=self.n_samples),
+            arguments=self.arguments(),
+            time_constant=json_number(scale.time_constant),
+            first_order_fit=dict(
+                time_constant=json_number(scale.time_constant),
+                gains=[json_number(value) for value in scale.gains],
+                level=json_number(scale.level),
+                rmse=json_number(scale.rmse),
+                explained=json_number(scale.explained),
+                edge=scale.edge,
+            ),
+            pilot=_json_tree(self.pilot),
+            fit=_json_tree(self.fit),
+            reasons=list(self.reasons),
+            notes=list(self.notes),
+            dt=self.dt,
+        )
+
+    def text(self):
+        """Plain text for a terminal: the options, then why, then what to look at."""
+        lines = [
+            "suggested settings for dynia analyse: " + " ".join(self.arguments()),
+            f"  (window {self.window:g} s = 2n+1 = {2 * self.n + 1} steps of {self.dt:g} s)",
+            "why:",
+            *(f"  - {reason}" for reason in self.reasons),
+        ]
+        if self.notes:
+            lines += ["check:", *(f"  - {note}" for note in self.notes)]
+        return "\n".join(lines)
+
+
+def suggest(u, y, model, bounds, *, dt=1.0, x0="zero", ic_se_target=IC_SE_TARGET, rng=None):
+    """Propose a window, a behavioural share and a number of samples for this record and model.
+
+    The reasoning is in the module documentation; every number it rests on
+    is in the returned :class:`Suggestion`.
+
+    Parameters
+    ----------
+    u, y : array_like
+        Input (n_steps,) or (n_steps, n_inputs) and output (n_steps,), as
+        :func:`dynia.run` takes them (deviation variables when the analysis
+        uses offsets). NaN in ``y`` marks a missing value.
+    model : dynia.models.Model
+    bounds : mapping of str to (low, high)
+        The ranges the analysis would sample.
+    dt : float, default 1.0
+    x0 : {"zero", "steady"}, default "zero"
+        The analysis's initial state, used by the pilot and the fit.
+    ic_se_target : float, default 0.02
+        The Monte Carlo standard error of the IC the samples should reach.
+    rng : numpy.random.Generator or int, optional
+        Seeds of the pilot runs and of the fit's extra starts.
+
+    Returns
+    -------
+    Suggestion
+    """
+    dt, x0 = check_dt(dt), check_x0(x0)
+    u, y = _checks.record(u, y, n_inputs=model.n_inputs)
+    names, box = parameter_box(bounds, model.names, repr(model))
+    bounds = {name: (float(low), float(high)) for name, (low, high) in zip(names, box)}
+    target = _checks.open_interval(ic_se_target, "ic_se_target", 0.0, 1.0)
+    rng = np.random.default_rng(rng)
+    n_steps = y.size
+
+    scale = dominant_time_constant(u, y, dt)
+    tau = scale.time_constant
+    wanted = max(math.floor(tau / (2 * dt) + 0.5), 1)
+    n = min(wanted, (n_steps - 1) // 2)
+    gains = ", ".join(f"{gain:.3g}" for gain in scale.gains)
+    reasons = [
+        f"dominant time constant {tau:.4g} s: a first-order fit to the whole record (gain {gains}, RMS residual "
+        f"{scale.rmse:.3g}, {100 * scale.explained:.0f} % of the output's variance explained)",
+        f"window 2n+1 = {2 * n + 1} steps ({(2 * n + 1) * dt:g} s), about one time constant: centred on an input "
+        "change it holds the level before and the bend of the response, where gain and time constant act "
+        "differently; shorter windows see a line (only their ratio), longer ones mix in settled stretches",
+    ]
+    notes = []
+    if scale.edge == "fast":
+        notes.append(
+            f"the output follows the input within one sample ({dt:g} s): no time constant is resolvable at this "
+            "sampling, the window is the shortest (3 steps)"
+        )
+    elif scale.edge == "slow":
+        notes.append("the first-order fit finds a time constant as long as the record: the record may not settle")
+    if scale.explained < 0.5:
+        notes.append(
+            f"a first-order model explains only {100 * scale.explained:.0f} % of the output's variance: the time "
+            "constant, and so the window, is a rough guide"
+        )
+    if n < wanted:
+        notes.append(f"the window is capped at the record's length ({n_steps} steps); a longer record would help")
+    notes += _close_changes(u, n, dt)
+
+    d = len(names)
+    percentage = min(_MAX_PERCENTAGE, 100.0 / _RANGE_SHARE_INVERSE**d)
+    reasons.append(
+        f"percentage {percentage:g}: the behavioural set is that share of the parameter box whatever the number "
+        f"of samples, and with {d} parameter(s) {percentage:g} % spans about a tenth of each range where a window "
+        f"pins them all, so their IC can reach about 0.9 (the default 10 % spans {100 * 0.1 ** (1 / d):.0f} % of each)"
+    )
+
+    pilot = _pilot(u, y, model, bounds, dt=dt, x0=x0, n=n, percentage=percentage, rng=rng)
+    worst = max(pilot["parameters"], key=lambda name: pilot["parameters"][name]["ic_se"])
+    worst_se = pilot["parameters"][worst]["ic_se"]
+    needed = pilot["n_samples"] * (worst_se / target) ** 2
+    floor = math.ceil(_MIN_BEHAVIOURAL / (percentage / 100))
+    n_samples = max(_round_up(needed), floor)
+    source = "result.ic_se" if pilot["source"] == "ic_se" else f"spread over {len(pilot['seeds'])} seeds"
+    reasons.append(
+        f"samples {n_samples}: a pilot with {pilot['n_samples']} samples gave an IC standard error of "
+        f"{worst_se:.3f} for {worst} near its highest IC ({source}); "
+        f"it falls as 1/sqrt(N), so {pilot['n_samples']} x ({worst_se:.3f}/{target:g})^2 = {needed:.0f} reach "
+        f"{target:g}" + (f" (at least {floor}, for {_MIN_BEHAVIOURAL} behavioural sets)" if floor > needed else "")
+    )
+    for name, entry in pilot["parameters"].items():
+        if entry["max_ic"] is not None and entry["max_ic"] < 0.5:
+            notes.append(
+                f"{name}: the pilot's highest IC is {entry['max_ic']:.2f}; more samples sharpen the IC, they do not "
+                "raise it: this record may hold little information on it"
+            )
+
+    fitted = fit_segments(u, y, model, [(0, n_steps)], bounds=bounds, dt=dt, x0=x0, n_starts=3, rng=rng)
+    fit = {}
+    for name in names:
+        low, high = bounds[name]
+        estimate = fitted.parameters[name]
+        at_bound = name in fitted.at_bound
+        fit[name] = dict(
+            estimate=estimate,
+            std_error=fitted.std_errors_hac[name],
+            range=[low, high],
+            at_bound=at_bound,
+            identifiable=fitted.identifiable[name],
+        )
+        if at_bound:
+            side = "lower" if estimate - low <= high - estimate else "upper"
+            notes.append(
+                f"the range [{low:g}, {high:g}] of {name} excludes the least-squares fit: its estimate lies on the "
+                f"{side} bound {low if side == 'lower' else high:g}; widen the range beyond it"
+            )
+        elif not fitted.identifiable[name]:
+            notes.append(f"least squares on the whole record does not determine {name}: no window will pin it")
+    reasons.append(
+        "ranges: least squares on the whole record gives "
+        + ", ".join(f"{name} = {entry['estimate']:.4g} +- {entry['std_error']:.2g}" for name, entry in fit.items())
+        + (" (inside every range)" if not fitted.at_bound else "")
+    )
+    return Suggestion(
+        n=n,
+        window=(2 * n + 1) * dt,
+        percentage=percentage,
+        n_samples=int(n_samples),
+        time_scale=scale,
+        pilot=pilot,
+        fit=fit,
+        reasons=reasons,
+        notes=notes,
+        dt=dt,
+    )
+
+
+def _pilot(u, y, model, bounds, *, dt, x0, n, percentage, rng):
+    """IC standard error near each parameter's highest IC, from a pilot run (or several)."""
+    n_samples = max(_PILOT_MIN, math.ceil(_PILOT_BEHAVIOURAL / (percentage / 100)))
+    options = dict(dt=dt, x0=x0, n=n, percentage=percentage, n_samples=n_samples)
+    if "ic_error" in inspect.signature(run).parameters:
+        seeds = [int(rng.integers(2**63))]
+        result = run(u, y, model, bounds, ic_error=True, rng=seeds[0], **options)
+        ic, spread = result.ic, np.asarray(result.ic_se, dtype=float)
+        if spread.shape == (len(result.names),):
+            spread = np.repeat(spread[:, None], ic.shape[1], axis=1)
+        variance, source = spread**2, "ic_se"
+    else:
+        seeds = [int(seed) for seed in rng.integers(2**63, size=_PILOT_SEEDS)]
+        runs = np.stack([run(u, y, model, bounds, rng=seed, **options).ic for seed in seeds])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # steps where every run's IC is missing
+            ic, variance = np.nanmean(runs, axis=0), np.nanvar(runs, axis=0, ddof=1)
+        source = "seeds"
+    parameters = {}
+    for p, name in enumerate(bounds):
+        if np.isnan(ic[p]).all():
+            parameters[name] = dict(max_ic=None, ic_se=0.0)
+            continue
+        highest = float(np.nanmax(ic[p]))
+        near = ic[p] >= highest - _PEAK_MARGIN
+        parameters[name] = dict(max_ic=highest, ic_se=float(math.sqrt(np.nanmean(variance[p][near]))))
+    return dict(n_samples=n_samples, seeds=seeds, source=source, parameters=parameters)
+
+
+def _close_changes(u, n, dt):
+    """A note when a step-like input changes again within one window of an earlier change."""
+    notes = []
+    columns = u.reshape(u.shape[0], -1)
+    for column in columns.T:
+        span = float(column.max() - column.min())
+        if span == 0:
+            continue
+        changed = np.abs(np.diff(column)) > _CHANGE_SHARE * span
+        if changed.mean() >= _STEP_LIKE:
+            continue
+        changes = np.flatnonzero(changed) + 1
+        # A ramp is one change: only a change after a quiet step starts a new one.
+        starts = changes[np.r_[True, np.diff(changes) > 1]] if changes.size else changes
+        close = np.flatnonzero(np.diff(starts) < 2 * n + 1)
+        if close.size:
+            notes.append(
+                f"{close.size} input change(s) follow the previous one within a window ({(2 * n + 1) * dt:g} s), "
+                f"the first at {starts[close[0] + 1] * dt:g} s: windows there see two responses at once"
+            )
+    return notes
+
+
+def _round_up(value):
+    """``value`` rounded up to two significant digits (at least 1)."""
+    if value <= 1:
+        return 1
+    magnitude = 10 ** max(math.floor(math.log10(value)) - 1, 0)
+    return int(math.ceil(value / magnitude) * magnitude)
+
+
+def _json_tree(value):
+    if isinstance(value, dict):
+        return {key: _json_tree(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_tree(item) for item in value]
+    if isinstance(value, float):
+        return json_number(value)
+    return value

@@ -1,0 +1,266 @@
+"""dynia suggest and --window: settings from the record's own time scales, and the reasons for them."""
+
+import json
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from dynia.cli import main
+from dynia.errors import DataError, SettingsError
+from dynia.fit import fit_segments
+from dynia.models import FirstOrder
+from dynia.suggest import dominant_time_constant, parse_duration, suggest, window_half_width
+
+# A TCLab-like heater step test: 1 s sampling, about two hours, heater steps in %, a time constant of
+# 170 s, a gain of 0.6 degC/%, ambient 21 degC, sensor noise of 0.15 degC.
+TCLAB_GAIN, TCLAB_TAU = 0.6, 170.0
+TCLAB_INPUT = np.r_[np.zeros(60), np.full(1800, 60.0), np.full(1500, 25.0), np.full(1800, 80.0), np.full(2040, 40.0)]
+TCLAB_ARGS = ["--time", "time", "--input", "Q1", "--output", "T1", "--model", "first-order"]
+TCLAB_ARGS += ["--param", "K=0:2", "--param", "T=0:500", "--offset", "first"]
+
+
+def tclab_record(seed=3):
+    noise = np.random.default_rng(seed).normal(0, 0.15, TCLAB_INPUT.size)
+    return TCLAB_INPUT, 21.0 + FirstOrder().simulate([[TCLAB_GAIN, TCLAB_TAU]], TCLAB_INPUT)[0] + noise
+
+
+def write_csv(path, u, y, dt=1.0):
+    np.savetxt(path, np.column_stack([np.arange(u.size) * dt, u, y]), delimiter=",", header="time,Q1,T1", comments="")
+    return path
+
+
+@pytest.fixture(scope="module")
+def tclab(tmp_path_factory):
+    u, y = tclab_record()
+    return write_csv(tmp_path_factory.mktemp("tclab") / "step_test.csv", u, y), u, y
+
+
+def run_cli(capsys, *args):
+    status = main([str(arg) for arg in args])
+    captured = capsys.readouterr()
+    return status, captured.out, captured.err
+
+
+# ------------------------------------------------------------ durations
+
+
+@pytest.mark.parametrize(
+    "text, seconds",
+    [("60s", 60.0), ("60", 60.0), ("2min", 120.0), ("1h", 3600.0), ("1.5 h", 5400.0), ("1d", 86400.0), ("90 sec", 90)],
+)
+def test_durations_in_time_units(text, seconds):
+    assert parse_duration(text) == seconds
+
+
+@pytest.mark.parametrize("text", ["", "abc", "60 parsecs", "-5s", "0s", "1e999s", "s"])
+def test_what_is_no_duration_is_one_line_naming_the_option(text):
+    with pytest.raises(SettingsError, match="^--window ") as caught:
+        parse_duration(text, "--window")
+    assert "\n" not in str(caught.value)
+
+
+def test_the_half_window_of_a_duration():
+    assert window_half_width(60.0, 1.0, 1000) == 30
+    assert window_half_width(61.0, 2.0, 1000) == 15  # 30.5 steps: 2n+1 = 31
+    assert window_half_width(5.0, 1.0, 1000) == 3  # 2.5 rounds half up
+    assert window_half_width(3.0, 1.0, 5) == 2  # 1.5 rounds half up: 5 steps
+    with pytest.raises(SettingsError, match="at least 3 steps"):
+        window_half_width(2.9, 1.0, 1000)
+    with pytest.raises(SettingsError, match="longer than the record's 100 steps"):
+        window_half_width(201.0, 1.0, 100)
+    with pytest.raises(SettingsError, match="longer than the record's 100 steps"):
+        window_half_width(100.0, 1.0, 100)  # n = 50: 101 steps
+
+
+# ------------------------------------------------------- the time scale
+
+
+def test_the_time_constant_of_a_clean_first_order_record_is_exact():
+    u = np.repeat([0.0, 50.0, 20.0, 70.0], 600)
+    scale = dominant_time_constant(u, 3.0 + FirstOrder().simulate([[0.6, 60.0]], u, dt=2.0)[0], dt=2.0)
+    assert scale.time_constant == pytest.approx(60.0, rel=1e-4)
+    assert scale.gains[0] == pytest.approx(0.6, rel=1e-4) and scale.level == pytest.approx(3.0, abs=1e-3)
+    assert scale.explained == pytest.approx(1.0) and scale.edge is None
+
+
+def test_the_time_constant_from_noisy_data_with_gaps_and_two_inputs():
+    rng = np.random.default_rng(1)
+    u = np.column_stack([np.repeat([0.0, 1.0, 0.0, 1.0, 1.0], 400), np.repeat([0.0, 0.0, 2.0, 2.0, 0.0], 400)])
+    model = FirstOrder()
+    y = model.simulate([[2.0, 40.0]], u[:, 0])[0] - model.simulate([[0.5, 40.0]], u[:, 1])[0]
+    y = y + rng.normal(0, 0.05, y.size)
+    y[500:700] = np.nan
+    scale = dominant_time_constant(u, y)
+    assert scale.time_constant == pytest.approx(40.0, rel=0.03)
+    assert scale.gains == pytest.approx((2.0, -0.5), rel=0.03)
+
+
+def test_an_output_that_follows_at_once_or_never_settles_is_at_the_edge():
+    u = np.repeat([0.0, 1.0, 0.0, 1.0], 50)
+    assert dominant_time_constant(u, 2 * u).edge == "fast"
+    ramp = FirstOrder().simulate([[1.0, 1e6]], np.ones(200))[0]
+    assert dominant_time_constant(np.ones(200) * np.r_[0, np.ones(199)], ramp).edge == "slow"
+    with pytest.raises(DataError, match="measured values"):
+        dominant_time_constant(u, np.full(u.size, np.nan))
+
+
+# ----------------------------------------------------------- suggestions
+
+
+def test_a_range_that_excludes_the_fit_is_named():
+    u, y = tclab_record()
+    found = suggest(u[:3400], y[:3400] - y[0], FirstOrder(), {"K": (0, 2), "T": (0, 100)}, rng=1)
+    assert found.fit["T"]["at_bound"] and not found.fit["K"]["at_bound"]
+    notes = [note for note in found.notes if "excludes the least-squares fit" in note]
+    assert len(notes) == 1 and notes[0].startswith("the range [0, 100] of T") and "upper bound 100" in notes[0]
+
+
+def test_input_changes_closer_than_a_window_are_noted():
+    u = np.r_[np.zeros(100), np.ones(30), np.zeros(370), np.ones(500)]
+    y = FirstOrder().simulate([[1.0, 60.0]], u)[0] + np.random.default_rng(2).normal(0, 0.01, u.size)
+    found = suggest(u, y, FirstOrder(), {"K": (0, 3), "T": (0, 200)}, rng=1)
+    assert found.n == 30
+    close = [note for note in found.notes if "within a window" in note]
+    assert len(close) == 1 and close[0].startswith("1 input change(s)") and "first at 130 s" in close[0]
+
+
+def test_the_share_follows_the_number_of_parameters():
+    from dynia.models import FOPDT
+
+    u = np.repeat([0.0, 1.0, 0.0, 1.0], 60)
+    y = FOPDT().simulate([[2.0, 8.0, 3.0]], u)[0] + np.random.default_rng(3).normal(0, 0.02, u.size)
+    found = suggest(u, y, FOPDT(), {"K": (0, 5), "T": (0, 30), "theta": (0, 10)}, rng=1)
+    assert found.percentage == 0.1
+    assert found.n_samples >= 50 / 0.001  # at least 50 behavioural sets
+    assert found.pilot["n_samples"] == 25_000
+
+
+def test_suggested_settings_identify_the_time_constant_where_the_defaults_do_not(tclab, tmp_path, capsys):
+    """The issue's TCLab case: the defaults leave T unidentified; the suggestion identifies it."""
+    path, u, y = tclab
+    status, out, err = run_cli(capsys, "suggest", path, *TCLAB_ARGS, "--seed", "1", "--json")
+    assert status == 0 and err == ""
+    proposal = json.loads(out)
+    settings = proposal["settings"]
+    assert proposal["time_constant"] == pytest.approx(TCLAB_TAU, rel=0.02)
+    assert settings["n"] == 85 and settings["window"] == 171.0 and settings["percentage"] == 1.0
+    assert 2500 <= settings["n_samples"] <= 30_000
+    assert proposal["arguments"] == ["--n", "85", "--percentage", "1", "--samples", str(settings["n_samples"])]
+    assert proposal["command"][:2] == ["dynia", "analyse"] and "--json" not in proposal["command"]
+
+    least_squares = fit_segments(
+        u, y - y[0], FirstOrder(), [(0, u.size)], bounds={"K": (0, 2), "T": (0, 500)}, x0="zero"
+    ).parameters["T"]
+    assert proposal["fit"]["T"]["estimate"] == pytest.approx(least_squares, rel=1e-3)
+
+    def analysed(*options):
+        out = tmp_path / f"run{len(list(tmp_path.iterdir()))}"
+        status, _, _ = run_cli(
+            capsys, "analyse", path, *TCLAB_ARGS, "--seed", "2", "--no-plots", *options, "--out", out
+        )
+        assert status == 0
+        return json.loads((out / "summary.json").read_text())["parameters"]["T"]
+
+    defaults = analysed()
+    suggested = analysed(*proposal["arguments"])
+    assert defaults["max_ic"] < 0.6
+    assert suggested["max_ic"] > 0.6
+    low, high = suggested["band"]
+    assert low <= least_squares <= high
+    assert suggested["verdict"] == "identified"
+
+
+def test_suggest_prints_the_reasons_and_the_command_to_run(tclab, capsys):
+    path, _, _ = tclab
+    status, out, err = run_cli(capsys, "suggest", path, *TCLAB_ARGS, "--seed", "1")
+    assert status == 0 and err == ""
+    lines = out.splitlines()
+    assert lines[0].startswith("suggested settings for dynia analyse: --n 85 --percentage 1 --samples ")
+    assert "why:" in lines and "run:" in lines
+    assert any(line.startswith("  - dominant time constant 17") for line in lines)
+    command = lines[lines.index("run:") + 1].split()
+    assert command[:3] == ["dynia", "analyse", str(path)] and command.count("--seed") == 1
+    assert command[-2:] == ["--out", "RESULTS"]
+
+
+def test_suggest_needs_no_out_and_refuses_analysis_options(tclab, capsys):
+    path, _, _ = tclab
+    status, _, err = run_cli(capsys, "suggest", path, *TCLAB_ARGS, "--n", "5")
+    assert status == 2 and err.count("\n") == 1 and "--n" in err
+    status, _, err = run_cli(capsys, "suggest", path, "--time", "time", "--input", "Q1", "--output", "T1")
+    assert status == 2 and "--model is required" in err
+
+
+# --------------------------------------------------------------- --window
+
+
+@pytest.fixture(scope="module")
+def short_record(tmp_path_factory):
+    u = np.repeat([0.0, 1.0, 0.0, 1.0, 0.0], 40)
+    y = FirstOrder().simulate([[2.0, 10.0]], u, dt=2.0)[0] + np.random.default_rng(5).normal(0, 0.05, u.size)
+    return write_csv(tmp_path_factory.mktemp("short") / "short.csv", u, y, dt=2.0)
+
+
+SHORT_ARGS = ["--time", "time", "--input", "Q1", "--output", "T1", "--model", "first-order"]
+SHORT_ARGS += ["--param", "K=0:5", "--param", "T=0:40", "--samples", "200", "--seed", "1", "--no-plots"]
+
+
+@pytest.mark.parametrize("command, summary", [("analyse", "summary.json"), ("identify", "identified.json")])
+def test_a_window_in_time_units_becomes_n_on_the_grid_and_is_recorded(short_record, tmp_path, capsys, command, summary):
+    out = tmp_path / "out"
+    status, _, err = run_cli(capsys, command, short_record, *SHORT_ARGS, "--window", "1min", "--out", out)
+    assert status == 0, err
+    settings = json.loads((out / summary).read_text())["settings"]
+    assert settings["window"] == "1min" and settings["n"] == 15  # 60 s / (2 x 2 s)
+    assert settings["analysis"]["n"] == 15
+
+
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        (["--window", "5s"], "--window 5 s is 2.5 steps of 2 s; a window needs at least 3 steps"),
+        (["--window", "1h"], "--window 3600 s is 1801 steps of 2 s (2n+1 with n = 900), longer than the record's"),
+        (["--window", "60s", "--n", "5"], "--window and --n both set the window; give one of them"),
+        (["--window", "fortnight"], "--window must be a duration such as 60s"),
+        (["--window", "20s", "--min-points", "30"], "min_points 30 is more than a window holds"),
+    ],
+)
+def test_a_bad_window_is_one_line(short_record, tmp_path, capsys, options, message):
+    out = tmp_path / "out"
+    status, _, err = run_cli(capsys, "analyse", short_record, *SHORT_ARGS, *options, "--out", out)
+    assert status == 2 and err.count("\n") == 1
+    assert message in err
+    assert not out.exists()
+
+
+def test_window_and_n_are_exclusive_across_the_config_file(short_record, tmp_path, capsys):
+    config = tmp_path / "run.toml"
+    config.write_text("n = 5\n")
+    status, _, err = run_cli(
+        capsys, "analyse", short_record, *SHORT_ARGS, "--config", config, "--window", "20s", "--out", tmp_path / "o"
+    )
+    assert status == 2 and "--window and --n both set the window" in err
+    config.write_text('window = "20s"\n')
+    status, _, err = run_cli(capsys, "analyse", short_record, *SHORT_ARGS, "--config", config, "--out", tmp_path / "p")
+    assert status == 0, err
+    assert json.loads((tmp_path / "p" / "summary.json").read_text())["settings"]["n"] == 5
+
+
+def test_the_pilot_takes_the_ic_standard_error_of_dynia_run_when_it_offers_one(monkeypatch):
+    import dynia.suggest
+
+    real_run = dynia.suggest.run
+
+    def run_with_errors(u, y, model, bounds, *, ic_error=False, **options):
+        assert ic_error
+        result = real_run(u, y, model, bounds, **options)
+        return SimpleNamespace(names=result.names, ic=result.ic, ic_se=np.full(result.ic.shape, 0.04))
+
+    monkeypatch.setattr(dynia.suggest, "run", run_with_errors)
+    u, y = tclab_record()
+    found = suggest(u[:3400], y[:3400] - y[0], FirstOrder(), {"K": (0, 2), "T": (0, 500)}, rng=1)
+    assert found.pilot["source"] == "ic_se" and len(found.pilot["seeds"]) == 1
+    assert found.pilot["n_samples"] == 2500
+    assert found.n_samples == 10_000  # 2500 x (0.04 / 0.02)^2
+    assert "(result.ic_se)" in found.reasons[3]
