@@ -15,28 +15,10 @@ from dynia import __version__
 from dynia.cli import UsageError, _bounds, main
 from dynia.models import FirstOrder
 
-HEATING_ARGS = [
-    "--time",
-    "time",
-    "--input",
-    "u",
-    "--output",
-    "y",
-    "--model",
-    "first-order",
-    "--param",
-    "K=0:40",
-    "--param",
-    "T=0:200",
-    "--input-offset",
-    "6",
-    "--offset",
-    "first",
-    "--samples",
-    "400",
-    "--seed",
-    "1",
-]
+HEATING_ARGS = (
+    "--time time --input u --output y --model first-order --param K=0:40 --param T=0:200 "
+    "--input-offset 6 --offset first --samples 400 --seed 1"
+).split()
 
 
 def _analyse(capsys, *args):
@@ -336,24 +318,9 @@ def test_identify_recovers_a_known_model_with_a_glitch_excluded(tmp_path, capsys
         tmp_path / "data.csv",
         "time,u,y\n" + "".join(f"{k},{float(a)!r},{float(b)!r}\n" for k, (a, b) in enumerate(zip(u, y))),
     )
-    common = [
-        "--time",
-        "time",
-        "--input",
-        "u",
-        "--output",
-        "y",
-        "--model",
-        "first-order",
-        "--param",
-        "K=0:5",
-        "--param",
-        "T=0:30",
-        "--method",
-        "whole",
-        "--seed",
-        "2",
-    ]
+    common = (
+        "--time time --input u --output y --model first-order --param K=0:5 --param T=0:30 --method whole --seed 2"
+    ).split()
     assert main(["identify", str(tmp_path / "data.csv"), *common, "--out", str(tmp_path / "raw")]) == 0
     assert (
         main(["identify", str(tmp_path / "data.csv"), *common, "--exclude-flagged", "--out", str(tmp_path / "clean")])
