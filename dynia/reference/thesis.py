@@ -76,6 +76,38 @@ edge (``lhood_cumulated(0)``).
 ``ub == lb`` gives Inf/NaN IC and      Raises ``ValueError`` (``lb < ub`` needed).
 ``bins == 1`` an infinite width.       Raises ``ValueError`` (``bins >= 2``).
 =====================================  =============================================
+
+The text and its code disagree
+------------------------------
+=====================================  =============================================
+The thesis's text says                 Its code does (and this port with it)
+=====================================  =============================================
+The cost of a window is the summed     ``wCost = wMAE.^2``: the squared *mean
+squared error, SSE (sections 2.2.2,    absolute* error over the window (commented
+3 and 4.2).                            "SSE value for the window"). It ranks the
+                                       samples by the L1 norm of their errors, and
+                                       the likelihood ``1 - cost`` weights them by
+                                       it. Kept.
+Eq. 2.3 normalises the band by "the    ``IC = 1 - (CI(2) - CI(1))/(ub - lb)``: by
+maximum and minimum acceptable values  the *sampling* range. Kept. Over the
+of the parameters in the behavioural   behavioural set's own range the IC would
+set".                                  measure the shape of the behavioural values,
+                                       not their width: a set a hundredth of the
+                                       range wide reads like one spanning all of it
+                                       (notebooks/ch2_method.py draws both).
+The simulations use ``lsim`` (section  ``example_firstorder.m`` simulates with
+3).                                    forward Euler, time step 1, from a state of
+                                       70 (``lsim`` is commented out as the
+                                       "alternative simulation method"): ported
+                                       as :func:`euler_simulation`.
+=====================================  =============================================
+
+The example script, beyond the DYNIA files: :func:`euler_simulation` is its
+Monte Carlo simulation loop, :func:`plot_parameter_estimation` its
+identifiability plot (``pcolor`` with ``shading flat``), and
+:func:`moving_window_from_costs` is ``movingWindowCalcs`` for windows whose
+costs are already known, fast enough for records of tens of thousands of
+steps.
 """
 
 import math
@@ -86,6 +118,9 @@ from ..errors import SettingsError
 
 __all__ = [
     "moving_window_calcs",
+    "moving_window_from_costs",
+    "euler_simulation",
+    "plot_parameter_estimation",
     "run_dynia",
     "select_best_parameters",
     "calc_likelihood",
@@ -193,12 +228,17 @@ def _check_port_arguments(TIME, par, lb, ub, ns, mct, y, bins, percentage, n):
         raise SettingsError(f"par must have shape (ns,) = ({ns},); got {par.shape}")
     if y.shape != (TIME,):
         raise SettingsError(f"y must have shape (TIME,) = ({TIME},); got {y.shape}")
+    if n < 0 or TIME < 2 * n or TIME < 1:
+        raise SettingsError(f"the MATLAB windows need 0 <= n and TIME >= 2n (and TIME >= 1); got TIME={TIME}, n={n}")
+    _check_window_settings(lb, ub, ns, bins, percentage)
+
+
+def _check_window_settings(lb, ub, ns, bins, percentage):
+    """Raise a clear ``ValueError`` for a range, bin count or percentage the MATLAB cannot use."""
     if not lb < ub:
         raise SettingsError(f"lb must be below ub; got lb={lb}, ub={ub}")
     if bins < 2:
         raise SettingsError(f"bins must be at least 2 (the bin width is (ub-lb)/(bins-1)); got {bins}")
-    if n < 0 or TIME < 2 * n or TIME < 1:
-        raise SettingsError(f"the MATLAB windows need 0 <= n and TIME >= 2n (and TIME >= 1); got TIME={TIME}, n={n}")
     rows = ns * (percentage / 100)
     if rows != math.floor(rows):
         raise SettingsError(
@@ -342,3 +382,208 @@ def conf_limits(par_sorted, count_max, conf_level):
     c2 = 1 - c1
     cli = [math.floor(c1 * (count_max - 1)), math.floor(c2 * (count_max - 1))]
     return np.array([par_sorted[cli[0]], par_sorted[cli[1]]])
+
+
+def moving_window_from_costs(wCost, par, lb, ub, ns, bins, percentage, *, conf_level=90):
+    """``movingWindowCalcs`` for windows whose costs are given: the rest of its loop body, window by window.
+
+    The cost loop of :func:`moving_window_calcs` runs in Python over every sample of every window, which
+    is slow for long records. Given each window's costs ``wMAE.^2`` (for instance from
+    :func:`dynia.analysis.window_costs`, which computes them as the MATLAB does, bit for bit), this runs
+    the rest of the loop body: ``selectBestParameters``, ``runDynia`` and the information content. It
+    skips only ``cumulLikelihood``'s ``lhood_c_all``, which nothing reads. For the same costs it returns
+    what :func:`moving_window_calcs` returns.
+
+    Parameters
+    ----------
+    wCost : array_like, shape (n_windows, ns)
+        Cost of every sample in every window; NaN ranks last, as MATLAB's ``sort`` puts it.
+    par, lb, ub, ns, bins, percentage, conf_level
+        As :func:`moving_window_calcs`.
+
+    Returns
+    -------
+    IC : ndarray, shape (n_windows,)
+    CI_t : ndarray, shape (n_windows, 2)
+    gradient_data : ndarray, shape (bins, n_windows)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dynia.analysis import window_costs
+    >>> rng = np.random.default_rng(0)
+    >>> par = rng.uniform(0, 1, 50)
+    >>> mct = par[:, None] * np.ones((50, 30))
+    >>> y = 0.5 * np.ones(30)
+    >>> fast = moving_window_from_costs(window_costs(y, mct, 2, 0, 30), par, 0, 1, 50, 5, 10)
+    >>> slow = moving_window_calcs(30, par, 0, 1, 50, mct, y, 5, 10, 2)
+    >>> all(np.array_equal(a, b) for a, b in zip(fast, slow))
+    True
+    """
+    wCost = np.asarray(wCost, dtype=float)
+    par = np.asarray(par, dtype=float)
+    if wCost.ndim != 2 or wCost.shape[1] != ns:
+        raise SettingsError(f"wCost must have shape (n_windows, ns) = (..., {ns}); got {wCost.shape}")
+    if par.shape != (ns,):
+        raise SettingsError(f"par must have shape (ns,) = ({ns},); got {par.shape}")
+    _check_window_settings(lb, ub, ns, bins, percentage)
+
+    n_windows = wCost.shape[0]
+    IC = np.zeros(n_windows)
+    CI_t = np.zeros((n_windows, 2))
+    gradient_data = np.zeros((bins, n_windows))
+    count_max = math.floor(ns * (percentage / 100))
+    for t in range(n_windows):
+        best_mat, _ = select_best_parameters(wCost[t], par, count_max)
+        lhood = calc_likelihood(best_mat)
+        par_sorted_indices = np.argsort(best_mat[:, 1], kind="stable")
+        par_sorted = best_mat[par_sorted_indices, 1]
+        # cumulLikelihood's running sum, in the same order (numpy's cumsum adds left to right).
+        lhood_cumulated = np.cumsum(lhood[par_sorted_indices])
+        gradient_vec = cld_gradient(bins, ub, lb, par_sorted, lhood_cumulated, count_max)
+        CI = conf_limits(par_sorted, count_max, conf_level)
+        CI_t[t] = CI
+        IC[t] = 1 - (CI[1] - CI[0]) / (ub - lb)
+        gradient_data[:, t] = gradient_vec[:, 0]
+    return IC, CI_t, gradient_data
+
+
+def euler_simulation(params, u, *, x=70.0, return_state=False):
+    """The Monte Carlo simulator of ``example_firstorder.m``: forward Euler, time step 1, from ``x = 70``.
+
+    For every sample the script builds ``sys = ss(tf(b1_mc(k), [a1_mc(k) 1]))``, takes
+    ``[a, b, c, d] = ssdata(sys)`` and runs::
+
+        x = 70;
+        for i = 1:size
+            x_d = a * x + b * u(i);
+            x = x + x_d;            % time step = 1
+            mct(k,i) = c*x;
+        end
+
+    This port runs the same three lines for all samples at once, with the controllable canonical
+    realisation of ``K/(T s + 1)``: ``a = -1/T``, ``b = 1``, ``c = K/T``. MATLAB's ``ss`` balances the
+    realisation it builds, which may rescale the state and with it what a start at 70 means; the
+    dynamics and the steady state do not depend on the realisation.
+
+    Compared with the exact, zero-order-hold simulation of :class:`dynia.models.FirstOrder`:
+
+    * the output at step i already answers ``u(i)``, a lead of one step (the exact output at step i
+      answers the inputs up to step i-1);
+    * the pole is ``1 - 1/T`` instead of ``exp(-1/T)``: the response is too fast, oscillates for
+      T < 1 and grows without bound for T < 0.5 (to inf, then NaN, as in MATLAB);
+    * every simulation starts from the state ``x``, whatever the data did;
+    * the steady state, ``K*u``, is exact.
+
+    Parameters
+    ----------
+    params : array_like, shape (ns, 2)
+        Gain K (the script's ``b1_mc``) and time constant T (``a1_mc``) of each sample, the column
+        order of :class:`dynia.models.FirstOrder`.
+    u : array_like, shape (TIME,)
+        Input, one value per step.
+    x : float or array_like of shape (ns,), default 70.0
+        State before the first step.
+    return_state : bool, default False
+        Also return the state after the last step, to continue on the next piece of a long record.
+
+    Returns
+    -------
+    mct : ndarray, shape (ns, TIME)
+        Simulated output of every sample.
+    x : ndarray, shape (ns,)
+        The final state (only with ``return_state=True``).
+
+    Examples
+    --------
+    >>> euler_simulation([[2.0, 1.0], [2.0, 3.0]], [35.0, 35.0, 35.0]).round(2)
+    array([[70.  , 70.  , 70.  ],
+           [54.44, 59.63, 63.09]])
+    >>> bool(np.isnan(euler_simulation([[2.0, 0.1]], np.full(500, 35.0))[0, -1]))
+    True
+    """
+    params = np.asarray(params, dtype=float)
+    u = np.asarray(u, dtype=float)
+    if params.ndim != 2 or params.shape[1] != 2:
+        raise SettingsError(f"params must have shape (ns, 2), columns K and T; got {params.shape}")
+    if u.ndim != 1:
+        raise SettingsError(f"u must be 1-D (TIME,); got shape {u.shape}")
+    ns = params.shape[0]
+    x = np.array(np.broadcast_to(np.asarray(x, dtype=float), (ns,)))
+    mct = np.zeros((ns, u.size))
+    with np.errstate(divide="ignore", over="ignore", invalid="ignore"):  # T = 0 and T < 0.5 overflow, as in MATLAB
+        a = -1.0 / params[:, 1]
+        b = 1.0
+        c = params[:, 0] / params[:, 1]
+        for i in range(u.size):
+            x_d = a * x + b * u[i]
+            x = x + x_d
+            mct[:, i] = c * x
+    return (mct, x) if return_state else mct
+
+
+def plot_parameter_estimation(time, CI_t, gradient_data, lb, ub, bins, *, ax=None):
+    """The example script's identifiability plot ("Parameter estimation plot"), drawn as MATLAB draws it.
+
+    The script runs::
+
+        plot(time, CI(:, 1), time, CI(:, 2)); hold on
+        colormap(flipud(gray))
+        y_step = (ub-lb)/(bins-1); y_range = lb:y_step:ub;
+        pcolor(time, y_range, gradient_data); shading flat
+        axis([time(1), time(size), lb, ub])
+
+    ``pcolor`` with flat shading colours the cell between rows i and i+1 and columns j and j+1 with
+    ``gradient_data(i, j)``: row i is drawn from ``lb + (i-1)*y_step`` to ``lb + i*y_step``, and the
+    last row (bin) and the last column (step) are not drawn. The colour limits are the data's minimum
+    and maximum (MATLAB's automatic ``CLim``), so where ``cld_gradient`` left negative entries (empty
+    bins) zero is light grey, not white. The limits are drawn over the shading here; in MATLAB the
+    surface may hide them.
+
+    Parameters
+    ----------
+    time : array_like, shape (TIME,)
+        The x values of the steps.
+    CI_t : array_like, shape (TIME, 2)
+        Lower and upper limit of every step.
+    gradient_data : array_like, shape (bins, TIME)
+        As :func:`moving_window_calcs` returns it.
+    lb, ub : float
+        Sampling range of the parameter.
+    bins : int
+        Number of gradient bins.
+    ax : matplotlib.axes.Axes, optional
+        Where to draw; a new figure's axes by default.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    import matplotlib.pyplot as plt
+
+    time = np.asarray(time, dtype=float)
+    CI_t = np.asarray(CI_t, dtype=float)
+    gradient_data = np.asarray(gradient_data, dtype=float)
+    if gradient_data.shape != (bins, time.size) or CI_t.shape != (time.size, 2):
+        raise SettingsError(
+            f"gradient_data must be (bins, TIME) = ({bins}, {time.size}) and CI_t (TIME, 2); "
+            f"got {gradient_data.shape} and {CI_t.shape}"
+        )
+    ax = ax if ax is not None else plt.figure().add_subplot()
+    y_range = lb + (ub - lb) / (bins - 1) * np.arange(bins)
+    ax.pcolormesh(
+        time,
+        y_range,
+        gradient_data[:-1, :-1],
+        shading="flat",
+        cmap="Greys",
+        vmin=np.nanmin(gradient_data),
+        vmax=np.nanmax(gradient_data),
+        rasterized=True,
+    )
+    ax.plot(time, CI_t[:, 0], color="tab:blue", linewidth=1, label="lower limit")
+    ax.plot(time, CI_t[:, 1], color="tab:green", linewidth=1, label="upper limit")
+    ax.axis([time[0], time[-1], lb, ub])
+    ax.set_xlabel("Time Step")
+    ax.set_ylabel("Parameter Value")
+    return ax
