@@ -3,7 +3,9 @@
 Shapes follow the package convention (see :mod:`dynia.analysis`):
 ``ic`` (n_params, n_steps), ``ci`` (n_params, n_steps, 2) as [lower, upper],
 ``gradient`` (n_params, n_bins, n_steps), ``bin_centres`` (n_params, n_bins),
-``samples`` (n_samples, n_params), ``bounds`` (n_params, 2).
+``samples`` (n_samples, n_params), ``bounds`` (n_params, 2); the optional
+Monte Carlo errors ``ic_se`` (n_params, n_steps) and ``ci_se`` (n_params,
+n_steps, 2).
 """
 
 from dataclasses import dataclass, field
@@ -53,6 +55,13 @@ class DyniaResult:
         the index had a time zone), see :func:`dynia.frames.unpack`. When
         present, :meth:`to_dataframe` and :meth:`to_xarray` carry it and the
         plots draw against it. None otherwise.
+    ic_se : ndarray (n_params, n_steps) or None
+        Monte Carlo standard error of ``ic``: how much the IC would change
+        with another sample of the same size (``dynia.run(...,
+        ic_error=True)``, batch means, see :mod:`dynia.engine.windows`).
+        NaN where ``ic`` is. None when not estimated.
+    ci_se : ndarray (n_params, n_steps, 2) or None
+        The same for the lower and upper limit.
     """
 
     names: tuple
@@ -66,6 +75,8 @@ class DyniaResult:
     settings: dict = field(default_factory=dict)
     verdicts: dict | None = None
     timestamps: np.ndarray | None = None
+    ic_se: np.ndarray | None = None
+    ci_se: np.ndarray | None = None
 
     def index(self, name):
         """Position of parameter ``name`` on the parameter axis."""
@@ -221,8 +232,9 @@ class DyniaResult:
     def to_dataframe(self):
         """Long table: one row per (time, parameter) with ic, lower and upper.
 
-        With :attr:`timestamps` a ``timestamp`` column follows ``time``.
-        Needs pandas (``pip install dynia[pandas]``).
+        With :attr:`timestamps` a ``timestamp`` column follows ``time``; with
+        the Monte Carlo errors, columns ``ic_se``, ``lower_se`` and
+        ``upper_se`` follow. Needs pandas (``pip install dynia[pandas]``).
         """
         try:
             import pandas as pd
@@ -230,6 +242,11 @@ class DyniaResult:
             raise ImportError("to_dataframe needs pandas: pip install 'dynia[pandas]'") from None
         n_params, n_steps = self.ic.shape
         stamps = {} if self.timestamps is None else {"timestamp": np.tile(self.timestamps, n_params)}
+        errors = {}
+        if self.ic_se is not None:
+            errors = dict(
+                ic_se=self.ic_se.ravel(), lower_se=self.ci_se[:, :, 0].ravel(), upper_se=self.ci_se[:, :, 1].ravel()
+            )
         return pd.DataFrame(
             {
                 "time": np.tile(self.time, n_params),
@@ -238,13 +255,16 @@ class DyniaResult:
                 "ic": self.ic.ravel(),
                 "lower": self.ci[:, :, 0].ravel(),
                 "upper": self.ci[:, :, 1].ravel(),
+                **errors,
             }
         )
 
     def plot_information_content(self, name, ax=None):
         """Information content of ``name`` over time (thesis Figures 2.8, 3.3, ...).
 
-        Returns the matplotlib Axes. A long record is drawn through
+        With :attr:`ic_se`, IC +- 2 standard errors is shaded grey: where
+        the shading crosses a threshold, more samples could change the
+        verdict. Returns the matplotlib Axes. A long record is drawn through
         :func:`dynia.plotting.envelope`, so its memory does not grow with it.
         """
         import matplotlib.pyplot as plt
@@ -252,6 +272,18 @@ class DyniaResult:
         p = self.index(name)
         ax = ax if ax is not None else plt.figure().add_subplot()
         axis = self._plot_axis(ax)
+        if self.ic_se is not None:
+            # The envelope of each edge: the lower edge's minima and the upper edge's maxima stay in view.
+            low_time, low = envelope(axis, self.ic[p] - 2 * self.ic_se[p])
+            high_time, high = envelope(axis, self.ic[p] + 2 * self.ic_se[p])
+            ax.fill_between(
+                np.union1d(low_time, high_time),
+                np.interp(np.union1d(low_time, high_time), low_time, low),
+                np.interp(np.union1d(low_time, high_time), high_time, high),
+                color="0.8",
+                linewidth=0,
+                label="IC +- 2 standard errors",
+            )
         ax.plot(*envelope(axis, self.ic[p]), color="k", linewidth=1)
         ax.set_ylim(0, 1)
         ax.set_xlim(axis[0], axis[-1])

@@ -133,6 +133,17 @@ class AnalysisSettings:
         Threads (None: every core). Results do not depend on it.
     dt : float, default 1.0
         Sample time of the record.
+    ic_error : bool, default False
+        Also estimate the Monte Carlo standard errors of IC and limits
+        (``result.ic_se``, ``result.ci_se``; batch means, see
+        :mod:`dynia.engine.windows`). Not for the mcat flavour.
+    target_se : float or None, default None
+        With :func:`dynia.run`: add samples until the largest IC standard
+        error of the steps that matter is below this, in (0, 1); implies
+        ``ic_error``, needs ``max_samples`` and the uniform sampler.
+    max_samples : int or None, default None
+        The budget of ``target_se``: at most this many samples, at least
+        ``n_samples``.
     """
 
     n_samples: int = 2000
@@ -148,6 +159,9 @@ class AnalysisSettings:
     engine: str = "auto"
     workers: int | None = None
     dt: float = 1.0
+    ic_error: bool = False
+    target_se: float | None = None
+    max_samples: int | None = None
 
     def __post_init__(self):
         def store(name, value):
@@ -186,9 +200,39 @@ class AnalysisSettings:
         if self.workers is not None:
             store("workers", _whole(self.workers, "workers", 1))
         store("dt", check_dt(self.dt))
+        if not isinstance(self.ic_error, bool):
+            raise SettingsError(
+                f"ic_error must be True or False; got {self.ic_error!r} ({type(self.ic_error).__name__})", "ic_error"
+            )
+        if self.target_se is not None:
+            target_se = _real(self.target_se, "target_se")
+            if not 0 < target_se < 1:
+                raise SettingsError(f"target_se is an IC standard error in (0, 1); got {target_se:g}", "target_se")
+            store("target_se", target_se)
+            store("ic_error", True)  # the target is on the error, which must then be estimated
+        if self.max_samples is not None:
+            store("max_samples", _whole(self.max_samples, "max_samples", self.n_samples))
         self._check_combinations()
 
     def _check_combinations(self):
+        if (self.target_se is None) != (self.max_samples is None):
+            raise SettingsError(
+                "target_se and max_samples go together: the target of the Monte Carlo error and the budget of "
+                "samples that may be spent on it",
+                "target_se" if self.max_samples is None else "max_samples",
+            )
+        if self.ic_error and self.flavour == "mcat":
+            raise SettingsError(
+                "ic_error is not available for the mcat flavour yet (its likelihood carries state from window "
+                "to window); use flavour 'thesis' or 'weighted'",
+                "ic_error",
+            )
+        if self.target_se is not None and self.sampler != "uniform":
+            raise SettingsError(
+                f"target_se adds samples to the first ones, which only the uniform sampler can do (a Latin "
+                f"hypercube or Sobol design does not extend, an adaptive one is redrawn); got sampler {self.sampler!r}",
+                "target_se",
+            )
         if self.sampler in ADAPTIVE_SAMPLERS:
             if self.flavour == "mcat":
                 raise SettingsError(

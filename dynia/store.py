@@ -10,11 +10,12 @@ The Dataset
 Dimensions ``parameter``, ``time``, ``side``, ``bin`` and ``sample``;
 variables ``ic`` (parameter, time), ``ci`` (parameter, time, side),
 ``gradient`` (parameter, bin, time), ``bin_centres`` (parameter, bin),
-``samples`` (sample, parameter) and ``bounds`` (parameter, side).
-Coordinates: ``parameter`` (the names), ``time`` (seconds), ``side``
-("lower", "upper": ``ci.sel(side="lower")`` is the lower limit, and for
-``bounds`` the low end of the range) and, when the result has timestamps,
-``timestamp`` (datetime64[ns], along ``time``).
+``samples`` (sample, parameter) and ``bounds`` (parameter, side); when the
+result has its Monte Carlo errors, ``ic_se`` (parameter, time) and ``ci_se``
+(parameter, time, side) too. Coordinates: ``parameter`` (the names),
+``time`` (seconds), ``side`` ("lower", "upper": ``ci.sel(side="lower")``
+is the lower limit, and for ``bounds`` the low end of the range) and, when
+the result has timestamps, ``timestamp`` (datetime64[ns], along ``time``).
 
 Settings and verdicts are the JSON attributes ``settings`` and ``verdicts``
 (``"null"`` for a result without verdicts). The JSON is plain but for
@@ -70,6 +71,11 @@ _ARRAYS = {
     "samples": ("sample", "parameter"),
     "bounds": ("parameter", "side"),
 }
+# Written when the result has them (not None), read back when the file has them.
+_OPTIONAL_ARRAYS = {
+    "ic_se": ("parameter", "time"),
+    "ci_se": ("parameter", "time", "side"),
+}
 _COORDINATES = ("parameter", "time", "side", "timestamp")
 _SIDES = ("lower", "upper")
 
@@ -98,6 +104,11 @@ def to_xarray(result):
     if result.timestamps is not None:
         coords["timestamp"] = ("time", np.asarray(result.timestamps, dtype="datetime64[ns]"))
     variables = {name: (dims, getattr(result, name)) for name, dims in _ARRAYS.items()}
+    variables.update(
+        (name, (dims, getattr(result, name)))
+        for name, dims in _OPTIONAL_ARRAYS.items()
+        if getattr(result, name) is not None
+    )
     settings = {}
     for key, value in result.settings.items():
         if isinstance(value, np.ndarray):
@@ -196,6 +207,9 @@ def load(path):
         is_variable = isinstance(value, dict) and value.keys() == {_VARIABLE}
         settings[key] = dataset[value[_VARIABLE]].values if is_variable else value
     arrays = {key: dataset[key].transpose(*dims).values for key, dims in _ARRAYS.items()}
+    arrays.update(
+        (key, dataset[key].transpose(*dims).values) for key, dims in _OPTIONAL_ARRAYS.items() if key in dataset
+    )
     timestamps = None
     if "timestamp" in dataset.variables:
         stamps = dataset["timestamp"]

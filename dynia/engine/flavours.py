@@ -5,6 +5,11 @@
 :mod:`dynia.engine.kernels` (:class:`CompiledFlavour`), bit for bit alike;
 importance-weighted samples take :class:`ImportanceFlavour`; ``"mcat"`` is
 :class:`McatFlavour`. See :mod:`dynia.engine.windows` for what each computes.
+
+With ``ic_error`` every analysis also reads IC and limits off each batch of
+the samples (:func:`ic_batches`, :class:`BatchedFlavour`, and the compiled
+kernel :func:`dynia.engine.kernels.analyse_windows_batched`), from which
+:func:`monte_carlo_errors` gives their standard errors.
 """
 
 import math
@@ -29,15 +34,26 @@ __all__ = [
     "flavour_analysis",
     "bin_centres_of",
     "importance_weights",
+    "ic_batches",
+    "monte_carlo_errors",
+    "IC_BATCHES",
+    "MIN_BATCH_BEHAVIOURAL",
     "ThesisFlavour",
     "WeightedFlavour",
     "CompiledFlavour",
     "ImportanceFlavour",
     "McatFlavour",
+    "BatchedFlavour",
 ]
 
 FLAVOURS = ("thesis", "mcat", "weighted")
 ENGINES = ("auto", "numba", "numpy")
+# Batches of the Monte Carlo error (see ic_batches): ten give the error's own
+# spread about 24 % (a standard deviation with 9 degrees of freedom), and a
+# batch keeps at least five behavioural sets, or the limits of the thesis
+# (sorted positions floor(c(count-1))) are the batch's extremes.
+IC_BATCHES = 10
+MIN_BATCH_BEHAVIOURAL = 5
 
 
 def compiled_engine(engine, flavour, weights=None):
@@ -56,14 +72,47 @@ def compiled_engine(engine, flavour, weights=None):
     return engine != "numpy" and supported and kernels.AVAILABLE
 
 
-def flavour_analysis(flavour, compiled, params, bounds, percentage, bins, conf_level, min_points, weights=None):
+def flavour_analysis(
+    flavour, compiled, params, bounds, percentage, bins, conf_level, min_points, weights=None, ic_error=False
+):
     """The object that analyses windows for ``flavour``, on the compiled kernels or on numpy.
 
     Compiled, it has ``analyse_rows(window_errors, measured, m, slots)``;
-    otherwise ``analyse(mae, usable)``. Either has ``count``, ``n_bins`` and
+    otherwise ``analyse(mae, usable)``. Either returns ``(ic, ci,
+    gradient)`` of the windows and has ``count``, ``n_bins`` and
     ``bin_centres``. With importance ``weights`` (n_samples,) it is an
-    :class:`ImportanceFlavour`.
+    :class:`ImportanceFlavour`. With ``ic_error`` it also has ``batches``
+    (see :func:`ic_batches`) and returns ``(ic, ci, gradient, batch_ic,
+    batch_ci)``, the IC (batches, n_params, m) and limits (batches,
+    n_params, m, 2) of every batch; the mcat flavour has no batches yet
+    (:class:`~dynia.errors.SettingsError`).
     """
+    if ic_error:
+        if flavour == "mcat":
+            raise SettingsError(
+                "ic_error is not available for the mcat flavour yet (its likelihood carries state from window "
+                "to window); use flavour 'thesis' or 'weighted'",
+                "ic_error",
+            )
+        batches = ic_batches(params.shape[0], percentage)
+        if compiled:
+            return CompiledFlavour(params, bounds, percentage, bins, conf_level, flavour, min_points, batches)
+        parts = [
+            flavour_analysis(
+                flavour,
+                False,
+                params[batch::batches],
+                bounds,
+                percentage,
+                bins,
+                conf_level,
+                min_points,
+                weights=None if weights is None else np.asarray(weights)[batch::batches],
+            )
+            for batch in range(batches)
+        ]
+        whole = flavour_analysis(flavour, False, params, bounds, percentage, bins, conf_level, min_points, weights)
+        return BatchedFlavour(whole, parts)
     if weights is not None:
         if flavour == "mcat":
             raise SettingsError(
@@ -76,6 +125,69 @@ def flavour_analysis(flavour, compiled, params, bounds, percentage, bins, conf_l
     if compiled:
         return CompiledFlavour(params, bounds, percentage, bins, conf_level, flavour, min_points)
     return FLAVOUR_CLASSES[flavour](params, bounds, percentage, bins, conf_level)
+
+
+def ic_batches(n_samples, percentage):
+    """Batches B of the Monte Carlo error of IC for ``n_samples`` samples at ``percentage`` %.
+
+    Sample i belongs to batch ``i mod B``: interleaved, so that every batch
+    draws alike from samples drawn in stages (the adaptive samplers' uniform
+    stage and boxes). B is :data:`IC_BATCHES` (10), or the largest number
+    below it whose smallest batch (``n_samples // B`` samples) still keeps
+    :data:`MIN_BATCH_BEHAVIOURAL` (5) behavioural sets,
+    ``floor(n_samples//B * percentage/100)``.
+
+    Raises
+    ------
+    SettingsError
+        When not even 2 batches keep 5 behavioural sets each: the samples
+        are too few for an error estimate (raise n_samples or percentage).
+
+    Examples
+    --------
+    >>> ic_batches(2000, 10), ic_batches(50_000, 0.1), ic_batches(300, 10)
+    (10, 10, 6)
+    """
+    for batches in range(IC_BATCHES, 1, -1):
+        if math.floor(n_samples // batches * (percentage / 100)) >= MIN_BATCH_BEHAVIOURAL:
+            return batches
+    raise SettingsError(
+        f"ic_error needs at least 2 batches of {MIN_BATCH_BEHAVIOURAL} behavioural sets; percentage={percentage:g} "
+        f"of n_samples={n_samples} keeps {math.floor(n_samples * (percentage / 100))} in all (raise n_samples or "
+        "percentage)",
+        "ic_error",
+    )
+
+
+def monte_carlo_errors(batch_ic, batch_ci):
+    """Standard errors of IC and limits from their batch estimates (batch means).
+
+    The estimate from all n samples varies about as much as one from a
+    batch of n/B samples does divided by B (the variance of these
+    estimators falls as 1/n), so the standard error is the standard
+    deviation of the B batch estimates (ddof 1) over sqrt(B). NaN where the
+    IC is (a window with too few measured points); 0 where every batch
+    agrees.
+
+    Parameters
+    ----------
+    batch_ic : ndarray (B, n_params, m)
+    batch_ci : ndarray (B, n_params, m, 2)
+
+    Returns
+    -------
+    ic_se : ndarray (n_params, m)
+    ci_se : ndarray (n_params, m, 2)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> ic_se, ci_se = monte_carlo_errors(np.array([0.5, 0.7]).reshape(2, 1, 1), np.zeros((2, 1, 1, 2)))
+    >>> round(float(ic_se[0, 0]), 6), ci_se.tolist()
+    (0.1, [[[0.0, 0.0]]])
+    """
+    root = math.sqrt(batch_ic.shape[0])
+    return np.std(batch_ic, axis=0, ddof=1) / root, np.std(batch_ci, axis=0, ddof=1) / root
 
 
 def _chunk_arrays(n_params, n_bins, rows):
@@ -116,19 +228,27 @@ class ThesisFlavour:
         self.bin_centres = bin_centres_of(bounds, bins)
 
     def analyse(self, mae, usable):
+        return self._read_off(mae, usable, self.n_bins)
+
+    def band(self, mae, usable):
+        """``(ic, ci)`` of :meth:`analyse` without the gradient."""
+        return self._read_off(mae, usable, 0)[:2]
+
+    def _read_off(self, mae, usable, n_bins):
         with np.errstate(over="ignore"):  # an error beyond 1e154 costs inf: still the worst
             cost = mae**2
         cost[~usable] = 0.0  # any finite value: these windows are blanked below
         selected = lowest_stable(cost, self.count)
         weights = cld.likelihood(np.take_along_axis(cost, selected, axis=1))
         rows = selected.shape[0]
-        ic, ci, gradient = _chunk_arrays(self.columns.shape[0], self.n_bins, rows)
+        ic, ci, gradient = _chunk_arrays(self.columns.shape[0], n_bins, rows)
         for p, column in enumerate(self.columns):
             values = column[selected]
             low, high = self.bounds[p]
             ci[p] = self._limits(values, weights)
             ic[p] = 1 - (ci[p, :, 1] - ci[p, :, 0]) / (high - low)
-            gradient[p] = cld.binned_mass(values, weights, low, high, self.bins).T
+            if n_bins:
+                gradient[p] = cld.binned_mass(values, weights, low, high, self.bins).T
         return _blank_unusable(ic, ci, gradient, usable)
 
     def _limits(self, values, weights):
@@ -143,9 +263,14 @@ class WeightedFlavour(ThesisFlavour):
 
 
 class CompiledFlavour:
-    """The thesis and weighted flavours on the compiled kernel :func:`dynia.kernels.analyse_windows`."""
+    """The thesis and weighted flavours on the compiled kernel :func:`dynia.kernels.analyse_windows`.
 
-    def __init__(self, params, bounds, percentage, bins, conf_level, flavour, min_points):
+    With ``batches`` > 0 (see :func:`ic_batches`) on
+    :func:`dynia.kernels.analyse_windows_batched`, which also reads IC and
+    limits off each batch of samples, from the same window costs.
+    """
+
+    def __init__(self, params, bounds, percentage, bins, conf_level, flavour, min_points, batches=0):
         reference = ThesisFlavour(params, bounds, percentage, bins, conf_level)
         self.count = reference.count
         self.columns = reference.columns
@@ -153,18 +278,30 @@ class CompiledFlavour:
         self.bin_centres = reference.bin_centres
         self.lows = np.ascontiguousarray(bounds[:, 0])
         self.highs = np.ascontiguousarray(bounds[:, 1])
-        lower_share = (1 - conf_level / 100) / 2
-        self.positions = np.array(
-            [math.floor(lower_share * (self.count - 1)), math.floor((1 - lower_share) * (self.count - 1))],
-            dtype=np.int64,
-        )
+        self.conf_level = conf_level
+        self.positions = self._positions(self.count)
         self.levels = np.array([(100 - conf_level) / 200, (100 + conf_level) / 200])
         self.weighted = flavour == "weighted"
         self.min_points = float(min_points)
+        self.batches = batches
+        n_samples = params.shape[0]
+        # Batch b holds samples b, b + batches, ...: its size and count as ThesisFlavour would find them.
+        self.batch_counts = np.array(
+            [math.floor(len(range(b, n_samples, batches)) * (percentage / 100)) for b in range(batches)],
+            dtype=np.int64,
+        )
+        self.batch_positions = np.array([self._positions(count) for count in self.batch_counts], dtype=np.int64)
+
+    def _positions(self, count):
+        lower_share = (1 - self.conf_level / 100) / 2
+        return np.array(
+            [math.floor(lower_share * (count - 1)), math.floor((1 - lower_share) * (count - 1))], dtype=np.int64
+        )
 
     def analyse_rows(self, window_errors, measured, m, slots):
-        ic, ci, gradient = _chunk_arrays(self.columns.shape[0], self.n_bins, m)
-        kernels.analyse_windows(
+        n_params = self.columns.shape[0]
+        ic, ci, gradient = _chunk_arrays(n_params, self.n_bins, m)
+        common = (
             window_errors,
             measured,
             m,
@@ -182,7 +319,12 @@ class CompiledFlavour:
             ci,
             gradient,
         )
-        return ic, ci, gradient
+        if not self.batches:
+            kernels.analyse_windows(*common)
+            return ic, ci, gradient
+        batch_ic, batch_ci = np.empty((self.batches, n_params, m)), np.empty((self.batches, n_params, m, 2))
+        kernels.analyse_windows_batched(*common, self.batch_counts, self.batch_positions, batch_ic, batch_ci)
+        return ic, ci, gradient, batch_ic, batch_ci
 
 
 def importance_weights(weights, n_samples):
@@ -220,6 +362,13 @@ class ImportanceFlavour:
         self.bin_centres = bin_centres_of(bounds, bins)
 
     def analyse(self, mae, usable):
+        return self._read_off(mae, usable, self.n_bins)
+
+    def band(self, mae, usable):
+        """``(ic, ci)`` of :meth:`analyse` without the gradient."""
+        return self._read_off(mae, usable, 0)[:2]
+
+    def _read_off(self, mae, usable, n_bins):
         with np.errstate(over="ignore"):
             cost = mae**2
         cost[~usable] = 0.0
@@ -233,14 +382,38 @@ class ImportanceFlavour:
         total = mass.sum(axis=1, keepdims=True)
         mass = np.where(total > 0, mass / np.where(total > 0, total, 1), prior)  # all-equal costs >= 1
         rows = order.shape[0]
-        ic, ci, gradient = _chunk_arrays(self.columns.shape[0], self.n_bins, rows)
+        ic, ci, gradient = _chunk_arrays(self.columns.shape[0], n_bins, rows)
         for p, column in enumerate(self.columns):
             values = column[order]
             low, high = self.bounds[p]
             ci[p] = cld.weighted_limits(values, mass if self.likelihood_limits else prior, self.conf_level)
             ic[p] = 1 - (ci[p, :, 1] - ci[p, :, 0]) / (high - low)
-            gradient[p] = cld.binned_mass(values, mass, low, high, self.bins).T
+            if n_bins:
+                gradient[p] = cld.binned_mass(values, mass, low, high, self.bins).T
         return _blank_unusable(ic, ci, gradient, usable)
+
+
+class BatchedFlavour:
+    """A numpy flavour that also reads IC and limits off every batch of the samples.
+
+    ``whole`` analyses all samples; ``parts[b]`` the samples of batch b
+    (b, b + B, ..., see :func:`ic_batches`), each a flavour of its own with
+    its own behavioural count (importance weights renormalised within the
+    batch). ``analyse(mae, usable)`` returns ``(ic, ci, gradient, batch_ic,
+    batch_ci)``; every batch's numbers are those of its samples analysed
+    alone, bit for bit, as on the compiled kernel.
+    """
+
+    def __init__(self, whole, parts):
+        self.whole = whole
+        self.parts = parts
+        self.batches = len(parts)
+        self.count, self.n_bins, self.bin_centres = whole.count, whole.n_bins, whole.bin_centres
+
+    def analyse(self, mae, usable):
+        ic, ci, gradient = self.whole.analyse(mae, usable)
+        bands = [part.band(mae[:, batch :: self.batches], usable) for batch, part in enumerate(self.parts)]
+        return ic, ci, gradient, np.stack([ic for ic, _ in bands]), np.stack([ci for _, ci in bands])
 
 
 class McatFlavour:

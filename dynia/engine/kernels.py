@@ -35,7 +35,7 @@ except ImportError:  # the numpy path serves
 
 AVAILABLE = numba is not None
 
-__all__ = ["AVAILABLE", "simulate_errors", "analyse_windows"]
+__all__ = ["AVAILABLE", "simulate_errors", "analyse_windows", "analyse_windows_batched"]
 
 
 def _jit(function):
@@ -349,6 +349,225 @@ def _stable_argsort(values, length, order, buffer):
 
 
 @_jit
+def _window_sums(errors, measured, t, slots, total):
+    """``total[s]`` = the errors of sample s over window t, summed left to right; returns its measured points."""
+    n_samples = errors.shape[1]
+    present = measured[t]
+    for s in range(n_samples):
+        total[s] = errors[t, s]
+    for shift in range(1, slots):
+        present += measured[t + shift]
+        row = errors[t + shift]
+        for s in range(n_samples):
+            total[s] += row[s]
+    return present
+
+
+@_jit
+def _read_off(
+    cost,
+    count,
+    bound,
+    columns,
+    offset,
+    stride,
+    lows,
+    highs,
+    bins,
+    positions,
+    levels,
+    weighted,
+    t,
+    ic,
+    ci,
+    gradient,
+    with_gradient,
+    candidates,
+    scratch,
+    selected,
+    weights,
+    values,
+    order,
+    buffer,
+):
+    """Behavioural set of one window's ``cost`` and what it gives: ``ic[:, t]``, ``ci[:, t]``, ``gradient[:, :, t]``.
+
+    Sample j of ``cost`` is column ``offset + stride*j`` of ``columns``, so a
+    batch of samples (every stride-th from offset) is read off the same way
+    as all of them. Without ``with_gradient`` the gradient is left alone.
+    Returns the count-th smallest cost.
+    """
+    n_params = columns.shape[0]
+    threshold = _behavioural(cost, count, bound, candidates, scratch, selected)
+    lowest = np.inf
+    for i in range(count):
+        weights[i] = 1.0 - cost[selected[i]]
+        lowest = min(lowest, weights[i])
+    if lowest < 0:
+        for i in range(count):
+            weights[i] = weights[i] - lowest
+    weight_total = 0.0
+    for i in range(count):
+        weight_total += weights[i]
+    if weight_total == 0:
+        for i in range(count):
+            weights[i] = 1.0
+        weight_total = float(count)
+    for i in range(count):
+        weights[i] = weights[i] / weight_total
+
+    for p in range(n_params):
+        low, high = lows[p], highs[p]
+        for i in range(count):
+            values[i] = columns[p, offset + stride * selected[i]]
+        if with_gradient:
+            for b in range(bins):
+                gradient[p, b, t] = 0.0
+            for i in range(count):
+                which = int((values[i] - low) / (high - low) * bins)
+                which = min(max(which, 0), bins - 1)
+                gradient[p, which, t] += weights[i]
+        if weighted:
+            _stable_argsort(values, count, order, buffer)
+            for side in range(2):
+                cumulative = 0.0
+                reached = 0
+                for i in range(count):
+                    cumulative += weights[order[i]]
+                    if cumulative < levels[side]:
+                        reached += 1
+                ci[p, t, side] = values[order[min(reached, count - 1)]]
+        else:
+            for side in range(2):
+                for i in range(count):
+                    scratch[i] = values[i]
+                ci[p, t, side] = _select(scratch, count, positions[side])
+        ic[p, t] = 1 - (ci[p, t, 1] - ci[p, t, 0]) / (high - low)
+    return threshold
+
+
+@_jit
+def _next_bound(threshold):
+    """A guess of the next window's count-th cost from this one's.
+
+    The next window's count-th cost is usually close: a bound a little above
+    this one lets most windows search only a few candidates.
+    """
+    return threshold * 1.25 if threshold > 0 else threshold
+
+
+@_jit
+def _analyse_block(
+    errors,
+    measured,
+    m,
+    slots,
+    count,
+    columns,
+    lows,
+    highs,
+    bins,
+    positions,
+    levels,
+    weighted,
+    min_points,
+    ic,
+    ci,
+    gradient,
+    batch_counts,
+    batch_positions,
+    batch_ic,
+    batch_ci,
+):
+    """:func:`analyse_windows`, and the same for every batch of :func:`analyse_windows_batched`."""
+    n_samples = errors.shape[1]
+    n_batches = batch_counts.shape[0]
+    total = np.empty(n_samples)
+    batch_cost = np.empty(n_samples)
+    candidates = np.empty(n_samples, dtype=np.int64)
+    scratch = np.empty(n_samples)
+    selected = np.empty(count, dtype=np.int64)
+    weights = np.empty(count)
+    values = np.empty(count)
+    order = np.empty(count, dtype=np.int64)
+    buffer = np.empty(count, dtype=np.int64)
+    bound = np.nan
+    batch_bounds = np.full(n_batches, np.nan)
+    for t in range(m):
+        present = _window_sums(errors, measured, t, slots, total)
+        if present < min_points:
+            ic[:, t] = np.nan
+            ci[:, t, :] = np.nan
+            gradient[:, :, t] = np.nan
+            for b in range(n_batches):
+                batch_ic[b, :, t] = np.nan
+                batch_ci[b, :, t, :] = np.nan
+            continue
+        for s in range(n_samples):
+            mae = total[s] / present
+            total[s] = mae * mae
+        threshold = _read_off(
+            total,
+            count,
+            bound,
+            columns,
+            0,
+            1,
+            lows,
+            highs,
+            bins,
+            positions,
+            levels,
+            weighted,
+            t,
+            ic,
+            ci,
+            gradient,
+            True,
+            candidates,
+            scratch,
+            selected,
+            weights,
+            values,
+            order,
+            buffer,
+        )
+        bound = _next_bound(threshold)
+        # Batch b holds samples b, b + n_batches, ...: its costs are these samples' costs.
+        for b in range(n_batches):
+            size = (n_samples - b + n_batches - 1) // n_batches
+            for j in range(size):
+                batch_cost[j] = total[b + n_batches * j]
+            threshold = _read_off(
+                batch_cost[:size],
+                batch_counts[b],
+                batch_bounds[b],
+                columns,
+                b,
+                n_batches,
+                lows,
+                highs,
+                bins,
+                batch_positions[b],
+                levels,
+                weighted,
+                t,
+                batch_ic[b],
+                batch_ci[b],
+                gradient,
+                False,
+                candidates,
+                scratch,
+                selected,
+                weights,
+                values,
+                order,
+                buffer,
+            )
+            batch_bounds[b] = _next_bound(threshold)
+
+
+@_jit
 def analyse_windows(
     errors,
     measured,
@@ -376,82 +595,85 @@ def analyse_windows(
     (n_params, m, 2) and ``gradient`` (n_params, bins, m); windows with
     fewer than ``min_points`` measured points get NaN.
     """
-    n_samples = errors.shape[1]
     n_params = columns.shape[0]
-    total = np.empty(n_samples)
-    candidates = np.empty(n_samples, dtype=np.int64)
-    scratch = np.empty(n_samples)
-    selected = np.empty(count, dtype=np.int64)
-    weights = np.empty(count)
-    values = np.empty(count)
-    order = np.empty(count, dtype=np.int64)
-    buffer = np.empty(count, dtype=np.int64)
-    bound = np.nan
-    for t in range(m):
-        present = measured[t]
-        for s in range(n_samples):
-            total[s] = errors[t, s]
-        for shift in range(1, slots):
-            present += measured[t + shift]
-            row = errors[t + shift]
-            for s in range(n_samples):
-                total[s] += row[s]
-        if present < min_points:
-            ic[:, t] = np.nan
-            ci[:, t, :] = np.nan
-            gradient[:, :, t] = np.nan
-            continue
-        for s in range(n_samples):
-            mae = total[s] / present
-            total[s] = mae * mae
-        threshold = _behavioural(total, count, bound, candidates, scratch, selected)
-        # The next window's count-th cost is usually close: a bound a little
-        # above this one lets most windows search only a few candidates.
-        bound = threshold * 1.25 if threshold > 0 else threshold
+    _analyse_block(
+        errors,
+        measured,
+        m,
+        slots,
+        count,
+        columns,
+        lows,
+        highs,
+        bins,
+        positions,
+        levels,
+        weighted,
+        min_points,
+        ic,
+        ci,
+        gradient,
+        np.empty(0, dtype=np.int64),
+        np.empty((0, 2), dtype=np.int64),
+        np.empty((0, n_params, m)),
+        np.empty((0, n_params, m, 2)),
+    )
 
-        lowest = np.inf
-        for i in range(count):
-            weights[i] = 1.0 - total[selected[i]]
-            lowest = min(lowest, weights[i])
-        if lowest < 0:
-            for i in range(count):
-                weights[i] = weights[i] - lowest
-        weight_total = 0.0
-        for i in range(count):
-            weight_total += weights[i]
-        if weight_total == 0:
-            for i in range(count):
-                weights[i] = 1.0
-            weight_total = float(count)
-        for i in range(count):
-            weights[i] = weights[i] / weight_total
 
-        for p in range(n_params):
-            low, high = lows[p], highs[p]
-            for i in range(count):
-                values[i] = columns[p, selected[i]]
-            for b in range(bins):
-                gradient[p, b, t] = 0.0
-            for i in range(count):
-                which = int((values[i] - low) / (high - low) * bins)
-                which = min(max(which, 0), bins - 1)
-                gradient[p, which, t] += weights[i]
-            if weighted:
-                _stable_argsort(values, count, order, buffer)
-                for side in range(2):
-                    cumulative = 0.0
-                    reached = 0
-                    for i in range(count):
-                        cumulative += weights[order[i]]
-                        if cumulative < levels[side]:
-                            reached += 1
-                    ci[p, t, side] = values[order[min(reached, count - 1)]]
-            else:
-                for side in range(2):
-                    for i in range(count):
-                        scratch[i] = values[i]
-                    ci[p, t, side] = _select(scratch, count, positions[side])
-            ic[p, t] = 1 - (ci[p, t, 1] - ci[p, t, 0]) / (high - low)
+@_jit
+def analyse_windows_batched(
+    errors,
+    measured,
+    m,
+    slots,
+    count,
+    columns,
+    lows,
+    highs,
+    bins,
+    positions,
+    levels,
+    weighted,
+    min_points,
+    ic,
+    ci,
+    gradient,
+    batch_counts,
+    batch_positions,
+    batch_ic,
+    batch_ci,
+):
+    """:func:`analyse_windows`, and the IC and limits of every batch of samples from the same costs.
+
+    Batch b of the ``B = batch_counts.size`` batches holds samples b, b + B,
+    b + 2B, ...; its behavioural set is its ``batch_counts[b]`` lowest costs
+    and ``batch_positions[b]`` (2,) its thesis limits' positions. Writes
+    ``batch_ic`` (B, n_params, m) and ``batch_ci`` (B, n_params, m, 2), each
+    batch bit-identical to :func:`analyse_windows` on that batch's samples
+    alone; the window sums are formed once for all.
+    """
+    _analyse_block(
+        errors,
+        measured,
+        m,
+        slots,
+        count,
+        columns,
+        lows,
+        highs,
+        bins,
+        positions,
+        levels,
+        weighted,
+        min_points,
+        ic,
+        ci,
+        gradient,
+        batch_counts,
+        batch_positions,
+        batch_ic,
+        batch_ci,
+    )
 
 
 class CompiledErrors:
