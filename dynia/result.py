@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .engine.cld import binned_mass
 from .errors import SettingsError
 from .plotting import decimated_columns, envelope
 
@@ -292,7 +293,43 @@ class DyniaResult:
         ax.set_title(f"Information content of {name}")
         return ax
 
-    def plot_identifiability(self, name, ax=None, true_value=None):
+    def bin_counts(self):
+        """Number of Monte Carlo samples in each gradient bin of each parameter.
+
+        A bin's CLD gradient is the likelihood mass of the behavioural samples
+        in it, so a bin that happens to hold more samples collects more mass
+        and looks darker, whatever the data say. These counts tell how much of
+        a dark bin is the sample: uniform samples put ``n_samples / n_bins``
+        in each bin on average, give or take its square root. The bins are
+        those of the gradient: ``n_bins`` equal bins of each parameter's
+        ``bounds`` (a value on the upper bound counts in the last bin), and for
+        the ``"mcat"`` flavour, whose rows are points of the sample range, the
+        nearest of them.
+
+        Returns
+        -------
+        ndarray of int, shape (n_params, n_bins)
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> res = DyniaResult(names=("K",), samples=np.array([[0.1], [0.2], [0.9], [1.0]]),
+        ...                   bounds=np.array([[0.0, 1.0]]), time=np.arange(3.0), ic=np.zeros((1, 3)),
+        ...                   ci=np.zeros((1, 3, 2)), gradient=np.zeros((1, 4, 3)),
+        ...                   bin_centres=np.array([[0.125, 0.375, 0.625, 0.875]]))
+        >>> res.bin_counts()
+        array([[2, 0, 0, 2]])
+        """
+        n_bins = self.bin_centres.shape[1]
+        columns = np.asarray(self.samples, dtype=float).T
+        if self.settings.get("flavour") == "mcat":
+            between = (self.bin_centres[:, :-1] + self.bin_centres[:, 1:]) / 2
+            which = [np.searchsorted(edges, values) for edges, values in zip(between, columns)]
+            return np.array([np.bincount(rows, minlength=n_bins) for rows in which])
+        counts = [binned_mass(values, 1.0, low, high, n_bins) for values, (low, high) in zip(columns, self.bounds)]
+        return np.rint(counts).astype(int)
+
+    def plot_identifiability(self, name, ax=None, true_value=None, per_sample=False):
         """Confidence band over time with the CLD gradient in grey (darker = larger).
 
         The thesis's parameter identifiability plot (Figures 2.9, 3.4, ...).
@@ -300,13 +337,38 @@ class DyniaResult:
         record is drawn through :mod:`dynia.plotting` (each time bucket's
         largest gradient and the envelope of the limits), so its memory does
         not grow with it.
+
+        With ``per_sample=True`` each bin's gradient is divided by the share
+        of the samples in that bin (:meth:`bin_counts`), so that a bin that
+        holds more samples by chance does not look darker: the grey is then
+        likelihood mass per sample, relative to an even spread (1 where a
+        bin's share of the mass equals its share of the samples). Bins
+        without samples stay white.
+
+        Examples
+        --------
+        >>> import matplotlib
+        >>> matplotlib.use("Agg")
+        >>> import numpy as np
+        >>> res = DyniaResult(names=("K",), samples=np.array([[0.1], [0.2], [0.9]]), bounds=np.array([[0.0, 1.0]]),
+        ...                   time=np.arange(3.0), ic=np.zeros((1, 3)), ci=np.zeros((1, 3, 2)),
+        ...                   gradient=np.ones((1, 2, 3)), bin_centres=np.array([[0.25, 0.75]]))
+        >>> ax = res.plot_identifiability("K", per_sample=True)
+        >>> ax.collections[0].get_array().reshape(2, 3)[:, 0].tolist()  # mass 1 in each bin, 2/3 and 1/3 of the samples
+        [1.5, 3.0]
         """
         import matplotlib.pyplot as plt
 
         p = self.index(name)
+        gradient = self.gradient[p]
+        if per_sample:
+            counts = self.bin_counts()[p]
+            share = counts / counts.sum()
+            with np.errstate(divide="ignore", invalid="ignore"):
+                gradient = np.where(counts[:, None] > 0, gradient / share[:, None], 0.0)
         ax = ax if ax is not None else plt.figure().add_subplot()
         axis = self._plot_axis(ax)
-        columns_time, columns = decimated_columns(axis, self.gradient[p])
+        columns_time, columns = decimated_columns(axis, gradient)
         ax.pcolormesh(
             columns_time, self.bin_centres[p], columns, cmap="Greys", shading="nearest", vmin=0, rasterized=True
         )
@@ -319,7 +381,8 @@ class DyniaResult:
         ax.set_xlim(axis[0], axis[-1])
         ax.set_xlabel("time")
         ax.set_ylabel(name)
-        ax.set_title(f"Uncertainty band and CLD gradient of {name}")
+        shading = "CLD gradient per sample" if per_sample else "CLD gradient"
+        ax.set_title(f"Uncertainty band and {shading} of {name}")
         ax.legend(loc="upper right", fontsize="small")
         return ax
 
