@@ -301,10 +301,12 @@ class DyniaResult:
         and looks darker, whatever the data say. These counts tell how much of
         a dark bin is the sample: uniform samples put ``n_samples / n_bins``
         in each bin on average, give or take its square root. The bins are
-        those of the gradient: ``n_bins`` equal bins of each parameter's
-        ``bounds`` (a value on the upper bound counts in the last bin), and for
-        the ``"mcat"`` flavour, whose rows are points of the sample range, the
-        nearest of them.
+        those of the gradient: for the ``"thesis"`` and ``"weighted"``
+        flavours (and results without a flavour) ``n_bins`` equal bins of each
+        parameter's ``bounds``, as the engine bins (a value on the upper bound
+        counts in the last bin); for other rows (the ``"mcat"`` flavour's
+        points of the sample range, the ``"thesis-code"`` rows of
+        :func:`dynia.reference.thesis.thesis_code_result`) the nearest row.
 
         Returns
         -------
@@ -322,7 +324,7 @@ class DyniaResult:
         """
         n_bins = self.bin_centres.shape[1]
         columns = np.asarray(self.samples, dtype=float).T
-        if self.settings.get("flavour") == "mcat":
+        if self.settings.get("flavour", "thesis") not in ("thesis", "weighted"):
             between = (self.bin_centres[:, :-1] + self.bin_centres[:, 1:]) / 2
             which = [np.searchsorted(edges, values) for edges, values in zip(between, columns)]
             return np.array([np.bincount(rows, minlength=n_bins) for rows in which])

@@ -3,7 +3,9 @@
 import numpy as np
 import pytest
 
+import dynia
 from dynia import thesis
+from dynia.analysis import window_costs
 
 
 def test_conf_limits_use_floor_of_c_times_count_minus_one():
@@ -122,3 +124,82 @@ def test_moving_window_calcs_checks_shapes():
         thesis.moving_window_calcs(30, par, 0, 1, 50, mct.T, y, 10, 20, 2)
     with pytest.raises(ValueError, match="y must have shape"):
         thesis.moving_window_calcs(30, par, 0, 1, 50, mct, y[:-1], 10, 20, 2)
+
+
+def script_euler(K, T, u, x=70.0):
+    """``example_firstorder.m``'s loop for one sample, written out from the script.
+
+    ``ss(tf(K, [T 1]))``: the transfer function K/T / (s + 1/T) in controllable canonical form,
+    a = -1/T, b = 1, c = K/T; then ``x_d = a*x + b*u(i); x = x + x_d; mct(i) = c*x``.
+    """
+    numerator, denominator = np.array([0.0, K]), np.array([T, 1.0])
+    numerator, denominator = numerator / denominator[0], denominator / denominator[0]
+    a, b, c = -denominator[1], 1.0, numerator[1]
+    out = []
+    for u_i in u:
+        x_d = a * x + b * u_i
+        x = x + x_d
+        out.append(c * x)
+    return np.array(out)
+
+
+def test_euler_simulation_runs_the_scripts_loop():
+    u = np.r_[np.full(40, 35.0), np.full(20, 10.0), np.zeros(40)]
+    params = np.array([[2.0, 3.0], [0.5, 6.5], [6.0, 0.8], [3.3, 1.0]])
+    mct = thesis.euler_simulation(params, u)
+    for row, (K, T) in zip(mct, params):
+        np.testing.assert_allclose(row, script_euler(K, T, u), rtol=1e-13)
+    np.testing.assert_allclose(thesis.euler_simulation(params, u, x=0.0)[0], script_euler(2.0, 3.0, u, x=0.0))
+
+
+def test_euler_simulation_answers_the_input_one_step_early():
+    u = np.r_[np.zeros(5), np.ones(10)]
+    euler = thesis.euler_simulation([[2.0, 3.0]], u, x=0.0)[0]
+    exact = dynia.models.FirstOrder().simulate([[2.0, 3.0]], u)[0]
+    assert euler[4] == 0 and euler[5] > 0  # the step at 5 shows at 5
+    assert exact[5] == 0 and exact[6] > 0  # in the exact (zero-order hold) output one step later
+    # T = 1 puts the Euler pole 1 - 1/T at 0: the output is K u(i) itself, not K u(i-1).
+    np.testing.assert_array_equal(thesis.euler_simulation([[2.0, 1.0]], u, x=0.0)[0], 2.0 * u)
+
+
+def test_euler_simulation_diverges_below_half_a_step_and_settles_at_k_u_above():
+    u = np.full(3000, 35.0)
+    below, above = thesis.euler_simulation([[2.0, 0.49], [2.0, 0.51]], u)
+    # pole 1 - 1/0.49 = -1.04: the oscillation grows by 4 % a step, without bound
+    growth = np.abs(below[1:] / below[:-1])[-100:]
+    np.testing.assert_allclose(growth, 1 / 0.49 - 1, rtol=1e-9)
+    assert np.abs(below[-1]) > 1e40
+    assert not np.isfinite(thesis.euler_simulation([[2.0, 0.1]], u)[0, -1])  # pole -9: to inf, then NaN
+    np.testing.assert_allclose(above[-1], 2.0 * 35.0, rtol=1e-12)
+
+
+@pytest.mark.parametrize("time_constant", [0.6, 1.0, 3.0, 7.0])
+def test_euler_simulation_steady_state_is_k_times_u(time_constant):
+    u = np.full(4000, 12.5)
+    np.testing.assert_allclose(thesis.euler_simulation([[1.7, time_constant]], u)[0, -1], 1.7 * 12.5, rtol=1e-12)
+
+
+def test_moving_window_from_costs_equals_moving_window_calcs():
+    par, mct, y = _tiny_problem(seed=4, ns=60, steps=40)
+    costs = window_costs(y, mct, 3, 0, 40)
+    fast = thesis.moving_window_from_costs(costs, par, 0, 1, 60, 8, 10)
+    slow = thesis.moving_window_calcs(40, par, 0, 1, 60, mct, y, 8, 10, 3)
+    for got, expected in zip(fast, slow):
+        np.testing.assert_array_equal(got, expected)
+
+
+def test_thesis_code_result_ranks_diverged_simulations_last_as_matlab_does():
+    example = dynia.synthetic.thesis_example(1, np.random.default_rng(5))
+    samples = np.random.default_rng(6).uniform(0, 7, (100, 2))
+    samples[:4, 1] = [0.05, 0.1, 0.2, 0.3]  # poles -19 to -2.3: inf, then NaN, within the record
+    sims = thesis.euler_simulation(samples, example.u)
+    assert np.isinf(sims).any() and np.isnan(sims).any()
+    result = thesis.thesis_code_result(
+        example.y, sims, samples, [[0, 7], [0, 7]], ["K", "T"], n=10, percentage=10, bins=40
+    )
+    for p in range(2):
+        with np.errstate(over="ignore"):
+            IC, CI_t, grad = thesis.moving_window_calcs(500, samples[:, p], 0, 7, 100, sims, example.y, 40, 10, 10)
+        np.testing.assert_array_equal(result.ic[p], IC)
+        np.testing.assert_array_equal(result.ci[p], CI_t)
+        np.testing.assert_array_equal(result.gradient[p], grad)

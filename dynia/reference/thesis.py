@@ -107,7 +107,9 @@ Monte Carlo simulation loop, :func:`plot_parameter_estimation` its
 identifiability plot (``pcolor`` with ``shading flat``), and
 :func:`moving_window_from_costs` is ``movingWindowCalcs`` for windows whose
 costs are already known, fast enough for records of tens of thousands of
-steps.
+steps; :func:`thesis_code_result` runs it on given simulations and packs the
+result as a :class:`dynia.DyniaResult`, so that a notebook can draw what the
+thesis's code draws beside what the engine computes.
 """
 
 import math
@@ -121,6 +123,7 @@ __all__ = [
     "moving_window_from_costs",
     "euler_simulation",
     "plot_parameter_estimation",
+    "thesis_code_result",
     "run_dynia",
     "select_best_parameters",
     "calc_likelihood",
@@ -587,3 +590,115 @@ def plot_parameter_estimation(time, CI_t, gradient_data, lb, ub, bins, *, ax=Non
     ax.set_xlabel("Time Step")
     ax.set_ylabel("Parameter Value")
     return ax
+
+
+def thesis_code_result(y, sims, samples, bounds, names, *, n, percentage, bins, time=None, conf_level=90):
+    """DYNIA as the thesis's code computes it, on given simulations, as a :class:`dynia.DyniaResult`.
+
+    The costs of every window are those of ``movingWindowCalcs`` (:func:`dynia.analysis.window_costs`,
+    bit for bit), and each parameter goes through :func:`moving_window_from_costs`: the information
+    content and limits are the engine's ``"thesis"`` flavour's, the gradient is ``cld_gradient``'s, with
+    its quirks. Row b of the gradient holds the behavioural values in ``[lb + b w, lb + (b+1) w)`` with
+    ``w = (ub-lb)/(bins-1)``, the row ``pcolor`` draws there (:func:`plot_parameter_estimation`), so
+    ``bin_centres`` are ``lb + (b + 1/2) w``; the last row lies beyond ``ub`` and is always 0.
+
+    Parameters
+    ----------
+    y : array_like, shape (TIME,)
+        Measured output.
+    sims : array_like, shape (ns, TIME)
+        Simulated output of every sample (for instance :func:`euler_simulation`, or a model's exact
+        simulation where the thesis gives no script).
+    samples : array_like, shape (ns, n_params)
+        The parameter values analysed, one column per name.
+    bounds : array_like, shape (n_params, 2)
+        Sampling range [lb, ub] of each.
+    names : sequence of str
+        The parameters' names.
+    n, percentage, bins, conf_level
+        As :func:`moving_window_calcs`.
+    time : array_like, shape (TIME,), optional
+        Time of each step; the step number by default.
+
+    Returns
+    -------
+    dynia.DyniaResult
+        With ``settings["flavour"] == "thesis-code"``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> samples = rng.uniform(0, 1, (50, 1))
+    >>> sims = samples * np.ones((50, 30))
+    >>> res = thesis_code_result(0.5 * np.ones(30), sims, samples, [[0.0, 1.0]], ["a"], n=2, percentage=10, bins=5)
+    >>> IC, CI_t, grad = moving_window_calcs(30, samples[:, 0], 0, 1, 50, sims, 0.5 * np.ones(30), 5, 10, 2)
+    >>> np.array_equal(res.ic[0], IC), np.array_equal(res.gradient[0], grad), res.bin_centres[0].tolist()
+    (True, True, [0.125, 0.375, 0.625, 0.875, 1.125])
+    """
+    from ..result import DyniaResult
+
+    y = np.asarray(y, dtype=float)
+    sims = np.asarray(sims, dtype=float)
+    samples = np.asarray(samples, dtype=float)
+    bounds = np.asarray(bounds, dtype=float)
+    names = tuple(names)
+    ns = sims.shape[0]
+    if samples.shape != (ns, len(names)) or bounds.shape != (len(names), 2):
+        raise SettingsError(
+            f"samples must be (ns, n_params) = ({ns}, {len(names)}) and bounds ({len(names)}, 2) for names "
+            f"{names}; got {samples.shape} and {bounds.shape}"
+        )
+    if sims.shape != (ns, y.size) or y.ndim != 1:
+        raise SettingsError(f"sims must be (ns, TIME) for y of shape (TIME,); got {sims.shape} and {y.shape}")
+    steps = y.size
+    ic = np.empty((len(names), steps))
+    ci = np.empty((len(names), steps, 2))
+    gradient = np.empty((len(names), bins, steps))
+    # Costs in blocks of windows: for a month of minutes the whole (TIME, ns) table would rival the simulations.
+    block = max(1, 2**24 // max(ns, 1))
+    for start in range(0, steps, block):
+        stop = min(start + block, steps)
+        costs = _matlab_window_costs(y, sims, n, start, stop)
+        for p, (low, high) in enumerate(bounds):
+            IC, CI_t, grad = moving_window_from_costs(
+                costs, samples[:, p], low, high, ns, bins, percentage, conf_level=conf_level
+            )
+            ic[p, start:stop], ci[p, start:stop], gradient[p, :, start:stop] = IC, CI_t, grad
+    width = (bounds[:, 1] - bounds[:, 0]) / (bins - 1)
+    bin_centres = bounds[:, :1] + (np.arange(bins) + 0.5) * width[:, None]
+    settings = {"flavour": "thesis-code", "n": n, "percentage": percentage, "bins": bins, "conf_level": conf_level}
+    return DyniaResult(
+        names=names,
+        samples=samples,
+        bounds=bounds,
+        time=np.arange(float(steps)) if time is None else np.asarray(time, dtype=float),
+        ic=ic,
+        ci=ci,
+        gradient=gradient,
+        bin_centres=bin_centres,
+        settings=settings,
+    )
+
+
+def _matlab_window_costs(y, sims, n, start, stop):
+    """``wMAE.^2`` of the windows at steps [start, stop), with MATLAB's inf and NaN where a simulation diverged.
+
+    :func:`dynia.analysis.window_costs` refuses non-finite simulations; the thesis's Euler loop makes them
+    (T < 0.5). In MATLAB a window holding an inf costs inf and one holding a NaN costs NaN, and its sort
+    puts both after every finite cost, inf before NaN, as numpy's does.
+    """
+    from ..engine.windows import window_costs
+
+    finite = np.isfinite(sims)
+    if finite.all():
+        return window_costs(y, sims, n, start, stop)
+    costs = window_costs(y, np.where(finite, sims, 0.0), n, start, stop)
+    steps = y.size
+    lows = np.clip(np.arange(start, stop) - n, 0, steps)
+    highs = np.clip(np.arange(start, stop) + n + 1, 0, steps)
+    for marker, value in ((np.isinf(sims), np.inf), (np.isnan(sims), np.nan)):
+        seen = np.concatenate([np.zeros((sims.shape[0], 1), dtype=np.int64), np.cumsum(marker, axis=1)], axis=1)
+        in_window = (seen[:, highs] - seen[:, lows]).T > 0
+        costs[in_window] = value
+    return costs
