@@ -143,6 +143,7 @@ def adaptive_run(
     window=None,
     engine=None,
     workers=None,
+    ic_error=None,
     progress=False,
 ):
     """DYNIA with evaluations concentrated in the windows' low-cost regions.
@@ -164,6 +165,11 @@ def adaptive_run(
         Model evaluations in all, for every scheme.
     engine : {"auto", "numpy"}
         The weighted analysis runs on numpy; "numba" is an error.
+    ic_error : bool, default False
+        Also estimate the Monte Carlo standard errors of IC and limits, as
+        :func:`dynia.run` does, from the importance-weighted samples: each
+        batch (every B-th sample, so every stage of the sampling is in
+        every batch) is analysed with its own weights, renormalised.
     blocks : int, optional
         Number of blocks of consecutive windows that get their own box
         (default: one per 2n+1 steps, at most 50).
@@ -201,6 +207,7 @@ def adaptive_run(
         window=window,
         engine=engine,
         workers=workers,
+        ic_error=ic_error,
     )
     if settings.sampler not in SCHEMES:
         raise SettingsError(f"adaptive_run takes sampler (scheme) 'iis' or 'de'; got {settings.sampler!r}")
@@ -269,6 +276,7 @@ def adaptive_run(
         engine=settings.engine,
         workers=settings.workers,
         progress=progress,
+        ic_error=settings.ic_error,
     )
     analysed = dict(result.settings)
     result.settings.clear()

@@ -1,6 +1,7 @@
 """``dynia.run``: sample, simulate and analyse in one call, streaming over time."""
 
 import dataclasses
+import math
 import warnings
 
 import numpy as np
@@ -10,23 +11,43 @@ from .adaptive import adaptive_run
 from .engine.flavours import compiled_engine
 from .engine.kernels import CompiledErrors
 from .engine.windows import ArrayErrors, analyse_stream, default_chunk_steps
-from .errors import ModelError
+from .errors import ModelError, SettingsError
 from .frames import unpack
 from .models import LinearModel, Model, StateSpaceModel
 from .models.custom import StateErrors
 from .sampling import sample
 from .settings import ADAPTIVE_SAMPLERS, AnalysisSettings, parameter_box
-from .verdicts import assess
+from .verdicts import WEAK_BELOW, assess
 
-__all__ = ["run", "DROPPED_WARNING_SHARE", "DroppedSamplesWarning"]
+__all__ = [
+    "run",
+    "ic_se_that_matters",
+    "DROPPED_WARNING_SHARE",
+    "DroppedSamplesWarning",
+    "TargetNotReachedWarning",
+    "TARGET_MARGIN",
+    "TARGET_MIN_GROWTH",
+]
 
 # Above this share of dropped (non-finite) parameter sets the analysis no longer
 # covers the box it claims to, so the run says so.
 DROPPED_WARNING_SHARE = 0.01
 
 
+# target_se: a round asks for the count predicted to reach the target (the error falls as 1/sqrt(N))
+# times TARGET_MARGIN, since the prediction rests on an error estimate that is itself uncertain (about
+# 24 % with 10 batches), and grows the sample at least TARGET_MIN_GROWTH-fold, so that an optimistic
+# prediction costs few rounds.
+TARGET_MARGIN = 1.2
+TARGET_MIN_GROWTH = 1.5
+
+
 class DroppedSamplesWarning(UserWarning):
     """More than 1 % of the parameter sets were dropped because their simulation was not finite."""
+
+
+class TargetNotReachedWarning(UserWarning):
+    """``target_se`` was not reached within ``max_samples``: the IC's Monte Carlo error is larger than asked."""
 
 
 def run(
@@ -49,6 +70,9 @@ def run(
     window=None,
     engine=None,
     workers=None,
+    ic_error=None,
+    target_se=None,
+    max_samples=None,
     rng=None,
     progress=False,
 ):
@@ -107,6 +131,25 @@ def run(
         simulates the model in compiled code. Results are bit-identical.
     workers : int, optional
         Threads (default: every core). Results do not depend on it.
+    ic_error : bool, default False
+        Also estimate the Monte Carlo standard errors of IC and limits
+        (``result.ic_se``, ``result.ci_se``): how much they would change
+        with another sample of the same size. Batch means in the same pass,
+        at little extra cost (see :mod:`dynia.engine.windows`); the adaptive
+        samplers' errors use their importance weights.
+    target_se : float, optional
+        Add uniform samples until the largest IC standard error where it
+        matters (:func:`ic_se_that_matters`) is at most this, or
+        ``max_samples`` is reached. Every earlier sample is kept (the
+        samples are those one run with the final count would draw); each
+        round simulates them all again, so memory stays bounded and the
+        cost is about twice that of one run at the final count.
+        ``result.settings`` records ``target_se_reached`` (the error
+        reached), ``target_se_met`` and ``target_se_rounds`` (samples and
+        error of each round); a :class:`TargetNotReachedWarning` says when
+        the budget ran out first. Implies ``ic_error``.
+    max_samples : int, optional
+        The budget of ``target_se`` (required with it).
     settings : dynia.settings.AnalysisSettings, optional
         All of the above in one checked object.
 
@@ -147,6 +190,9 @@ def run(
         window=window,
         engine=engine,
         workers=workers,
+        ic_error=ic_error,
+        target_se=target_se,
+        max_samples=max_samples,
     )
     if not isinstance(model, Model):
         raise ModelError(
@@ -162,7 +208,23 @@ def run(
             ),
             timestamps,
         )
-    samples = sample(settings.sampler, settings.n_samples, box, np.random.default_rng(rng))
+    generator = np.random.default_rng(rng)
+    samples = sample(settings.sampler, settings.n_samples, box, generator)
+    if settings.target_se is None:
+        result, sims = _analyse_samples(u, y, model, names, box, samples, settings, progress)
+    else:
+        result, sims = _analyse_to_target(u, y, model, names, box, samples, settings, generator, progress)
+    with np.errstate(over="ignore", invalid="ignore"):
+        verdicts = assess(result, u=u, y=y, model=model, simulations=sims)
+    return _dated(dataclasses.replace(result, verdicts=verdicts), timestamps)
+
+
+def _analyse_samples(u, y, model, names, box, samples, settings, progress):
+    """Simulate ``samples`` and analyse them: the result and, for a whole-record model, its simulations.
+
+    Sets whose simulation is not finite are dropped (and warned about).
+    """
+    n_sampled = samples.shape[0]
     model_order = [names.index(name) for name in model.names]
     compiled = compiled_engine(settings.engine, settings.flavour)
     workers = settings.workers or _checks.default_workers()
@@ -174,13 +236,13 @@ def run(
         finite = np.isfinite(sims).all(axis=1)
     elif compiled and _compiled_state_space(model):
         # Unstable sets are found during the analysis (StateErrors.diverged), saving a simulation pass.
-        finite = np.ones(samples.shape[0], dtype=bool)
+        finite = np.ones(n_sampled, dtype=bool)
     else:
         finite = model.finite_samples(samples[:, model_order], u, dt=settings.dt, x0=settings.x0)
     while True:
         if not finite.any():
             raise ModelError(
-                f"{model!r}: the simulation of every one of the {settings.n_samples} parameter sets is not "
+                f"{model!r}: the simulation of every one of the {n_sampled} parameter sets is not "
                 "finite (NaN or overflow); check the model and the parameter ranges"
             )
         analysed = samples[finite]
@@ -199,8 +261,8 @@ def run(
             errors = model.simulate_chunks(
                 analysed[:, model_order], u, dt=settings.dt, x0=settings.x0, chunk_steps=chunk_steps
             )
-        n_dropped = int(settings.n_samples - analysed.shape[0])
-        recorded = settings.record(model, names, box, n_sampled=settings.n_samples, n_dropped=n_dropped)
+        n_dropped = int(n_sampled - analysed.shape[0])
+        recorded = settings.record(model, names, box, n_sampled=n_sampled, n_dropped=n_dropped)
         try:
             result = analyse_stream(
                 y,
@@ -221,6 +283,7 @@ def run(
                 window=settings.window,
                 engine=settings.engine,
                 workers=workers,
+                ic_error=settings.ic_error,
             )
         finally:
             if isinstance(errors, (CompiledErrors, StateErrors)):
@@ -229,10 +292,84 @@ def run(
             break
         # Some sets overflowed: their costs were not finite, so the analysis is redone without them.
         finite[np.flatnonzero(finite)[errors.diverged]] = False
-    warn_dropped(n_dropped, settings.n_samples)
-    with np.errstate(over="ignore", invalid="ignore"):
-        verdicts = assess(result, u=u, y=y, model=model, simulations=sims)
-    return _dated(dataclasses.replace(result, verdicts=verdicts), timestamps)
+    warn_dropped(n_dropped, n_sampled)
+    return result, sims
+
+
+def _analyse_to_target(u, y, model, names, box, samples, settings, generator, progress):
+    """Add uniform samples to ``samples`` until the IC's Monte Carlo error meets ``settings.target_se``.
+
+    Each round analyses every sample drawn so far (earlier ones are kept,
+    new ones are drawn from the same ``generator``, so the samples are those
+    a single run with the final count would draw). The error of IC falls as
+    1/sqrt(N): the next count is the one that would reach the target, times
+    :data:`TARGET_MARGIN`, at least :data:`TARGET_MIN_GROWTH` times the
+    current one and at most ``max_samples``.
+    """
+    rounds = []
+    while True:
+        result, sims = _analyse_samples(u, y, model, names, box, samples, settings, progress)
+        reached = ic_se_that_matters(result)
+        rounds.append([int(samples.shape[0]), reached])
+        if reached <= settings.target_se or samples.shape[0] >= settings.max_samples:
+            break
+        wanted = math.ceil(samples.shape[0] * TARGET_MARGIN * (reached / settings.target_se) ** 2)
+        count = min(settings.max_samples, max(wanted, math.ceil(samples.shape[0] * TARGET_MIN_GROWTH)))
+        samples = np.r_[samples, sample("uniform", count - samples.shape[0], box, generator)]
+    met = reached <= settings.target_se
+    result.settings.update(target_se_reached=reached, target_se_met=met, target_se_rounds=rounds)
+    if not met:
+        warnings.warn(
+            f"the largest Monte Carlo standard error of IC where it matters is {reached:.3g} with "
+            f"max_samples={settings.max_samples} samples, above target_se={settings.target_se:g}; raise "
+            "max_samples or accept the error (result.ic_se)",
+            TargetNotReachedWarning,
+            stacklevel=3,
+        )
+    return result, sims
+
+
+def ic_se_that_matters(result, threshold=WEAK_BELOW):
+    """The largest Monte Carlo standard error of IC over the steps where it can change a conclusion.
+
+    Those are, for every parameter, the steps whose IC is within two
+    standard errors of ``threshold`` or above it (``ic + 2 ic_se >=
+    threshold``: where another Monte Carlo sample could make the IC reach
+    the verdicts' threshold or fall below it), and always its highest IC
+    (the verdict is read there). Steps without IC are left out.
+
+    Parameters
+    ----------
+    result : DyniaResult
+        With ``ic_se`` (``ic_error=True``).
+    threshold : float, default 0.5
+        The IC from which a parameter counts as identified
+        (:func:`dynia.verdicts.assess`'s ``weak_below``).
+
+    Returns
+    -------
+    float
+        NaN when no step has an IC.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dynia.result import DyniaResult
+    >>> res = DyniaResult(names=("K",), samples=np.zeros((1, 1)), bounds=np.array([[0.0, 1.0]]), time=np.arange(3.0),
+    ...                   ic=np.array([[0.1, 0.45, 0.8]]), ci=np.zeros((1, 3, 2)), gradient=np.zeros((1, 2, 3)),
+    ...                   bin_centres=np.zeros((1, 2)), ic_se=np.array([[0.1, 0.03, 0.01]]))
+    >>> float(ic_se_that_matters(res))
+    0.03
+    """
+    if result.ic_se is None:
+        raise SettingsError("the result has no Monte Carlo errors: run with ic_error=True", "ic_error")
+    ic, ic_se = np.asarray(result.ic), np.asarray(result.ic_se)
+    if np.isnan(ic).all():
+        return math.nan
+    matters = np.nan_to_num(ic + 2 * ic_se, nan=-np.inf) >= threshold
+    highest = np.nanargmax(np.where(np.isnan(ic), -np.inf, ic), axis=1)
+    matters[np.arange(ic.shape[0]), highest] = True
+    return float(np.nanmax(np.where(matters, ic_se, np.nan)))
 
 
 def _dated(result, timestamps):

@@ -35,10 +35,12 @@ import numpy as np
 
 from .errors import ModelError, SettingsError
 
-__all__ = ["VERDICTS", "assess", "noise_only", "noise_sigma"]
+__all__ = ["VERDICTS", "WEAK_BELOW", "assess", "noise_only", "noise_sigma"]
 
 VERDICTS = ("identified", "weak", "suspect")
 
+# The highest IC from which a parameter counts as identified (assess's weak_below).
+WEAK_BELOW = 0.5
 # A band edge this close to a bound, as a fraction of the range, touches it.
 BOUND_TOLERANCE = 0.01
 # MAE spreads up to this many sampling standard deviations of a noise-only MAE count as noise.
@@ -112,7 +114,7 @@ def _judge(mae, m, sigma, multiple):
     return spread <= threshold, spread, threshold
 
 
-def assess(result, *, u=None, y=None, model=None, dt=None, x0=None, weak_below=0.5, simulations=None):
+def assess(result, *, u=None, y=None, model=None, dt=None, x0=None, weak_below=WEAK_BELOW, simulations=None):
     """Verdict and reasons for every parameter of a DYNIA result.
 
     Parameters
