@@ -28,6 +28,7 @@ dynia.errors.SettingsError: conf_level is a percentage in (50, 100); got 0.9 (di
 import dataclasses
 import math
 import numbers
+import os
 from collections.abc import Mapping
 
 import numpy as np
@@ -42,6 +43,7 @@ __all__ = [
     "WINDOWS",
     "ENGINES",
     "X0",
+    "DTYPES",
     "MAX_BINS",
     "MAX_PARAMETER",
     "check_dt",
@@ -55,6 +57,7 @@ FLAVOURS = ("thesis", "mcat", "weighted")
 WINDOWS = ("centred", "trailing")
 ENGINES = ("auto", "numba", "numpy")
 X0 = ("zero", "steady")
+DTYPES = ("float64", "float32")
 # A finer CLD-gradient grid only spreads the behavioural set (a few hundred
 # values) thinner: past this the rows are mostly empty and the array huge.
 MAX_BINS = 1000
@@ -144,6 +147,15 @@ class AnalysisSettings:
     max_samples : int or None, default None
         The budget of ``target_se``: at most this many samples, at least
         ``n_samples``.
+    dtype : {"float64", "float32"}, default "float64"
+        Type of the result's time-dependent arrays (IC, limits, gradient and
+        their errors). The engine computes in float64 either way; float32
+        keeps each value rounded to the nearest float32, at half the memory
+        (see :mod:`dynia.storage`).
+    store : str or os.PathLike or None, default None
+        A netCDF file that the time-dependent arrays are written to as they
+        are produced, so that they never lie whole in memory; the result
+        reads them from it (see :mod:`dynia.storage`). Kept as a str.
     """
 
     n_samples: int = 2000
@@ -162,6 +174,8 @@ class AnalysisSettings:
     ic_error: bool = False
     target_se: float | None = None
     max_samples: int | None = None
+    dtype: str = "float64"
+    store: str | None = None
 
     def __post_init__(self):
         def store(name, value):
@@ -212,6 +226,13 @@ class AnalysisSettings:
             store("ic_error", True)  # the target is on the error, which must then be estimated
         if self.max_samples is not None:
             store("max_samples", _whole(self.max_samples, "max_samples", self.n_samples))
+        store("dtype", _choice(self.dtype, "dtype", DTYPES))
+        if self.store is not None:
+            if not isinstance(self.store, (str, os.PathLike)) or not os.fspath(self.store):
+                raise SettingsError(
+                    f"store must be the path of a file (str or os.PathLike); got {self.store!r}", "store"
+                )
+            store("store", os.fspath(self.store))
         self._check_combinations()
 
     def _check_combinations(self):
@@ -234,6 +255,12 @@ class AnalysisSettings:
                 "target_se",
             )
         if self.sampler in ADAPTIVE_SAMPLERS:
+            if self.store is not None or self.dtype != "float64":
+                raise SettingsError(
+                    f"sampler {self.sampler!r} holds every simulation in memory, so the storage settings for "
+                    "long records (store, dtype) do not help it; use the uniform, lhs or sobol sampler with them",
+                    "store" if self.store is not None else "dtype",
+                )
             if self.flavour == "mcat":
                 raise SettingsError(
                     f"sampler {self.sampler!r} draws importance-weighted samples, which the mcat flavour cannot "

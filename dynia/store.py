@@ -12,7 +12,10 @@ variables ``ic`` (parameter, time), ``ci`` (parameter, time, side),
 ``gradient`` (parameter, bin, time), ``bin_centres`` (parameter, bin),
 ``samples`` (sample, parameter) and ``bounds`` (parameter, side); when the
 result has its Monte Carlo errors, ``ic_se`` (parameter, time) and ``ci_se``
-(parameter, time, side) too. Coordinates: ``parameter`` (the names),
+(parameter, time, side) too; when it has its noise floor, ``informative``,
+``mae_spread`` and ``noise_floor`` (time), the mask as int8 in the file (netCDF
+has no booleans) and bool in the Dataset and when loaded; files without them
+load with None there. Coordinates: ``parameter`` (the names),
 ``time`` (seconds), ``side`` ("lower", "upper": ``ci.sel(side="lower")``
 is the lower limit, and for ``bounds`` the low end of the range) and, when
 the result has timestamps, ``timestamp`` (datetime64[ns], along ``time``).
@@ -55,7 +58,7 @@ import numpy as np
 
 from .errors import DataError, OutputError, SettingsError
 
-__all__ = ["to_xarray", "save", "load", "FORMAT_VERSION"]
+__all__ = ["to_xarray", "save", "load", "metadata", "FORMAT_VERSION", "TIMESTAMP_ATTRIBUTES"]
 
 # Written as the attribute "dynia_result"; a later layout raises it, and load refuses what it cannot read.
 FORMAT_VERSION = 1
@@ -71,6 +74,10 @@ _ARRAYS = {
     "samples": ("sample", "parameter"),
     "bounds": ("parameter", "side"),
 }
+# The noise floor along time (see dynia.engine.noise), written when the result has it. Part of the
+# metadata, so that a result written block by block (dynia.storage) gets it too; the mask is int8 in a
+# file, since netCDF has no booleans, and bool again when loaded.
+_NOISE_FLOOR = ("informative", "mae_spread", "noise_floor")
 # Written when the result has them (not None), read back when the file has them.
 _OPTIONAL_ARRAYS = {
     "ic_se": ("parameter", "time"),
@@ -81,6 +88,8 @@ _SIDES = ("lower", "upper")
 
 # The timestamps as integer nanoseconds from the epoch: exact, and what any CF reader decodes to datetimes.
 _TIMESTAMP_UNITS = "nanoseconds since 1970-01-01"
+# The attributes of the timestamp variable in a file (what xarray writes with that encoding).
+TIMESTAMP_ATTRIBUTES = {"units": _TIMESTAMP_UNITS, "calendar": "proleptic_gregorian"}
 
 _TUPLE = "__tuple__"
 _VARIABLE = "__variable__"
@@ -103,16 +112,54 @@ def to_xarray(result):
     }
     if result.timestamps is not None:
         coords["timestamp"] = ("time", np.asarray(result.timestamps, dtype="datetime64[ns]"))
-    variables = {name: (dims, getattr(result, name)) for name, dims in _ARRAYS.items()}
+    variables = {name: _variable(getattr(result, name), dims) for name, dims in _ARRAYS.items()}
     variables.update(
-        (name, (dims, getattr(result, name)))
+        (name, _variable(getattr(result, name), dims))
         for name, dims in _OPTIONAL_ARRAYS.items()
         if getattr(result, name) is not None
     )
+    attrs, array_settings = metadata(result, reserved=(*variables, *_COORDINATES))
+    variables.update(array_settings)
+    if result.informative is not None:
+        variables["informative"] = (("time",), np.asarray(result.informative, dtype=bool))
+    return xr.Dataset(variables, coords=coords, attrs=attrs)
+
+
+def _variable(values, dims):
+    """An array of a result as a Dataset variable: an array on disk stays there (read lazily by xarray)."""
+    from .storage import DiskArray
+
+    if not isinstance(values, DiskArray):
+        return dims, values
+    import xarray as xr
+
+    opened = xr.open_dataset(values.filename, engine="h5netcdf", mask_and_scale=False, decode_times=False)
+    return opened[values.name].variable.transpose(*dims)
+
+
+def metadata(result, reserved):
+    """The file attributes of ``result`` (format, settings and verdicts as JSON) and its array settings.
+
+    Returns ``(attrs, variables)``: a setting that is an ndarray becomes a
+    variable of its name, ``(dims, values)``, which must not be one of the
+    names ``reserved`` for the result's own variables; so does the noise
+    floor (``informative`` as int8, ``mae_spread``, ``noise_floor``), when
+    the result has it.
+
+    Raises
+    ------
+    SettingsError
+        As :func:`save`.
+    """
+    variables = {
+        name: (("time",), np.asarray(getattr(result, name), dtype=np.int8 if name == "informative" else float))
+        for name in _NOISE_FLOOR
+        if getattr(result, name) is not None
+    }
     settings = {}
     for key, value in result.settings.items():
         if isinstance(value, np.ndarray):
-            if key in variables or key in _COORDINATES:
+            if key in reserved or key in _NOISE_FLOOR:
                 raise SettingsError(
                     f"result.settings[{key!r}] is an array, saved as a variable of its name, but the result "
                     f"has a variable {key!r} of its own; rename the setting",
@@ -128,14 +175,16 @@ def to_xarray(result):
         "settings": json.dumps(settings),
         "verdicts": json.dumps(_encoded(result.verdicts, "result.verdicts", None)),
     }
-    return xr.Dataset(variables, coords=coords, attrs=attrs)
+    return attrs, variables
 
 
 def save(result, path):
     """Write ``result`` to the netCDF-4 file ``path`` (replaced if it exists); :func:`load` reads it back.
 
     Every array is written as it is, without a fill value, so NaN stays NaN
-    bit for bit; timestamps as int64 nanoseconds since 1970-01-01.
+    bit for bit; timestamps as int64 nanoseconds since 1970-01-01. A result
+    whose arrays are on disk (``store``, see :mod:`dynia.storage`) is copied
+    one time block at a time, never loaded whole.
 
     Raises
     ------
@@ -147,6 +196,11 @@ def save(result, path):
     OutputError
         ``path`` cannot be written (a missing folder, no permission).
     """
+    from .storage import DiskArray, write_result
+
+    if isinstance(result.ic, DiskArray):
+        write_result(result, path)
+        return
     dataset = to_xarray(result)
     encoding = {name: {"_FillValue": None} for name in dataset.variables}
     if "timestamp" in dataset.variables:
@@ -157,7 +211,7 @@ def save(result, path):
         raise OutputError(f"{os.fspath(path)}: cannot be written ({error.strerror or error})") from None
 
 
-def load(path):
+def load(path, *, lazy=False):
     """The :class:`~dynia.result.DyniaResult` that :func:`save` wrote to ``path``.
 
     Every array comes back bit-identical (NaN where NaN), with the names, the
@@ -165,6 +219,10 @@ def load(path):
     comes back a tuple and a list a list, an ndarray setting an ndarray of
     its dtype; a numpy scalar comes back as the Python number it was written
     as.
+
+    With ``lazy=True`` the arrays along time (IC, limits, gradient and their
+    errors) stay in the file as :class:`dynia.storage.DiskArray` objects,
+    read where indexed: for results larger than memory (:mod:`dynia.storage`).
 
     Raises
     ------
@@ -184,7 +242,7 @@ def load(path):
     if not os.path.isfile(name):
         raise DataError(f"{name}: no such file; expected a netCDF file written by DyniaResult.save")
     try:
-        dataset = xr.load_dataset(
+        dataset = (xr.open_dataset if lazy else xr.load_dataset)(
             name, engine="h5netcdf", mask_and_scale=False, decode_times=False, decode_timedelta=False
         )
     except (OSError, ValueError) as error:
@@ -206,10 +264,11 @@ def load(path):
     for key, value in json.loads(dataset.attrs["settings"], object_hook=_decoded).items():
         is_variable = isinstance(value, dict) and value.keys() == {_VARIABLE}
         settings[key] = dataset[value[_VARIABLE]].values if is_variable else value
-    arrays = {key: dataset[key].transpose(*dims).values for key, dims in _ARRAYS.items()}
-    arrays.update(
-        (key, dataset[key].transpose(*dims).values) for key, dims in _OPTIONAL_ARRAYS.items() if key in dataset
-    )
+    arrays = {key: _loaded(dataset, key, dims, lazy) for key, dims in _ARRAYS.items()}
+    arrays.update((key, _loaded(dataset, key, dims, lazy)) for key, dims in _OPTIONAL_ARRAYS.items() if key in dataset)
+    arrays.update((key, dataset[key].values) for key in _NOISE_FLOOR if key in dataset)
+    if "informative" in arrays:
+        arrays["informative"] = arrays["informative"].astype(bool)
     timestamps = None
     if "timestamp" in dataset.variables:
         stamps = dataset["timestamp"]
@@ -224,6 +283,23 @@ def load(path):
         timestamps=timestamps,
         **arrays,
     )
+
+
+def _loaded(dataset, key, dims, lazy):
+    """Variable ``key`` in the order ``dims``: in memory, or with ``lazy`` a DiskArray when it lies along time."""
+    from .storage import TIME_VARIABLES, DiskArray
+
+    variable = dataset[key]
+    if not (lazy and key in TIME_VARIABLES):
+        return variable.transpose(*dims).values
+    if variable.dims != dims:
+        raise DataError(
+            f"{dataset.encoding['source']}: {key} has dimensions {variable.dims}; a lazy load needs {dims} "
+            "(the order dynia writes), load it with lazy=False"
+        )
+    import h5py
+
+    return DiskArray(h5py.File(dataset.encoding["source"], "r")[key], dataset.encoding["source"], key)
 
 
 def _encoded(value, where, setting):

@@ -89,6 +89,7 @@ from .. import _checks
 from ..errors import DataError, SettingsError
 from ..result import DyniaResult
 from ..settings import AnalysisSettings
+from ..storage import ResultFile, result_arrays
 from .flavours import FLAVOURS, compiled_engine, flavour_analysis, monte_carlo_errors
 
 __all__ = [
@@ -134,6 +135,8 @@ def moving_window(
     window="centred",
     engine="auto",
     ic_error=False,
+    dtype="float64",
+    store=None,
 ):
     """Moving-window DYNIA of every parameter at once.
 
@@ -193,6 +196,15 @@ def moving_window(
         Also estimate the Monte Carlo standard errors of IC and limits, by
         batch means in the same pass (see the module documentation). Not
         for ``"mcat"``.
+    dtype : {"float64", "float32"}, default "float64"
+        Type of the time-dependent result arrays; float32 values are the
+        float64 results rounded (see :mod:`dynia.storage`).
+    store : str or os.PathLike, optional
+        Write those arrays to this netCDF file as they are produced (complete
+        and renamed into place when the analysis ends) and return a result
+        that reads them from it; memory then does not grow with them (see
+        :mod:`dynia.storage`). A :class:`dynia.storage.ResultFile` may be
+        given instead, whose owner commits it.
 
     Returns
     -------
@@ -246,6 +258,8 @@ def moving_window(
         window=window,
         engine=engine,
         ic_error=ic_error,
+        dtype=dtype,
+        store=store,
     )
 
 
@@ -280,6 +294,8 @@ def analyse_stream(
     window="centred",
     engine="auto",
     ic_error=False,
+    dtype="float64",
+    store=None,
 ):
     """Moving-window DYNIA fed by simulated output in consecutive time chunks.
 
@@ -312,6 +328,8 @@ def analyse_stream(
         window=window,
         engine=engine,
         ic_error=ic_error,
+        dtype=dtype,
+        store=store,
     )
 
 
@@ -344,6 +362,8 @@ def _analyse(
     window="centred",
     engine="auto",
     ic_error=False,
+    dtype="float64",
+    store=None,
 ):
     n_samples, n_params = params.shape
     bounds = _checks.bounds_array(bounds, n_params)
@@ -368,6 +388,8 @@ def _analyse(
         engine=engine,
         workers=workers,
         ic_error=ic_error,
+        dtype=dtype,
+        store=None if isinstance(store, ResultFile) else store,
     )
     n, percentage, bins, conf_level = checked.n, checked.percentage, checked.bins, checked.conf_level
     min_points, workers = checked.min_points, checked.workers
@@ -386,11 +408,12 @@ def _analyse(
         flavour, compiled, params, bounds, percentage, bins, conf_level, min_points, weights=weights, ic_error=ic_error
     )
     n_steps = y.size
-    ic = np.full((n_params, n_steps), np.nan)
-    ci = np.full((n_params, n_steps, 2), np.nan)
-    gradient = np.full((n_params, flavour_impl.n_bins, n_steps), np.nan)
-    ic_se = np.full((n_params, n_steps), np.nan) if ic_error else None
-    ci_se = np.full((n_params, n_steps, 2), np.nan) if ic_error else None
+    # In memory or, with a store, in a file written as the chunks come (dynia.storage).
+    output = result_arrays(store, checked.dtype)
+    shapes = dict(ic=(n_params, n_steps), ci=(n_params, n_steps, 2), gradient=(n_params, flavour_impl.n_bins, n_steps))
+    if ic_error:
+        shapes.update(ic_se=(n_params, n_steps), ci_se=(n_params, n_steps, 2))
+    output.allocate(shapes, names=names, samples=params, bounds=bounds, time=time, bin_centres=flavour_impl.bin_centres)
 
     slots = before + after + 1
 
@@ -402,11 +425,10 @@ def _analyse(
 
     def store(finished):
         start, stop, (chunk_ic, chunk_ci, chunk_gradient, *batches) = finished.result()
-        ic[:, start:stop] = chunk_ic
-        ci[:, start:stop] = chunk_ci
-        gradient[:, :, start:stop] = chunk_gradient
+        chunks = dict(ic=chunk_ic, ci=chunk_ci, gradient=chunk_gradient)
         if ic_error:
-            ic_se[:, start:stop], ci_se[:, start:stop] = monte_carlo_errors(*batches)
+            chunks["ic_se"], chunks["ci_se"] = monte_carlo_errors(*batches)
+        output.write(start, stop, chunks)
 
     starts = range(0, n_steps, chunk_steps)
     if progress:
@@ -416,7 +438,8 @@ def _analyse(
     # Errors are pulled in time order (a simulation stream is sequential); the
     # windows of each chunk are then analysed on a worker. MCAT's likelihood
     # carries state from window to window, so it stays on one worker.
-    with ThreadPoolExecutor(max_workers=workers) as pool:
+    # An error or an interruption discards the output (a store's partial file).
+    with ThreadPoolExecutor(max_workers=workers) as pool, output:
         pending = deque()
         for start in starts:
             stop = min(start + chunk_steps, n_steps)
@@ -451,19 +474,22 @@ def _analyse(
     )
     if ic_error:
         recorded.update(ic_batches=flavour_impl.batches)
-    return DyniaResult(
+    arrays = output.arrays()
+    result = DyniaResult(
         names=names,
         samples=params,
         bounds=bounds,
         time=time,
-        ic=ic,
-        ci=ci,
-        gradient=gradient,
+        ic=arrays["ic"],
+        ci=arrays["ci"],
+        gradient=arrays["gradient"],
         bin_centres=flavour_impl.bin_centres,
         settings=recorded,
-        ic_se=ic_se,
-        ci_se=ci_se,
+        ic_se=arrays.get("ic_se"),
+        ci_se=arrays.get("ci_se"),
     )
+    # A ResultFile given by the caller is committed by the caller, once it has added the verdicts.
+    return result if isinstance(store, ResultFile) else output.commit(result)
 
 
 def _parameter_names(names, n_params):

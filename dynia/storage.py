@@ -1,0 +1,412 @@
+"""Where the result arrays live: in memory, or in a netCDF file written as the windows are analysed.
+
+A year of 1 Hz data is 3e7 steps; its CLD gradient alone, (n_params, bins,
+n_steps) in float64, needs 19 GB for two parameters and 40 bins. Two
+settings of :class:`dynia.settings.AnalysisSettings` bound that:
+
+``dtype="float32"``
+    The time-dependent arrays (``ic``, ``ci``, ``gradient``, ``ic_se``,
+    ``ci_se``) are kept in float32: the engine still computes in float64,
+    and every value is the float64 result rounded to the nearest float32
+    (relative error at most 6e-8, far below any Monte Carlo error), at half
+    the memory and disk.
+``store=PATH``
+    Those arrays go to the netCDF-4 file ``PATH`` as they are produced, in
+    time blocks (:class:`ResultFile`), never whole in memory. The file has
+    the layout :func:`dynia.store.save` writes, chunked over time, so
+    :func:`dynia.load` reads it, and the returned result reads it lazily:
+    its time-dependent arrays are :class:`DiskArray` objects, which index
+    like numpy arrays (``res.ic[p]`` reads one parameter's row) and turn into
+    ndarrays wherever numpy needs one. The file is written under a temporary
+    name beside ``PATH`` and renamed to ``PATH`` only when complete (for
+    :func:`dynia.run`, with its verdicts), so an error or an interruption
+    never leaves a half-written file under ``PATH``.
+
+What still grows with the record, with a store: the time axis (8 bytes a
+step), the caller's input and output, and one parameter's row of IC or of a
+limit while the summary and the verdicts look for its maximum; the gradient
+is read one time block at a time for plots and one column for estimates.
+
+Examples
+--------
+>>> import numpy as np, tempfile, pathlib, dynia
+>>> from dynia.analysis import moving_window
+>>> gain = np.random.default_rng(1).uniform(0, 4, (500, 1))
+>>> u = np.r_[np.zeros(20), np.ones(40)]
+>>> with tempfile.TemporaryDirectory() as folder:
+...     path = pathlib.Path(folder, "result.nc")
+...     res = moving_window(2 * u, gain * u, gain, [[0, 4]], n=3, dtype="float32", store=path)
+...     kept = type(res.gradient).__name__, str(res.ic.dtype), res.ic[0].shape
+...     same = np.array_equal(dynia.load(path).ic, res.ic, equal_nan=True)
+>>> kept, same
+(('DiskArray', 'float32', (60,)), True)
+"""
+
+import dataclasses
+import os
+import tempfile
+
+import numpy as np
+from numpy.lib.mixins import NDArrayOperatorsMixin
+
+from .errors import OutputError
+
+__all__ = [
+    "DTYPES",
+    "TIME_VARIABLES",
+    "DiskArray",
+    "ResultArrays",
+    "ResultFile",
+    "result_arrays",
+    "write_result",
+    "disk_arrays",
+]
+
+DTYPES = ("float64", "float32")
+
+# The result arrays that lie along time, with the file's dimensions (as dynia.store lays them out).
+TIME_VARIABLES = {
+    "ic": ("parameter", "time"),
+    "ci": ("parameter", "time", "side"),
+    "gradient": ("parameter", "bin", "time"),
+    "ic_se": ("parameter", "time"),
+    "ci_se": ("parameter", "time", "side"),
+}
+
+# Bytes of one on-disk chunk of the widest variable (the gradient of one parameter): large enough that
+# a row of IC is read in few requests, small enough for HDF5's chunk cache and for the write buffer.
+_CHUNK_BYTES = 4 * 2**20
+
+
+def result_arrays(store, dtype):
+    """Where an analysis keeps its arrays: :class:`ResultArrays` in memory, or a :class:`ResultFile` at ``store``.
+
+    ``store`` may also be a :class:`ResultFile` already made, whose owner commits it.
+    """
+    if isinstance(store, ResultFile):
+        return store
+    return ResultArrays(dtype) if store is None else ResultFile(store, dtype)
+
+
+def _time_index(name, start, stop):
+    """Index of the steps [start, stop) of variable ``name``."""
+    axis = TIME_VARIABLES[name].index("time")
+    return (slice(None),) * axis + (slice(start, stop),)
+
+
+class ResultArrays:
+    """The time-dependent result arrays in memory, NaN until written, in ``dtype``.
+
+    Assigning float64 chunks into float32 arrays rounds each value to the nearest float32.
+    """
+
+    def __init__(self, dtype="float64"):
+        self.dtype = np.dtype(dtype)
+        self._arrays = {}
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, kind, error, trace):
+        if kind is not None:
+            self.discard()
+
+    def allocate(self, shapes, **fixed):
+        """Make an array per ``shapes`` entry (a TIME_VARIABLES name to its shape); ``fixed`` is unused here.
+
+        ``fixed`` holds the parts a file writes first (names, samples, bounds, time, bin_centres).
+        """
+        self._arrays = {name: np.full(shape, np.nan, dtype=self.dtype) for name, shape in shapes.items()}
+
+    def write(self, start, stop, chunks):
+        """Put each chunk of ``chunks`` (name to the values of steps [start, stop)) in place."""
+        for name, chunk in chunks.items():
+            self._arrays[name][_time_index(name, start, stop)] = chunk
+
+    def arrays(self):
+        """The arrays, by name."""
+        return dict(self._arrays)
+
+    def discard(self):
+        """Drop the arrays (nothing is kept outside memory)."""
+        self._arrays = {}
+
+    def commit(self, result):
+        """The finished ``result`` (in memory there is nothing more to write)."""
+        return result
+
+
+class ResultFile:
+    """Result arrays written to a netCDF-4 file as they are produced, then renamed into place.
+
+    :meth:`allocate` creates ``.PATH.XXXX.partial`` beside ``PATH`` with
+    every variable laid out as :func:`dynia.store.save` writes it, the
+    time-dependent ones chunked over time; :meth:`write` fills them block by
+    block (a time block is buffered until its on-disk chunks are complete, so
+    each chunk is written once); :meth:`commit` adds the settings, verdicts and
+    timestamps of the finished result, renames the file to ``PATH`` and
+    returns the result reading from it. :meth:`discard` (also on an error in
+    ``with``) deletes the partial file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The final file; replaced if it exists, when the commit succeeds.
+    dtype : {"float64", "float32"}
+        Type of the time-dependent arrays in the file.
+    """
+
+    def __init__(self, path, dtype="float64"):
+        self.path = os.path.abspath(os.fspath(path))
+        self.dtype = np.dtype(dtype)
+        self._partial = None
+        self._file = None
+        self._buffers = {}
+        self._block = 0
+        self._block_start = 0
+        self._n_steps = 0
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, kind, error, trace):
+        if kind is not None:
+            self.discard()
+
+    def allocate(self, shapes, *, names, samples, bounds, time, bin_centres):
+        """Create the partial file with its fixed parts and the empty time-dependent variables of ``shapes``.
+
+        Called again (a retried analysis), it starts a new file.
+        """
+        import h5netcdf
+        import h5py
+
+        self.discard()
+        folder, base = os.path.split(self.path)
+        if os.path.isdir(self.path):
+            raise OutputError(f"{self.path}: is a folder; store must name a file")
+        try:
+            handle, self._partial = tempfile.mkstemp(prefix=f".{base}.", suffix=".partial", dir=folder)
+            os.close(handle)
+            self._file = h5netcdf.File(self._partial, "w")
+        except OSError as error:
+            self._partial = None
+            raise OutputError(f"{self.path}: cannot be written ({error.strerror or error})") from None
+        samples, bounds, time = np.asarray(samples), np.asarray(bounds), np.asarray(time)
+        n_bins = shapes["gradient"][1]
+        self._n_steps = time.size
+        self._block = int(min(max(_CHUNK_BYTES // (n_bins * self.dtype.itemsize), 1), max(self._n_steps, 1)))
+        file = self._file
+        file.dimensions = dict(parameter=len(names), time=self._n_steps, side=2, bin=n_bins, sample=samples.shape[0])
+        file.create_variable("parameter", ("parameter",), dtype=h5py.string_dtype(), data=np.array(names, dtype=object))
+        file.create_variable(
+            "side", ("side",), dtype=h5py.string_dtype(), data=np.array(["lower", "upper"], dtype=object)
+        )
+        stamps = file.create_variable("time", ("time",), dtype="f8", data=time, chunks=(self._block,))
+        stamps.attrs.update(units="s", long_name="time from the start of the record")
+        for name, data, dims in (
+            ("samples", samples, ("sample", "parameter")),
+            ("bounds", bounds, ("parameter", "side")),
+            ("bin_centres", bin_centres, ("parameter", "bin")),
+        ):
+            file.create_variable(name, dims, dtype="f8", data=data)
+        self._buffers = {}
+        for name, shape in shapes.items():
+            chunks = tuple(
+                self._block if dim == "time" else (1 if dim == "parameter" else size)
+                for dim, size in zip(TIME_VARIABLES[name], shape)
+            )
+            file.create_variable(name, TIME_VARIABLES[name], dtype=self.dtype, chunks=chunks)
+            buffer_shape = tuple(
+                self._block if dim == "time" else size for dim, size in zip(TIME_VARIABLES[name], shape)
+            )
+            self._buffers[name] = np.full(buffer_shape, np.nan, dtype=self.dtype)
+        self._block_start = 0
+
+    def write(self, start, stop, chunks):
+        """Write ``chunks`` (name to the values of steps [start, stop)); steps must come in order.
+
+        Values are buffered until a time block is complete, then written to
+        the file in one piece.
+        """
+        at = start
+        while at < stop:
+            block_stop = min(self._block_start + self._block, self._n_steps)
+            end = min(stop, block_stop)
+            for name, chunk in chunks.items():
+                self._buffers[name][_time_index(name, at - self._block_start, end - self._block_start)] = chunk[
+                    _time_index(name, at - start, end - start)
+                ]
+            if end == block_stop:
+                self._flush(block_stop)
+            at = end
+
+    def _flush(self, block_stop):
+        width = block_stop - self._block_start
+        for name, buffer in self._buffers.items():
+            self._file.variables[name][_time_index(name, self._block_start, block_stop)] = buffer[
+                _time_index(name, 0, width)
+            ]
+            buffer.fill(np.nan)
+        self._block_start = block_stop
+
+    def arrays(self):
+        """The variables written, as :class:`DiskArray` objects on the partial file."""
+        self._file.flush()
+        return {name: DiskArray(self._file.variables[name], self._partial, name) for name in self._buffers}
+
+    def commit(self, result):
+        """Add ``result``'s settings, verdicts and timestamps, rename the file to ``path``, return it read lazily.
+
+        ``result`` is the finished result whose arrays this file holds.
+        """
+        from .store import TIMESTAMP_ATTRIBUTES, metadata
+
+        attrs, variables = metadata(
+            result,
+            reserved=(*TIME_VARIABLES, "time", "timestamp", "parameter", "side", "samples", "bounds", "bin_centres"),
+        )
+        file = self._file
+        for name, (dims, values) in variables.items():
+            for axis, dim in enumerate(dims):
+                if dim not in file.dimensions:
+                    file.dimensions[dim] = values.shape[axis]
+            file.create_variable(name, dims, data=values)
+        if result.timestamps is not None:
+            stamps = file.create_variable(
+                "timestamp",
+                ("time",),
+                dtype="i8",
+                data=np.asarray(result.timestamps, dtype="datetime64[ns]").view(np.int64),
+                chunks=(self._block,),
+            )
+            stamps.attrs.update(TIMESTAMP_ATTRIBUTES)
+        file.attrs.update(attrs)
+        file.close()
+        self._file = None
+        try:
+            os.replace(self._partial, self.path)
+        except OSError as error:
+            self.discard()
+            raise OutputError(f"{self.path}: cannot be written ({error.strerror or error})") from None
+        self._partial = None
+        # Everything but the arrays written here stays as the result holds it (fields the file has no room for too).
+        return dataclasses.replace(result, **disk_arrays(self.path, self._buffers))
+
+    def discard(self):
+        """Close and delete the partial file, if any."""
+        if self._file is not None:
+            self._file.close()
+            self._file = None
+        if self._partial is not None:
+            try:
+                os.remove(self._partial)
+            except FileNotFoundError:
+                pass
+            self._partial = None
+
+
+def write_result(result, path, dtype=None):
+    """Write ``result`` to ``path`` through a :class:`ResultFile`, one time block at a time.
+
+    How :func:`dynia.store.save` writes a result whose arrays are on disk
+    (:class:`DiskArray`), so that saving it elsewhere never loads them whole.
+    ``dtype`` defaults to that of ``result.ic``.
+    """
+    present = {name: getattr(result, name) for name in TIME_VARIABLES if getattr(result, name) is not None}
+    with ResultFile(path, dtype or present["ic"].dtype) as file:
+        file.allocate(
+            {name: array.shape for name, array in present.items()},
+            names=result.names,
+            samples=result.samples,
+            bounds=result.bounds,
+            time=result.time,
+            bin_centres=result.bin_centres,
+        )
+        for start in range(0, result.time.size, file._block):
+            stop = min(start + file._block, result.time.size)
+            file.write(start, stop, {name: array[_time_index(name, start, stop)] for name, array in present.items()})
+        return file.commit(result)
+
+
+def disk_arrays(path, names):
+    """The variables ``names`` of the netCDF file ``path`` as :class:`DiskArray` objects, by name."""
+    import h5py
+
+    file = h5py.File(path, "r")
+    return {name: DiskArray(file[name], path, name) for name in names}
+
+
+class DiskArray(NDArrayOperatorsMixin):
+    """A numpy-like view of an array in an HDF5 file, read only where indexed.
+
+    Indexing with whole numbers on leading axes alone (``gradient[p]``) gives
+    another DiskArray; any other index reads those values into an ndarray.
+    ``np.asarray`` reads the whole view; numpy functions and arithmetic read
+    their operands first. A DiskArray pickles as its file name and variable,
+    so it can be sent to another process on the same file system.
+    """
+
+    def __init__(self, dataset, filename, name, leading=()):
+        self._dataset = dataset
+        self.filename = os.fspath(filename)
+        self.name = name
+        self._leading = tuple(leading)
+
+    @property
+    def shape(self):
+        return self._dataset.shape[len(self._leading) :]
+
+    @property
+    def dtype(self):
+        return self._dataset.dtype
+
+    @property
+    def ndim(self):
+        return len(self.shape)
+
+    @property
+    def size(self):
+        return int(np.prod(self.shape))
+
+    def __len__(self):
+        return self.shape[0]
+
+    def __getitem__(self, key):
+        key = key if isinstance(key, tuple) else (key,)
+        if (
+            all(isinstance(item, (int, np.integer)) and not isinstance(item, bool) for item in key)
+            and len(key) < self.ndim
+        ):
+            leading = []
+            for axis, item in enumerate(key):
+                size = self.shape[axis]
+                if not -size <= item < size:
+                    raise IndexError(f"index {item} is out of bounds for axis {axis} with size {size}")
+                leading.append(int(item) % size)
+            return DiskArray(self._dataset, self.filename, self.name, self._leading + tuple(leading))
+        try:
+            return np.asarray(self._dataset[self._leading + key])
+        except (TypeError, ValueError):
+            # Selections HDF5 cannot make (fancy indices out of order, repeated): read the view, index in memory.
+            return np.asarray(self)[key]
+
+    def __array__(self, dtype=None, copy=None):
+        values = np.asarray(self._dataset[self._leading + (Ellipsis,)])
+        return values if dtype is None else values.astype(dtype, copy=False)
+
+    def __array_ufunc__(self, ufunc, method, *inputs, **kwargs):
+        inputs = tuple(np.asarray(item) if isinstance(item, DiskArray) else item for item in inputs)
+        return getattr(ufunc, method)(*inputs, **kwargs)
+
+    def __reduce__(self):
+        return _reopened, (self.filename, self.name, self._leading)
+
+    def __repr__(self):
+        return f"DiskArray({self.name!r} in {self.filename!r}, shape={self.shape}, dtype={self.dtype})"
+
+
+def _reopened(filename, name, leading):
+    import h5py
+
+    return DiskArray(h5py.File(filename, "r")[name], filename, name, leading)
