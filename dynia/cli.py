@@ -37,7 +37,7 @@ from .data import load_csv
 from .errors import DyniaError, Interrupted, SettingsError
 from .identify import identify
 from .outdir import OutputDirectory
-from .pipeline import DroppedSamplesWarning, run
+from .pipeline import DroppedSamplesWarning, TargetNotReachedWarning, run
 from .quality import check_quality
 from .refine import narrowed_bounds
 from .settings import FLAVOURS, MAX_PARAMETER, SAMPLERS, AnalysisSettings
@@ -131,6 +131,20 @@ def _parser():
         metavar="N",
         help="windows with fewer measured output points report a missing IC (default 1)",
     )
+    method.add_argument(
+        "--ic-error",
+        action="store_true",
+        help="also estimate the Monte Carlo standard error of IC and limits (batch means): "
+        "NAME_se columns in ic.csv, max_ic_se in summary.json, IC +- 2 SE shaded in the plots",
+    )
+    method.add_argument(
+        "--target-se",
+        type=float,
+        metavar="SE",
+        help="add samples until the largest IC standard error where it can change a verdict is at most SE "
+        "(implies --ic-error; needs --max-samples)",
+    )
+    method.add_argument("--max-samples", type=int, metavar="N", help="the budget of --target-se")
     method.add_argument(
         "--second-run",
         action="store_true",
@@ -365,6 +379,9 @@ OPTIONS = {
     "conf_level": ("number", 90.0, _ANALYSE),
     "flavour": ("text", "thesis", _ANALYSE),
     "min_points": ("whole", 1, _ANALYSE),
+    "ic_error": ("flag", False, _ANALYSE),
+    "target_se": ("number", None, _ANALYSE),
+    "max_samples": ("whole", None, _ANALYSE),
     "second_run": ("flag", False, _ANALYSE),
     "narrow_threshold": ("number", 0.75, _ANALYSE),
     "narrow_margin": ("number", 0.5, _ANALYSE),
@@ -560,6 +577,9 @@ def _analysis_settings(options):
             bins=options["bins"],
             conf_level=options["conf_level"],
             flavour=options["flavour"],
+            ic_error=options["ic_error"],
+            target_se=options["target_se"],
+            max_samples=options["max_samples"],
             # With --window the window's length is known only on the data's grid; checked then (_load).
             min_points=options["min_points"] if options.get("window") is None else 1,
         )
@@ -805,7 +825,8 @@ def _data_warnings(data, u, y, options):
 
 def _dynia_warnings(caught):
     """The messages of dynia's own warnings among those caught; the rest stay silent."""
-    messages = [str(item.message) for item in caught if issubclass(item.category, DroppedSamplesWarning)]
+    ours = (DroppedSamplesWarning, TargetNotReachedWarning)
+    messages = [str(item.message) for item in caught if issubclass(item.category, ours)]
     caught.clear()
     return messages
 
@@ -874,6 +895,7 @@ def _analyse(options, command_line, caught):
                     n_dropped=result.settings["n_dropped"],
                     n_behavioural=result.settings["n_behavioural"],
                     engine=result.settings["engine"],
+                    **_monte_carlo_record(result.settings),
                 ),
                 warnings=notices + dropped,
                 data=dict(
@@ -903,6 +925,21 @@ def _analyse(options, command_line, caught):
             )
     print("\n\n".join(tables))
     return _done(options)
+
+
+def _monte_carlo_record(settings):
+    """What summary.json's ``run`` says of the Monte Carlo error: batches, and the target's rounds."""
+    if not settings.get("ic_error"):
+        return {}
+    record = dict(ic_batches=settings["ic_batches"])
+    if settings.get("target_se") is not None:
+        record.update(
+            target_se=settings["target_se"],
+            target_se_reached=settings["target_se_reached"],
+            target_se_met=settings["target_se_met"],
+            target_se_rounds=settings["target_se_rounds"],
+        )
+    return record
 
 
 def _identify(options, command_line, caught):

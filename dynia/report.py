@@ -55,7 +55,16 @@ def write_analysis(directory, result, data, summary, *, offset=0.0, plots=True):
     directory = Path(directory)
     names = list(result.names)
     times = file_times(data, data.time)
-    _write_csv(directory / "ic.csv", ["time"] + names, result.ic.T, times)
+    if result.ic_se is None:
+        _write_csv(directory / "ic.csv", ["time"] + names, result.ic.T, times)
+    else:  # each parameter's IC, then its Monte Carlo standard error
+        columns = [column for name in names for column in (name, f"{name}_se")]
+        _write_csv(
+            directory / "ic.csv",
+            ["time"] + columns,
+            np.stack([result.ic, result.ic_se], axis=1).reshape(-1, data.time.size).T,
+            times,
+        )
     limit_columns = [f"{name}_{side}" for name in names for side in ("lower", "upper")]
     _write_csv(
         directory / "limits.csv",
@@ -90,10 +99,11 @@ def verdict_table(parameters):
             rows.append((name, "-", "-", "-", "-", entry["verdict"]))
             continue
         low, high = entry["band"]
+        se = entry.get("max_ic_se")
         rows.append(
             (
                 name,
-                f"{entry['max_ic']:.3f}",
+                f"{entry['max_ic']:.3f}" + ("" if se is None else f" +- {se:.3f}"),
                 str(entry["time_of_max_ic"]),
                 f"[{low:.4g}, {high:.4g}]",
                 f"{entry['estimate']:.4g}",

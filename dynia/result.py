@@ -210,7 +210,8 @@ class DyniaResult:
         -------
         dict
             ``{name: {"max_ic", "time_of_max_ic", "band": [lower, upper], "estimate",
-            "verdict", "reasons"}}`` with plain Python values.
+            "verdict", "reasons"}}`` with plain Python values; with the Monte
+            Carlo errors also ``"max_ic_se"``, the standard error of the max IC.
         """
         from .verdicts import assess  # verdicts reads results: imported here to keep the modules acyclic
 
@@ -227,6 +228,8 @@ class DyniaResult:
                     band=[float(self.ci[p, best, 0]), float(self.ci[p, best, 1])],
                     estimate=float(self.bin_centres[p, int(np.argmax(self.gradient[p, :, best]))]),
                 )
+                if self.ic_se is not None:
+                    summary[name]["max_ic_se"] = float(self.ic_se[p, best])
             summary[name].update(verdict=verdicts[name]["verdict"], reasons=list(verdicts[name]["reasons"]))
         return summary
 

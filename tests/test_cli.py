@@ -349,3 +349,41 @@ def test_identify_bad_options_are_one_line_errors(tmp_path, capsys, extra, messa
     err = capsys.readouterr().err.strip().splitlines()
     assert status == 2 and len(err) == 1 and message in err[0]
     assert not (tmp_path / "out").exists()
+
+
+def test_ic_error_reaches_the_table_the_summary_and_ic_csv(tmp_path, capsys):
+    out = tmp_path / "with-error"
+    assert main(["analyse", str(HEATING), *HEATING_ARGS, "--ic-error", "--no-plots", "--out", str(out)]) == 0
+    table = capsys.readouterr().out
+    header, ic = _read_csv(out / "ic.csv")
+    assert header == ["time", "K", "K_se", "T", "T_se"]
+    summary = json.loads((out / "summary.json").read_text())
+    # 400 samples at 10 %: 8 batches of 50 keep 5 behavioural sets each, 10 of 40 would keep 4.
+    assert summary["run"]["ic_batches"] == 8 and summary["settings"]["analysis"]["ic_error"] is True
+    for column, name in ((1, "K"), (3, "T")):
+        best = int(np.nanargmax(ic[:, column]))
+        assert summary["parameters"][name]["max_ic_se"] == pytest.approx(ic[best, column + 1], rel=1e-12)
+        assert f"{summary['parameters'][name]['max_ic']:.3f} +- " in table
+
+
+def test_target_se_records_its_rounds_and_warns_when_the_budget_runs_out(tmp_path, capsys):
+    out = tmp_path / "target"
+    args = ["--target-se", "0.001", "--max-samples", "800", "--no-plots", "--out", str(out)]
+    assert main(["analyse", str(HEATING), *HEATING_ARGS, *args]) == 0
+    assert "dynia: warning: the largest Monte Carlo standard error" in capsys.readouterr().err
+    run = json.loads((out / "summary.json").read_text())["run"]
+    assert run["n_sampled"] == 800 and run["target_se_met"] is False
+    assert [count for count, _ in run["target_se_rounds"]] == [400, 800]
+
+
+@pytest.mark.parametrize(
+    "extra, message",
+    [
+        (["--target-se", "0.02"], "--target-se and max_samples go together"),
+        (["--target-se", "2", "--max-samples", "900"], "--target-se is an IC standard error in (0, 1)"),
+        (["--ic-error", "--flavour", "mcat"], "mcat"),
+    ],
+)
+def test_monte_carlo_error_options_are_checked(tmp_path, capsys, extra, message):
+    status, err = _analyse(capsys, HEATING, *HEATING_ARGS, *extra, "--out", tmp_path / "x")
+    assert status == 2 and message in err and not (tmp_path / "x").exists()
