@@ -15,13 +15,17 @@ consecutive samples, and time into chunks of ``time_chunks`` steps.
 0. One task per sample chunk asks the model which of its samples simulate to
    finite output (:meth:`dynia.models.Model.finite_samples`); the others are
    dropped, as :func:`dynia.run` drops them.
-1. One task per chunk of the samples kept simulates it over the whole record
-   (the state is carried through time, so a chunk runs from the first step
-   to the last) and cuts, with the engine's own code, each time chunk's
-   window inputs: the absolute errors over the chunk and its halo for the
-   compiled engine, the window means for the numpy engine (a sample's
-   window mean depends on its own errors only, so those of a sample chunk
-   are the single-process engine's).
+1. The samples kept are simulated chunk by chunk of time as well: one task
+   per (sample chunk, time chunk) resumes the simulation of its samples
+   from the state the task of the previous time chunk left
+   (:meth:`dynia.models.Model.simulate_span`, bit for bit one uninterrupted
+   simulation), simulates the steps the time chunk's windows reach that no
+   earlier task simulated, and cuts, with the engine's own code, the time
+   chunk's window inputs: the absolute errors over the chunk and its halo
+   for the compiled engine, the window means for the numpy engine (a
+   sample's window mean depends on its own errors only, so those of a
+   sample chunk are the single-process engine's). It hands on the model's
+   state and the errors of the halo the next time chunk shares.
 2. One task per time chunk joins these blocks of all sample chunks, in
    sample order, and runs the flavour's analysis: the behavioural set is
    selected among all samples of a window at once. MCAT's likelihood carries
@@ -29,11 +33,19 @@ consecutive samples, and time into chunks of ``time_chunks`` steps.
    chain, each taking the state the previous one left.
 
 Only the results, (n_params, n_steps) and (n_params, n_bins, n_steps), are
-gathered on the client. The blocks stay on the workers between the stages:
-together 8 x n_samples x n_steps bytes (plus the halos), since a chunk's
-simulation cannot be paused and resumed, and released time chunk by time
-chunk as the windows are analysed (dask spills to disk what does not fit in
-a worker's memory limit).
+gathered on the client. Time chunks are submitted as the analysis goes,
+at most two per worker thread submitted and not yet analysed, and each
+chunk's blocks are released once analysed; so the cluster holds the blocks
+of a few time chunks at a time, 8 x n_samples x time_chunks bytes each
+(plus the halos), never a sample chunk's whole record (measured by
+``python -m dynia.bench --case distributed``).
+
+A model that cannot pause and resume (``model.resumable`` false: a
+:class:`~dynia.models.FunctionModel` without ``state=``, whose function
+answers for the whole record at once) is still run, the old way: one task
+per sample chunk simulates it over the whole record and keeps every time
+chunk's block on its worker until analysed, 8 x n_samples x n_steps bytes
+in all (dask spills to disk what does not fit in a worker's memory limit).
 
 An existing cluster
 -------------------
@@ -61,6 +73,7 @@ guard its entry point with ``if __name__ == "__main__":``.
 """
 
 import copy
+import itertools
 import math
 import operator
 import os
@@ -71,10 +84,9 @@ import numpy as np
 
 from . import _checks
 from .engine.flavours import compiled_engine, flavour_analysis
-from .engine.kernels import CompiledErrors
 from .engine.windows import StreamedErrors, window_halos, window_inputs, window_mean
 from .errors import DyniaError, ModelError
-from .pipeline import compiled_simulation, warn_dropped
+from .pipeline import warn_dropped
 from .result import DyniaResult
 from .sampling import sample
 from .settings import SAMPLERS, AnalysisSettings, parameter_box
@@ -87,6 +99,11 @@ _STATEFUL_FLAVOURS = ("mcat",)
 
 # Default ceiling on the values of one time chunk's blocks: 4e6 float64 = 32 MB.
 _BLOCK_VALUES = 4_000_000
+
+# Time chunks submitted and not yet analysed, per worker thread: enough to
+# keep every worker busy while the next chunk's stage 1 runs, few enough
+# that the blocks waiting on the cluster stay a few time chunks' worth.
+_CHUNKS_AHEAD_PER_THREAD = 2
 
 
 def run(
@@ -131,9 +148,11 @@ def run(
         Samples per simulation task (default: the samples shared evenly
         among the worker threads).
     time_chunks : int, optional
-        Time steps per analysis task (default: about four tasks per worker
-        thread, and at most about 4e6 values per task). Any size works,
-        also one below the window's reach ``n``.
+        Time steps per simulation and analysis task (default: about four
+        tasks per worker thread, and at most about 4e6 values per analysis
+        task). Any size works, also one below the window's reach ``n``.
+        Memory on the cluster grows with it (see the module docstring),
+        not with the record.
     settings, dt, n_samples, n, percentage, bins, conf_level, flavour, x0, rng, progress, min_points, window
         As :func:`dynia.run`; ``settings.workers`` must be None (the
         cluster's workers do the work).
@@ -255,21 +274,22 @@ def run(
         if time_chunks is None:
             time_chunks = max(1, min(math.ceil(n_steps / (4 * threads)), _BLOCK_VALUES // samples.shape[0]))
         windows = _Windows(before, after, settings.min_points, compiled)
-        chunk_inputs = [
-            client.submit(
-                _chunk_window_inputs, model, rows, u_data, y_data, dt, x0, windows, time_chunks, first, pure=False
+        row_chunks = list(_scatter_rows(client, samples[:, model_order], sample_chunks))
+        if model.resumable:
+            blocks = _ChainedBlocks(client, model, row_chunks, u_data, y_data, dt, x0, windows)
+        else:
+            blocks = _WholeRecordBlocks(
+                client, model, row_chunks, u_data, y_data, dt, x0, windows, n_steps, time_chunks
             )
-            for first, rows in _scatter_rows(client, samples[:, model_order], sample_chunks)
-        ]
         ic, ci, gradient = _analyse_on_cluster(
             client,
-            chunk_inputs,
+            blocks,
             flavour_impl,
             windows,
-            n_steps,
-            time_chunks,
+            [(start, min(start + time_chunks, n_steps)) for start in range(0, n_steps, time_chunks)],
             stateful=flavour in _STATEFUL_FLAVOURS,
             progress=progress,
+            ahead=_CHUNKS_AHEAD_PER_THREAD * threads,
         )
 
     # The same record as dynia.run's: the settings asked for, then what the analysis did.
@@ -290,45 +310,56 @@ def run(
     )
 
 
-def _analyse_on_cluster(client, chunk_inputs, flavour, windows, n_steps, time_chunks, *, stateful, progress):
-    """Stage 2 from the futures of stage 1: one task per time chunk; ic, ci, gradient on the client.
+def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, progress, ahead):
+    """Stage 2, fed by stage 1: one task per time chunk; ic, ci, gradient on the client.
 
-    ``chunk_inputs`` (the stage-1 futures, in sample order) is emptied, so
-    that each chunk's output is released once split into time blocks. A
-    stateful flavour's tasks form a chain in time order, each starting
-    from the state the one before left.
+    ``blocks(start, stop)`` submits stage 1 of the time chunk [start, stop)
+    and returns the futures of its blocks, in sample order; it is called
+    in time order. At most ``ahead`` time chunks are submitted and not yet
+    analysed, so the blocks on the cluster stay those of a few time chunks;
+    a chunk's blocks are released once it is analysed. A stateful
+    flavour's tasks form a chain in time order, each starting from the
+    state the one before left.
     """
     from distributed import as_completed
 
-    spans = [(start, min(start + time_chunks, n_steps)) for start in range(0, n_steps, time_chunks)]
-    # blocks[s][k]: the window inputs of sample chunk s for time chunk k
-    blocks = [
-        [client.submit(operator.getitem, inputs, k, pure=False) for k in range(len(spans))] for inputs in chunk_inputs
-    ]
-    chunk_inputs.clear()
-    state = client.scatter(flavour, hash=False)
-    chunk_spans = {}
-    for k, (start, stop) in enumerate(spans):
-        analysed = client.submit(
-            _analyse_time_chunk, state, windows, [row[k] for row in blocks], stop - start, pure=False
-        )
-        chunk_spans[client.submit(operator.getitem, analysed, 0, pure=False)] = (start, stop)
-        if stateful:
-            state = client.submit(operator.getitem, analysed, 1, pure=False)
-    del blocks  # the analysis tasks hold the blocks they need; each goes once they are done
-
     n_params = flavour.bin_centres.shape[0]
+    n_steps = spans[-1][1]
     ic = np.empty((n_params, n_steps))
     ci = np.empty((n_params, n_steps, 2))
     gradient = np.empty((n_params, flavour.n_bins, n_steps))
-    finished = as_completed(chunk_spans, loop=client.loop)
+    state = client.scatter(flavour, hash=False)
+    chunk_spans = {}
+    finished = as_completed(loop=client.loop)
+
+    def submit(start, stop):
+        nonlocal state
+        analysed = client.submit(_analyse_time_chunk, state, windows, blocks(start, stop), stop - start, pure=False)
+        chunk = client.submit(operator.getitem, analysed, 0, pure=False)
+        chunk_spans[chunk] = (start, stop)
+        finished.add(chunk)
+        if stateful:
+            state = client.submit(operator.getitem, analysed, 1, pure=False)
+
+    waiting = iter(spans)
+    for start, stop in itertools.islice(waiting, ahead):
+        submit(start, stop)
+    bar = None
     if progress:
         from tqdm.auto import tqdm
 
-        finished = tqdm(finished, total=len(chunk_spans), desc="DYNIA windows", unit="chunk")
+        bar = tqdm(total=len(spans), desc="DYNIA windows", unit="chunk")
     for future in finished:
         start, stop = chunk_spans.pop(future)
-        ic[:, start:stop], ci[:, start:stop], gradient[:, :, start:stop] = future.result()
+        # What a flavour reports beyond these three is not part of the result (yet).
+        ic[:, start:stop], ci[:, start:stop], gradient[:, :, start:stop], *_ = future.result()
+        following = next(waiting, None)
+        if following is not None:
+            submit(*following)
+        if bar is not None:
+            bar.update()
+    if bar is not None:
+        bar.close()
     return ic, ci, gradient
 
 
@@ -402,14 +433,6 @@ class _Windows:
         """Steps per window."""
         return self.before + self.after + 1
 
-    def errors(self, model, params, u, y, dt, x0, time_chunks):
-        """The absolute errors of simulating ``params``, served in time order."""
-        if self.compiled and compiled_simulation(model):
-            # One thread: the cluster's workers are the parallelism (and no pool needs closing).
-            return CompiledErrors(model, params, u, y, dt=dt, x0=x0, workers=1)
-        sims = model.simulate_chunks(params, u, dt=dt, x0=x0, chunk_steps=time_chunks)
-        return StreamedErrors(y, sims, params.shape[0])
-
     def block(self, errors, start, stop, n_steps):
         """One sample chunk's input to the windows at steps [start, stop), with its measured counts."""
         window_errors, measured = window_inputs(
@@ -428,11 +451,107 @@ class _Windows:
         return flavour.analyse(joined, counts >= self.min_points)
 
 
-def _chunk_window_inputs(model, params, u, y, dt, x0, windows, time_chunks, first):
-    """Stage 1: simulate one sample chunk over the record; its window inputs per time chunk."""
+class _ChainedBlocks:
+    """Stage 1 for a model that can pause and resume: per time chunk, one task per sample chunk.
+
+    The task of a sample chunk's time chunk resumes from what the task of
+    its previous time chunk handed on, so the tasks of a sample chunk form
+    a chain in time and none simulates more than a time chunk and its halo.
+    """
+
+    def __init__(self, client, model, row_chunks, u, y, dt, x0, windows):
+        self._client = client
+        self._arguments = (model, u, y, dt, x0, windows)
+        self._row_chunks = row_chunks
+        self._handed_on = [None] * len(row_chunks)
+
+    def __call__(self, start, stop):
+        """Submit the time chunk [start, stop), the one after the last submitted; its blocks' futures."""
+        blocks = []
+        for index, (first, rows) in enumerate(self._row_chunks):
+            step = self._client.submit(
+                _chained_window_inputs, rows, first, self._handed_on[index], start, stop, *self._arguments, pure=False
+            )
+            blocks.append(self._client.submit(operator.getitem, step, 0, pure=False))
+            self._handed_on[index] = self._client.submit(operator.getitem, step, 1, pure=False)
+        return blocks
+
+
+def _chained_window_inputs(params, first, handed_on, start, stop, model, u, y, dt, x0, windows):
+    """Stage 1, resumable: one sample chunk's window inputs at steps [start, stop), and what to hand on.
+
+    ``handed_on`` is what the task of the previous time chunk returned, the
+    simulation's state and the errors from where this chunk's windows reach
+    back to up to that state's step (None for the first time chunk). The
+    steps the windows reach beyond it are simulated here.
+    """
+    n_steps = y.size
+    reach_back, reach_ahead = max(start - windows.before, 0), min(stop + windows.after, n_steps)
+    with _sample_chunk_context(first, params.shape[0]):
+        if handed_on is None:
+            state, errors = model.start_simulation(params, u, dt=dt, x0=x0), np.empty((params.shape[0], 0))
+        else:
+            state, errors = handed_on
+        if reach_ahead > state.step:
+            simulated_from = state.step
+            sims, state = model.simulate_span(state, u, reach_ahead)
+            fresh = StreamedErrors(y, [sims], params.shape[0]).columns(simulated_from, reach_ahead)
+            errors = np.concatenate([errors, fresh], axis=1)
+        block = windows.block(_ErrorSpan(y, reach_back, errors), start, stop, n_steps)
+        shared = max(stop - windows.before, 0)  # where the next time chunk's windows reach back to
+        # A copy, so that the errors of this chunk are freed with its block.
+        return block, (state, errors[:, shared - reach_back :].copy())
+
+
+class _ErrorSpan:
+    """The absolute errors of consecutive steps from ``first`` on, as an error source of ``window_inputs``."""
+
+    def __init__(self, y, first, errors):
+        self.y = y
+        self._first = first
+        self._errors = errors
+
+    def columns(self, start, stop):
+        """Errors for times [start, stop), shape (n_samples, stop - start)."""
+        return self._errors[:, start - self._first : stop - self._first]
+
+    def rows(self, start, stop):
+        """Errors for times [start, stop), time-major: shape (stop - start, n_samples)."""
+        return np.ascontiguousarray(self.columns(start, stop).T)
+
+
+class _WholeRecordBlocks:
+    """Stage 1 for a model that cannot pause: one task per sample chunk over the whole record.
+
+    Every time chunk's blocks are split off at once, so that each is
+    released after its analysis.
+    """
+
+    def __init__(self, client, model, row_chunks, u, y, dt, x0, windows, n_steps, time_chunks):
+        whole_record = [
+            client.submit(
+                _whole_record_window_inputs, model, rows, u, y, dt, x0, windows, time_chunks, first, pure=False
+            )
+            for first, rows in row_chunks
+        ]
+        self._time_chunks = time_chunks
+        self._by_time = {
+            k: [client.submit(operator.getitem, inputs, k, pure=False) for inputs in whole_record]
+            for k in range(math.ceil(n_steps / time_chunks))
+        }
+
+    def __call__(self, start, stop):
+        """The blocks' futures of the time chunk [start, stop), handed out once."""
+        return self._by_time.pop(start // self._time_chunks)
+
+
+def _whole_record_window_inputs(model, params, u, y, dt, x0, windows, time_chunks, first):
+    """Stage 1, not resumable: simulate one sample chunk over the record; its window inputs per time chunk."""
     n_steps = y.size
     with _sample_chunk_context(first, params.shape[0]):
-        errors = windows.errors(model, params, u, y, dt, x0, time_chunks)
+        errors = StreamedErrors(
+            y, model.simulate_chunks(params, u, dt=dt, x0=x0, chunk_steps=time_chunks), params.shape[0]
+        )
         return [
             windows.block(errors, start, min(start + time_chunks, n_steps), n_steps)
             for start in range(0, n_steps, time_chunks)

@@ -21,12 +21,13 @@ array([[0.   , 1.264, 1.729, 1.9  ],
        [0.   , 0.   , 0.787, 1.554]])
 """
 
-from .base import Model
+from .base import Model, SimulationState
 from .custom import FunctionModel, StateSpaceModel
 from .linear import FOPDT, FirstOrder, LinearModel, SecondOrderDelay, Stepper, TransferFunction
 
 __all__ = [
     "Model",
+    "SimulationState",
     "LinearModel",
     "Stepper",
     "FirstOrder",

@@ -3,9 +3,12 @@
 A model simulates the same record for many parameter sets at once. It must
 provide :meth:`Model.simulate_chunks` (the output a block of steps at a
 time, so that memory does not grow with the record); :meth:`Model.stepper`
-(one logged sample at a time, for :class:`dynia.online.OnlineDynia`) is
-optional. :meth:`Model.simulate`, :meth:`Model.finite_samples` and the
-argument checks are shared.
+(one logged sample at a time, for :class:`dynia.online.OnlineDynia`) and
+:meth:`Model.start_simulation` with :meth:`Model.simulate_span` (a
+simulation paused and resumed from a :class:`SimulationState`, possibly in
+another process, for :mod:`dynia.distributed`) are optional.
+:meth:`Model.simulate`, :meth:`Model.finite_samples` and the argument checks
+are shared.
 
 Shape convention
 ----------------
@@ -24,17 +27,47 @@ from __future__ import annotations
 
 import numbers
 from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from ..errors import DataError, ModelError
 
-__all__ = ["Model", "VALUES_PER_CHUNK", "check_names"]
+__all__ = ["Model", "SimulationState", "VALUES_PER_CHUNK", "check_names"]
 
 # Default chunk size: 4e6 float64 values are 32 MB per output chunk, large
 # enough that the per-chunk overhead is negligible and small enough that the
 # chunk plus the gathered inputs stay far below typical memory limits.
 VALUES_PER_CHUNK = 4_000_000
+
+
+@dataclass(frozen=True)
+class SimulationState:
+    """Where a paused simulation stands: the next step and what the model needs to go on from it.
+
+    Made by :meth:`Model.start_simulation` and :meth:`Model.simulate_span`;
+    it can be pickled and sent to another process. :meth:`Model.simulate_span`
+    never changes the state it is given, so one state can be resumed twice
+    with the same result.
+
+    Attributes
+    ----------
+    step : int
+        The step the simulation goes on from (0 before the first step).
+    n_steps : int
+        Length of the record it simulates.
+    n_samples : int
+        Number of parameter sets simulated.
+    carried : object
+        The model's own: the parameter sets or their discretisation, and
+        the state of every sample at ``step``.
+    """
+
+    step: int
+    n_steps: int
+    n_samples: int
+    carried: Any
 
 
 class Model:
@@ -179,6 +212,113 @@ class Model:
         [0.0, 0.0, 0.0, 1.0]
         """
         raise ModelError(f"{type(self).__name__} cannot be simulated one sample at a time (it has no stepper)")
+
+    @property
+    def resumable(self) -> bool:
+        """Whether the simulation can pause and resume (:meth:`start_simulation`, :meth:`simulate_span`)."""
+        return False
+
+    def start_simulation(self, params, u, dt: float = 1.0, x0: str = "zero") -> SimulationState:
+        """The state before the first step of simulating every parameter set on ``u``.
+
+        With :meth:`simulate_span` the record is then simulated in spans of
+        steps, each resumed from the state the previous one left, in this or
+        another process; the spans joined equal `simulate` bit for bit.
+
+        Parameters
+        ----------
+        params, u, dt, x0
+            As for `simulate`; ``u`` is the whole record.
+
+        Returns
+        -------
+        SimulationState
+            At step 0.
+
+        Raises
+        ------
+        ModelError
+            If the model cannot pause and resume (see `resumable`).
+
+        Examples
+        --------
+        >>> from dynia.models import FirstOrder
+        >>> model, u = FirstOrder(), [1.0] * 5
+        >>> state = model.start_simulation([[2.0, 1.0]], u)
+        >>> first, state = model.simulate_span(state, u, 2)
+        >>> rest, state = model.simulate_span(state, u, 5)
+        >>> (first.round(4), rest.round(4), state.step)
+        (array([[0.    , 1.2642]]), array([[1.7293, 1.9004, 1.9634]]), 5)
+        """
+        raise ModelError(
+            f"{self!r} cannot pause a simulation and resume it later (it has no start_simulation and "
+            "simulate_span); it can only be simulated over the whole record"
+        )
+
+    def simulate_span(self, state: SimulationState, u, stop: int) -> tuple[np.ndarray, SimulationState]:
+        """Simulate from ``state.step`` up to step ``stop``, resuming ``state``.
+
+        Parameters
+        ----------
+        state : SimulationState
+            From :meth:`start_simulation` or a previous span; not changed.
+        u : array_like
+            The whole record, as given to :meth:`start_simulation`.
+        stop : int
+            The step after the span, ``state.step < stop <= n_steps``.
+
+        Returns
+        -------
+        sims : ndarray, shape (n_samples, stop - state.step)
+            The output over the span, bit for bit those columns of `simulate`.
+        state : SimulationState
+            At ``stop``.
+
+        Examples
+        --------
+        >>> from dynia.models import FirstOrder
+        >>> model, u = FirstOrder(), [1.0] * 4
+        >>> state = model.start_simulation([[2.0, 1.0]], u)
+        >>> model.simulate_span(state, u, 4)[0].round(4)
+        array([[0.    , 1.2642, 1.7293, 1.9004]])
+        """
+        raise ModelError(
+            f"{self!r} cannot pause a simulation and resume it later (it has no start_simulation and "
+            "simulate_span); it can only be simulated over the whole record"
+        )
+
+    def check_span(self, state, u, stop) -> np.ndarray:
+        """Check the arguments of :meth:`simulate_span`; return the whole ``u`` as floats.
+
+        Only the span's own steps are checked for finite values: the steps
+        before it were checked by the spans that simulated them, and a
+        record of a million steps is not rescanned for every span.
+        """
+        if not isinstance(state, SimulationState):
+            raise ModelError(
+                f"state must be the SimulationState of start_simulation or simulate_span; got {type(state).__name__}"
+            )
+        if isinstance(stop, bool) or not isinstance(stop, numbers.Integral) or not state.step < stop <= state.n_steps:
+            raise ModelError(
+                f"stop must be a whole number after the state's step {state.step} and at most the record's "
+                f"{state.n_steps} steps; got {stop!r}"
+            )
+        try:
+            u = np.asarray(u, dtype=float)
+        except (TypeError, ValueError):
+            raise DataError("u must be the whole record given to start_simulation, an array of numbers") from None
+        if u.ndim == 0 or u.shape[0] != state.n_steps:
+            raise DataError(
+                f"u has shape {u.shape} but the simulation was started on a record of {state.n_steps} steps; "
+                "give the same whole record to every span"
+            )
+        try:
+            span = self.check_input(u[state.step : stop])
+        except DataError as error:
+            raise DataError(
+                f"in the span of steps {state.step} to {stop - 1} (counted from its start): {error}"
+            ) from None
+        return u.reshape(state.n_steps, *span.shape[1:])
 
     def finite_samples(self, params, u, dt: float = 1.0, x0: str = "zero") -> np.ndarray:
         """Which parameter sets simulate to finite output over the whole record.

@@ -37,6 +37,7 @@ array([[0.   , 0.5  , 0.875]])
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 
@@ -44,7 +45,7 @@ import numpy as np
 
 from ..errors import DyniaError, ModelError
 from ..settings import check_dt, check_x0
-from .base import Model
+from .base import Model, SimulationState
 
 try:
     import numba
@@ -149,6 +150,32 @@ class FunctionModel(Model):
         return _ChunkStepper(self, params, dt)
 
     stepper.__doc__ = Model.stepper.__doc__
+
+    @property
+    def resumable(self) -> bool:
+        return self.streams
+
+    resumable.__doc__ = Model.resumable.__doc__
+
+    def start_simulation(self, params, u, dt: float = 1.0, x0: str = "zero") -> SimulationState:
+        if not self.streams:
+            raise ModelError(
+                f"{self!r} simulates the whole record at once, so it cannot pause and resume; "
+                "give state=... (fn then simulates chunk by chunk)"
+            )
+        params, u, dt = self._arguments(params, u, dt, x0)
+        return SimulationState(0, u.shape[0], params.shape[0], (params, dt, self._initial_state(params)))
+
+    start_simulation.__doc__ = Model.start_simulation.__doc__
+
+    def simulate_span(self, state, u, stop):
+        u = self.check_span(state, u, stop)
+        params, dt, carried = state.carried
+        # fn may update its state in place; the state given must stay as it was.
+        sims, carried = self._called(params, u[state.step : stop], dt, copy.deepcopy(carried))
+        return sims, SimulationState(stop, state.n_steps, state.n_samples, (params, dt, carried))
+
+    simulate_span.__doc__ = Model.simulate_span.__doc__
 
     def _arguments(self, params, u, dt, x0):
         params = self.check_params(params)
@@ -278,6 +305,29 @@ class StateSpaceModel(Model):
 
     stepper.__doc__ = Model.stepper.__doc__
 
+    @property
+    def resumable(self) -> bool:
+        return True
+
+    resumable.__doc__ = Model.resumable.__doc__
+
+    def start_simulation(self, params, u, dt: float = 1.0, x0: str = "zero") -> SimulationState:
+        params = self.check_params(params)
+        u = self.check_input(u)
+        self._check_x0_setting(x0)
+        return SimulationState(0, u.shape[0], params.shape[0], (params, check_dt(dt), self.initial_state(params)))
+
+    start_simulation.__doc__ = Model.start_simulation.__doc__
+
+    def simulate_span(self, state, u, stop):
+        u = self.check_span(state, u, stop)
+        params, dt, values = state.carried
+        # step may update the state in place; the state given must stay as it was.
+        sims, values = self._span(values.copy(), u[state.step : stop], params, dt, first=state.step == 0)
+        return sims, SimulationState(stop, state.n_steps, state.n_samples, (params, dt, values))
+
+    simulate_span.__doc__ = Model.simulate_span.__doc__
+
     def initial_state(self, params):
         """The state at step 0 of every sample, (n_samples, n_states), checked."""
         n_samples = params.shape[0]
@@ -301,19 +351,21 @@ class StateSpaceModel(Model):
             raise ModelError(f"{self!r} starts from its own x0; x0={x0!r} is not available for it")
 
     def _chunks(self, params, u, dt, chunk_steps, state):
-        first = True
         for start in range(0, u.shape[0], chunk_steps):
-            piece = u[start : start + chunk_steps]
-            if first:  # the first step in Python: clear errors for wrong shapes before any compiled loop
-                sims = np.empty((params.shape[0], piece.shape[0]))
-                sims[:, 0], state = self.advance(state, piece[0], params, dt)
-                rest = piece[1:]
-                if rest.shape[0]:
-                    sims[:, 1:], state = self._loop(state, rest, params, dt)
-                first = False
-            else:
-                sims, state = self._loop(state, piece, params, dt)
+            sims, state = self._span(state, u[start : start + chunk_steps], params, dt, first=start == 0)
             yield sims
+
+    def _span(self, state, piece, params, dt, *, first):
+        """The outputs over ``piece`` and the state after it; ``first``: the piece starts the record."""
+        if not first:
+            return self._loop(state, piece, params, dt)
+        # The first step in Python: clear errors for wrong shapes before any compiled loop.
+        sims = np.empty((params.shape[0], piece.shape[0]))
+        sims[:, 0], state = self.advance(state, piece[0], params, dt)
+        rest = piece[1:]
+        if rest.shape[0]:
+            sims[:, 1:], state = self._loop(state, rest, params, dt)
+        return sims, state
 
     def _loop(self, state, piece, params, dt):
         if self.compiled:

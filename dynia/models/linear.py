@@ -58,7 +58,7 @@ import scipy.linalg
 
 from ..errors import DataError, ModelError
 from ..settings import check_dt, check_x0
-from .base import Model
+from .base import Model, SimulationState
 
 __all__ = ["LinearModel", "Stepper", "FirstOrder", "FOPDT", "SecondOrderDelay", "TransferFunction"]
 
@@ -147,6 +147,35 @@ class LinearModel(Model):
         return _run(system, u, x0, chunk_steps)
 
     simulate_chunks.__doc__ = Model.simulate_chunks.__doc__
+
+    @property
+    def resumable(self) -> bool:
+        return True
+
+    resumable.__doc__ = Model.resumable.__doc__
+
+    def start_simulation(self, params, u, dt: float = 1.0, x0: str = "zero") -> SimulationState:
+        params = self.check_params(params)
+        u = self.check_input(u)
+        x0 = check_x0(x0)
+        system = self.discretise(params, check_dt(dt), u.shape[0], steady=x0 == "steady")
+        state = _initial_state(system, x0, u[0])
+        # The discretisation travels with the state: resuming must not redo it (per sample for a TransferFunction).
+        return SimulationState(0, u.shape[0], params.shape[0], (system, x0, state))
+
+    start_simulation.__doc__ = Model.start_simulation.__doc__
+
+    def simulate_span(self, state, u, stop):
+        u = self.check_span(state, u, stop)
+        system, x0, values = state.carried
+        # The recursion overwrites the rows it starts from; the state given stays as it was.
+        recursion = _Recursion(system, values.copy())
+        time_major = np.empty((stop - state.step, state.n_samples))
+        _advance(system, recursion, u, x0, state.step, stop, time_major)
+        resumed = SimulationState(stop, state.n_steps, state.n_samples, (system, x0, recursion.state()))
+        return _to_sample_major(time_major), resumed
+
+    simulate_span.__doc__ = Model.simulate_span.__doc__
 
     def stepper(self, params, dt: float = 1.0, x0: str = "zero") -> Stepper:
         params = self.check_params(params)
@@ -667,35 +696,40 @@ def _input_major(per_sample: np.ndarray) -> np.ndarray:
 
 def _run(system: _DiscreteSystem, u: np.ndarray, x0: str, chunk_steps: int) -> Iterator[np.ndarray]:
     """Advance all samples through ``u`` and yield (n_samples, m) output chunks."""
-    n_samples = system.c.shape[1]
     n_steps = u.shape[0]
-    # One row per input; slot 0 stands for every time before t=0, so clipping
-    # indices at -1 and shifting by one gathers the pre-history without
-    # padding by the delay.
-    by_input = u.reshape(n_steps, -1).T
-    before = by_input[:, :1] if x0 == "steady" else np.zeros((by_input.shape[0], 1))
-    padded_input = np.concatenate((before, by_input), axis=1)
     recursion = _Recursion(system, _initial_state(system, x0, u[0]))
-    time_major = np.empty((min(chunk_steps, n_steps), n_samples))
+    time_major = np.empty((min(chunk_steps, n_steps), system.c.shape[1]))
+    for start in range(0, n_steps, chunk_steps):
+        stop = min(start + chunk_steps, n_steps)
+        _advance(system, recursion, u, x0, start, stop, time_major[: stop - start])
+        yield _to_sample_major(time_major[: stop - start])
 
+
+def _advance(system: _DiscreteSystem, recursion: _Recursion, u: np.ndarray, x0: str, start: int, stop: int, out):
+    """Write the outputs of steps [start, stop) into ``out`` (stop - start, n_samples); the recursion moves on."""
+    n_steps = u.shape[0]
+    by_input = u.reshape(n_steps, -1).T
     delays = system.delay_steps
     # With one common delay the delayed input is a scalar per step, so no
     # (steps, samples) gather is needed.
     offsets = delays[:1] if np.all(delays == delays[0]) else delays
-    for start in range(0, n_steps, chunk_steps):
-        stop = min(start + chunk_steps, n_steps)
-        source_index = np.arange(start, stop)[:, None] - offsets[None, :]
-        # Each gathered block is (n_inputs, steps, offsets): u_j[k-d], then u_j[k-d-1].
-        gathered = [padded_input[:, np.maximum(source_index, -1) + 1]]
-        if recursion.needs_prev:
-            gathered.append(padded_input[:, np.maximum(source_index - 1, -1) + 1])
-        if offsets.shape[0] == 1:
-            gathered = [block[:, :, 0] for block in gathered]
-        inputs = [rows for block in gathered for rows in block]
-        for step in range(stop - start):
-            # The state after the record is never output; advancing to it could only overflow.
-            recursion.step(time_major[step], [rows[step] for rows in inputs], advance=start + step + 1 < n_steps)
-        yield _to_sample_major(time_major[: stop - start])
+    # Only the inputs the span reaches back to are gathered, after one slot
+    # standing for every time before t=0: indices clipped at reach - 1 land
+    # on it, so the pre-history needs no padding by the delay.
+    reach = max(start - int(offsets.max()) - 1, 0)
+    before = by_input[:, :1] if x0 == "steady" else np.zeros((by_input.shape[0], 1))
+    padded_input = np.concatenate((before, by_input[:, reach:stop]), axis=1)
+    source_index = np.arange(start, stop)[:, None] - offsets[None, :]
+    # Each gathered block is (n_inputs, steps, offsets): u_j[k-d], then u_j[k-d-1].
+    gathered = [padded_input[:, np.maximum(source_index, reach - 1) - reach + 1]]
+    if recursion.needs_prev:
+        gathered.append(padded_input[:, np.maximum(source_index - 1, reach - 1) - reach + 1])
+    if offsets.shape[0] == 1:
+        gathered = [block[:, :, 0] for block in gathered]
+    inputs = [rows for block in gathered for rows in block]
+    for step in range(stop - start):
+        # The state after the record is never output; advancing to it could only overflow.
+        recursion.step(out[step], [rows[step] for rows in inputs], advance=start + step + 1 < n_steps)
 
 
 def _initial_state(system: _DiscreteSystem, x0: str, first_input) -> np.ndarray:
@@ -750,6 +784,10 @@ class _Recursion:
         )
         self._current, self._upcoming = list(state), list(np.empty_like(state))
         self._scratch = np.empty(n_samples)
+
+    def state(self) -> np.ndarray:
+        """A copy of the current state, (n_states, n_samples)."""
+        return np.array(self._current).reshape(len(self._current), self._scratch.shape[0])
 
     def step(self, out: np.ndarray, inputs: list, advance: bool = True) -> None:
         """Write y[k] into ``out`` and, if ``advance``, move the state to x[k+1].
