@@ -57,10 +57,10 @@ section 4.2.
 The number of samples
 ---------------------
 A pilot :func:`dynia.run` at the proposed window and share with few samples
-(enough for 25 behavioural sets, at least 500) gives the Monte Carlo
-standard error of each parameter's IC near its highest value: from
-``result.ic_se`` when :func:`dynia.run` offers ``ic_error=True``, otherwise
-from the spread of that many samples over five seeds. The band's limits are
+(enough for 50 behavioural sets, at least 500: ten batches of five for the
+batch means) gives the Monte Carlo standard error of each parameter's IC
+near its highest value, ``result.ic_se`` of ``ic_error=True`` (its honesty
+is checked in :mod:`dynia.honesty`). The band's limits are
 quantiles of a behavioural set whose size grows with the samples, so the
 error shrinks as ``1/sqrt(N)``; the proposal is the N that brings the
 largest of them to ``ic_se_target`` (0.02), rounded up to two significant
@@ -87,10 +87,8 @@ Examples
 30
 """
 
-import inspect
 import math
 import re
-import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -98,6 +96,7 @@ from scipy.optimize import minimize_scalar
 from scipy.signal import lfilter
 
 from . import _checks
+from .engine.flavours import IC_BATCHES, MIN_BATCH_BEHAVIOURAL
 from .errors import DataError, SettingsError
 from .fit import fit_segments
 from .pipeline import run
@@ -140,12 +139,11 @@ _GRID_POINTS = 60
 # an integer, so that 100 / 10**d is the float nearest the intended 1 % or 0.1 %.
 _RANGE_SHARE_INVERSE = 10
 _MAX_PERCENTAGE = 10.0
-# The pilot holds this many behavioural sets (and at least _PILOT_MIN samples); the proposal at least _MIN_BEHAVIOURAL.
-_PILOT_BEHAVIOURAL = 25
+# The pilot holds this many behavioural sets (and at least _PILOT_MIN samples): IC_BATCHES batches of
+# MIN_BATCH_BEHAVIOURAL for its Monte Carlo error. The proposal keeps at least _MIN_BEHAVIOURAL.
+_PILOT_BEHAVIOURAL = IC_BATCHES * MIN_BATCH_BEHAVIOURAL
 _PILOT_MIN = 500
 _MIN_BEHAVIOURAL = 50
-# Without result.ic_se, the pilot is repeated with this many seeds.
-_PILOT_SEEDS = 5
 # The IC standard error is pooled over the steps whose pilot IC lies within this of the parameter's highest.
 _PEAK_MARGIN = 0.05
 # An input change counts when it exceeds this share of the input's range; the input is step-like when
@@ -302,8 +300,8 @@ class Suggestion:
     time_scale : TimeScale
         The first-order fit that set the window.
     pilot : dict
-        ``n_samples``, ``seeds``, ``source`` ("ic_se" or "seeds") and per
-        parameter ``max_ic`` and ``ic_se`` of the pilot run.
+        ``n_samples``, ``seed`` and per parameter ``max_ic`` and ``ic_se``
+        of the pilot run.
     fit : dict
         Per parameter the least-squares ``estimate``, its ``std_error``
         (robust, :attr:`dynia.fit.FitResult.std_errors_hac`), its ``range``,
@@ -444,10 +442,9 @@ def suggest(u, y, model, bounds, *, dt=1.0, x0="zero", ic_se_target=IC_SE_TARGET
     needed = pilot["n_samples"] * (worst_se / target) ** 2
     floor = math.ceil(_MIN_BEHAVIOURAL / (percentage / 100))
     n_samples = max(_round_up(needed), floor)
-    source = "result.ic_se" if pilot["source"] == "ic_se" else f"spread over {len(pilot['seeds'])} seeds"
     reasons.append(
         f"samples {n_samples}: a pilot with {pilot['n_samples']} samples gave an IC standard error of "
-        f"{worst_se:.3f} for {worst} near its highest IC ({source}); "
+        f"{worst_se:.3f} for {worst} near its highest IC (result.ic_se); "
         f"it falls as 1/sqrt(N), so {pilot['n_samples']} x ({worst_se:.3f}/{target:g})^2 = {needed:.0f} reach "
         f"{target:g}" + (f" (at least {floor}, for {_MIN_BEHAVIOURAL} behavioural sets)" if floor > needed else "")
     )
@@ -499,23 +496,13 @@ def suggest(u, y, model, bounds, *, dt=1.0, x0="zero", ic_se_target=IC_SE_TARGET
 
 
 def _pilot(u, y, model, bounds, *, dt, x0, n, percentage, rng):
-    """IC standard error near each parameter's highest IC, from a pilot run (or several)."""
+    """IC standard error near each parameter's highest IC, from a pilot run's ``ic_se``."""
     n_samples = max(_PILOT_MIN, math.ceil(_PILOT_BEHAVIOURAL / (percentage / 100)))
-    options = dict(dt=dt, x0=x0, n=n, percentage=percentage, n_samples=n_samples)
-    if "ic_error" in inspect.signature(run).parameters:
-        seeds = [int(rng.integers(2**63))]
-        result = run(u, y, model, bounds, ic_error=True, rng=seeds[0], **options)
-        ic, spread = result.ic, np.asarray(result.ic_se, dtype=float)
-        if spread.shape == (len(result.names),):
-            spread = np.repeat(spread[:, None], ic.shape[1], axis=1)
-        variance, source = spread**2, "ic_se"
-    else:
-        seeds = [int(seed) for seed in rng.integers(2**63, size=_PILOT_SEEDS)]
-        runs = np.stack([run(u, y, model, bounds, rng=seed, **options).ic for seed in seeds])
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)  # steps where every run's IC is missing
-            ic, variance = np.nanmean(runs, axis=0), np.nanvar(runs, axis=0, ddof=1)
-        source = "seeds"
+    seed = int(rng.integers(2**63))
+    result = run(
+        u, y, model, bounds, dt=dt, x0=x0, n=n, percentage=percentage, n_samples=n_samples, ic_error=True, rng=seed
+    )
+    ic, variance = result.ic, result.ic_se**2
     parameters = {}
     for p, name in enumerate(bounds):
         if np.isnan(ic[p]).all():
@@ -524,7 +511,7 @@ def _pilot(u, y, model, bounds, *, dt, x0, n, percentage, rng):
         highest = float(np.nanmax(ic[p]))
         near = ic[p] >= highest - _PEAK_MARGIN
         parameters[name] = dict(max_ic=highest, ic_se=float(math.sqrt(np.nanmean(variance[p][near]))))
-    return dict(n_samples=n_samples, seeds=seeds, source=source, parameters=parameters)
+    return dict(n_samples=n_samples, seed=seed, parameters=parameters)
 
 
 def _close_changes(u, n, dt):

@@ -1,7 +1,6 @@
 """dynia suggest and --window: settings from the record's own time scales, and the reasons for them."""
 
 import json
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -133,7 +132,7 @@ def test_the_share_follows_the_number_of_parameters():
     found = suggest(u, y, FOPDT(), {"K": (0, 5), "T": (0, 30), "theta": (0, 10)}, rng=1)
     assert found.percentage == 0.1
     assert found.n_samples >= 50 / 0.001  # at least 50 behavioural sets
-    assert found.pilot["n_samples"] == 25_000
+    assert found.pilot["n_samples"] == 50_000  # ten batches of five behavioural sets for its ic_se
 
 
 def test_suggested_settings_identify_the_time_constant_where_the_defaults_do_not(tclab, tmp_path, capsys):
@@ -247,20 +246,13 @@ def test_window_and_n_are_exclusive_across_the_config_file(short_record, tmp_pat
     assert json.loads((tmp_path / "p" / "summary.json").read_text())["settings"]["n"] == 5
 
 
-def test_the_pilot_takes_the_ic_standard_error_of_dynia_run_when_it_offers_one(monkeypatch):
-    import dynia.suggest
-
-    real_run = dynia.suggest.run
-
-    def run_with_errors(u, y, model, bounds, *, ic_error=False, **options):
-        assert ic_error
-        result = real_run(u, y, model, bounds, **options)
-        return SimpleNamespace(names=result.names, ic=result.ic, ic_se=np.full(result.ic.shape, 0.04))
-
-    monkeypatch.setattr(dynia.suggest, "run", run_with_errors)
+def test_the_sample_count_brings_the_pilots_ic_standard_error_to_the_target():
     u, y = tclab_record()
     found = suggest(u[:3400], y[:3400] - y[0], FirstOrder(), {"K": (0, 2), "T": (0, 500)}, rng=1)
-    assert found.pilot["source"] == "ic_se" and len(found.pilot["seeds"]) == 1
-    assert found.pilot["n_samples"] == 2500
-    assert found.n_samples == 10_000  # 2500 x (0.04 / 0.02)^2
+    # 1 % behavioural: 50 behavioural sets, ten batches of five, need 5000 pilot samples.
+    assert found.percentage == 1 and found.pilot["n_samples"] == 5000
+    worst = max(entry["ic_se"] for entry in found.pilot["parameters"].values())
+    assert worst > 0
+    needed = 5000 * (worst / 0.02) ** 2
+    assert needed <= found.n_samples <= max(needed * 1.1, 5000)  # rounded up to two significant digits
     assert "(result.ic_se)" in found.reasons[3]
