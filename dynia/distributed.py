@@ -84,6 +84,7 @@ import numpy as np
 
 from . import _checks
 from .engine.flavours import compiled_engine, flavour_analysis
+from .engine.noise import record_noise_floor, window_points
 from .engine.windows import StreamedErrors, window_halos, window_inputs, window_mean
 from .errors import DyniaError, ModelError
 from .pipeline import warn_dropped
@@ -281,7 +282,7 @@ def run(
             blocks = _WholeRecordBlocks(
                 client, model, row_chunks, u_data, y_data, dt, x0, windows, n_steps, time_chunks
             )
-        ic, ci, gradient = _analyse_on_cluster(
+        ic, ci, gradient, best, threshold = _analyse_on_cluster(
             client,
             blocks,
             flavour_impl,
@@ -292,10 +293,23 @@ def run(
             ahead=_CHUNKS_AHEAD_PER_THREAD * threads,
         )
 
+    floor = record_noise_floor(
+        best,
+        threshold,
+        window_points(y, before, after),
+        windows.slots,
+        len(names),
+        settings.percentage,
+        samples.shape[0],
+    )
     # The same record as dynia.run's: the settings asked for, then what the analysis did.
     recorded = settings.record(model, names, box, n_sampled=n_samples, n_dropped=n_samples - samples.shape[0])
     recorded.update(
-        n_samples=samples.shape[0], n_behavioural=flavour_impl.count, engine="numba" if compiled else "numpy"
+        n_samples=samples.shape[0],
+        n_behavioural=flavour_impl.count,
+        engine="numba" if compiled else "numpy",
+        noise_sigma=floor.sigma,
+        noise_multiple=floor.multiple,
     )
     return DyniaResult(
         names=tuple(names),
@@ -307,11 +321,14 @@ def run(
         gradient=gradient,
         bin_centres=flavour_impl.bin_centres,
         settings=recorded,
+        informative=floor.informative,
+        mae_spread=floor.spread,
+        noise_floor=floor.floor,
     )
 
 
 def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, progress, ahead):
-    """Stage 2, fed by stage 1: one task per time chunk; ic, ci, gradient on the client.
+    """Stage 2, fed by stage 1: one task per time chunk; ic, ci, gradient, best and threshold MAE on the client.
 
     ``blocks(start, stop)`` submits stage 1 of the time chunk [start, stop)
     and returns the futures of its blocks, in sample order; it is called
@@ -328,6 +345,7 @@ def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, pr
     ic = np.empty((n_params, n_steps))
     ci = np.empty((n_params, n_steps, 2))
     gradient = np.empty((n_params, flavour.n_bins, n_steps))
+    best, threshold = np.empty(n_steps), np.empty(n_steps)
     state = client.scatter(flavour, hash=False)
     chunk_spans = {}
     finished = as_completed(loop=client.loop)
@@ -351,8 +369,9 @@ def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, pr
         bar = tqdm(total=len(spans), desc="DYNIA windows", unit="chunk")
     for future in finished:
         start, stop = chunk_spans.pop(future)
-        # What a flavour reports beyond these three is not part of the result (yet).
-        ic[:, start:stop], ci[:, start:stop], gradient[:, :, start:stop], *_ = future.result()
+        results = future.result()
+        ic[:, start:stop], ci[:, start:stop], gradient[:, :, start:stop] = results.ic, results.ci, results.gradient
+        best[start:stop], threshold[start:stop] = results.best, results.threshold
         following = next(waiting, None)
         if following is not None:
             submit(*following)
@@ -360,7 +379,7 @@ def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, pr
             bar.update()
     if bar is not None:
         bar.close()
-    return ic, ci, gradient
+    return ic, ci, gradient, best, threshold
 
 
 def _import_distributed():
@@ -443,7 +462,7 @@ class _Windows:
         return window_mean(window_errors, measured, stop - start, self.slots)
 
     def analyse(self, flavour, blocks, m):
-        """The flavour's (ic, ci, gradient) of m windows from the blocks of every sample chunk, in order."""
+        """The flavour's :class:`~dynia.engine.flavours.WindowResults` of m windows from every sample chunk's block."""
         joined = np.concatenate([block for block, _ in blocks], axis=1)
         counts = blocks[0][1]
         if self.compiled:
@@ -561,7 +580,7 @@ def _whole_record_window_inputs(model, params, u, y, dt, x0, windows, time_chunk
 def _analyse_time_chunk(flavour, windows, blocks, m):
     """Stage 2: the analysis of one time chunk's m windows, from the blocks of all sample chunks.
 
-    Returns the chunk's (ic, ci, gradient) and the flavour after it, whose
+    Returns the chunk's :class:`~dynia.engine.flavours.WindowResults` and the flavour after it, whose
     state the next chunk of a stateful flavour starts from.
     """
     # A worker hands the same object to every task that needs it; analysing

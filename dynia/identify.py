@@ -10,7 +10,8 @@ the methods can be compared on equal terms:
     :func:`dynia.run` on the fitting part (the held-out output blanked),
     then :func:`dynia.segments.segments_from_ic`: the stretches where the
     information content of a parameter (``mode="any"``) or of all
-    (``"joint"``) reaches ``ic_threshold``. Also reports the model-structure
+    (``"joint"``) reaches ``ic_threshold`` in windows above the noise floor
+    (``DyniaResult.informative``: never a window that only ranks noise). Also reports the model-structure
     warnings of :func:`dynia.structure.structure_warnings`.
 ``"baseline"``
     The accepted intervals of :func:`dynia.baseline.find_intervals`
@@ -294,7 +295,11 @@ def identify(
     if not chosen:
         raise SettingsError(
             f"method {method!r} selected no data to fit on"
-            + (f" (no window reached IC {ic_threshold}; lower ic_threshold)" if method == "dynia" else "")
+            + (
+                f" (no window above the noise floor reached IC {ic_threshold}; lower ic_threshold)"
+                if method == "dynia"
+                else ""
+            )
         )
     if report is not None:
         inside = sum(len(found) for found in report.findings_in(chosen).values())

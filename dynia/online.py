@@ -37,6 +37,7 @@ import numpy as np
 
 from . import _checks
 from .engine.flavours import FLAVOUR_CLASSES, McatFlavour
+from .engine.noise import record_noise_floor
 from .errors import DataError
 from .models import Model
 from .result import DyniaResult
@@ -206,6 +207,7 @@ class OnlineDynia:
         self._mae = np.empty((1, n_samples))
         self._finite = np.empty(n_samples, dtype=bool)
         self._diverged = np.zeros(n_samples, dtype=bool)
+        self._percentage = percentage
         self.steps = 0
         self._blank_results()
 
@@ -272,7 +274,7 @@ class OnlineDynia:
                 errors.fill(0.0)
             self.steps += 1
             usable = self._window_mean()
-        self.ic, self.ci, self.gradient = self._analyse(usable)
+        self._analyse(usable)
         return self.ic, self.ci, self.gradient
 
     def replay(self, u, y):
@@ -292,17 +294,28 @@ class OnlineDynia:
             ``.ic`` (n_params, n_steps), ``.ci`` (n_params, n_steps, 2),
             ``.gradient`` (n_params, n_bins, n_steps), with ``.time`` continuing
             from the steps fed before; comparable with
-            ``dynia.run(..., window="trailing")`` on the same record.
+            ``dynia.run(..., window="trailing")`` on the same record. Its
+            noise floor (``.informative``, :mod:`dynia.engine.noise`) judges
+            the replayed windows together, as the batch analysis does: the
+            noise level is a median over them, so a single update cannot
+            give it.
         """
         u, y = _checks.record(u, y, n_inputs=self._model.n_inputs)
         n_params, n_bins = self.bin_centres.shape
         ic = np.empty((n_params, y.size))
         ci = np.empty((n_params, y.size, 2))
         gradient = np.empty((n_params, n_bins, y.size))
+        best, threshold, points = np.empty(y.size), np.empty(y.size), np.empty(y.size)
         first = self.steps
         for step, (u_t, y_t) in enumerate(zip(u.tolist(), y.tolist())):  # u_t a list for several inputs
             ic[:, step], ci[:, step], gradient[:, :, step] = self.update(u_t, y_t)
-        settings = dict(self._settings, n_diverged=self.n_diverged)
+            best[step], threshold[step], points[step] = self._best, self._threshold, self._present
+        floor = record_noise_floor(
+            best, threshold, points, self._errors.shape[0], n_params, self._percentage, self.samples.shape[0]
+        )
+        settings = dict(
+            self._settings, n_diverged=self.n_diverged, noise_sigma=floor.sigma, noise_multiple=floor.multiple
+        )
         return DyniaResult(
             names=self.names,
             samples=np.array(self.samples),
@@ -313,6 +326,9 @@ class OnlineDynia:
             gradient=gradient,
             bin_centres=self.bin_centres,
             settings=settings,
+            informative=floor.informative,
+            mae_spread=floor.spread,
+            noise_floor=floor.floor,
         )
 
     def _window_mean(self):
@@ -331,14 +347,16 @@ class OnlineDynia:
         present = int(self._measured.sum())
         if present:
             total /= float(present)
+        self._present = present
         return present >= self._min_points
 
     def _analyse(self, usable):
         """Rank, select and read off the window's results with the engine's flavour code."""
         if self._diverged.any():
             usable = self._rank_diverged_last() and usable
-        ic, ci, gradient = self._flavour.analyse(self._mae, np.array([usable]))
-        return ic[:, 0], ci[:, 0], gradient[:, :, 0]
+        results = self._flavour.analyse(self._mae, np.array([usable]))
+        self.ic, self.ci, self.gradient = results.ic[:, 0], results.ci[:, 0], results.gradient[:, :, 0]
+        self._best, self._threshold = float(results.best[0]), float(results.threshold[0])
 
     def _rank_diverged_last(self):
         """Give diverged sets the worst MAE; False if too few finite sets remain to analyse."""
@@ -354,6 +372,8 @@ class OnlineDynia:
 
     def _blank_results(self):
         n_params, n_bins = self.bin_centres.shape
+        self._best = self._threshold = float("nan")
+        self._present = 0
         self.ic = np.full(n_params, np.nan)
         self.ci = np.full((n_params, 2), np.nan)
         self.gradient = np.full((n_params, n_bins), np.nan)

@@ -486,7 +486,7 @@ def informative_segments(result, *, threshold=0.75, parameter=None):
     True
     """
     threshold = _checks.open_interval(threshold, "threshold", 0, 1)
-    informative = result.informative(threshold, parameter)
+    informative = result.ic_at_least(threshold, parameter)
     return mask_to_segments(result.window_cover(informative))
 
 

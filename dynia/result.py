@@ -63,6 +63,20 @@ class DyniaResult:
         NaN where ``ic`` is. None when not estimated.
     ci_se : ndarray (n_params, n_steps, 2) or None
         The same for the lower and upper limit.
+    informative : ndarray (n_steps,) of bool or None
+        The noise floor (:mod:`dynia.engine.noise`): True where the window
+        tells parameter sets apart beyond what measurement noise alone does,
+        its behavioural MAE spread above ``noise_floor``. An uninformative
+        window's IC and band are a ranking of noise: the plots grey it out,
+        the verdicts never call it ``identified`` and ``dynia identify``
+        never selects it. One mask for all parameters, since the behavioural
+        set is one for all. None for results built without it.
+    mae_spread : ndarray (n_steps,) or None
+        The statistic: the behavioural set's largest MAE minus the best.
+    noise_floor : ndarray (n_steps,) or None
+        What noise alone keeps the spread below (``settings["noise_multiple"]``
+        sampling standard deviations of the MAE of the window's points of
+        noise ``settings["noise_sigma"]``).
     """
 
     names: tuple
@@ -78,6 +92,9 @@ class DyniaResult:
     timestamps: np.ndarray | None = None
     ic_se: np.ndarray | None = None
     ci_se: np.ndarray | None = None
+    informative: np.ndarray | None = None
+    mae_spread: np.ndarray | None = None
+    noise_floor: np.ndarray | None = None
 
     def index(self, name):
         """Position of parameter ``name`` on the parameter axis."""
@@ -123,8 +140,8 @@ class DyniaResult:
             raise SettingsError(f"step {step} is outside the record's {n_steps} steps")
         return max(step - before, 0), min(step + after + 1, n_steps)
 
-    def informative(self, threshold, parameters=None, mode="any"):
-        """Steps whose window is informative: IC at least ``threshold`` (NaN never is), (n_steps,) bool.
+    def ic_at_least(self, threshold, parameters=None, mode="any"):
+        """Steps whose IC is at least ``threshold`` (NaN never is), (n_steps,) bool.
 
         ``parameters`` (default all) are the parameters considered; ``mode``
         "any" needs one of them to reach the threshold, "joint" all. For one
@@ -238,7 +255,9 @@ class DyniaResult:
 
         With :attr:`timestamps` a ``timestamp`` column follows ``time``; with
         the Monte Carlo errors, columns ``ic_se``, ``lower_se`` and
-        ``upper_se`` follow. Needs pandas (``pip install dynia[pandas]``).
+        ``upper_se`` follow; with the noise floor, ``informative`` (the
+        window's, the same for every parameter). Needs pandas (``pip install
+        dynia[pandas]``).
         """
         try:
             import pandas as pd
@@ -260,6 +279,7 @@ class DyniaResult:
                 "lower": self.ci[:, :, 0].ravel(),
                 "upper": self.ci[:, :, 1].ravel(),
                 **errors,
+                **({} if self.informative is None else {"informative": np.tile(self.informative, n_params)}),
             }
         )
 
@@ -268,8 +288,10 @@ class DyniaResult:
 
         With :attr:`ic_se`, IC +- 2 standard errors is shaded grey: where
         the shading crosses a threshold, more samples could change the
-        verdict. Returns the matplotlib Axes. A long record is drawn through
-        :func:`dynia.plotting.envelope`, so its memory does not grow with it.
+        verdict. Windows below the noise floor (:attr:`informative` False)
+        are veiled in grey. Returns the matplotlib Axes. A long record is
+        drawn through :func:`dynia.plotting.envelope`, so its memory does not
+        grow with it.
         """
         import matplotlib.pyplot as plt
 
@@ -289,6 +311,7 @@ class DyniaResult:
                 label="IC +- 2 standard errors",
             )
         ax.plot(*envelope(axis, self.ic[p]), color="k", linewidth=1)
+        self._veil_uninformative(ax, axis)
         ax.set_ylim(0, 1)
         ax.set_xlim(axis[0], axis[-1])
         ax.set_xlabel("time")
@@ -338,7 +361,9 @@ class DyniaResult:
         """Confidence band over time with the CLD gradient in grey (darker = larger).
 
         The thesis's parameter identifiability plot (Figures 2.9, 3.4, ...).
-        ``true_value`` draws a dashed line. Returns the matplotlib Axes. A long
+        ``true_value`` draws a dashed line. Windows below the noise floor
+        (:attr:`informative` False) are veiled in grey: their band and
+        gradient rank noise. Returns the matplotlib Axes. A long
         record is drawn through :mod:`dynia.plotting` (each time bucket's
         largest gradient and the envelope of the limits), so its memory does
         not grow with it.
@@ -365,15 +390,16 @@ class DyniaResult:
         import matplotlib.pyplot as plt
 
         p = self.index(name)
-        gradient = self.gradient[p]
+        ax = ax if ax is not None else plt.figure().add_subplot()
+        axis = self._plot_axis(ax)
+        # Thinned first (a gradient on disk is read a block at a time): dividing a row by its positive share
+        # commutes with a bucket's maximum, bit for bit, since rounding is monotonic.
+        columns_time, columns = decimated_columns(axis, self.gradient[p])
         if per_sample:
             counts = self.bin_counts()[p]
             share = counts / counts.sum()
             with np.errstate(divide="ignore", invalid="ignore"):
-                gradient = np.where(counts[:, None] > 0, gradient / share[:, None], 0.0)
-        ax = ax if ax is not None else plt.figure().add_subplot()
-        axis = self._plot_axis(ax)
-        columns_time, columns = decimated_columns(axis, gradient)
+                columns = np.where(counts[:, None] > 0, columns / share[:, None], 0.0)
         ax.pcolormesh(
             columns_time, self.bin_centres[p], columns, cmap="Greys", shading="nearest", vmin=0, rasterized=True
         )
@@ -381,6 +407,7 @@ class DyniaResult:
         ax.plot(*envelope(axis, self.ci[p, :, 1]), color="tab:red", linewidth=1, label="upper limit")
         if true_value is not None:
             ax.axhline(true_value, color="k", linestyle="--", linewidth=1, label="true value")
+        self._veil_uninformative(ax, axis)
         low, high = self.bounds[p]
         ax.set_ylim(min(low, self.bin_centres[p].min()), max(high, self.bin_centres[p].max()))
         ax.set_xlim(axis[0], axis[-1])
@@ -390,6 +417,30 @@ class DyniaResult:
         ax.set_title(f"Uncertainty band and {shading} of {name}")
         ax.legend(loc="upper right", fontsize="small")
         return ax
+
+    def _veil_uninformative(self, ax, axis):
+        """A translucent grey band over each run of windows below the noise floor, from edge to edge of its steps.
+
+        One collection however many runs, so a long record's plot stays small.
+        """
+        if self.informative is None or np.all(self.informative):
+            return
+        below = np.concatenate(([False], ~np.asarray(self.informative, dtype=bool), [False]))
+        starts = np.flatnonzero(below[1:] & ~below[:-1])
+        stops = np.flatnonzero(~below[1:] & below[:-1])
+        # A step reaches halfway to its neighbours; the record's first and last steps end at themselves.
+        middles = np.concatenate(([axis[0]], (axis[:-1] + axis[1:]) / 2, [axis[-1]]))
+        left, right = middles[starts], middles[stops]
+        ax.broken_barh(
+            list(zip(left, right - left)),
+            (0, 1),
+            transform=ax.get_xaxis_transform(),
+            facecolor="0.75",
+            alpha=0.5,
+            linewidth=0,
+            zorder=1.5,
+            label="below the noise floor",
+        )
 
     def _plot_axis(self, ax):
         """The x values of the plots: ``time``, or with timestamps matplotlib's date numbers on a date axis.

@@ -202,8 +202,10 @@ def segments_from_ic(result, *, threshold=0.5, min_length=None, merge_gap=None, 
     """Segments where the information content reaches a threshold.
 
     Steps are informative where the IC of the chosen parameters is at least
-    ``threshold`` (NaN, a window with too few measured points, never is).
-    Gaps shorter than ``merge_gap`` steps between informative runs are
+    ``threshold`` (NaN, a window with too few measured points, never is)
+    and, when the result has its noise floor (``result.informative``), the
+    window tells parameter sets apart beyond noise: a high IC below the
+    floor is a ranking of noise and never selected. Gaps shorter than ``merge_gap`` steps between informative runs are
     closed, then runs shorter than ``min_length`` steps are dropped. The IC
     of a window belongs to the step at its centre: for a run with
     ``window="trailing"`` (read from ``result.settings``) the IC at ``t``
@@ -252,6 +254,10 @@ def segments_from_ic(result, *, threshold=0.5, min_length=None, merge_gap=None, 
     [(1, 4)]
     >>> segments_from_ic(result, mode="per_parameter")
     {'K': [(0, 2), (3, 5)], 'T': [(1, 4), (6, 7)]}
+    >>> import dataclasses
+    >>> floored = dataclasses.replace(result, informative=np.array([True, True, True, True, False, False, False]))
+    >>> segments_from_ic(floored, mode="per_parameter")
+    {'K': [(0, 2), (3, 4)], 'T': [(1, 4)]}
     """
     if not isinstance(result, DyniaResult):
         raise TypeError(f"result must be a DyniaResult; got {type(result).__name__}")
@@ -263,7 +269,9 @@ def segments_from_ic(result, *, threshold=0.5, min_length=None, merge_gap=None, 
     window_length = None if half_window is None else 2 * half_window + 1
     min_length = _default_length(min_length, "min_length", 1, 1 if window_length is None else window_length)
     merge_gap = _default_length(merge_gap, "merge_gap", 0, 0 if half_window is None else half_window)
-    informative = np.array([result.informative(limit, name) for name, limit in zip(chosen, limits)])
+    informative = np.array([result.ic_at_least(limit, name) for name, limit in zip(chosen, limits)])
+    if result.informative is not None:
+        informative &= np.asarray(result.informative, dtype=bool)
     if half_window is not None:
         informative = np.array([result.window_centres(row) for row in informative])
     if mode == "per_parameter":

@@ -20,10 +20,18 @@ parameter one of :data:`VERDICTS` and the reasons for it.
         The max-IC step lies less than one full window (2n+1 steps) from the
         first or last step, so its window is truncated or next to one that
         is: an artefact of the record's edge is likely.
+    ``"below_noise_floor"``
+        The window at max IC lies below the noise floor of the analysis
+        (``result.informative`` False, see :mod:`dynia.engine.noise`): its
+        behavioural set's MAEs spread no further than measurement noise alone
+        makes them spread, so a narrow band there is a ranking of noise.
+        Results of :func:`dynia.run` and the other front-ends carry the
+        floor; the engine computes it in the same pass.
     ``"noise_only"``
-        The window at max IC does not discriminate between parameter sets
-        beyond what measurement noise alone produces (see :func:`noise_only`);
-        a narrow band there is a ranking of noise.
+        The same question for a result without the floor (built by hand),
+        when :func:`assess` is given the data and the model: the samples
+        are simulated again and the window's median minus best MAE is
+        compared with noise (see :func:`noise_only`).
 
 Each reason is ``{"code": ..., "text": ...}``; branch on the code, the text
 is for people.
@@ -124,8 +132,12 @@ def assess(result, *, u=None, y=None, model=None, dt=None, x0=None, weak_below=W
     u, y : array_like, shape (n_steps,), optional
         The input and output the analysis ran on (offsets already removed).
     model : dynia.models.Model, optional
-        The model analysed. Without ``u``, ``y`` and ``model`` the
-        ``"noise_only"`` rule is skipped; the other rules need the result only.
+        The model analysed. A result with its noise floor
+        (``result.informative``) needs none of ``u``, ``y`` and ``model``:
+        the ``"below_noise_floor"`` rule reads the floor, and nothing is
+        simulated. For a result without it, ``u``, ``y`` and ``model``
+        give the ``"noise_only"`` rule, which simulates the samples again;
+        without them it is skipped.
     dt, x0 : optional
         Simulation settings; default ``result.settings["dt"]`` and
         ``result.settings["x0"]``, else the model's defaults.
@@ -155,7 +167,14 @@ def assess(result, *, u=None, y=None, model=None, dt=None, x0=None, weak_below=W
         raise SettingsError("assess needs u, y and model together for the noise_only rule, or none of them")
     best = {p: int(np.nanargmax(result.ic[p])) for p in range(len(result.names)) if not np.isnan(result.ic[p]).all()}
     windows = {step: result.window_range(step) for step in set(best.values())}
-    noise = {} if model is None else _noise_windows(result, u, y, model, dt, x0, windows, simulations)
+    if model is not None:
+        u, y = _checked_data(result, u, y, model)
+    if result.informative is not None:
+        noise = {step: _floor_text(result, step) for step in windows}
+        noise_code = "below_noise_floor"
+    else:
+        noise = {} if model is None else _noise_windows(result, u, y, model, dt, x0, windows, simulations)
+        noise_code = "noise_only"
     verdicts = {}
     for p, name in enumerate(result.names):
         if p not in best:
@@ -164,7 +183,7 @@ def assess(result, *, u=None, y=None, model=None, dt=None, x0=None, weak_below=W
         step = best[p]
         reasons = _bound_reasons(result, p, step) + _edge_reasons(result, step, windows[step])
         if noise.get(step):
-            reasons.append(_reason("noise_only", f"the window at max IC (time {result.time[step]:.6g}) " + noise[step]))
+            reasons.append(_reason(noise_code, f"the window at max IC (time {result.time[step]:.6g}) " + noise[step]))
         ic = float(result.ic[p, step])
         if ic < weak_below:
             verdicts[name] = dict(
@@ -207,6 +226,30 @@ def _edge_reasons(result, step, window):
     ]
 
 
+def _floor_text(result, step):
+    """Text of the below_noise_floor reason of the window at ``step``, or None when it is informative."""
+    if result.informative[step]:
+        return None
+    spread, floor = float(result.mae_spread[step]), float(result.noise_floor[step])
+    if np.isnan(floor):
+        return f"has too few measured points to tell parameter sets from noise (spread {spread:.3g})"
+    sigma, multiple = result.settings.get("noise_sigma", math.nan), result.settings.get("noise_multiple", math.nan)
+    return (
+        f"is below the noise floor: its behavioural MAE spread {spread:.3g} is at most {floor:.3g}, "
+        f"{multiple:.3g} standard deviations of the MAE of noise sigma {sigma:.3g} (estimated from the best fits)"
+    )
+
+
+def _checked_data(result, u, y, model):
+    """``u`` and ``y`` as arrays, checked against the result's steps and ``model`` against its parameters."""
+    u, y = np.asarray(u, dtype=float), np.asarray(y, dtype=float)
+    if y.shape != result.time.shape or u.shape[:1] != result.time.shape:
+        raise SettingsError(f"u and y must have the result's {result.time.size} steps; got {u.shape} and {y.shape}")
+    if sorted(model.names) != sorted(result.names):
+        raise ModelError(f"model parameters {list(model.names)} do not match the result's {list(result.names)}")
+    return u, y
+
+
 def _noise_windows(result, u, y, model, dt, x0, windows, simulations):
     """Text of the noise_only reason of each window that fits noise only, else None.
 
@@ -214,11 +257,6 @@ def _noise_windows(result, u, y, model, dt, x0, windows, simulations):
     ``_MAX_VALUES`` values, up to the end of the latest window; only the
     windows' columns are kept.
     """
-    u, y = np.asarray(u, dtype=float), np.asarray(y, dtype=float)
-    if y.shape != result.time.shape or u.shape[:1] != result.time.shape:
-        raise SettingsError(f"u and y must have the result's {result.time.size} steps; got {u.shape} and {y.shape}")
-    if sorted(model.names) != sorted(result.names):
-        raise ModelError(f"model parameters {list(model.names)} do not match the result's {list(result.names)}")
     params = result.samples[:, [result.names.index(name) for name in model.names]]
     options = dict(
         dt=result.settings.get("dt", 1.0) if dt is None else dt,

@@ -172,7 +172,7 @@ def period_table(result, periods):
 def truth_check(result, true_values):
     """Per parameter: the informative windows (IC >= ic_threshold) and the share of them whose band holds the truth."""
     for p, name in enumerate(result.names):
-        informative = result.informative(ic_threshold, name)
+        informative = result.ic_at_least(ic_threshold, name)
         low, high = result.ci[p, informative, 0], result.ci[p, informative, 1]
         held = (low <= true_values[name]) & (true_values[name] <= high)
         share = f"{held.mean():.2f}" if informative.any() else "-"
@@ -330,7 +330,7 @@ print(f"\nsecond run: narrowed {tank_narrowed} to",
       {name: tuple(np.round(tank_second.bounds[tank_second.index(name)], 3)) for name in tank_narrowed})
 summary_table(tank_second, tank_truth, TANK_PERIODS)
 c_row = tank_second.index("c")
-informative = tank_second.informative(ic_threshold, "c")
+informative = tank_second.ic_at_least(ic_threshold, "c")
 holds = (tank_second.ci[c_row, :, 0] <= tank_truth["c"]) & (tank_truth["c"] <= tank_second.ci[c_row, :, 1])
 print(f"second run, c: mean true level in informative windows whose band holds the truth "
       f"{vessel.clean[informative & holds].mean():.2f}, misses it {vessel.clean[informative & ~holds].mean():.2f}")

@@ -1,5 +1,6 @@
 """Verdicts on real and synthetic records: each rule fires where it should and only there."""
 
+import dataclasses
 import math
 from pathlib import Path
 
@@ -33,6 +34,11 @@ def handmade(ic, lower, upper, bounds=(0.0, 10.0), n=2, window="centred"):
         bin_centres=np.zeros((1, 1)),
         settings=dict(n=n, window=window),
     )
+
+
+def without_floor(result):
+    """``result`` as if built by hand: no noise floor."""
+    return dataclasses.replace(result, informative=None, mae_spread=None, noise_floor=None)
 
 
 def example1(seed):
@@ -196,7 +202,8 @@ def test_heating_time_constant_peaks_with_its_band_at_the_bound():
     assert summary["T"]["max_ic"] == pytest.approx(0.92, abs=0.01)
     found = assess(result, u=u, y=y, model=model)
     assert found["T"]["verdict"] == "suspect"
-    assert codes(found["T"]) == ["band_at_bound", "record_edge"]
+    # The plate settling away from the operating point: no linear model fits there, and no set beats noise.
+    assert codes(found["T"]) == ["band_at_bound", "record_edge", "below_noise_floor"]
     assert found["T"]["reasons"][0]["text"].endswith("touches the lower bound 0")
     # The gain's peak, at the end of the first 9 V plateau (398 s), passes every rule.
     assert summary["K"]["time_of_max_ic"] == 398.0
@@ -236,10 +243,14 @@ def test_example1_time_constant_peaks_in_the_noise_after_the_last_step():
     assert not lower <= 3.0 <= upper  # a confident band that misses the true T
     found = assess(result, u=u, y=y, model=model)
     assert found["T"]["verdict"] == "suspect"
-    assert codes(found["T"]) == ["noise_only"]
+    assert codes(found["T"]) == ["below_noise_floor"]
     assert found["K"] == {"verdict": "identified", "reasons": []}
-    # Without the data the noise rule cannot run, and nothing else is wrong with T's peak.
-    assert assess(result)["T"] == {"verdict": "identified", "reasons": []}
+    # The engine's noise floor needs neither the data nor a simulation.
+    assert assess(result) == found
+    # A result without the floor: the re-simulating rule finds the same, and without the data nothing is wrong.
+    bare = without_floor(result)
+    assert codes(assess(bare, u=u, y=y, model=model)["T"]) == ["noise_only"]
+    assert assess(bare)["T"] == {"verdict": "identified", "reasons": []}
 
 
 def test_samples_are_simulated_in_the_models_parameter_order():
@@ -265,6 +276,7 @@ def test_samples_are_simulated_in_the_models_parameter_order():
 
 def test_batching_does_not_change_the_verdicts(monkeypatch):
     u, y, model, result = example1(1)
+    result = without_floor(result)
     reference = assess(result, u=u, y=y, model=model)
     monkeypatch.setattr(verdicts, "_MAX_VALUES", 7 * 500)
     assert assess(result, u=u, y=y, model=model) == reference

@@ -13,6 +13,7 @@ kernel :func:`dynia.engine.kernels.analyse_windows_batched`), from which
 """
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -44,6 +45,7 @@ __all__ = [
     "ImportanceFlavour",
     "McatFlavour",
     "BatchedFlavour",
+    "WindowResults",
 ]
 
 FLAVOURS = ("thesis", "mcat", "weighted")
@@ -54,6 +56,28 @@ ENGINES = ("auto", "numba", "numpy")
 # (sorted positions floor(c(count-1))) are the batch's extremes.
 IC_BATCHES = 10
 MIN_BATCH_BEHAVIOURAL = 5
+
+
+class WindowResults(NamedTuple):
+    """What a flavour reads off m windows.
+
+    ``ic`` (n_params, m), ``ci`` (n_params, m, 2), ``gradient`` (n_params,
+    n_bins, m); ``best`` and ``threshold`` (m,), the lowest MAE and the
+    largest MAE of the behavioural set, what :mod:`dynia.engine.noise` tests
+    (both the square root of the window's cost for "thesis" and "weighted",
+    so that both engines give them bit for bit); with ``ic_error``
+    ``batch_ic`` (batches, n_params, m) and ``batch_ci`` (batches, n_params,
+    m, 2), else None. Every array is NaN where a window had too few
+    measured points.
+    """
+
+    ic: np.ndarray
+    ci: np.ndarray
+    gradient: np.ndarray
+    best: np.ndarray
+    threshold: np.ndarray
+    batch_ic: np.ndarray | None = None
+    batch_ci: np.ndarray | None = None
 
 
 def compiled_engine(engine, flavour, weights=None):
@@ -78,14 +102,13 @@ def flavour_analysis(
     """The object that analyses windows for ``flavour``, on the compiled kernels or on numpy.
 
     Compiled, it has ``analyse_rows(window_errors, measured, m, slots)``;
-    otherwise ``analyse(mae, usable)``. Either returns ``(ic, ci,
-    gradient)`` of the windows and has ``count``, ``n_bins`` and
+    otherwise ``analyse(mae, usable)``. Either returns the
+    :class:`WindowResults` of the windows and has ``count``, ``n_bins`` and
     ``bin_centres``. With importance ``weights`` (n_samples,) it is an
     :class:`ImportanceFlavour`. With ``ic_error`` it also has ``batches``
-    (see :func:`ic_batches`) and returns ``(ic, ci, gradient, batch_ic,
-    batch_ci)``, the IC (batches, n_params, m) and limits (batches,
-    n_params, m, 2) of every batch; the mcat flavour has no batches yet
-    (:class:`~dynia.errors.SettingsError`).
+    (see :func:`ic_batches`) and the results carry ``batch_ic`` and
+    ``batch_ci``, the IC and limits of every batch; the mcat flavour has no
+    batches yet (:class:`~dynia.errors.SettingsError`).
     """
     if ic_error:
         if flavour == "mcat":
@@ -195,12 +218,18 @@ def _chunk_arrays(n_params, n_bins, rows):
     return np.empty((n_params, rows)), np.empty((n_params, rows, 2)), np.empty((n_params, n_bins, rows))
 
 
-def _blank_unusable(ic, ci, gradient, usable):
-    """NaN wherever a window had too few measured points."""
+def _blank_unusable(ic, ci, gradient, behavioural_mae, usable):
+    """The windows' results, NaN wherever a window had too few measured points.
+
+    ``behavioural_mae`` (m, count) holds the behavioural set's MAEs (or
+    costs, then ``behavioural_mae`` is their square root), any order.
+    """
     ic[:, ~usable] = np.nan
     ci[:, ~usable] = np.nan
     gradient[:, :, ~usable] = np.nan
-    return ic, ci, gradient
+    best = np.where(usable, behavioural_mae.min(axis=1), np.nan)
+    threshold = np.where(usable, behavioural_mae.max(axis=1), np.nan)
+    return WindowResults(ic, ci, gradient, best, threshold)
 
 
 def bin_centres_of(bounds, bins):
@@ -239,7 +268,8 @@ class ThesisFlavour:
             cost = mae**2
         cost[~usable] = 0.0  # any finite value: these windows are blanked below
         selected = lowest_stable(cost, self.count)
-        weights = cld.likelihood(np.take_along_axis(cost, selected, axis=1))
+        behavioural_cost = np.take_along_axis(cost, selected, axis=1)
+        weights = cld.likelihood(behavioural_cost)
         rows = selected.shape[0]
         ic, ci, gradient = _chunk_arrays(self.columns.shape[0], n_bins, rows)
         for p, column in enumerate(self.columns):
@@ -249,7 +279,7 @@ class ThesisFlavour:
             ic[p] = 1 - (ci[p, :, 1] - ci[p, :, 0]) / (high - low)
             if n_bins:
                 gradient[p] = cld.binned_mass(values, weights, low, high, self.bins).T
-        return _blank_unusable(ic, ci, gradient, usable)
+        return _blank_unusable(ic, ci, gradient, np.sqrt(behavioural_cost), usable)
 
     def _limits(self, values, weights):
         return cld.limits(values, self.conf_level)
@@ -301,6 +331,7 @@ class CompiledFlavour:
     def analyse_rows(self, window_errors, measured, m, slots):
         n_params = self.columns.shape[0]
         ic, ci, gradient = _chunk_arrays(n_params, self.n_bins, m)
+        extreme_costs = np.empty((2, m))
         common = (
             window_errors,
             measured,
@@ -318,13 +349,15 @@ class CompiledFlavour:
             ic,
             ci,
             gradient,
+            extreme_costs,
         )
+        # The square roots are taken here, as the numpy flavours take them, so both give the same bits.
         if not self.batches:
             kernels.analyse_windows(*common)
-            return ic, ci, gradient
+            return WindowResults(ic, ci, gradient, *np.sqrt(extreme_costs))
         batch_ic, batch_ci = np.empty((self.batches, n_params, m)), np.empty((self.batches, n_params, m, 2))
         kernels.analyse_windows_batched(*common, self.batch_counts, self.batch_positions, batch_ic, batch_ci)
-        return ic, ci, gradient, batch_ic, batch_ci
+        return WindowResults(ic, ci, gradient, *np.sqrt(extreme_costs), batch_ic, batch_ci)
 
 
 def importance_weights(weights, n_samples):
@@ -373,6 +406,9 @@ class ImportanceFlavour:
             cost = mae**2
         cost[~usable] = 0.0
         order, behavioural = lowest_weighted(cost, self.prior_weights, self.fraction)
+        # The behavioural costs, in rank order; the rest repeat the lowest, which changes no minimum or maximum.
+        ranked_cost = np.take_along_axis(cost, order, axis=1)
+        behavioural_cost = np.where(behavioural, ranked_cost, ranked_cost[:, :1])
         prior = np.where(behavioural, self.prior_weights[order], 0.0)
         prior /= prior.sum(axis=1, keepdims=True)
         likelihood = 1 - np.take_along_axis(cost, order, axis=1)
@@ -390,7 +426,7 @@ class ImportanceFlavour:
             ic[p] = 1 - (ci[p, :, 1] - ci[p, :, 0]) / (high - low)
             if n_bins:
                 gradient[p] = cld.binned_mass(values, mass, low, high, self.bins).T
-        return _blank_unusable(ic, ci, gradient, usable)
+        return _blank_unusable(ic, ci, gradient, np.sqrt(behavioural_cost), usable)
 
 
 class BatchedFlavour:
@@ -399,9 +435,10 @@ class BatchedFlavour:
     ``whole`` analyses all samples; ``parts[b]`` the samples of batch b
     (b, b + B, ..., see :func:`ic_batches`), each a flavour of its own with
     its own behavioural count (importance weights renormalised within the
-    batch). ``analyse(mae, usable)`` returns ``(ic, ci, gradient, batch_ic,
-    batch_ci)``; every batch's numbers are those of its samples analysed
-    alone, bit for bit, as on the compiled kernel.
+    batch). ``analyse(mae, usable)`` returns the :class:`WindowResults` of
+    ``whole`` with ``batch_ic`` and ``batch_ci``; every batch's numbers are
+    those of its samples analysed alone, bit for bit, as on the compiled
+    kernel.
     """
 
     def __init__(self, whole, parts):
@@ -411,9 +448,9 @@ class BatchedFlavour:
         self.count, self.n_bins, self.bin_centres = whole.count, whole.n_bins, whole.bin_centres
 
     def analyse(self, mae, usable):
-        ic, ci, gradient = self.whole.analyse(mae, usable)
+        results = self.whole.analyse(mae, usable)
         bands = [part.band(mae[:, batch :: self.batches], usable) for batch, part in enumerate(self.parts)]
-        return ic, ci, gradient, np.stack([ic for ic, _ in bands]), np.stack([ci for _, ci in bands])
+        return results._replace(batch_ic=np.stack([ic for ic, _ in bands]), batch_ci=np.stack([ci for _, ci in bands]))
 
 
 class McatFlavour:
@@ -464,7 +501,8 @@ class McatFlavour:
             ci[p] = ordered[:, self.limit_index]
             ic[p] = 1 - (ci[p, :, 1] - ci[p, :, 0]) / self.span[p]
             gradient[p] = self._cdf_slope(_nudge_ties(ordered), p).T
-        return _blank_unusable(ic, ci, gradient, usable)
+        # MCAT ranks by MAE itself, so its behavioural set's MAEs are read off directly.
+        return _blank_unusable(ic, ci, gradient, np.take_along_axis(mae, selected, axis=1), usable)
 
     def _likelihood(self, mae, usable):
         """``1 - mae/max(mae)`` (or ``1 - mae`` once a window had max 0), lifted above 0."""

@@ -395,12 +395,14 @@ def _read_off(
     Sample j of ``cost`` is column ``offset + stride*j`` of ``columns``, so a
     batch of samples (every stride-th from offset) is read off the same way
     as all of them. Without ``with_gradient`` the gradient is left alone.
-    Returns the count-th smallest cost.
+    Returns the count-th smallest cost and the smallest.
     """
     n_params = columns.shape[0]
     threshold = _behavioural(cost, count, bound, candidates, scratch, selected)
     lowest = np.inf
+    smallest = np.inf
     for i in range(count):
+        smallest = min(smallest, cost[selected[i]])
         weights[i] = 1.0 - cost[selected[i]]
         lowest = min(lowest, weights[i])
     if lowest < 0:
@@ -443,7 +445,7 @@ def _read_off(
                     scratch[i] = values[i]
                 ci[p, t, side] = _select(scratch, count, positions[side])
         ic[p, t] = 1 - (ci[p, t, 1] - ci[p, t, 0]) / (high - low)
-    return threshold
+    return threshold, smallest
 
 
 @_jit
@@ -474,6 +476,7 @@ def _analyse_block(
     ic,
     ci,
     gradient,
+    extreme_costs,
     batch_counts,
     batch_positions,
     batch_ic,
@@ -499,6 +502,7 @@ def _analyse_block(
             ic[:, t] = np.nan
             ci[:, t, :] = np.nan
             gradient[:, :, t] = np.nan
+            extreme_costs[:, t] = np.nan
             for b in range(n_batches):
                 batch_ic[b, :, t] = np.nan
                 batch_ci[b, :, t, :] = np.nan
@@ -506,7 +510,7 @@ def _analyse_block(
         for s in range(n_samples):
             mae = total[s] / present
             total[s] = mae * mae
-        threshold = _read_off(
+        threshold, smallest = _read_off(
             total,
             count,
             bound,
@@ -533,12 +537,14 @@ def _analyse_block(
             buffer,
         )
         bound = _next_bound(threshold)
+        extreme_costs[0, t] = smallest
+        extreme_costs[1, t] = threshold
         # Batch b holds samples b, b + n_batches, ...: its costs are these samples' costs.
         for b in range(n_batches):
             size = (n_samples - b + n_batches - 1) // n_batches
             for j in range(size):
                 batch_cost[j] = total[b + n_batches * j]
-            threshold = _read_off(
+            threshold, _ = _read_off(
                 batch_cost[:size],
                 batch_counts[b],
                 batch_bounds[b],
@@ -585,6 +591,7 @@ def analyse_windows(
     ic,
     ci,
     gradient,
+    extreme_costs,
 ):
     """Analyse the m windows of a block; see :mod:`dynia.analysis` for the method.
 
@@ -592,8 +599,10 @@ def analyse_windows(
     come from the window inputs (row j + t belongs to slot j of window t).
     ``positions`` are the thesis limits' sorted positions, ``levels`` the
     weighted limits' CLD levels. Writes ``ic`` (n_params, m), ``ci``
-    (n_params, m, 2) and ``gradient`` (n_params, bins, m); windows with
-    fewer than ``min_points`` measured points get NaN.
+    (n_params, m, 2), ``gradient`` (n_params, bins, m) and
+    ``extreme_costs`` (2, m), the smallest cost and the largest behavioural
+    cost (the count-th smallest) of every window; windows with fewer than
+    ``min_points`` measured points get NaN.
     """
     n_params = columns.shape[0]
     _analyse_block(
@@ -613,6 +622,7 @@ def analyse_windows(
         ic,
         ci,
         gradient,
+        extreme_costs,
         np.empty(0, dtype=np.int64),
         np.empty((0, 2), dtype=np.int64),
         np.empty((0, n_params, m)),
@@ -638,6 +648,7 @@ def analyse_windows_batched(
     ic,
     ci,
     gradient,
+    extreme_costs,
     batch_counts,
     batch_positions,
     batch_ic,
@@ -669,6 +680,7 @@ def analyse_windows_batched(
         ic,
         ci,
         gradient,
+        extreme_costs,
         batch_counts,
         batch_positions,
         batch_ic,
