@@ -14,6 +14,9 @@ INSTALLED := $(ENV_DIR)/.dynia-installed
 PACKAGE := $(wildcard dynia/*.py dynia/*/*.py)
 NOTEBOOKS := $(wildcard notebooks/*.py)
 REPORTS := $(patsubst notebooks/%.py,reports/%.html,$(NOTEBOOKS))
+# The chapter-3 notebooks once more with code_path "thesis", each identifiability figure drawn as the
+# thesis's code draws it: reports/NAME_thesis_code.html, its figures in reports/figures/thesis_code/.
+THESIS_CODE_REPORTS := $(patsubst %,reports/%_thesis_code.html,ch3_example1 ch3_example2 ch3_case_study)
 # Notebook parameters: override with `make figures PARAMS=my.yaml` (or one
 # report: `make reports/ch3_example1.html PARAMS=my.yaml`). reports/.params
 # records which parameters the reports were made with, and is rewritten only
@@ -46,7 +49,7 @@ test: $(INSTALLED)
 bench: $(INSTALLED)
 	$(PY) -m dynia.bench
 
-figures: $(REPORTS)
+figures: $(REPORTS) $(THESIS_CODE_REPORTS)
 
 # Executed notebook and its HTML (input cells hidden) are redone only when the
 # notebook, the package or the parameter file changed.
@@ -56,6 +59,14 @@ reports/%.html: notebooks/%.py $(PACKAGE) reports/.params $(INSTALLED)
 	$(PY) -m papermill --cwd reports --kernel python3 $(PARAMS_FLAG) reports/$*.source.ipynb reports/$*.ipynb
 	rm reports/$*.source.ipynb
 	$(PY) -m jupyter nbconvert --to html --no-input --output $*.html reports/$*.ipynb
+
+$(THESIS_CODE_REPORTS): reports/%_thesis_code.html: notebooks/%.py $(PACKAGE) reports/.params $(INSTALLED)
+	mkdir -p reports/figures/thesis_code
+	$(PY) -m jupytext --to ipynb --output reports/$*_thesis_code.source.ipynb $<
+	$(PY) -m papermill --cwd reports --kernel python3 $(PARAMS_FLAG) -p code_path thesis -p figure_dir figures/thesis_code \
+		reports/$*_thesis_code.source.ipynb reports/$*_thesis_code.ipynb
+	rm reports/$*_thesis_code.source.ipynb
+	$(PY) -m jupyter nbconvert --to html --no-input --output $*_thesis_code.html reports/$*_thesis_code.ipynb
 
 references: $(REFERENCES)
 

@@ -124,6 +124,9 @@ __all__ = [
     "euler_simulation",
     "plot_parameter_estimation",
     "thesis_code_result",
+    "plot_thesis_code_result",
+    "CODE_PATHS",
+    "check_code_path",
     "run_dynia",
     "select_best_parameters",
     "calc_likelihood",
@@ -702,3 +705,65 @@ def _matlab_window_costs(y, sims, n, start, stop):
         in_window = (seen[:, highs] - seen[:, lows]).T > 0
         costs[in_window] = value
     return costs
+
+
+CODE_PATHS = ("thesis", "corrected")
+
+
+def check_code_path(code_path):
+    """The chapter-3 notebooks' ``code_path``, checked: ``"thesis"`` or ``"corrected"``.
+
+    ``"thesis"`` draws each identifiability figure as the thesis's code draws it (its Euler simulator
+    where its script uses one, :func:`thesis_code_result`'s gradient, :func:`plot_parameter_estimation`);
+    ``"corrected"`` draws the engine's exact simulation and likelihood mass per bin.
+
+    Examples
+    --------
+    >>> check_code_path("thesis")
+    'thesis'
+    >>> check_code_path("matlab")
+    Traceback (most recent call last):
+    ...
+    dynia.errors.SettingsError: code_path must be one of 'thesis', 'corrected'; got 'matlab'
+    """
+    if code_path not in CODE_PATHS:
+        raise SettingsError(
+            f"code_path must be one of {', '.join(map(repr, CODE_PATHS))}; got {code_path!r}", "code_path"
+        )
+    return code_path
+
+
+def plot_thesis_code_result(result, name, *, ax=None, true_value=None):
+    """A :func:`thesis_code_result`'s identifiability plot, as the script draws it, with the true value.
+
+    :func:`plot_parameter_estimation` on the result's limits and gradient of ``name``, a dashed line at
+    ``true_value`` when given, the parameter's name on the y axis and a legend.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+
+    Examples
+    --------
+    >>> import matplotlib
+    >>> matplotlib.use("Agg")
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> samples = rng.uniform(0, 1, (50, 1))
+    >>> res = thesis_code_result(0.5 * np.ones(30), samples * np.ones((50, 30)), samples, [[0.0, 1.0]], ["a"],
+    ...                          n=2, percentage=10, bins=5)
+    >>> plot_thesis_code_result(res, "a", true_value=0.5).get_ylabel()
+    'a'
+    """
+    if result.settings.get("flavour") != "thesis-code":
+        raise SettingsError("plot_thesis_code_result draws results of thesis_code_result only", "result")
+    p = result.index(name)
+    low, high = result.bounds[p]
+    ax = plot_parameter_estimation(
+        result.time, result.ci[p], result.gradient[p], low, high, result.settings["bins"], ax=ax
+    )
+    if true_value is not None:
+        ax.axhline(true_value, color="k", linestyle="--", linewidth=1, label="true value")
+    ax.set_ylabel(name)
+    ax.legend(loc="upper right", fontsize="small")
+    return ax
