@@ -1,0 +1,249 @@
+"""The noise floor (issue 13): which windows tell parameter sets apart beyond what noise alone does."""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+from numpy.testing import assert_array_equal
+
+import dynia
+from dynia.analysis import moving_window
+from dynia.engine import kernels
+from dynia.engine.noise import critical_multiple, fitted_noise_sigma, noise_floor, window_points
+from dynia.errors import SettingsError
+from dynia.models import FirstOrder
+from dynia.online import OnlineDynia
+from dynia.result import DyniaResult
+from dynia.segments import segments_from_ic
+from dynia.synthetic import thesis_example
+from dynia.verdicts import assess
+
+THESIS = dict(n_samples=2000, n=10, percentage=10)
+FLOOR_FIELDS = ("informative", "mae_spread", "noise_floor")
+
+
+def example(number, seed, **options):
+    found = thesis_example(number, np.random.default_rng(seed))
+    result = dynia.run(found.u, found.y, found.model, found.bounds, rng=seed + 1000, **{**THESIS, **options})
+    return found, result
+
+
+def assert_same_floor(result, reference):
+    for field in FLOOR_FIELDS:
+        assert_array_equal(getattr(result, field), getattr(reference, field), err_msg=field)
+    assert result.settings["noise_sigma"] == reference.settings["noise_sigma"]
+
+
+# ---- the acceptance check of issue 13: thesis example 1 --------------------------------------------------------
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_example1_the_response_is_informative_and_the_noise_after_it_is_not(seed):
+    found, result = example(1, seed)
+    informative = result.informative
+    assert informative.shape == (500,) and informative.dtype == bool
+    # The input steps and plateaus before 400, and the decay after the step to 0 at 399 while it still
+    # stands above the noise (70 exp(-(t-399)/3) passes the noise's 0.5 at about 414).
+    assert informative[:416].all()
+    # Once the response has decayed into the noise, no window ranks anything but noise.
+    assert informative[446:].mean() <= 0.05
+    # The decay's last windows: a window centred at t > 430 holds only output below 0.06, an eighth of the noise.
+    assert not informative[431:446].any()
+    # T's highest IC lies in that noise (the band misses T = 3); the floor keeps it from counting as identified.
+    summary = result.summary()
+    assert not informative[np.nanargmax(result.ic[result.index("T")])]
+    assert summary["T"]["verdict"] != "identified"
+    assert "below_noise_floor" in [reason["code"] for reason in summary["T"]["reasons"]]
+    assert summary["K"]["verdict"] == "identified"
+
+
+def test_example1_noise_level_comes_from_the_best_fits():
+    for seed in range(4):
+        found, result = example(1, seed)
+        assert result.settings["noise_sigma"] == pytest.approx(found.noise, rel=0.15)
+        assert result.settings["noise_multiple"] == critical_multiple(0.1, 2000, math.ceil(500 / 21))
+
+
+def test_example2_is_informative_only_where_the_delayed_pulses_arrive():
+    found, result = example(2, 0)
+    informative = result.informative
+    # Pulses at 100 and 350, dead time 100: the output moves from 200 and 450 on, for about 20 steps.
+    assert informative[198:218].all() and informative[448:468].all()
+    assert not informative[:180].any() and not informative[235:430].any() and not informative[490:].any()
+    assert result.settings["noise_sigma"] == pytest.approx(found.noise, rel=0.15)
+
+
+# ---- records without information, and one full of it --------------------------------------------------------
+
+
+def test_a_pure_noise_record_is_uninformative():
+    # An input far below the noise: every set's output stays within 0.07 of 0, the noise is 1.
+    rng = np.random.default_rng(5)
+    u = np.r_[np.zeros(100), np.full(200, 0.01), np.zeros(200)]
+    y = rng.normal(0, 1.0, u.size)
+    result = dynia.run(u, y, FirstOrder(), {"K": (0, 7), "T": (0, 7)}, rng=1, **THESIS)
+    assert result.informative.mean() <= 0.01
+    assert result.settings["noise_sigma"] == pytest.approx(1.0, rel=0.15)
+
+
+def test_independent_noise_residuals_pass_the_floor_rarely():
+    """The least favourable null of the test, residuals independent across sets: with sigma known, the
+    family-wise chance of any informative window in a record is at most 5 %."""
+    records_with_a_false_window = 0
+    for seed in range(20):
+        rng = np.random.default_rng(seed)
+        sims = rng.normal(0, 1, (2000, 300))
+        result = moving_window(np.zeros(300), sims, rng.uniform(size=(2000, 1)), [[0, 1]], n=10, percentage=10)
+        floor = noise_floor(
+            np.zeros(300),
+            result.mae_spread,
+            window_points(np.zeros(300), 10, 10),
+            n_params=1,
+            share=0.1,
+            n_samples=2000,
+            n_windows=math.ceil(300 / 21),
+            sigma=1.0,
+        )
+        records_with_a_false_window += bool(floor.informative.any())
+    assert records_with_a_false_window <= 1
+
+
+def test_a_strongly_excited_record_is_informative_almost_everywhere():
+    rng = np.random.default_rng(2)
+    u = np.repeat(rng.choice([0.0, 10.0, 20.0, 35.0], 40), 8)  # a level change every 8 steps
+    y = FirstOrder().simulate([[2.0, 3.0]], u)[0] + rng.normal(0, 0.5, u.size)
+    result = dynia.run(u, y, FirstOrder(), {"K": (0, 7), "T": (0, 7)}, rng=1, **THESIS)
+    assert result.informative.mean() >= 0.97
+
+
+# ---- the statistic and its pieces -----------------------------------------------------------------------------
+
+
+def test_windows_of_tied_costs_are_uninformative_and_windows_without_points_too():
+    best = np.array([0.4, 0.4, 0.4, np.nan])
+    threshold = np.array([0.4, 0.5, 2.0, np.nan])
+    floor = noise_floor(best, threshold, np.array([21.0, 21, 2, 0]), n_params=2, share=0.1, n_samples=500, n_windows=1)
+    # Ties spread 0; a window of 2 points cannot fit 2 parameters and noise; NaN has no result.
+    assert floor.informative.tolist() == [False, False, False, False]
+    assert np.isnan(floor.floor[2]) and np.isnan(floor.spread[3])
+
+
+def test_the_critical_multiple_grows_with_the_samples_and_windows_and_needs_a_share():
+    assert critical_multiple(0.1, 2000, 24) < critical_multiple(0.1, 20_000, 24) < critical_multiple(0.1, 20_000, 5000)
+    with pytest.raises(SettingsError):
+        critical_multiple(0.0, 2000, 24)
+
+
+def test_the_fitted_sigma_skips_windows_that_cannot_fit_the_parameters():
+    assert math.isnan(fitted_noise_sigma(np.array([0.3, np.nan]), np.array([2.0, 21.0]), 2))
+
+
+# ---- every engine front-end gives the same floor --------------------------------------------------------------
+
+
+@pytest.mark.skipif(not kernels.AVAILABLE, reason="needs numba")
+@pytest.mark.parametrize("flavour", ["thesis", "weighted"])
+@pytest.mark.parametrize("ic_error", [False, True])
+def test_compiled_and_numpy_engines_give_the_same_floor_bit_for_bit(flavour, ic_error):
+    found = thesis_example(1, np.random.default_rng(3))
+    options = dict(rng=4, flavour=flavour, ic_error=ic_error, **THESIS)
+    compiled = dynia.run(found.u, found.y, found.model, found.bounds, engine="numba", **options)
+    plain = dynia.run(found.u, found.y, found.model, found.bounds, engine="numpy", **options)
+    assert compiled.settings["engine"] == "numba" and plain.settings["engine"] == "numpy"
+    assert_same_floor(compiled, plain)
+
+
+def test_mcat_and_importance_weights_have_their_own_behavioural_set_and_a_floor():
+    found = thesis_example(1, np.random.default_rng(3))
+    mcat = dynia.run(found.u, found.y, found.model, found.bounds, rng=4, flavour="mcat", **THESIS)
+    assert mcat.informative[:400].all() and not mcat.informative[446:].any()
+    sims = found.model.simulate(mcat.samples, found.u)
+    weighted = moving_window(found.y, sims, mcat.samples, [[0, 7], [0, 7]], n=10, weights=np.ones(2000))
+    assert weighted.informative[:400].all() and not weighted.informative[446:].any()
+
+
+def test_online_replay_gives_the_floor_of_the_trailing_batch_run():
+    found = thesis_example(1, np.random.default_rng(3))
+    online = OnlineDynia(found.model, found.bounds, rng=4, **THESIS)
+    replayed = online.replay(found.u, found.y)
+    batch = dynia.run(found.u, found.y, found.model, found.bounds, rng=4, window="trailing", engine="numpy", **THESIS)
+    assert_same_floor(replayed, batch)
+    # The trailing window at t is the centred one at t - n.
+    assert not replayed.informative[456:].any() and replayed.informative[10:410].all()
+
+
+def test_distributed_run_gives_the_floor_of_dynia_run():
+    distributed = pytest.importorskip("distributed")
+    from dynia.distributed import run
+
+    found = thesis_example(1, np.random.default_rng(3))
+    options = dict(n_samples=300, n=10, percentage=10, rng=4)
+    with (
+        distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        on_cluster = run(found.u, found.y, found.model, found.bounds, client=client, time_chunks=37, **options)
+    assert_same_floor(on_cluster, dynia.run(found.u, found.y, found.model, found.bounds, **options))
+
+
+# ---- results, files, verdicts and the selection ---------------------------------------------------------------
+
+
+def test_the_floor_survives_save_and_load_and_older_files_load_without_it(tmp_path):
+    found, result = example(1, 0, n_samples=300)
+    result.save(tmp_path / "result.nc")
+    back = dynia.load(tmp_path / "result.nc")
+    assert back.informative.dtype == bool
+    assert_same_floor(back, result)
+    assert result.to_xarray()["informative"].dims == ("time",)
+    table = result.to_dataframe()
+    assert table["informative"].tolist() == np.tile(result.informative, 2).tolist()
+    dataclasses.replace(result, informative=None, mae_spread=None, noise_floor=None).save(tmp_path / "old.nc")
+    old = dynia.load(tmp_path / "old.nc")
+    assert old.informative is None and old.mae_spread is None and old.noise_floor is None
+
+
+def handmade(informative):
+    steps = informative.size
+    ic = np.full((1, steps), 0.3)
+    ic[0, 30] = 0.9
+    return DyniaResult(
+        names=("a",),
+        samples=np.zeros((3, 1)),
+        bounds=np.array([[0.0, 10.0]]),
+        time=np.arange(steps, dtype=float),
+        ic=ic,
+        ci=np.tile([4.0, 5.0], (1, steps, 1)),
+        gradient=np.zeros((1, 1, steps)),
+        bin_centres=np.zeros((1, 1)),
+        settings=dict(n=2, noise_sigma=0.5, noise_multiple=3.5),
+        informative=informative,
+        mae_spread=np.full(steps, 0.1),
+        noise_floor=np.full(steps, 0.2),
+    )
+
+
+def test_a_max_ic_window_below_the_floor_is_never_identified_and_the_reason_gives_the_numbers():
+    below = handmade(np.arange(60) < 20)
+    verdict = assess(below)["a"]
+    assert verdict["verdict"] == "suspect"
+    assert [reason["code"] for reason in verdict["reasons"]] == ["below_noise_floor"]
+    assert verdict["reasons"][0]["text"] == (
+        "the window at max IC (time 30) is below the noise floor: its behavioural MAE spread 0.1 is at most 0.2, "
+        "3.5 standard deviations of the MAE of noise sigma 0.5 (estimated from the best fits)"
+    )
+    assert assess(handmade(np.ones(60, dtype=bool)))["a"] == {"verdict": "identified", "reasons": []}
+
+
+def test_segments_and_identify_never_select_windows_below_the_floor():
+    informative = np.ones(60, dtype=bool)
+    informative[25:40] = False
+    result = dataclasses.replace(handmade(informative), ic=np.full((1, 60), 0.9))
+    assert segments_from_ic(result, min_length=1, merge_gap=0) == [(0, 25), (40, 60)]
+    # dynia identify on example 1: the noise after the response is never fitted on, though T's IC is high there.
+    found = thesis_example(1, np.random.default_rng(0))
+    chosen = dynia.identify.identify(
+        found.u, found.y, found.model, found.bounds, method="dynia", held_out=0.05, rng=1, n_samples=2000
+    )
+    assert chosen.segments and all(stop <= 440 for _, stop in chosen.segments)
