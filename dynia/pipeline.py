@@ -17,6 +17,7 @@ from .models import LinearModel, Model, StateSpaceModel
 from .models.custom import StateErrors
 from .sampling import sample
 from .settings import ADAPTIVE_SAMPLERS, AnalysisSettings, parameter_box
+from .storage import result_arrays
 from .verdicts import WEAK_BELOW, assess
 
 __all__ = [
@@ -73,6 +74,8 @@ def run(
     ic_error=None,
     target_se=None,
     max_samples=None,
+    dtype=None,
+    store=None,
     rng=None,
     progress=False,
 ):
@@ -150,6 +153,15 @@ def run(
         the budget ran out first. Implies ``ic_error``.
     max_samples : int, optional
         The budget of ``target_se`` (required with it).
+    dtype : {"float64", "float32"}, default "float64"
+        Type of the result's IC, limits, gradient and their errors; float32
+        values are the float64 results rounded, at half the memory.
+    store : str or os.PathLike, optional
+        A netCDF file that those arrays are written to as they are produced,
+        for records whose gradient does not fit in memory: the file is
+        complete (verdicts included) and renamed into place when ``run``
+        returns, never left half-written, and the result reads it lazily
+        (:mod:`dynia.storage`; ``dynia.load`` reads it too).
     settings : dynia.settings.AnalysisSettings, optional
         All of the above in one checked object.
 
@@ -193,6 +205,8 @@ def run(
         ic_error=ic_error,
         target_se=target_se,
         max_samples=max_samples,
+        dtype=dtype,
+        store=store,
     )
     if not isinstance(model, Model):
         raise ModelError(
@@ -210,16 +224,18 @@ def run(
         )
     generator = np.random.default_rng(rng)
     samples = sample(settings.sampler, settings.n_samples, box, generator)
-    if settings.target_se is None:
-        result, sims = _analyse_samples(u, y, model, names, box, samples, settings, progress)
-    else:
-        result, sims = _analyse_to_target(u, y, model, names, box, samples, settings, generator, progress)
-    with np.errstate(over="ignore", invalid="ignore"):
-        verdicts = assess(result, u=u, y=y, model=model, simulations=sims)
-    return _dated(dataclasses.replace(result, verdicts=verdicts), timestamps)
+    # The arrays in memory, or in settings.store as they are produced, committed with the verdicts (dynia.storage).
+    with result_arrays(settings.store, settings.dtype) as output:
+        if settings.target_se is None:
+            result, sims = _analyse_samples(u, y, model, names, box, samples, settings, progress, output)
+        else:
+            result, sims = _analyse_to_target(u, y, model, names, box, samples, settings, generator, progress, output)
+        with np.errstate(over="ignore", invalid="ignore"):
+            verdicts = assess(result, u=u, y=y, model=model, simulations=sims)
+        return output.commit(_dated(dataclasses.replace(result, verdicts=verdicts), timestamps))
 
 
-def _analyse_samples(u, y, model, names, box, samples, settings, progress):
+def _analyse_samples(u, y, model, names, box, samples, settings, progress, output):
     """Simulate ``samples`` and analyse them: the result and, for a whole-record model, its simulations.
 
     Sets whose simulation is not finite are dropped (and warned about).
@@ -284,6 +300,7 @@ def _analyse_samples(u, y, model, names, box, samples, settings, progress):
                 engine=settings.engine,
                 workers=workers,
                 ic_error=settings.ic_error,
+                store=output,
             )
         finally:
             if isinstance(errors, (CompiledErrors, StateErrors)):
@@ -296,7 +313,7 @@ def _analyse_samples(u, y, model, names, box, samples, settings, progress):
     return result, sims
 
 
-def _analyse_to_target(u, y, model, names, box, samples, settings, generator, progress):
+def _analyse_to_target(u, y, model, names, box, samples, settings, generator, progress, output):
     """Add uniform samples to ``samples`` until the IC's Monte Carlo error meets ``settings.target_se``.
 
     Each round analyses every sample drawn so far (earlier ones are kept,
@@ -308,7 +325,7 @@ def _analyse_to_target(u, y, model, names, box, samples, settings, generator, pr
     """
     rounds = []
     while True:
-        result, sims = _analyse_samples(u, y, model, names, box, samples, settings, progress)
+        result, sims = _analyse_samples(u, y, model, names, box, samples, settings, progress, output)
         reached = ic_se_that_matters(result)
         rounds.append([int(samples.shape[0]), reached])
         if reached <= settings.target_se or samples.shape[0] >= settings.max_samples:

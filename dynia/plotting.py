@@ -26,6 +26,9 @@ from .errors import DataError
 
 __all__ = ["envelope", "decimated_columns", "plot_data", "plot_inputs"]
 
+# Values of an image read per block by decimated_columns (32 MB of float64).
+_BLOCK_VALUES = 2**22
+
 
 def envelope(time, values, max_points=4000):
     """A line thinned to the minimum and maximum of each time bucket.
@@ -96,7 +99,9 @@ def decimated_columns(time, image, max_columns=2000):
     time : array_like, shape (n_steps,)
         Time of each column, increasing.
     image : array_like, shape (n_rows, n_steps)
-        One column per time step; NaN marks a missing value.
+        One column per time step; NaN marks a missing value. Anything with
+        ``shape`` and numpy slicing, such as a :class:`dynia.storage.DiskArray`,
+        is read a block of columns at a time.
     max_columns : int, default 2000
         Most columns returned, at least 1.
 
@@ -123,21 +128,33 @@ def decimated_columns(time, image, max_columns=2000):
            [ 2., nan,  5.]])
     """
     time = _series(time, "time")
-    image = np.asarray(image, dtype=float)
-    if image.ndim != 2 or image.shape[1] != time.size:
+    if not hasattr(image, "shape"):
+        image = np.asarray(image, dtype=float)
+    if len(image.shape) != 2 or image.shape[1] != time.size:
         raise DataError(f"image must be 2-D (n_rows, {time.size}), one column per time; got shape {image.shape}")
     max_columns = whole_number(max_columns, "max_columns", minimum=1)
     n_steps = time.size
     if n_steps <= max_columns:
-        return time, image
+        return time, np.asarray(image, dtype=float)
     width = _bucket_width(n_steps, max_columns)
     whole = n_steps // width * width
-    # Splitting the last axis of a row-major image is a view: no copy of the image.
-    columns = np.fmax.reduce(image[:, :whole].reshape(image.shape[0], -1, width), axis=2)
+    # Whole buckets a block at a time, so that an image on disk (dynia.storage) is never read whole; splitting
+    # the last axis of a row-major block is a view, so an image in memory is not copied either.
+    block = width * max(1, _BLOCK_VALUES // (width * max(image.shape[0], 1)))
+    columns = np.concatenate(
+        [
+            np.fmax.reduce(
+                np.asarray(image[:, start : min(start + block, whole)], dtype=float).reshape(image.shape[0], -1, width),
+                axis=2,
+            )
+            for start in range(0, whole, block)
+        ],
+        axis=1,
+    )
     starts = np.arange(0, n_steps, width)
     ends = np.minimum(starts + width, n_steps) - 1
     if whole < n_steps:
-        columns = np.column_stack([columns, np.fmax.reduce(image[:, whole:], axis=1)])
+        columns = np.column_stack([columns, np.fmax.reduce(np.asarray(image[:, whole:], dtype=float), axis=1)])
     return (time[starts] + time[ends]) / 2, columns
 
 

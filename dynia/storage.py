@@ -81,9 +81,9 @@ _CHUNK_BYTES = 4 * 2**20
 def result_arrays(store, dtype):
     """Where an analysis keeps its arrays: :class:`ResultArrays` in memory, or a :class:`ResultFile` at ``store``.
 
-    ``store`` may also be a :class:`ResultFile` already made, whose owner commits it.
+    ``store`` may also be a :class:`ResultArrays` or :class:`ResultFile` already made, whose owner commits it.
     """
-    if isinstance(store, ResultFile):
+    if isinstance(store, ResultArrays):
         return store
     return ResultArrays(dtype) if store is None else ResultFile(store, dtype)
 
@@ -136,7 +136,7 @@ class ResultArrays:
         return result
 
 
-class ResultFile:
+class ResultFile(ResultArrays):
     """Result arrays written to a netCDF-4 file as they are produced, then renamed into place.
 
     :meth:`allocate` creates ``.PATH.XXXX.partial`` beside ``PATH`` with
@@ -157,21 +157,14 @@ class ResultFile:
     """
 
     def __init__(self, path, dtype="float64"):
+        super().__init__(dtype)
         self.path = os.path.abspath(os.fspath(path))
-        self.dtype = np.dtype(dtype)
         self._partial = None
         self._file = None
         self._buffers = {}
         self._block = 0
         self._block_start = 0
         self._n_steps = 0
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, kind, error, trace):
-        if kind is not None:
-            self.discard()
 
     def allocate(self, shapes, *, names, samples, bounds, time, bin_centres):
         """Create the partial file with its fixed parts and the empty time-dependent variables of ``shapes``.
@@ -390,6 +383,14 @@ class DiskArray(NDArrayOperatorsMixin):
         except (TypeError, ValueError):
             # Selections HDF5 cannot make (fancy indices out of order, repeated): read the view, index in memory.
             return np.asarray(self)[key]
+
+    def ravel(self):
+        """The whole view read, flattened (as ``ndarray.ravel``)."""
+        return np.asarray(self).ravel()
+
+    def astype(self, dtype):
+        """The whole view read, as ``dtype``."""
+        return np.asarray(self).astype(dtype)
 
     def __array__(self, dtype=None, copy=None):
         values = np.asarray(self._dataset[self._leading + (Ellipsis,)])
