@@ -30,10 +30,16 @@ process so that its peak resident memory (``ru_maxrss``) is its own.
    :func:`dynia.run` on a pure-numpy :class:`dynia.models.FunctionModel` over
    calling the function and :func:`dynia.moving_window` by hand (5 000
    samples x 5 000 steps); target < 10 %.
+10. :func:`dynia.distributed.run` on a local Dask cluster of one and of two
+    single-threaded worker processes (1 GB memory limit each), 10^4 samples x
+    10^6 steps (``--distributed-samples``, ``--distributed-steps``): wall
+    time, speed-up from one worker to two, and each worker's peak resident
+    memory, sampled every 0.1 s; target <= 1 GB per worker.
 """
 
 import argparse
 import json
+import os
 import resource
 import subprocess
 import sys
@@ -274,6 +280,52 @@ def _case_custom_models():
     return result
 
 
+def _case_distributed(n_samples=10_000, n_steps=1_000_000, time_chunks=None):
+    import threading
+
+    import psutil
+    from distributed import Client, LocalCluster
+
+    from .distributed import run
+
+    u, y, _, model = _example1(1, n_steps)
+    bounds = {"K": (0, 7), "T": (0, 7)}
+    result = dict(n_samples=n_samples, n_steps=n_steps)
+    for n_workers in (1, 2):
+        with (
+            LocalCluster(
+                n_workers=n_workers, threads_per_worker=1, processes=True, memory_limit="1GiB", dashboard_address=":0"
+            ) as cluster,
+            Client(cluster) as client,
+        ):
+            run(u[:200], y[:200], model, bounds, client=client, n_samples=200, rng=1)  # load the compiled kernels
+            workers = [psutil.Process(pid) for pid in client.run(os.getpid).values()]
+            peaks = [worker.memory_info().rss for worker in workers]
+            done = threading.Event()
+
+            def watch(workers=workers, peaks=peaks, done=done):
+                while not done.wait(0.1):
+                    for number, worker in enumerate(workers):
+                        peaks[number] = max(peaks[number], worker.memory_info().rss)
+
+            watcher = threading.Thread(target=watch)
+            watcher.start()
+            start = time.perf_counter()
+            try:
+                run(u, y, model, bounds, client=client, n_samples=n_samples, time_chunks=time_chunks, rng=1)
+            finally:
+                seconds = time.perf_counter() - start
+                done.set()
+                watcher.join()
+        result[f"{n_workers} workers"] = dict(
+            seconds=seconds,
+            sample_steps_per_s=n_samples * n_steps / seconds,
+            worker_peak_rss_mb=[peak / 2**20 for peak in peaks],
+        )
+    result["speed_up"] = result["1 workers"]["seconds"] / result["2 workers"]["seconds"]
+    return result
+
+
 CASES = {
     "port-vs-engine": _case_port_vs_engine,
     "engine-20000x2000": lambda: _case_engine(20_000, 2_000),
@@ -285,11 +337,12 @@ CASES = {
     "sampling-example1": _case_sampling,
     "cli-500000-rows": _case_cli_long_record,
     "custom-models": _case_custom_models,
+    "distributed": _case_distributed,
 }
 
 
-def _run_case(name):
-    result = CASES[name]()
+def _run_case(name, **options):
+    result = CASES[name](**options)
     result["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(json.dumps(result))
 
@@ -298,9 +351,15 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--case", choices=sorted(CASES), help="run one case in this process")
     parser.add_argument("--skip", nargs="*", default=[], choices=sorted(CASES), help="cases to leave out")
+    parser.add_argument("--distributed-samples", type=int, default=10_000, help="samples of the distributed case")
+    parser.add_argument("--distributed-steps", type=int, default=1_000_000, help="steps of the distributed case")
+    parser.add_argument("--distributed-time-chunks", type=int, help="time_chunks of the distributed case")
     args = parser.parse_args(argv)
     if args.case:
-        _run_case(args.case)
+        sizes = dict(
+            n_samples=args.distributed_samples, n_steps=args.distributed_steps, time_chunks=args.distributed_time_chunks
+        )
+        _run_case(args.case, **(sizes if args.case == "distributed" else {}))
         return
     for name in CASES:
         if name in args.skip:
@@ -353,6 +412,16 @@ def _describe(name, r):
             f"(target >= 0.33); pure-numpy FunctionModel at 5 000 x 5 000: dynia.run {function['run_s']:.2f} s, fn + "
             f"moving_window by hand {function['by_hand_s']:.2f} s -> overhead {100 * function['overhead']:.1f} % "
             f"(target < 10 %); peak RSS {r['peak_rss_mb']:.0f} MB"
+        )
+    if name == "distributed":
+        workers = "; ".join(
+            f"{count} {r[count]['seconds']:.0f} s = {r[count]['sample_steps_per_s']:.3g} sample-steps/s, "
+            f"worker peak RSS {', '.join(f'{peak:.0f}' for peak in r[count]['worker_peak_rss_mb'])} MB"
+            for count in ("1 workers", "2 workers")
+        )
+        return (
+            f"dynia.distributed.run, {r['n_samples']:,} samples x {r['n_steps']:,} steps, local cluster: {workers} "
+            f"(target <= 1024 MB per worker); speed-up {r['speed_up']:.2f}"
         )
     if name == "cli-500000-rows":
         return (

@@ -85,8 +85,8 @@ import numpy as np
 from . import _checks
 from .engine.flavours import compiled_engine, flavour_analysis
 from .engine.noise import record_noise_floor, window_points
-from .engine.windows import StreamedErrors, window_halos, window_inputs, window_mean
-from .errors import DyniaError, ModelError
+from .engine.windows import ArrayErrors, StreamedErrors, window_halos, window_inputs, window_mean
+from .errors import DataError, DyniaError, ModelError
 from .pipeline import warn_dropped
 from .result import DyniaResult
 from .sampling import sample
@@ -502,41 +502,47 @@ def _chained_window_inputs(params, first, handed_on, start, stop, model, u, y, d
     ``handed_on`` is what the task of the previous time chunk returned, the
     simulation's state and the errors from where this chunk's windows reach
     back to up to that state's step (None for the first time chunk). The
-    steps the windows reach beyond it are simulated here.
+    steps the windows reach beyond it are simulated here. Errors are kept
+    time-major, the compiled windows' layout, which a linear model
+    simulates in without transposing.
     """
     n_steps = y.size
     reach_back, reach_ahead = max(start - windows.before, 0), min(stop + windows.after, n_steps)
     with _sample_chunk_context(first, params.shape[0]):
         if handed_on is None:
-            state, errors = model.start_simulation(params, u, dt=dt, x0=x0), np.empty((params.shape[0], 0))
+            state, errors = model.start_simulation(params, u, dt=dt, x0=x0), np.empty((0, params.shape[0]))
         else:
             state, errors = handed_on
         if reach_ahead > state.step:
             simulated_from = state.step
-            sims, state = model.simulate_span(state, u, reach_ahead)
-            fresh = StreamedErrors(y, [sims], params.shape[0]).columns(simulated_from, reach_ahead)
-            errors = np.concatenate([errors, fresh], axis=1)
+            sims, state = model.simulate_span(state, u, reach_ahead, time_major=True)
+            try:
+                # The transposed view makes the errors come out time-major (numpy keeps the input's layout).
+                fresh = ArrayErrors(y[simulated_from:reach_ahead], sims.T).columns(0, sims.shape[0]).T
+            except DataError as error:
+                raise DataError(f"{error} (steps counted from step {simulated_from})") from error
+            errors = np.concatenate([errors, fresh]) if errors.shape[0] else fresh
         block = windows.block(_ErrorSpan(y, reach_back, errors), start, stop, n_steps)
         shared = max(stop - windows.before, 0)  # where the next time chunk's windows reach back to
         # A copy, so that the errors of this chunk are freed with its block.
-        return block, (state, errors[:, shared - reach_back :].copy())
+        return block, (state, errors[shared - reach_back :].copy())
 
 
 class _ErrorSpan:
-    """The absolute errors of consecutive steps from ``first`` on, as an error source of ``window_inputs``."""
+    """Time-major absolute errors of consecutive steps from ``first`` on, an error source of ``window_inputs``."""
 
     def __init__(self, y, first, errors):
         self.y = y
         self._first = first
         self._errors = errors
 
-    def columns(self, start, stop):
-        """Errors for times [start, stop), shape (n_samples, stop - start)."""
-        return self._errors[:, start - self._first : stop - self._first]
-
     def rows(self, start, stop):
         """Errors for times [start, stop), time-major: shape (stop - start, n_samples)."""
-        return np.ascontiguousarray(self.columns(start, stop).T)
+        return self._errors[start - self._first : stop - self._first]
+
+    def columns(self, start, stop):
+        """Errors for times [start, stop), shape (n_samples, stop - start)."""
+        return np.ascontiguousarray(self.rows(start, stop).T)
 
 
 class _WholeRecordBlocks:

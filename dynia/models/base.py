@@ -255,7 +255,9 @@ class Model:
             "simulate_span); it can only be simulated over the whole record"
         )
 
-    def simulate_span(self, state: SimulationState, u, stop: int) -> tuple[np.ndarray, SimulationState]:
+    def simulate_span(
+        self, state: SimulationState, u, stop: int, *, time_major: bool = False
+    ) -> tuple[np.ndarray, SimulationState]:
         """Simulate from ``state.step`` up to step ``stop``, resuming ``state``.
 
         Parameters
@@ -266,6 +268,10 @@ class Model:
             The whole record, as given to :meth:`start_simulation`.
         stop : int
             The step after the span, ``state.step < stop <= n_steps``.
+        time_major : bool, default False
+            Return the output transposed, (stop - state.step, n_samples)
+            and C-contiguous, the layout of the compiled windows; a linear
+            model computes it in that layout and saves two transpositions.
 
         Returns
         -------

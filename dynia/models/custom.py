@@ -168,12 +168,13 @@ class FunctionModel(Model):
 
     start_simulation.__doc__ = Model.start_simulation.__doc__
 
-    def simulate_span(self, state, u, stop):
+    def simulate_span(self, state, u, stop, *, time_major=False):
         u = self.check_span(state, u, stop)
         params, dt, carried = state.carried
         # fn may update its state in place; the state given must stay as it was.
         sims, carried = self._called(params, u[state.step : stop], dt, copy.deepcopy(carried))
-        return sims, SimulationState(stop, state.n_steps, state.n_samples, (params, dt, carried))
+        resumed = SimulationState(stop, state.n_steps, state.n_samples, (params, dt, carried))
+        return (np.ascontiguousarray(sims.T) if time_major else sims), resumed
 
     simulate_span.__doc__ = Model.simulate_span.__doc__
 
@@ -319,12 +320,13 @@ class StateSpaceModel(Model):
 
     start_simulation.__doc__ = Model.start_simulation.__doc__
 
-    def simulate_span(self, state, u, stop):
+    def simulate_span(self, state, u, stop, *, time_major=False):
         u = self.check_span(state, u, stop)
         params, dt, values = state.carried
         # step may update the state in place; the state given must stay as it was.
         sims, values = self._span(values.copy(), u[state.step : stop], params, dt, first=state.step == 0)
-        return sims, SimulationState(stop, state.n_steps, state.n_samples, (params, dt, values))
+        resumed = SimulationState(stop, state.n_steps, state.n_samples, (params, dt, values))
+        return (np.ascontiguousarray(sims.T) if time_major else sims), resumed
 
     simulate_span.__doc__ = Model.simulate_span.__doc__
 

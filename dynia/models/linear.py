@@ -165,15 +165,15 @@ class LinearModel(Model):
 
     start_simulation.__doc__ = Model.start_simulation.__doc__
 
-    def simulate_span(self, state, u, stop):
+    def simulate_span(self, state, u, stop, *, time_major=False):
         u = self.check_span(state, u, stop)
         system, x0, values = state.carried
         # The recursion overwrites the rows it starts from; the state given stays as it was.
         recursion = _Recursion(system, values.copy())
-        time_major = np.empty((stop - state.step, state.n_samples))
-        _advance(system, recursion, u, x0, state.step, stop, time_major)
+        output = np.empty((stop - state.step, state.n_samples))
+        _advance(system, recursion, u, x0, state.step, stop, output)
         resumed = SimulationState(stop, state.n_steps, state.n_samples, (system, x0, recursion.state()))
-        return _to_sample_major(time_major), resumed
+        return (output if time_major else _to_sample_major(output)), resumed
 
     simulate_span.__doc__ = Model.simulate_span.__doc__
 
