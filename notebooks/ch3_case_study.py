@@ -43,6 +43,19 @@
 # the first-order model, k in [0, 6], T1 in [0, 8], windows of 2n+1 steps with
 # n = 1, 2, 3, 5000 Monte Carlo samples and a 10 % behavioural set, then a
 # second run with k narrowed to [1.8, 2.2].
+#
+# **Two code paths.** `code_path = "corrected"` (the default) draws the
+# engine's likelihood mass per bin, divided by the share of the Monte Carlo
+# samples in each bin (so that a bin does not look darker for holding more
+# samples). `code_path = "thesis"` draws the identifiability figures (3.22,
+# 3.25) as the thesis's code would: the port's `cld_gradient` with its quirks,
+# on the same window costs, in its script's `pcolor` plot
+# (`dynia.thesis.thesis_code_result`). The thesis prints no script for the
+# case study, so the simulations stay exact (zero-order hold from steady
+# state); its example-1 Euler simulator is tried on the SSE table of Figure
+# 3.26. The information content is the same on both paths. The prose
+# describes the default rendering; the section "The thesis's code path" draws
+# both side by side in either rendering.
 
 # %% tags=["parameters"]
 days: int = 30  # length of the record in days (thesis: about a month)
@@ -52,6 +65,7 @@ n_main: int = 2  # the n whose identifiability plots are drawn in full
 percentage: float = 10  # behavioural share of the samples, in percent (thesis: 10)
 bins: int = 40  # CLD gradient bins
 dt: float = 1.0  # grid spacing in minutes
+code_path: str = "corrected"  # "thesis": the port's cld_gradient and the script's pcolor plot (the thesis gives no simulator for the case study: exact simulation); "corrected": the engine's likelihood mass per bin, per sample
 seed: int = 2009  # seed of every random draw (the synthetic data and the Monte Carlo samples)
 figure_dir: str = "figures"  # where the PNGs go
 
@@ -67,6 +81,7 @@ import dynia
 from dynia.data import resample_events
 from dynia.synthetic import cooling_water_loop
 
+dynia.thesis.check_code_path(code_path)
 os.makedirs(figure_dir, exist_ok=True)
 DAY = 1440.0  # minutes per day: the data are in minutes, the plots in days
 model = dynia.models.FirstOrder()
@@ -241,6 +256,27 @@ second = {n: analyse(u, y, second_bounds, n) for n in windows}
 before = grid < truth.drift_start
 after = grid > truth.drift_end
 
+
+def thesis_code(result, name):
+    """The port's gradient (and the same IC and limits) of `name`, on the run's samples and exact simulations."""
+    sims = model.simulate(result.samples, u, dt=dt, x0="steady")
+    p = result.index(name)
+    return dynia.thesis.thesis_code_result(y, sims, result.samples[:, [p]], result.bounds[[p]], [name],
+                                           n=result.settings["n"], percentage=percentage, bins=bins,
+                                           time=result.time)
+
+
+def draw_identifiability(result, name, ax, true_value=None):
+    """The engine's plot per sample, or the thesis script's pcolor plot for a thesis-code result."""
+    if result.settings["flavour"] == "thesis-code":
+        return dynia.thesis.plot_thesis_code_result(result, name, ax=ax, true_value=true_value)
+    return result.plot_identifiability(name, ax=ax, true_value=true_value, per_sample=True)
+
+
+# The identifiability figures' runs as each code path draws them (the thesis's gradient takes a while).
+shown_gain = thesis_code(first[n_main], "K") if code_path == "thesis" else first[n_main]
+shown_lag = thesis_code(second[n_main], "T") if code_path == "thesis" else second[n_main]
+
 # %% [markdown]
 # ## Figure 3.21: information content of the gain
 
@@ -298,47 +334,81 @@ print(f"steps of 8-10 units, n = {n_main}: lowest IC of K near each step", np.ro
 # %%
 fig, axes = plt.subplots(2, 1, figsize=(12, 7), sharex=True, constrained_layout=True)
 for ax, ylim in zip(axes, [None, (1.4, 2.6)]):
-    first[n_main].plot_identifiability("K", ax=ax)
+    draw_identifiability(shown_gain, "K", ax)
     ax.plot(days_axis, truth.gain_at(grid), color="k", linestyle="--", linewidth=1, label="true K")
     mark_events(ax, glitch=False)
     if ylim:
         ax.set_ylim(*ylim)
         ax.set_title(f"The same, K from {ylim[0]} to {ylim[1]}")
     else:
-        ax.set_title(f"Figure 3.22: uncertainty band and CLD gradient of K, first run, n = {n_main}")
+        shading = "the thesis's code" if code_path == "thesis" else "CLD gradient per sample"
+        ax.set_title(f"Figure 3.22: uncertainty band and CLD gradient of K, first run, n = {n_main} ({shading})")
     ax.legend(loc="lower left", fontsize="small")
 axes[0].set_xlabel("")
 axes[1].set_xlabel("time (days)")
 save(fig, 22)
 
 # %%
+def darkest_bin(result, part, per_sample=False):
+    """Edges of the darkest bin of K's gradient averaged over the steps `part`."""
+    centres = result.bin_centres[0]
+    half = (centres[1] - centres[0]) / 2
+    mass = np.nanmean(result.gradient[0][:, part], axis=1)
+    if per_sample:
+        counts = result.bin_counts()[0]
+        mass = np.where(counts > 0, mass / np.maximum(counts, 1), 0.0)
+    darkest = centres[np.argmax(mass)]
+    return f"{darkest - half:.2f}-{darkest + half:.2f}"
+
+
+# %%
 # NBVAL_CHECK_OUTPUT
 res = first[n_main]
 centres = res.bin_centres[0]
-half = (centres[1] - centres[0]) / 2
 for label, part in [("before the change of mode", before), ("after it", after), ("whole record", slice(None))]:
     mass = np.nanmean(res.gradient[0][:, part], axis=1)
-    darkest = centres[np.argmax(mass)]
     print(f"{label:26s}: gradient-weighted mean K {np.sum(mass * centres) / np.sum(mass):.2f}, "
           f"median band [{np.nanmedian(res.ci[0, part, 0]):.2f}, {np.nanmedian(res.ci[0, part, 1]):.2f}], "
-          f"darkest bin {darkest - half:.2f}-{darkest + half:.2f}")
+          f"darkest bin {darkest_bin(res, part)}, per sample {darkest_bin(res, part, per_sample=True)}")
+counts = res.bin_counts()[0]
+near = np.flatnonzero(np.abs(centres - truth.gain) < 0.25)
+half = (centres[1] - centres[0]) / 2
+print("samples per bin near K = 2: " + ", ".join(f"{centres[b] - half:.2f}-{centres[b] + half:.2f}: {counts[b]}"
+                                                 for b in near) + f" (mean {n_samples / bins:.0f} per bin)")
+
+# %%
+other_seeds = [dynia.run(u, y, model, first_bounds, dt=dt, n_samples=n_samples, n=n_main, percentage=percentage,
+                         bins=bins, x0="steady", rng=np.random.default_rng([seed, extra]))
+               for extra in range(1, 4)]
+for extra, result in enumerate(other_seeds, start=1):
+    print(f"other samples ({extra}), before the change of mode: darkest bin {darkest_bin(result, before)}, "
+          f"per sample {darkest_bin(result, before, per_sample=True)}")
 
 # %% [markdown]
 # The thesis saw the gain well identified at k ~ 2 but the CLD gradient
 # darkest at 1.7-1.9, and explained it by the input drifting from ~36 to ~40
 # while the output stayed near 72: a change of operating mode, i.e. of the
 # gain. The stand-in contains exactly that change (K falls from 2.0 to 1.8
-# over the orange band), and the plot shows it plainly: the band and the
-# dark region sit on 2.0 before the drift, slide down with the true gain
-# during it, and sit on 1.8 after it (the gradient-weighted means above).
-# Over the whole month the darkest bin is 1.80-1.95: with 40 bins on [0, 6]
-# the bins are 0.15 wide, 2.0 sits 0.05 above that bin's upper edge and 1.8
-# on its lower edge, so the bin collects gradient both before the change
-# (the behavioural gains spread about +-0.25 around 2.0) and after it. A dark
-# band a little below 2 over a record that is mostly at k = 2 is therefore
-# what a mode change to a lower gain, seen through 0.15-wide bins, looks like;
-# this supports the thesis's explanation, without proving it was the cause in
-# the real data.
+# over the orange band), and the plot shows it: the band sits on 2.0 before
+# the drift, slides down with the true gain during it, and sits on 1.8 after
+# it (the gradient-weighted means above, 2.00 and 1.79 with the defaults).
+#
+# **The darkest bin is not the mode change.** The likelihood mass per bin
+# (the `gradient` itself) is darkest on 1.80-1.95 already *before* the change,
+# where the true gain is 2.0 (the lines above). That is the sample, not the
+# data: with 40 bins of 0.15 on [0, 6], the bin of the truth, 1.95-2.10, drew
+# fewer of the 5000 uniform samples than the bins on either side (the counts
+# above, about 100 against about 125, with this seed), and a bin's mass grows
+# with the samples in it. Divided by the share of samples in each bin
+# (`per_sample=True`, the shading of Figure 3.22), the darkest bin before the
+# change is the truth's, 1.95-2.10, and after it 1.65-1.80, the bin below
+# the new gain 1.8 (which lies on its upper edge). With three other draws of
+# the samples (the cell above) the raw darkest bin before the change is the
+# truth's too, as the per-sample one is with all four. So the stand-in does
+# not support the reading of a dark bin a little below 2 as a mode change: it
+# can be darkest by chance alone. The
+# section "The thesis's code path" shows what the thesis's `cld_gradient`
+# adds to that.
 #
 # ## Figure 3.23: information content of the time constant, first run
 
@@ -441,7 +511,7 @@ for step, i in zip(truth.step_times, np.searchsorted(grid, truth.step_times)):
 fig = plt.figure(figsize=(12, 7), constrained_layout=True)
 layout = fig.add_gridspec(2, 2)
 ax = fig.add_subplot(layout[0, :])
-second[n_main].plot_identifiability("T", ax=ax, true_value=truth.time_constant)
+draw_identifiability(shown_lag, "T", ax, true_value=truth.time_constant)
 ax.set_ylabel("T1 (min)")
 mark_events(ax, glitch=False)
 ax.set_title(f"Figure 3.25: uncertainty band and CLD gradient of T1, second run, n = {n_main}")
@@ -449,8 +519,8 @@ ax.set_xlabel("time (days)")
 for column, (centre, title) in enumerate([(truth.glitch_time, "around the erroneous sample"),
                                           (big_step, "around the largest input step")]):
     ax = fig.add_subplot(layout[1, column])
-    zoom = dataclasses.replace(second[n_main], time=grid - centre)
-    zoom.plot_identifiability("T", ax=ax, true_value=truth.time_constant)
+    zoom = dataclasses.replace(shown_lag, time=grid - centre)
+    draw_identifiability(zoom, "T", ax, true_value=truth.time_constant)
     ax.set_ylabel("T1 (min)")
     ax.set_xlim(-15, 15)
     ax.set_xlabel(f"minutes from {centre:.0f}")
@@ -516,34 +586,120 @@ save(fig, 26)
 
 # %%
 # NBVAL_CHECK_OUTPUT
-quiet = before & (np.abs(grid - truth.glitch_time) > 30)
-print("  T1    SSE whole record    SSE before the change of mode    same, without the glitch's hour")
-for time_constant in [1.0, 1.5, 2.0, 3.0, 4.0]:
+THESIS_SSE = {1.0: 1.8803e4, 1.5: 1.8776e4, 2.0: 1.8772e4, 3.0: 1.8772e4, 4.0: 1.8772e4}  # the thesis's table
+glitch_hour = np.abs(grid - truth.glitch_time) <= 30
+quiet = before & ~glitch_hour
+print("  T1     thesis   whole record   after the change   the glitch's hour   the rest before   "
+      "Euler simulator: whole, the glitch's hour")
+for time_constant, thesis_sse in THESIS_SSE.items():
     error = (y - model.simulate([[2.0, time_constant]], u, dt=dt, x0="steady")[0]) ** 2
-    print(f"{time_constant:4.1f}    {error.sum():16.4g}    {error[before].sum():29.4g}    {error[quiet].sum():31.4g}")
+    euler = (y - dynia.thesis.euler_simulation([[2.0, time_constant]], u)[0]) ** 2
+    print(f"{time_constant:4.1f} {thesis_sse:10.5g} {error.sum():14.4g} {error[after].sum():18.4g} "
+          f"{error[glitch_hour].sum():19.4g} {error[quiet].sum():17.4g} {euler.sum():24.4g}, "
+          f"{euler[glitch_hour].sum():.4g}")
+whole_at_2 = ((y - model.simulate([[2.0, 2.0]], u, dt=dt, x0="steady")[0]) ** 2).sum()
+print(f"whole-record SSE at T1 = 2 over the thesis's: {whole_at_2 / THESIS_SSE[2.0]:.0f} times; "
+      f"steps after the change of mode: {after.sum()} of {grid.size}")
 
 # %% [markdown]
 # The thesis's point holds: with k = 2 the time constants 1-4 give nearly the
-# same SSE over the record (with the defaults within half a percent; the
-# thesis had 1.8803e4 to 1.8772e4). In our record the whole-record SSE is
-# dominated by the change of mode, where k = 2 overshoots the output by about
-# 8, and the part before it by the glitch, which a slow model smears over
-# many minutes (so T1 = 1 wins there). Without those two the SSE still varies
-# by only a few percent between T1 = 1 and 4, flat between 1.5 and 2: a
-# month of mostly steady data with six steps says little about T1 in an
-# overall fit, which is why DYNIA's pointing at the few informative minutes
-# is useful. That the flat minimum reaches below the true 2 is visible in the
-# zoom: a step happens within a minute, not on the grid, so the
-# zero-order-hold model on the 1-minute grid starts responding up to a minute
-# late, which a slightly faster time constant partly makes up for.
+# same SSE over the record (with the defaults within half a percent). Two
+# things differ from the thesis's table, and the columns above say why.
 #
+# * **Ours is about 30 times larger** (the last line). The change of mode:
+#   after it the true gain is 1.8, and k = 2 overshoots the output by about 8
+#   at every step of the last days (the "after the change" column is most of
+#   the whole-record SSE). The thesis's 1.88e4 over a month of
+#   minutes is a mean squared error under 0.5, so its record cannot have had
+#   such a stretch that k = 2 missed by several units: either its mode change
+#   was smaller, or its output settled back. The stand-in's drift is built
+#   from the thesis's words (input 36 -> 40 with the output steady), which
+#   fix the gain after it at 1.8.
+# * **Ours rises with T1, the thesis's falls** (1.8803e4 at T1 = 1 to
+#   1.8772e4 from T1 = 2 on). In the stand-in the rise is the glitch's hour:
+#   the output's zero follows the input's by one minute, which a fast lag
+#   follows and a slow one misses (the "glitch's hour" column falls by
+#   thousands from T1 = 4 to 1, more than the rest changes). With the
+#   thesis's Euler simulator (last columns), whose output answers the input
+#   one step early, a fast lag drops to zero one step *before* the measured
+#   zero and misses it twice: its glitch hour costs most at T1 = 1, and its
+#   whole-record SSE falls from T1 = 1 to 2, is flat to 3 and rises by a
+#   fraction of a percent at 4, close to the thesis's 1.8803e4 falling to a
+#   flat 1.8772e4. The thesis's falling SSE is therefore what its own
+#   simulator makes of an erroneous sample like ours; on the exact simulation
+#   the order reverses.
+#
+# Without the mode change and the glitch the SSE still varies by only a few
+# percent between T1 = 1 and 4 ("the rest before"): a month of mostly steady
+# data with six steps says little about T1 in an overall fit, which is why
+# DYNIA's pointing at the few informative minutes is useful.
+#
+
+# %% [markdown]
+# ## The thesis's code path
+#
+# The thesis prints the code of its example 1 only; its DYNIA files are the
+# same for every data set. On the same window costs (same samples, exact
+# simulations), the port of its `cld_gradient` uses rows of width
+# (ub - lb)/(bins - 1) = 6/39, about 0.154, with an edge at exactly 2.0, and
+# drops the likelihood of the first behavioural sample of every row. The
+# figure puts the corrected Figure 3.22 (likelihood mass per sample, left)
+# beside the thesis's code (right).
+
+# %%
+thesis_gain = shown_gain if code_path == "thesis" else thesis_code(first[n_main], "K")
+fig, axes = plt.subplots(1, 2, figsize=(15, 4), sharey=True, constrained_layout=True)
+for ax, (result, label) in zip(axes, [(first[n_main], "corrected: likelihood mass per sample"),
+                                      (thesis_gain, "the thesis's code: cld_gradient, pcolor")]):
+    draw_identifiability(result, "K", ax)
+    ax.plot(days_axis, truth.gain_at(grid), color="k", linestyle="--", linewidth=1, label="true K")
+    ax.set_ylim(1.4, 2.6)
+    ax.set_xlabel("time (days)")
+    ax.set_title(f"Figure 3.22, {label}", fontsize="medium")
+    ax.legend(loc="lower left", fontsize="small")
+fig.savefig(f"{figure_dir}/fig3_22_thesis_code.png", dpi=120, bbox_inches="tight")
+
+# %%
+for label, part in [("before the change of mode", before), ("after it", after), ("whole record", slice(None))]:
+    print(f"{label:26s}: darkest bin, corrected {darkest_bin(first[n_main], part)}, per sample "
+          f"{darkest_bin(first[n_main], part, per_sample=True)}; the thesis's code {darkest_bin(thesis_gain, part)}, "
+          f"per sample {darkest_bin(thesis_gain, part, per_sample=True)}")
+
+# %% [markdown]
+# Which of the thesis's observations on this record come from where, as far
+# as the stand-in can tell (numbers above, default parameters):
+#
+# * **k well identified nearly everywhere** (Figures 3.21, 3.22): the data,
+#   on every path.
+# * **The darkest bin at 1.7-1.9 while k ~ 2** (Figure 3.22): the code's
+#   bins, the sample and the data together. `cld_gradient`'s rows have an
+#   edge at exactly 2.0, so a gain of 2 darkens the row 1.85-2.00 below it
+#   and the row above it alike, and which one wins is decided by a few
+#   samples: before the change of mode the thesis's code is darkest on
+#   1.85-2.00, below the truth, on the very samples whose likelihood mass per
+#   sample is darkest on the truth's bin (the lines above). After the change
+#   to 1.8 its darkest row is 1.69-1.85, which is "1.7-1.9". So in the
+#   thesis's figure a dark 1.7-1.9 is what its rows make of a gain of 1.8, or
+#   of a gain of 2 with a few more samples below the edge; its figure cannot
+#   tell the two apart, and the explanation by a mode change stays a
+#   possibility, not a finding.
+# * **The highest IC of T1 at the erroneous sample, at T1 ~ 0** (Figures 3.24,
+#   3.25): the data (the glitch), with the output's zero one grid step after
+#   the input's; the gradient's quirks do not move it.
+# * **SSE nearly equal for T1 = 1-4** (Figure 3.26): the data. Its order
+#   (falling with T1) is what the Euler simulator's one-step lead makes of an
+#   erroneous sample; the exact simulation reverses it. Its size is about a
+#   thirtieth of ours: the thesis's record cannot have held a stretch as long
+#   and as badly fitted by k = 2 as our change of mode.
+
+# %% [markdown]
 # ## Summary: the stand-in against the thesis
 #
 # | thesis (real CWR data) | synthetic stand-in |
 # | --- | --- |
 # | baseline step fit k = 2.04, T1 = 2.16 | within 10 % of K = 2, T1 = 2 (printed above) |
 # | IC of k high, negative spikes at input steps (3.21) | high (about 0.9), a spike at the glitch but none at the steps (even 8-10 unit steps only dent it) |
-# | k ~ 2, gradient darkest at 1.7-1.9, input drifts 36 -> 40 with output ~72 (3.22) | band on 2.0, then on 1.8 after the built-in mode change; darkest bin over the month 1.80-1.95, which both gains feed |
+# | k ~ 2, gradient darkest at 1.7-1.9, input drifts 36 -> 40 with output ~72 (3.22) | band on 2.0, then on 1.8 after the built-in mode change; the likelihood mass is darkest on 1.80-1.95 before the change by the sample (per sample: on the truth's bin); the thesis's rows are darkest on 1.85-2.00 before and 1.69-1.85 after it |
 # | first run: little information on T1, minor spikes at input changes (3.23) | little information on T1, no spikes at the steps, a bump at the glitch |
 # | second run k in [1.8, 2.2]: pronounced IC of T1, highest at the erroneous sample at T1 ~ 0, other spikes at steps (3.24, 3.25) | the same, computed; T1 ~ 0 because the output's zero follows the input's by one grid step (by construction), simultaneous zeros give T1 near 8 instead |
-# | SSE nearly equal for T1 = 1-4 with k = 2 (3.26) | the same; dominated by the mode change and the glitch |
+# | SSE nearly equal for T1 = 1-4 with k = 2, falling from 1.8803e4 to 1.8772e4 (3.26) | nearly equal, about 30 times larger (the mode change) and rising with T1 (the glitch); with the thesis's Euler simulator falling from T1 = 1 to 2 as in the thesis |
