@@ -11,7 +11,8 @@ the methods can be compared on equal terms:
     then :func:`dynia.segments.segments_from_ic`: the stretches where the
     information content of a parameter (``mode="any"``) or of all
     (``"joint"``) reaches ``ic_threshold`` in windows above the noise floor
-    (``DyniaResult.informative``: never a window that only ranks noise). Also reports the model-structure
+    (``DyniaResult.informative``: never a window that only ranks noise).
+    Also reports the model-structure
     warnings of :func:`dynia.structure.structure_warnings`.
 ``"baseline"``
     The accepted intervals of :func:`dynia.baseline.find_intervals`

@@ -69,6 +69,14 @@ more, sigma is overestimated and the floor is higher: fewer windows are
 informative, never more. On thesis examples 1 and 2 (sigma 0.5 and 0.2) the
 estimate lands within 12 % of the truth.
 
+Two limits of one sigma for the whole record. Errors that grow with the
+output (relative gauging errors) are smaller than sigma where the output is
+small, so windows there that do discriminate can fall below the floor.
+And a population of unrelated outputs, not one model's family over its
+parameters, puts the minimum MAE far below the best fit's (the minimum of N
+independent MAEs): there the estimate is low and the floor too; give sigma
+to :func:`noise_floor` when it is known.
+
 Examples
 --------
 >>> import numpy as np
