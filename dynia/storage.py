@@ -49,7 +49,7 @@ import tempfile
 import numpy as np
 from numpy.lib.mixins import NDArrayOperatorsMixin
 
-from .errors import OutputError
+from .errors import DataError, OutputError
 
 __all__ = [
     "DTYPES",
@@ -161,6 +161,7 @@ class ResultFile(ResultArrays):
         self.path = os.path.abspath(os.fspath(path))
         self._partial = None
         self._file = None
+        self._variables = {}
         self._buffers = {}
         self._block = 0
         self._block_start = 0
@@ -246,7 +247,8 @@ class ResultFile(ResultArrays):
     def arrays(self):
         """The variables written, as :class:`DiskArray` objects on the partial file."""
         self._file.flush()
-        return {name: DiskArray(self._file.variables[name], self._partial, name) for name in self._buffers}
+        self._variables = {name: _Variable(self._file.variables[name], self._partial, name) for name in self._buffers}
+        return {name: DiskArray(variable) for name, variable in self._variables.items()}
 
     def commit(self, result):
         """Add ``result``'s settings, verdicts and timestamps, rename the file to ``path``, return it read lazily.
@@ -283,11 +285,19 @@ class ResultFile(ResultArrays):
             self.discard()
             raise OutputError(f"{self.path}: cannot be written ({error.strerror or error})") from None
         self._partial = None
-        # Everything but the arrays written here stays as the result holds it (fields the file has no room for too).
-        return dataclasses.replace(result, **disk_arrays(self.path, self._buffers))
+        # The arrays handed out before move with the file; the rest stays as the result holds it.
+        reopened = disk_arrays(self.path, self._variables)
+        for name, variable in self._variables.items():
+            variable.dataset, variable.filename = reopened[name]._variable.dataset, self.path
+        committed = {name: DiskArray(variable) for name, variable in self._variables.items()}
+        self._variables = {}  # a later discard (a reuse of this object) leaves the committed file alone
+        return dataclasses.replace(result, **committed)
 
     def discard(self):
-        """Close and delete the partial file, if any."""
+        """Close and delete the partial file, if any; arrays read from it raise :class:`~dynia.errors.DataError`."""
+        for variable in self._variables.values():
+            variable.dataset = None
+        self._variables = {}
         if self._file is not None:
             self._file.close()
             self._file = None
@@ -327,7 +337,24 @@ def disk_arrays(path, names):
     import h5py
 
     file = h5py.File(path, "r")
-    return {name: DiskArray(file[name], path, name) for name in names}
+    return {name: DiskArray(_Variable(file[name], path, name)) for name in names}
+
+
+class _Variable:
+    """What DiskArrays read: a variable of a file, moved with the file when it is renamed, gone when deleted."""
+
+    def __init__(self, dataset, filename, name):
+        self.dataset = dataset
+        self.filename = os.fspath(filename)
+        self.name = name
+
+    def opened(self):
+        if self.dataset is None:
+            raise DataError(
+                f"{self.name!r} of {self.filename}: the file was deleted, as its analysis did not finish (an error, "
+                "an interruption, or a retry with other samples); use the result the analysis returned"
+            )
+        return self.dataset
 
 
 class DiskArray(NDArrayOperatorsMixin):
@@ -340,19 +367,27 @@ class DiskArray(NDArrayOperatorsMixin):
     so it can be sent to another process on the same file system.
     """
 
-    def __init__(self, dataset, filename, name, leading=()):
-        self._dataset = dataset
-        self.filename = os.fspath(filename)
-        self.name = name
+    def __init__(self, variable, leading=()):
+        self._variable = variable
         self._leading = tuple(leading)
 
     @property
+    def filename(self):
+        """The file read."""
+        return self._variable.filename
+
+    @property
+    def name(self):
+        """The variable read."""
+        return self._variable.name
+
+    @property
     def shape(self):
-        return self._dataset.shape[len(self._leading) :]
+        return self._variable.opened().shape[len(self._leading) :]
 
     @property
     def dtype(self):
-        return self._dataset.dtype
+        return self._variable.opened().dtype
 
     @property
     def ndim(self):
@@ -377,9 +412,9 @@ class DiskArray(NDArrayOperatorsMixin):
                 if not -size <= item < size:
                     raise IndexError(f"index {item} is out of bounds for axis {axis} with size {size}")
                 leading.append(int(item) % size)
-            return DiskArray(self._dataset, self.filename, self.name, self._leading + tuple(leading))
+            return DiskArray(self._variable, self._leading + tuple(leading))
         try:
-            return np.asarray(self._dataset[self._leading + key])
+            return np.asarray(self._variable.opened()[self._leading + key])
         except (TypeError, ValueError):
             # Selections HDF5 cannot make (fancy indices out of order, repeated): read the view, index in memory.
             return np.asarray(self)[key]
@@ -393,7 +428,7 @@ class DiskArray(NDArrayOperatorsMixin):
         return np.asarray(self).astype(dtype)
 
     def __array__(self, dtype=None, copy=None):
-        values = np.asarray(self._dataset[self._leading + (Ellipsis,)])
+        values = np.asarray(self._variable.opened()[self._leading + (Ellipsis,)])
         return values if dtype is None else values.astype(dtype, copy=False)
 
     def __array_ufunc__(self, ufunc, method, *inputs, **kwargs):
@@ -410,4 +445,4 @@ class DiskArray(NDArrayOperatorsMixin):
 def _reopened(filename, name, leading):
     import h5py
 
-    return DiskArray(h5py.File(filename, "r")[name], filename, name, leading)
+    return DiskArray(_Variable(h5py.File(filename, "r")[name], filename, name), leading)

@@ -287,7 +287,7 @@ def load(path, *, lazy=False):
 
 def _loaded(dataset, key, dims, lazy):
     """Variable ``key`` in the order ``dims``: in memory, or with ``lazy`` a DiskArray when it lies along time."""
-    from .storage import TIME_VARIABLES, DiskArray
+    from .storage import TIME_VARIABLES, disk_arrays
 
     variable = dataset[key]
     if not (lazy and key in TIME_VARIABLES):
@@ -297,9 +297,7 @@ def _loaded(dataset, key, dims, lazy):
             f"{dataset.encoding['source']}: {key} has dimensions {variable.dims}; a lazy load needs {dims} "
             "(the order dynia writes), load it with lazy=False"
         )
-    import h5py
-
-    return DiskArray(h5py.File(dataset.encoding["source"], "r")[key], dataset.encoding["source"], key)
+    return disk_arrays(dataset.encoding["source"], [key])[key]
 
 
 def _encoded(value, where, setting):
