@@ -52,7 +52,6 @@ from numpy.lib.mixins import NDArrayOperatorsMixin
 from .errors import DataError, OutputError
 
 __all__ = [
-    "DTYPES",
     "TIME_VARIABLES",
     "DiskArray",
     "ResultArrays",
@@ -61,8 +60,6 @@ __all__ = [
     "write_result",
     "disk_arrays",
 ]
-
-DTYPES = ("float64", "float32")
 
 # The result arrays that lie along time, with the file's dimensions (as dynia.store lays them out).
 TIME_VARIABLES = {
@@ -82,6 +79,11 @@ def result_arrays(store, dtype):
     """Where an analysis keeps its arrays: :class:`ResultArrays` in memory, or a :class:`ResultFile` at ``store``.
 
     ``store`` may also be a :class:`ResultArrays` or :class:`ResultFile` already made, whose owner commits it.
+
+    Examples
+    --------
+    >>> [type(result_arrays(store, "float32")).__name__ for store in (None, "result.nc")]
+    ['ResultArrays', 'ResultFile']
     """
     if isinstance(store, ResultArrays):
         return store
@@ -154,6 +156,23 @@ class ResultFile(ResultArrays):
         The final file; replaced if it exists, when the commit succeeds.
     dtype : {"float64", "float32"}
         Type of the time-dependent arrays in the file.
+
+    Examples
+    --------
+    Made by hand, the file waits for its owner's commit, here after the verdicts:
+
+    >>> import dataclasses, tempfile, pathlib, numpy as np, dynia
+    >>> from dynia.analysis import moving_window
+    >>> gain = np.random.default_rng(1).uniform(0, 4, (500, 1))
+    >>> u = np.r_[np.zeros(20), np.ones(40)]
+    >>> with tempfile.TemporaryDirectory() as folder, ResultFile(pathlib.Path(folder, "r.nc")) as output:
+    ...     res = moving_window(2 * u, gain * u, gain, [[0, 4]], n=3, store=output)
+    ...     waiting = sorted(path.suffix for path in pathlib.Path(folder).iterdir())
+    ...     res = output.commit(dataclasses.replace(res, verdicts=dynia.verdicts.assess(res)))
+    ...     done = sorted(path.name for path in pathlib.Path(folder).iterdir())
+    ...     verdict = dynia.load(output.path).verdicts["p0"]["verdict"]
+    >>> waiting, done, verdict
+    (['.partial'], ['r.nc'], 'identified')
     """
 
     def __init__(self, path, dtype="float64"):
