@@ -331,8 +331,8 @@ def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, pr
     """Stage 2, fed by stage 1: one task per time chunk; ic, ci, gradient, best and threshold MAE on the client.
 
     ``blocks(start, stop)`` submits stage 1 of the time chunk [start, stop)
-    and returns the futures of its blocks, in sample order; it is called
-    in time order. At most ``ahead`` time chunks are submitted and not yet
+    and returns the futures of its outputs, (block, what it hands on) per
+    sample chunk, in sample order; it is called in time order. At most ``ahead`` time chunks are submitted and not yet
     analysed, so the blocks on the cluster stay those of a few time chunks;
     a chunk's blocks are released once it is analysed. A stateful
     flavour's tasks form a chain in time order, each starting from the
@@ -352,7 +352,7 @@ def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, pr
 
     def submit(start, stop):
         nonlocal state
-        analysed = client.submit(_analyse_time_chunk, state, windows, blocks(start, stop), stop - start, pure=False)
+        analysed = client.submit(_analyse_stage_one, state, windows, blocks(start, stop), stop - start, pure=False)
         chunk = client.submit(operator.getitem, analysed, 0, pure=False)
         chunk_spans[chunk] = (start, stop)
         finished.add(chunk)
@@ -482,26 +482,28 @@ class _ChainedBlocks:
         self._client = client
         self._arguments = (model, u, y, dt, x0, windows)
         self._row_chunks = row_chunks
-        self._handed_on = [None] * len(row_chunks)
+        self._previous = [None] * len(row_chunks)
 
     def __call__(self, start, stop):
-        """Submit the time chunk [start, stop), the one after the last submitted; its blocks' futures."""
-        blocks = []
-        for index, (first, rows) in enumerate(self._row_chunks):
-            step = self._client.submit(
-                _chained_window_inputs, rows, first, self._handed_on[index], start, stop, *self._arguments, pure=False
+        """Submit the time chunk [start, stop), the one after the last submitted; its outputs' futures."""
+        # The tasks take the whole output of the one before and pick what they need on the worker:
+        # splitting the outputs on the cluster would double the number of tasks.
+        self._previous = [
+            self._client.submit(
+                _chained_window_inputs, rows, first, previous, start, stop, *self._arguments, pure=False
             )
-            blocks.append(self._client.submit(operator.getitem, step, 0, pure=False))
-            self._handed_on[index] = self._client.submit(operator.getitem, step, 1, pure=False)
-        return blocks
+            for (first, rows), previous in zip(self._row_chunks, self._previous)
+        ]
+        return self._previous
 
 
-def _chained_window_inputs(params, first, handed_on, start, stop, model, u, y, dt, x0, windows):
+def _chained_window_inputs(params, first, previous, start, stop, model, u, y, dt, x0, windows):
     """Stage 1, resumable: one sample chunk's window inputs at steps [start, stop), and what to hand on.
 
-    ``handed_on`` is what the task of the previous time chunk returned, the
-    simulation's state and the errors from where this chunk's windows reach
-    back to up to that state's step (None for the first time chunk). The
+    ``previous`` is the output of the task of the previous time chunk (None
+    for the first), whose second part it handed on: the simulation's state
+    and the errors from where this chunk's windows reach back to up to that
+    state's step. The
     steps the windows reach beyond it are simulated here. Errors are kept
     time-major, the compiled windows' layout, which a linear model
     simulates in without transposing.
@@ -509,10 +511,10 @@ def _chained_window_inputs(params, first, handed_on, start, stop, model, u, y, d
     n_steps = y.size
     reach_back, reach_ahead = max(start - windows.before, 0), min(stop + windows.after, n_steps)
     with _sample_chunk_context(first, params.shape[0]):
-        if handed_on is None:
+        if previous is None:
             state, errors = model.start_simulation(params, u, dt=dt, x0=x0), np.empty((0, params.shape[0]))
         else:
-            state, errors = handed_on
+            _, (state, errors) = previous
         if reach_ahead > state.step:
             simulated_from = state.step
             sims, state = model.simulate_span(state, u, reach_ahead, time_major=True)
@@ -566,21 +568,29 @@ class _WholeRecordBlocks:
         }
 
     def __call__(self, start, stop):
-        """The blocks' futures of the time chunk [start, stop), handed out once."""
+        """The outputs' futures of the time chunk [start, stop), handed out once."""
         return self._by_time.pop(start // self._time_chunks)
 
 
 def _whole_record_window_inputs(model, params, u, y, dt, x0, windows, time_chunks, first):
-    """Stage 1, not resumable: simulate one sample chunk over the record; its window inputs per time chunk."""
+    """Stage 1, not resumable: simulate one sample chunk over the record; its window inputs per time chunk.
+
+    Each time chunk's block comes with nothing to hand on, as a chained task's output does.
+    """
     n_steps = y.size
     with _sample_chunk_context(first, params.shape[0]):
         errors = StreamedErrors(
             y, model.simulate_chunks(params, u, dt=dt, x0=x0, chunk_steps=time_chunks), params.shape[0]
         )
         return [
-            windows.block(errors, start, min(start + time_chunks, n_steps), n_steps)
+            (windows.block(errors, start, min(start + time_chunks, n_steps), n_steps), None)
             for start in range(0, n_steps, time_chunks)
         ]
+
+
+def _analyse_stage_one(flavour, windows, outputs, m):
+    """Stage 2 on the outputs of stage 1, (block, what it hands on) per sample chunk: their blocks analysed."""
+    return _analyse_time_chunk(flavour, windows, [block for block, _ in outputs], m)
 
 
 def _analyse_time_chunk(flavour, windows, blocks, m):
