@@ -1,6 +1,7 @@
 """dynia.distributed.run against dynia.run: the same result bit for bit, whatever the chunks."""
 
 import operator
+import pickle
 import sys
 
 import control
@@ -9,7 +10,8 @@ import pytest
 from numpy.testing import assert_array_equal
 
 import dynia
-from dynia.models import FOPDT, FirstOrder, TransferFunction
+from dynia.errors import DataError, ModelError
+from dynia.models import FOPDT, FirstOrder, FunctionModel, SecondOrderDelay, StateSpaceModel, TransferFunction
 
 distributed = pytest.importorskip("distributed")
 from dynia.distributed import run  # noqa: E402  (after the skip: needs dask.distributed)
@@ -210,3 +212,149 @@ def test_without_dask_the_error_says_what_to_install(record, monkeypatch):
     u, y = record
     with pytest.raises(ImportError, match=r"pip install 'dynia\[distributed\]'"):
         run(u, y, FirstOrder(), BOUNDS)
+
+
+# Memory bounded in time: stage 1 resumes each sample chunk's simulation time chunk by time chunk.
+
+TANK_BOUNDS = {"A": (0.5, 5.0), "c": (0.1, 2.0)}
+
+
+def tank_step(x, u_k, p, dt):
+    return np.maximum(x + dt * (u_k - p[:, 1:2] * np.sqrt(x)) / p[:, 0:1], 0.0)
+
+
+def tank_output(x, u_k, p):
+    return x[:, 0]
+
+
+def tank():
+    """A nonlinear tank with square-root outflow, resumable from its level."""
+    return StateSpaceModel(tank_step, tank_output, x0=[1.0], names=["A", "c"], n_states=1)
+
+
+def tank_record():
+    u = np.r_[np.full(40, 0.5), np.full(60, 1.5), np.full(50, 0.2)]
+    y = tank().simulate([[2.0, 0.7]], u)[0] + np.random.default_rng(1).normal(0, 0.05, u.size)
+    return u, y
+
+
+# (first step, steps) of every call of lag_chunk: what each task of stage 1 simulated.
+LAG_CALLS = []
+
+
+def lag_chunk(params, u, dt, state):
+    """A first-order lag streamed chunk by chunk; the state is the step reached and the output."""
+    step, level = state
+    LAG_CALLS.append((step, u.shape[0]))
+    gain, time_constant = params[:, 0], params[:, 1]
+    sims = np.empty((params.shape[0], u.shape[0]))
+    for k in range(u.shape[0]):
+        sims[:, k] = level
+        level = level + dt * (gain * u[k] - level) / time_constant
+    return sims, (step + u.shape[0], level)
+
+
+def lag_start(params):
+    return 0, np.zeros(params.shape[0])
+
+
+def whole_record_lag(params, u, dt):
+    sims = np.empty((params.shape[0], u.shape[0]))
+    sims[:, 0] = 0.0
+    for k in range(1, u.shape[0]):
+        sims[:, k] = sims[:, k - 1] + dt * (params[:, 0] * u[k - 1] - sims[:, k - 1]) / params[:, 1]
+    return sims
+
+
+LAG_BOUNDS = {"K": (0.0, 7.0), "T": (1.0, 7.0)}
+
+
+@pytest.mark.parametrize("engine", ["numba", "numpy"])
+def test_second_order_dead_time_across_time_chunks_equals_dynia_run(client, engine):
+    """Dead times of up to 14 steps, longer than a time chunk: the resumed simulation reads inputs
+    from chunks simulated by earlier tasks; a steady start and per-sample delays."""
+    u = np.r_[np.full(30, 1.0), np.full(50, 3.0), np.full(40, 0.5), np.full(40, 2.0)]
+    y = SecondOrderDelay().simulate([[1.5, 4.0, 2.0, 6.5]], u, dt=0.5, x0="steady")[0]
+    y = y + np.random.default_rng(2).normal(0, 0.05, u.size)
+    bounds = {"K": (0.5, 3.0), "T1": (0.1, 8.0), "T2": (0.1, 8.0), "theta": (0.0, 7.0)}
+    options = dict(dt=0.5, x0="steady", n_samples=240, n=4, rng=12, engine=engine)
+    result = run(u, y, SecondOrderDelay(), bounds, client=client, sample_chunks=70, time_chunks=6, **options)
+    assert result.samples[:, 3].max() / 0.5 > 6 * 2  # dead times of more than two time chunks
+    assert_same(result, dynia.run(u, y, SecondOrderDelay(), bounds, **options))
+
+
+@pytest.mark.parametrize("flavour", ["thesis", "mcat"])
+def test_state_space_model_across_time_chunks_equals_dynia_run(client, flavour):
+    u, y = tank_record()
+    options = dict(n_samples=200, n=4, flavour=flavour, rng=3)
+    result = run(u, y, tank(), TANK_BOUNDS, client=client, sample_chunks=70, time_chunks=9, **options)
+    assert_same(result, dynia.run(u, y, tank(), TANK_BOUNDS, **options))
+
+
+def test_streaming_function_model_simulates_each_step_once_in_time_chunks(client, record):
+    u, y = record
+    model = FunctionModel(lag_chunk, ["K", "T"], state=lag_start)
+    options = dict(n_samples=200, n=5, rng=4)
+    LAG_CALLS.clear()
+    result = run(u, y, model, LAG_BOUNDS, client=client, sample_chunks=100, time_chunks=20, **options)
+    # Stage 0 checks each sample chunk over the whole record in one piece; stage 1 resumes in pieces.
+    stage_one = sorted(call for call in LAG_CALLS if call[1] < STEPS)
+    assert len(LAG_CALLS) - len(stage_one) == 2
+    assert max(steps for _, steps in stage_one) <= 20 + 5  # a time chunk and the halo ahead
+    expected = [(0, 25)] + [(start + 5, 20) for start in range(20, STEPS - 20, 20)] + [(STEPS - 15, 15)]
+    assert stage_one == sorted(expected * 2)  # each step once per sample chunk
+    assert_same(result, dynia.run(u, y, model, LAG_BOUNDS, **options))
+
+
+def test_a_model_that_cannot_resume_is_simulated_over_the_whole_record(client, record):
+    """A FunctionModel without state= answers for the whole record: stage 1 takes the old path."""
+    u, y = record
+    model = FunctionModel(whole_record_lag, ["K", "T"])
+    assert not model.resumable
+    with pytest.raises(ModelError, match="cannot pause and resume"):
+        model.start_simulation([[1.0, 2.0]], u)
+    options = dict(n_samples=200, n=5, rng=5)
+    result = run(u, y, model, LAG_BOUNDS, client=client, sample_chunks=64, time_chunks=30, **options)
+    assert_same(result, dynia.run(u, y, model, LAG_BOUNDS, **options))
+
+
+@pytest.mark.parametrize(
+    "model, params, x0",
+    [
+        (FirstOrder(), [[2.0, 3.0], [0.5, 0.0]], "zero"),
+        (SecondOrderDelay(), [[1.0, 2.0, 3.0, 17.5], [2.0, 0.5, 0.5, 0.0]], "steady"),
+        (TransferFunction(lambda p: control.tf([1.0, p[0]], [1.0, p[1], 2.0]), names=("a", "b")), [[1, 3]], "zero"),
+        (tank(), [[2.0, 0.7], [4.0, 1.5]], "zero"),
+        (FunctionModel(lag_chunk, ["K", "T"], state=lag_start), [[2.0, 3.0]], "zero"),
+    ],
+)
+def test_a_simulation_resumed_from_pickled_states_equals_one_uninterrupted(model, params, x0):
+    u = np.abs(np.random.default_rng(3).normal(1.0, 1.0, 90))
+    whole = model.simulate(params, u, x0=x0)
+    state = model.start_simulation(params, u, x0=x0)
+    pieces = []
+    for stop in (1, 2, 19, 20, 63, 90):
+        time_major = stop % 2 == 0
+        resumed = pickle.loads(pickle.dumps(state))
+        sims, state = model.simulate_span(resumed, u, stop, time_major=time_major)
+        again, _ = model.simulate_span(resumed, u, stop, time_major=time_major)  # the state given stays as it was
+        assert_array_equal(again, sims)
+        assert state.step == stop
+        pieces.append(sims.T if time_major else sims)
+    assert_array_equal(np.concatenate(pieces, axis=1), whole)
+
+
+def test_resuming_with_the_wrong_record_or_step_is_a_clear_error():
+    u = np.ones(50)
+    state = FirstOrder().start_simulation([[1.0, 2.0]], u)
+    with pytest.raises(ModelError, match="stop must be a whole number after the state's step 0"):
+        FirstOrder().simulate_span(state, u, 0)
+    with pytest.raises(DataError, match="started on a record of 50 steps"):
+        FirstOrder().simulate_span(state, u[:40], 10)
+    broken = u.copy()
+    broken[12] = np.nan
+    _, later = FirstOrder().simulate_span(state, u, 10)
+    with pytest.raises(DataError, match=r"span of steps 10 to 19 .*u\[2\] = nan"):
+        FirstOrder().simulate_span(later, broken, 20)
+    with pytest.raises(ModelError, match="state must be the SimulationState"):
+        FirstOrder().simulate_span((0, None), u, 10)
