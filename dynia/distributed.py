@@ -332,9 +332,10 @@ def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, pr
 
     ``blocks(start, stop)`` submits stage 1 of the time chunk [start, stop)
     and returns the futures of its outputs, (block, what it hands on) per
-    sample chunk, in sample order; it is called in time order. At most ``ahead`` time chunks are submitted and not yet
-    analysed, so the blocks on the cluster stay those of a few time chunks;
-    a chunk's blocks are released once it is analysed. A stateful
+    sample chunk, in sample order; it is called in time order. At most
+    ``ahead`` time chunks are submitted and not yet analysed, so the blocks
+    on the cluster stay those of a few time chunks; a chunk's blocks are
+    released once it is analysed. A stateful
     flavour's tasks form a chain in time order, each starting from the
     state the one before left.
     """
@@ -503,10 +504,9 @@ def _chained_window_inputs(params, first, previous, start, stop, model, u, y, dt
     ``previous`` is the output of the task of the previous time chunk (None
     for the first), whose second part it handed on: the simulation's state
     and the errors from where this chunk's windows reach back to up to that
-    state's step. The
-    steps the windows reach beyond it are simulated here. Errors are kept
-    time-major, the compiled windows' layout, which a linear model
-    simulates in without transposing.
+    state's step. The steps the windows reach beyond it are simulated here.
+    Errors are kept time-major, the compiled windows' layout, which a linear
+    model simulates in without transposing.
     """
     n_steps = y.size
     reach_back, reach_ahead = max(start - windows.before, 0), min(stop + windows.after, n_steps)
