@@ -660,6 +660,13 @@ for ax, (result, label) in zip(axes, [(first[n_main], "corrected: likelihood mas
 fig.savefig(f"{figure_dir}/fig3_22_thesis_code.png", dpi=120, bbox_inches="tight")
 
 # %%
+before_mass = np.nanmean(thesis_gain.gradient[0][:, before], axis=1)
+row_centres = thesis_gain.bin_centres[0]
+row_half = (row_centres[1] - row_centres[0]) / 2
+around_two = np.flatnonzero(np.abs(row_centres - truth.gain) < 2 * row_half)
+print("the thesis's code before the change of mode, share of the gradient in the rows on either side of 2.0: "
+      + ", ".join(f"{row_centres[row] - row_half:.2f}-{row_centres[row] + row_half:.2f}: "
+                  f"{before_mass[row] / before_mass.sum():.1%}" for row in around_two))
 for label, part in [("before the change of mode", before), ("after it", after), ("whole record", slice(None))]:
     print(f"{label:26s}: darkest bin, corrected {darkest_bin(first[n_main], part)}, per sample "
           f"{darkest_bin(first[n_main], part, per_sample=True)}; the thesis's code {darkest_bin(thesis_gain, part)}, "
@@ -672,17 +679,20 @@ for label, part in [("before the change of mode", before), ("after it", after), 
 # * **k well identified nearly everywhere** (Figures 3.21, 3.22): the data,
 #   on every path.
 # * **The darkest bin at 1.7-1.9 while k ~ 2** (Figure 3.22): the code's
-#   bins, the sample and the data together. `cld_gradient`'s rows have an
-#   edge at exactly 2.0, so a gain of 2 darkens the row 1.85-2.00 below it
-#   and the row above it alike, and which one wins is decided by a few
-#   samples: before the change of mode the thesis's code is darkest on
-#   1.85-2.00, below the truth, on the very samples whose likelihood mass per
-#   sample is darkest on the truth's bin (the lines above). After the change
-#   to 1.8 its darkest row is 1.69-1.85, which is "1.7-1.9". So in the
-#   thesis's figure a dark 1.7-1.9 is what its rows make of a gain of 1.8, or
-#   of a gain of 2 with a few more samples below the edge; its figure cannot
-#   tell the two apart, and the explanation by a mode change stays a
-#   possibility, not a finding.
+#   quirks and the data together. `cld_gradient`'s rows have an edge at
+#   exactly 2.0, so a gain of 2 splits its mass between the rows on either
+#   side (the percentages above), and each row drops the likelihood of its
+#   lowest behavioural value: in the row above the edge one of the
+#   best-fitting samples, in the row below one of the worst. So before the
+#   change of mode, with the gain at 2.0, the thesis's code is darkest on the
+#   row below the truth, 1.85-2.00, per sample too, on the very samples whose
+#   likelihood mass per sample is darkest on the truth's bin (the lines
+#   above). After the change to 1.8 its darkest row is 1.69-1.85, which is
+#   "1.7-1.9". So a dark 1.7-1.9 in the thesis's figure is what its code
+#   makes of a gain of 1.8, or of a gain a little above 1.85; a gain of 2
+#   would read 1.85-2.0. The mode change the thesis suspected fits that, but
+#   its figure shifts every gain down by up to a row, and the thesis's text
+#   does not say how long the dark region lasted.
 # * **The highest IC of T1 at the erroneous sample, at T1 ~ 0** (Figures 3.24,
 #   3.25): the data (the glitch), with the output's zero one grid step after
 #   the input's; the gradient's quirks do not move it.
