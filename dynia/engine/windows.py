@@ -91,6 +91,7 @@ from ..result import DyniaResult
 from ..settings import AnalysisSettings
 from ..storage import ResultArrays, result_arrays
 from .flavours import FLAVOURS, compiled_engine, flavour_analysis, monte_carlo_errors
+from .noise import record_noise_floor, window_points
 
 __all__ = [
     "moving_window",
@@ -417,6 +418,8 @@ def _analyse(
     output.allocate(shapes, names=names, samples=params, bounds=bounds, time=time, bin_centres=flavour_impl.bin_centres)
 
     slots = before + after + 1
+    # Two numbers a step for the noise floor, which needs every window's before it can judge any.
+    best, threshold = np.full(n_steps, np.nan), np.full(n_steps, np.nan)
 
     def analyse_chunk(start, stop, window_errors, measured):
         if compiled:
@@ -425,11 +428,12 @@ def _analyse(
         return start, stop, flavour_impl.analyse(mae, present >= min_points)
 
     def write(finished):
-        start, stop, (chunk_ic, chunk_ci, chunk_gradient, *batches) = finished.result()
-        chunks = dict(ic=chunk_ic, ci=chunk_ci, gradient=chunk_gradient)
+        start, stop, results = finished.result()
+        chunks = dict(ic=results.ic, ci=results.ci, gradient=results.gradient)
         if ic_error:
-            chunks["ic_se"], chunks["ci_se"] = monte_carlo_errors(*batches)
+            chunks["ic_se"], chunks["ci_se"] = monte_carlo_errors(results.batch_ic, results.batch_ci)
         output.write(start, stop, chunks)
+        best[start:stop], threshold[start:stop] = results.best, results.threshold
 
     starts = range(0, n_steps, chunk_steps)
     if progress:
@@ -457,6 +461,8 @@ def _analyse(
         while pending:
             write(pending.popleft())
 
+    points = window_points(y, before, after)
+    floor = record_noise_floor(best, threshold, points, slots, n_params, percentage, n_samples)
     # What the engine did wins over what the caller asked: the samples analysed
     # (after any were dropped) and the engine that ran ("auto" resolved).
     recorded = dict(settings or {})
@@ -472,6 +478,8 @@ def _analyse(
         n_behavioural=flavour_impl.count,
         engine="numba" if compiled else "numpy",
         ic_error=ic_error,
+        noise_sigma=floor.sigma,
+        noise_multiple=floor.multiple,
     )
     if ic_error:
         recorded.update(ic_batches=flavour_impl.batches)
@@ -488,6 +496,9 @@ def _analyse(
         settings=recorded,
         ic_se=arrays.get("ic_se"),
         ci_se=arrays.get("ci_se"),
+        informative=floor.informative,
+        mae_spread=floor.spread,
+        noise_floor=floor.floor,
     )
     # An output given by the caller is committed by the caller, once it has added the verdicts.
     return result if isinstance(store, ResultArrays) else output.commit(result)
