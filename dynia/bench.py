@@ -35,6 +35,12 @@ process so that its peak resident memory (``ru_maxrss``) is its own.
     10^6 steps (``--distributed-samples``, ``--distributed-steps``): wall
     time, speed-up from one worker to two, and each worker's peak resident
     memory, sampled every 0.1 s; target <= 1 GB per worker.
+
+``long-record``: a year of 1 Hz data in bounded memory, :func:`dynia.run`
+with ``dtype="float32"`` and ``store`` (a netCDF file in a temporary folder)
+on 10^4 samples x 3x10^7 steps (``--long-samples``, ``--long-steps``; about
+an hour on two cores), then its summary and plots; target peak resident
+memory <= 4 GB.
 """
 
 import argparse
@@ -326,6 +332,56 @@ def _case_distributed(n_samples=10_000, n_steps=1_000_000, time_chunks=None):
     return result
 
 
+def _case_long_record(n_samples=10_000, n_steps=30_000_000):
+    import tempfile
+    from pathlib import Path
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .pipeline import run
+
+    u, y, _, model = _example1(1, n_steps)
+    data_rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder, "long.nc")
+        start = time.perf_counter()
+        result = run(
+            u,
+            y,
+            model,
+            {"K": (0, 7), "T": (0, 7)},
+            n_samples=n_samples,
+            n=10,
+            bins=40,
+            rng=1,
+            dtype="float32",
+            store=path,
+        )
+        seconds = time.perf_counter() - start
+        run_rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+        start = time.perf_counter()
+        summary = result.summary()
+        for name in result.names:
+            plt.close(result.plot_identifiability(name).figure)
+            plt.close(result.plot_information_content(name).figure)
+        after_seconds = time.perf_counter() - start
+        file_mb = path.stat().st_size / 2**20
+    return dict(
+        n_samples=n_samples,
+        n_steps=n_steps,
+        seconds=seconds,
+        sample_steps_per_s=n_samples * n_steps / seconds,
+        data_peak_rss_mb=data_rss,
+        run_peak_rss_mb=run_rss,
+        summary_and_plots_s=after_seconds,
+        file_mb=file_mb,
+        max_ic={name: entry["max_ic"] for name, entry in summary.items()},
+    )
+
+
 CASES = {
     "port-vs-engine": _case_port_vs_engine,
     "engine-20000x2000": lambda: _case_engine(20_000, 2_000),
@@ -338,6 +394,7 @@ CASES = {
     "cli-500000-rows": _case_cli_long_record,
     "custom-models": _case_custom_models,
     "distributed": _case_distributed,
+    "long-record": _case_long_record,
 }
 
 
@@ -354,12 +411,15 @@ def main(argv=None):
     parser.add_argument("--distributed-samples", type=int, default=10_000, help="samples of the distributed case")
     parser.add_argument("--distributed-steps", type=int, default=1_000_000, help="steps of the distributed case")
     parser.add_argument("--distributed-time-chunks", type=int, help="time_chunks of the distributed case")
+    parser.add_argument("--long-samples", type=int, default=10_000, help="samples of the long-record case")
+    parser.add_argument("--long-steps", type=int, default=30_000_000, help="steps of the long-record case")
     args = parser.parse_args(argv)
     if args.case:
         sizes = dict(
             n_samples=args.distributed_samples, n_steps=args.distributed_steps, time_chunks=args.distributed_time_chunks
         )
-        _run_case(args.case, **(sizes if args.case == "distributed" else {}))
+        options = dict(distributed=sizes, **{"long-record": dict(n_samples=args.long_samples, n_steps=args.long_steps)})
+        _run_case(args.case, **options.get(args.case, {}))
         return
     for name in CASES:
         if name in args.skip:
@@ -422,6 +482,13 @@ def _describe(name, r):
         return (
             f"dynia.distributed.run, {r['n_samples']:,} samples x {r['n_steps']:,} steps, local cluster: {workers} "
             f"(target <= 1024 MB per worker); speed-up {r['speed_up']:.2f}"
+        )
+    if name == "long-record":
+        return (
+            f"dynia.run, {r['n_samples']:,} samples x {r['n_steps']:,} steps, float32 + store: {r['seconds']:.0f} s "
+            f"= {r['sample_steps_per_s']:.3g} sample-steps/s, peak RSS {r['run_peak_rss_mb']:.0f} MB "
+            f"(the data alone {r['data_peak_rss_mb']:.0f} MB; target <= 4096 MB), after summary and plots "
+            f"{r['peak_rss_mb']:.0f} MB ({r['summary_and_plots_s']:.0f} s); file {r['file_mb']:.0f} MB"
         )
     if name == "cli-500000-rows":
         return (
