@@ -514,7 +514,8 @@ ax = fig.add_subplot(layout[0, :])
 draw_identifiability(shown_lag, "T", ax, true_value=truth.time_constant)
 ax.set_ylabel("T1 (min)")
 mark_events(ax, glitch=False)
-ax.set_title(f"Figure 3.25: uncertainty band and CLD gradient of T1, second run, n = {n_main}")
+shading = "the thesis's code" if code_path == "thesis" else "CLD gradient per sample"
+ax.set_title(f"Figure 3.25: uncertainty band and CLD gradient of T1, second run, n = {n_main} ({shading})")
 ax.set_xlabel("time (days)")
 for column, (centre, title) in enumerate([(truth.glitch_time, "around the erroneous sample"),
                                           (big_step, "around the largest input step")]):
