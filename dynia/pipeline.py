@@ -328,12 +328,13 @@ def _analyse_to_target(u, y, model, names, box, samples, settings, generator, pr
         result, sims = _analyse_samples(u, y, model, names, box, samples, settings, progress, output)
         reached = ic_se_that_matters(result)
         rounds.append([int(samples.shape[0]), reached])
-        if reached <= settings.target_se or samples.shape[0] >= settings.max_samples:
+        # NaN: no informative step has an IC, so no error can change a conclusion.
+        if math.isnan(reached) or reached <= settings.target_se or samples.shape[0] >= settings.max_samples:
             break
         wanted = math.ceil(samples.shape[0] * TARGET_MARGIN * (reached / settings.target_se) ** 2)
         count = min(settings.max_samples, max(wanted, math.ceil(samples.shape[0] * TARGET_MIN_GROWTH)))
         samples = np.r_[samples, sample("uniform", count - samples.shape[0], box, generator)]
-    met = reached <= settings.target_se
+    met = math.isnan(reached) or reached <= settings.target_se
     result.settings.update(target_se_reached=reached, target_se_met=met, target_se_rounds=rounds)
     if not met:
         warnings.warn(
@@ -353,7 +354,9 @@ def ic_se_that_matters(result, threshold=WEAK_BELOW):
     standard errors of ``threshold`` or above it (``ic + 2 ic_se >=
     threshold``: where another Monte Carlo sample could make the IC reach
     the verdicts' threshold or fall below it), and always its highest IC
-    (the verdict is read there). Steps without IC are left out.
+    (the verdict is read there). Steps without IC are left out, and so are
+    windows below the noise floor (``result.informative`` False): their IC
+    ranks noise, is never an estimate, and more samples do not make it one.
 
     Parameters
     ----------
@@ -383,9 +386,13 @@ def ic_se_that_matters(result, threshold=WEAK_BELOW):
     ic, ic_se = np.asarray(result.ic), np.asarray(result.ic_se)
     if np.isnan(ic).all():
         return math.nan
+    if result.informative is not None:
+        ic = np.where(np.asarray(result.informative), ic, np.nan)
+        if np.isnan(ic).all():
+            return math.nan
     matters = np.nan_to_num(ic + 2 * ic_se, nan=-np.inf) >= threshold
     highest = np.nanargmax(np.where(np.isnan(ic), -np.inf, ic), axis=1)
-    matters[np.arange(ic.shape[0]), highest] = True
+    matters[np.arange(ic.shape[0]), highest] = ~np.isnan(ic[np.arange(ic.shape[0]), highest])
     return float(np.nanmax(np.where(matters, ic_se, np.nan)))
 
 
