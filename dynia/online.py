@@ -167,8 +167,13 @@ class OnlineDynia:
             sampler=SAMPLERS,
             engine=("auto", "numpy"),
             workers=(None,),
+            ic_error=(False,),
+            target_se=(None,),
+            dtype=("float64",),
+            store=(None,),
             why="the adaptive schemes need the whole record; an update is one "
-            "trailing window, analysed on numpy in the calling thread",
+            "trailing window, analysed on numpy in the calling thread, with no Monte Carlo error yet; "
+            "for a stored or float32 result replay the record through dynia.run(window='trailing')",
         )
         names, box = parameter_box(bounds, model.names, type(model).__name__)
         n_samples, dt, x0 = settings.n_samples, settings.dt, settings.x0

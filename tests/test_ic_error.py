@@ -155,3 +155,10 @@ def test_errors_survive_save_and_load_and_reach_the_table(tmp_path):
     table = result.to_dataframe()
     assert {"ic_se", "lower_se", "upper_se"} <= set(table.columns)
     np.testing.assert_array_equal(table["ic_se"].to_numpy(), result.ic_se.ravel())
+
+
+@pytest.mark.parametrize("setting", [dict(ic_error=True), dict(target_se=0.02, max_samples=5000)])
+def test_the_online_front_end_refuses_the_error_instead_of_ignoring_it(setting):
+    settings = dynia.settings.AnalysisSettings(window="trailing", **setting)
+    with pytest.raises(SettingsError, match="OnlineDynia does not support ic_error=True"):
+        dynia.online.OnlineDynia(dynia.models.FirstOrder(), {"K": (0, 7), "T": (0, 7)}, settings=settings)
