@@ -610,9 +610,11 @@ print(f"whole-record SSE at T1 = 2 over the thesis's: {whole_at_2 / THESIS_SSE[2
 # * **Ours is about 30 times larger** (the last line). The change of mode:
 #   after it the true gain is 1.8, and k = 2 overshoots the output by about 8
 #   at every step of the last days (the "after the change" column is most of
-#   the whole-record SSE). The thesis's 1.88e4 over a month of
-#   minutes is a mean squared error under 0.5, so its record cannot have had
-#   such a stretch that k = 2 missed by several units: either its mode change
+#   the whole-record SSE). The thesis does not give its grid, but its times
+#   (a step at 1.6e4 in a month of data) are minutes. On a grid of a minute,
+#   like ours, its 1.88e4 over a month is a mean squared error under 0.5, and
+#   a finer grid makes it smaller still: its record cannot have had such a
+#   stretch that k = 2 missed by several units. Either its mode change
 #   was smaller, or its output settled back. The stand-in's drift is built
 #   from the thesis's words (input 36 -> 40 with the output steady), which
 #   fix the gain after it at 1.8.

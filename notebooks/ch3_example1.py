@@ -335,19 +335,19 @@ print(f"the Euler T whose pole 1 - 1/T equals the exact pole exp(-1/3): {euler_e
 #   (Figures 3.3, 3.4): the data. Both paths give the same high IC on steady
 #   input (about 0.92); the Euler simulator's steady state is exact, and its
 #   start from 70 changes the gain's IC in the first ten steps only a little.
-# * **Where the gain's gradient is darkest**: the code. On the same samples
-#   the likelihood mass is darkest on 1.92-2.10, the bin of the truth, while
-#   `cld_gradient`'s 7/39-wide rows are darkest on 1.79-1.97 and then
-#   1.97-2.15, whether the simulations are exact or Euler. The shift down is
-#   `cld_gradient`'s binning, not the simulator's: its rows put an edge at
-#   1.97, 0.03 below the truth, so the two rows on either side share the
-#   mass almost evenly (the percentages above) and the dark region becomes
-#   1.79-2.15, centred below 2. Which of the two is darker is a near tie, and
-#   dropping each row's lowest behavioural value tips it down: in the row
-#   above the edge that value is one of the best-fitting samples, in the row
-#   below one of the worst. Nor is it the sample: the bin of the truth holds
-#   fewer samples than its neighbours (about 46 against 62 and 54) and is
-#   still the darkest, per sample too.
+# * **Where the gain's gradient is darkest**: the code's binning, with the
+#   sample. The engine's bin of the truth, 1.92-2.10, and the bin below it
+#   share the likelihood mass almost equally (the percentages above: the
+#   truth lies near the lower edge of its bin, and the bin below drew 62
+#   samples to its 46); per sample the truth's bin is clearly the darkest.
+#   `cld_gradient`'s 7/39-wide rows put an edge at 1.97, 0.03 below the
+#   truth, and its two darkest rows are the two on either side of that edge,
+#   1.79-1.97 and 1.97-2.15, whether the simulations are exact or Euler: its
+#   dark region is 1.79-2.15, centred below 2, because of its bins, not its
+#   simulator. The row below the edge comes out a little darker; dropping
+#   each row's lowest behavioural value (in the row above the edge one of
+#   the best-fitting samples, in the row below one of the worst) adds to
+#   that.
 # * **Where the time constant lies**: the simulator. The thesis's code puts
 #   the band of T at the first dip and after the final step above the truth
 #   (about [3.5, 4.2] at the final step, darkest near 3.6-3.8, against the
