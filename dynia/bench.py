@@ -327,6 +327,8 @@ def _case_distributed(n_samples=10_000, n_steps=1_000_000, time_chunks=None):
             seconds=seconds,
             sample_steps_per_s=n_samples * n_steps / seconds,
             worker_peak_rss_mb=[peak / 2**20 for peak in peaks],
+            # Other jobs on the machine slow the workers down; the one-minute load average says how many.
+            load_average=os.getloadavg()[0],
         )
     result["speed_up"] = result["1 workers"]["seconds"] / result["2 workers"]["seconds"]
     return result
@@ -476,7 +478,8 @@ def _describe(name, r):
     if name == "distributed":
         workers = "; ".join(
             f"{count} {r[count]['seconds']:.0f} s = {r[count]['sample_steps_per_s']:.3g} sample-steps/s, "
-            f"worker peak RSS {', '.join(f'{peak:.0f}' for peak in r[count]['worker_peak_rss_mb'])} MB"
+            f"worker peak RSS {', '.join(f'{peak:.0f}' for peak in r[count]['worker_peak_rss_mb'])} MB, "
+            f"load average {r[count]['load_average']:.1f}"
             for count in ("1 workers", "2 workers")
         )
         return (
