@@ -84,7 +84,7 @@ import numpy as np
 
 from . import _checks
 from .engine.flavours import compiled_engine, flavour_analysis
-from .engine.noise import record_noise_floor, window_points
+from .engine.noise import floor_fields, floor_settings, record_noise_floor, window_points
 from .engine.windows import ArrayErrors, StreamedErrors, window_halos, window_inputs, window_mean
 from .errors import DataError, DyniaError, ModelError
 from .pipeline import warn_dropped
@@ -282,7 +282,7 @@ def run(
             blocks = _WholeRecordBlocks(
                 client, model, row_chunks, u_data, y_data, dt, x0, windows, n_steps, time_chunks
             )
-        ic, ci, gradient, best, threshold = _analyse_on_cluster(
+        ic, ci, gradient, best, upper, threshold = _analyse_on_cluster(
             client,
             blocks,
             flavour_impl,
@@ -295,6 +295,7 @@ def run(
 
     floor = record_noise_floor(
         best,
+        upper,
         threshold,
         window_points(y, before, after),
         windows.slots,
@@ -308,8 +309,7 @@ def run(
         n_samples=samples.shape[0],
         n_behavioural=flavour_impl.count,
         engine="numba" if compiled else "numpy",
-        noise_sigma=floor.sigma,
-        noise_multiple=floor.multiple,
+        **floor_settings(floor),
     )
     return DyniaResult(
         names=tuple(names),
@@ -321,14 +321,12 @@ def run(
         gradient=gradient,
         bin_centres=flavour_impl.bin_centres,
         settings=recorded,
-        informative=floor.informative,
-        mae_spread=floor.spread,
-        noise_floor=floor.floor,
+        **floor_fields(floor),
     )
 
 
 def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, progress, ahead):
-    """Stage 2, fed by stage 1: one task per time chunk; ic, ci, gradient, best and threshold MAE on the client.
+    """Stage 2, fed by stage 1: one task per time chunk; ic, ci, gradient, best, upper and threshold MAE to the client.
 
     ``blocks(start, stop)`` submits stage 1 of the time chunk [start, stop)
     and returns the futures of its outputs, (block, what it hands on) per
@@ -346,7 +344,7 @@ def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, pr
     ic = np.empty((n_params, n_steps))
     ci = np.empty((n_params, n_steps, 2))
     gradient = np.empty((n_params, flavour.n_bins, n_steps))
-    best, threshold = np.empty(n_steps), np.empty(n_steps)
+    best, upper, threshold = np.empty(n_steps), np.empty(n_steps), np.empty(n_steps)
     state = client.scatter(flavour, hash=False)
     chunk_spans = {}
     finished = as_completed(loop=client.loop)
@@ -372,7 +370,7 @@ def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, pr
         start, stop = chunk_spans.pop(future)
         results = future.result()
         ic[:, start:stop], ci[:, start:stop], gradient[:, :, start:stop] = results.ic, results.ci, results.gradient
-        best[start:stop], threshold[start:stop] = results.best, results.threshold
+        best[start:stop], upper[start:stop], threshold[start:stop] = results.best, results.upper, results.threshold
         following = next(waiting, None)
         if following is not None:
             submit(*following)
@@ -380,7 +378,7 @@ def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, pr
             bar.update()
     if bar is not None:
         bar.close()
-    return ic, ci, gradient, best, threshold
+    return ic, ci, gradient, best, upper, threshold
 
 
 def _import_distributed():

@@ -37,7 +37,7 @@ import numpy as np
 
 from . import _checks
 from .engine.flavours import FLAVOUR_CLASSES, McatFlavour
-from .engine.noise import record_noise_floor
+from .engine.noise import floor_fields, floor_settings, record_noise_floor
 from .errors import DataError
 from .models import Model
 from .result import DyniaResult
@@ -310,17 +310,16 @@ class OnlineDynia:
         ic = np.empty((n_params, y.size))
         ci = np.empty((n_params, y.size, 2))
         gradient = np.empty((n_params, n_bins, y.size))
-        best, threshold, points = np.empty(y.size), np.empty(y.size), np.empty(y.size)
+        best, upper, threshold, points = np.empty(y.size), np.empty(y.size), np.empty(y.size), np.empty(y.size)
         first = self.steps
         for step, (u_t, y_t) in enumerate(zip(u.tolist(), y.tolist())):  # u_t a list for several inputs
             ic[:, step], ci[:, step], gradient[:, :, step] = self.update(u_t, y_t)
-            best[step], threshold[step], points[step] = self._best, self._threshold, self._present
+            best[step], upper[step], threshold[step] = self._best, self._upper, self._threshold
+            points[step] = self._present
         floor = record_noise_floor(
-            best, threshold, points, self._errors.shape[0], n_params, self._percentage, self.samples.shape[0]
+            best, upper, threshold, points, self._errors.shape[0], n_params, self._percentage, self.samples.shape[0]
         )
-        settings = dict(
-            self._settings, n_diverged=self.n_diverged, noise_sigma=floor.sigma, noise_multiple=floor.multiple
-        )
+        settings = dict(self._settings, n_diverged=self.n_diverged, **floor_settings(floor))
         return DyniaResult(
             names=self.names,
             samples=np.array(self.samples),
@@ -331,9 +330,7 @@ class OnlineDynia:
             gradient=gradient,
             bin_centres=self.bin_centres,
             settings=settings,
-            informative=floor.informative,
-            mae_spread=floor.spread,
-            noise_floor=floor.floor,
+            **floor_fields(floor),
         )
 
     def _window_mean(self):
@@ -361,7 +358,11 @@ class OnlineDynia:
             usable = self._rank_diverged_last() and usable
         results = self._flavour.analyse(self._mae, np.array([usable]))
         self.ic, self.ci, self.gradient = results.ic[:, 0], results.ci[:, 0], results.gradient[:, :, 0]
-        self._best, self._threshold = float(results.best[0]), float(results.threshold[0])
+        self._best, self._threshold, self._upper = (
+            float(results.best[0]),
+            float(results.threshold[0]),
+            float(results.upper[0]),
+        )
 
     def _rank_diverged_last(self):
         """Give diverged sets the worst MAE; False if too few finite sets remain to analyse."""
@@ -377,7 +378,7 @@ class OnlineDynia:
 
     def _blank_results(self):
         n_params, n_bins = self.bin_centres.shape
-        self._best = self._threshold = float("nan")
+        self._best = self._threshold = self._upper = float("nan")
         self._present = 0
         self.ic = np.full(n_params, np.nan)
         self.ci = np.full((n_params, 2), np.nan)

@@ -65,18 +65,26 @@ class DyniaResult:
         The same for the lower and upper limit.
     informative : ndarray (n_steps,) of bool or None
         The noise floor (:mod:`dynia.engine.noise`): True where the window
-        tells parameter sets apart beyond what measurement noise alone does,
-        its behavioural MAE spread above ``noise_floor``. An uninformative
+        tells parameter values apart beyond what measurement noise alone
+        does, its ``discrimination`` above ``noise_floor``. An uninformative
         window's IC and band are a ranking of noise: the plots grey it out,
         the verdicts never call it ``identified`` and ``dynia identify``
-        never selects it. One mask for all parameters, since the behavioural
-        set is one for all. None for results built without it.
-    mae_spread : ndarray (n_steps,) or None
-        The statistic: the behavioural set's largest MAE minus the best.
+        never selects it. One mask for all parameters, since the population
+        is one for all. None for results built without it (and for files
+        saved before the discrimination was the statistic).
+    discrimination : ndarray (n_steps,) or None
+        The mask's statistic: the MAE at population quantile 0.9
+        (``settings["noise_floor_quantile"]``) minus the best MAE.
     noise_floor : ndarray (n_steps,) or None
-        What noise alone keeps the spread below (``settings["noise_multiple"]``
-        sampling standard deviations of the MAE of the window's points of
-        noise ``settings["noise_sigma"]``).
+        What noise alone keeps the discrimination below
+        (``settings["noise_multiple"]`` sampling standard deviations of the
+        MAE of the window's points of noise ``settings["noise_sigma"]``).
+    behavioural_spread : ndarray (n_steps,) or None
+        The behavioural set's largest MAE minus the best: whether the band
+        itself is a ranking of noise (verdict reason ``noise_ranked``).
+    behavioural_floor : ndarray (n_steps,) or None
+        What noise alone keeps the behavioural spread below
+        (``settings["behavioural_multiple"]`` of the same standard deviations).
     """
 
     names: tuple
@@ -93,8 +101,10 @@ class DyniaResult:
     ic_se: np.ndarray | None = None
     ci_se: np.ndarray | None = None
     informative: np.ndarray | None = None
-    mae_spread: np.ndarray | None = None
+    discrimination: np.ndarray | None = None
     noise_floor: np.ndarray | None = None
+    behavioural_spread: np.ndarray | None = None
+    behavioural_floor: np.ndarray | None = None
 
     def index(self, name):
         """Position of parameter ``name`` on the parameter axis."""
@@ -256,7 +266,7 @@ class DyniaResult:
         With :attr:`timestamps` a ``timestamp`` column follows ``time``; with
         the Monte Carlo errors, columns ``ic_se``, ``lower_se`` and
         ``upper_se`` follow; with the noise floor, ``informative`` (the
-        window's, the same for every parameter). Needs pandas (``pip install
+        window's mask, :attr:`informative`, the same for every parameter). Needs pandas (``pip install
         dynia[pandas]``).
         """
         try:

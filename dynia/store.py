@@ -13,9 +13,11 @@ variables ``ic`` (parameter, time), ``ci`` (parameter, time, side),
 ``samples`` (sample, parameter) and ``bounds`` (parameter, side); when the
 result has its Monte Carlo errors, ``ic_se`` (parameter, time) and ``ci_se``
 (parameter, time, side) too; when it has its noise floor, ``informative``,
-``mae_spread`` and ``noise_floor`` (time), the mask as int8 in the file (netCDF
-has no booleans) and bool in the Dataset and when loaded; files without them
-load with None there. Coordinates: ``parameter`` (the names),
+``discrimination``, ``noise_floor``, ``behavioural_spread`` and
+``behavioural_floor`` (time), the mask as int8 in the file (netCDF has no
+booleans) and bool in the Dataset and when loaded; files without them, and
+files of the older floor (``mae_spread``, whose mask tested the behavioural
+spread), load with None there. Coordinates: ``parameter`` (the names),
 ``time`` (seconds), ``side`` ("lower", "upper": ``ci.sel(side="lower")``
 is the lower limit, and for ``bounds`` the low end of the range) and, when
 the result has timestamps, ``timestamp`` (datetime64[ns], along ``time``).
@@ -77,7 +79,7 @@ _ARRAYS = {
 # The noise floor along time (see dynia.engine.noise), written when the result has it. Part of the
 # metadata, so that a result written block by block (dynia.storage) gets it too; the mask is int8 in a
 # file, since netCDF has no booleans, and bool again when loaded.
-_NOISE_FLOOR = ("informative", "mae_spread", "noise_floor")
+_NOISE_FLOOR = ("informative", "discrimination", "noise_floor", "behavioural_spread", "behavioural_floor")
 # Written when the result has them (not None), read back when the file has them.
 _OPTIONAL_ARRAYS = {
     "ic_se": ("parameter", "time"),
@@ -143,8 +145,8 @@ def metadata(result, reserved):
     Returns ``(attrs, variables)``: a setting that is an ndarray becomes a
     variable of its name, ``(dims, values)``, which must not be one of the
     names ``reserved`` for the result's own variables; so does the noise
-    floor (``informative`` as int8, ``mae_spread``, ``noise_floor``), when
-    the result has it.
+    floor (``informative`` as int8, then ``discrimination``, ``noise_floor``,
+    ``behavioural_spread``, ``behavioural_floor``), when the result has it.
 
     Raises
     ------
@@ -266,7 +268,9 @@ def load(path, *, lazy=False):
         settings[key] = dataset[value[_VARIABLE]].values if is_variable else value
     arrays = {key: _loaded(dataset, key, dims, lazy) for key, dims in _ARRAYS.items()}
     arrays.update((key, _loaded(dataset, key, dims, lazy)) for key, dims in _OPTIONAL_ARRAYS.items() if key in dataset)
-    arrays.update((key, dataset[key].values) for key in _NOISE_FLOOR if key in dataset)
+    # An older file's floor (mae_spread) tested another statistic: it loads as no floor, not as this one.
+    if "discrimination" in dataset:
+        arrays.update((key, dataset[key].values) for key in _NOISE_FLOOR if key in dataset)
     if "informative" in arrays:
         arrays["informative"] = arrays["informative"].astype(bool)
     timestamps = None

@@ -22,11 +22,19 @@ parameter one of :data:`VERDICTS` and the reasons for it.
         is: an artefact of the record's edge is likely.
     ``"below_noise_floor"``
         The window at max IC lies below the noise floor of the analysis
-        (``result.informative`` False, see :mod:`dynia.engine.noise`): its
-        behavioural set's MAEs spread no further than measurement noise alone
-        makes them spread, so a narrow band there is a ranking of noise.
-        Results of :func:`dynia.run` and the other front-ends carry the
-        floor; the engine computes it in the same pass.
+        (``result.informative`` False, see :mod:`dynia.engine.noise`): the
+        worst-fitting tenth of the sampled box fits no worse than the best
+        beyond what measurement noise alone does, so the window does not
+        tell parameter values apart at all. Results of :func:`dynia.run`
+        and the other front-ends carry the floor; the engine computes it in
+        the same pass.
+    ``"noise_ranked"``
+        The window at max IC tells parameter values apart, but its
+        behavioural set ties within noise (``result.behavioural_spread`` at
+        most ``result.behavioural_floor``): which sets are kept, and so the
+        band, is decided by the noise realisation. Given only when the
+        window is above the floor (below it, ``"below_noise_floor"`` says
+        more).
     ``"noise_only"``
         The same question for a result without the floor (built by hand),
         when :func:`assess` is given the data and the model: the samples
@@ -170,11 +178,10 @@ def assess(result, *, u=None, y=None, model=None, dt=None, x0=None, weak_below=W
     if model is not None:
         u, y = _checked_data(result, u, y, model)
     if result.informative is not None:
-        noise = {step: _floor_text(result, step) for step in windows}
-        noise_code = "below_noise_floor"
+        noise = {step: _floor_reason(result, step) for step in windows}
     else:
-        noise = {} if model is None else _noise_windows(result, u, y, model, dt, x0, windows, simulations)
-        noise_code = "noise_only"
+        found = {} if model is None else _noise_windows(result, u, y, model, dt, x0, windows, simulations)
+        noise = {step: ("noise_only", text) for step, text in found.items() if text}
     verdicts = {}
     for p, name in enumerate(result.names):
         if p not in best:
@@ -183,7 +190,8 @@ def assess(result, *, u=None, y=None, model=None, dt=None, x0=None, weak_below=W
         step = best[p]
         reasons = _bound_reasons(result, p, step) + _edge_reasons(result, step, windows[step])
         if noise.get(step):
-            reasons.append(_reason(noise_code, f"the window at max IC (time {result.time[step]:.6g}) " + noise[step]))
+            code, text = noise[step]
+            reasons.append(_reason(code, f"the window at max IC (time {result.time[step]:.6g}) " + text))
         ic = float(result.ic[p, step])
         if ic < weak_below:
             verdicts[name] = dict(
@@ -226,17 +234,31 @@ def _edge_reasons(result, step, window):
     ]
 
 
-def _floor_text(result, step):
-    """Text of the below_noise_floor reason of the window at ``step``, or None when it is informative."""
-    if result.informative[step]:
+def _floor_reason(result, step):
+    """``(code, text)`` of the noise floor's reason for the window at ``step``, or None when neither applies."""
+    sigma = result.settings.get("noise_sigma", math.nan)
+    if not result.informative[step]:
+        discrimination, floor = float(result.discrimination[step]), float(result.noise_floor[step])
+        if np.isnan(floor):
+            return "below_noise_floor", (
+                f"has too few measured points to tell parameter sets from noise (discrimination {discrimination:.3g})"
+            )
+        multiple = result.settings.get("noise_multiple", math.nan)
+        quantile = result.settings.get("noise_floor_quantile", math.nan)
+        return "below_noise_floor", (
+            f"is below the noise floor: the MAE at population quantile {quantile:g} exceeds the best by "
+            f"{discrimination:.3g}, at most {floor:.3g}, {multiple:.3g} standard deviations of the MAE of noise "
+            f"sigma {sigma:.3g} (estimated from the best fits)"
+        )
+    if result.behavioural_spread is None:
         return None
-    spread, floor = float(result.mae_spread[step]), float(result.noise_floor[step])
-    if np.isnan(floor):
-        return f"has too few measured points to tell parameter sets from noise (spread {spread:.3g})"
-    sigma, multiple = result.settings.get("noise_sigma", math.nan), result.settings.get("noise_multiple", math.nan)
-    return (
-        f"is below the noise floor: its behavioural MAE spread {spread:.3g} is at most {floor:.3g}, "
-        f"{multiple:.3g} standard deviations of the MAE of noise sigma {sigma:.3g} (estimated from the best fits)"
+    spread, floor = float(result.behavioural_spread[step]), float(result.behavioural_floor[step])
+    if not spread <= floor:  # NaN: no floor to compare with
+        return None
+    multiple = result.settings.get("behavioural_multiple", math.nan)
+    return "noise_ranked", (
+        f"has its behavioural set tied within noise: its MAE spread {spread:.3g} is at most {floor:.3g}, "
+        f"{multiple:.3g} standard deviations of the MAE of noise sigma {sigma:.3g}; the band is a ranking of noise"
     )
 
 

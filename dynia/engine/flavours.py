@@ -20,6 +20,7 @@ import numpy as np
 from .. import _checks
 from ..errors import SettingsError
 from . import cld, kernels
+from .noise import quantile_position
 from .selection import (
     lowest_stable,
     lowest_weighted,
@@ -62,10 +63,12 @@ class WindowResults(NamedTuple):
     """What a flavour reads off m windows.
 
     ``ic`` (n_params, m), ``ci`` (n_params, m, 2), ``gradient`` (n_params,
-    n_bins, m); ``best`` and ``threshold`` (m,), the lowest MAE and the
-    largest MAE of the behavioural set, what :mod:`dynia.engine.noise` tests
-    (both the square root of the window's cost for "thesis" and "weighted",
-    so that both engines give them bit for bit); with ``ic_error``
+    n_bins, m); ``best``, ``threshold`` and ``upper`` (m,), the lowest MAE,
+    the largest MAE of the behavioural set and the MAE at the population
+    quantile of :func:`dynia.engine.noise.quantile_position`, what
+    :mod:`dynia.engine.noise` tests (each the square root of a window cost
+    for "thesis" and "weighted", so that both engines give them bit for
+    bit; the population's, unweighted, with importance weights); with ``ic_error``
     ``batch_ic`` (batches, n_params, m) and ``batch_ci`` (batches, n_params,
     m, 2), else None. Every array is NaN where a window had too few
     measured points.
@@ -76,6 +79,7 @@ class WindowResults(NamedTuple):
     gradient: np.ndarray
     best: np.ndarray
     threshold: np.ndarray
+    upper: np.ndarray
     batch_ic: np.ndarray | None = None
     batch_ci: np.ndarray | None = None
 
@@ -218,18 +222,25 @@ def _chunk_arrays(n_params, n_bins, rows):
     return np.empty((n_params, rows)), np.empty((n_params, rows, 2)), np.empty((n_params, n_bins, rows))
 
 
-def _blank_unusable(ic, ci, gradient, behavioural_mae, usable):
+def _population_quantile(values):
+    """Each row's value at :func:`~dynia.engine.noise.quantile_position` of its sorted order, (m,)."""
+    position = quantile_position(values.shape[1])
+    return np.partition(values, position, axis=1)[:, position]
+
+
+def _blank_unusable(ic, ci, gradient, behavioural_mae, upper, usable):
     """The windows' results, NaN wherever a window had too few measured points.
 
     ``behavioural_mae`` (m, count) holds the behavioural set's MAEs (or
-    costs, then ``behavioural_mae`` is their square root), any order.
+    costs, then ``behavioural_mae`` is their square root), any order;
+    ``upper`` (m,) the MAE at the population quantile of the noise floor.
     """
     ic[:, ~usable] = np.nan
     ci[:, ~usable] = np.nan
     gradient[:, :, ~usable] = np.nan
     best = np.where(usable, behavioural_mae.min(axis=1), np.nan)
     threshold = np.where(usable, behavioural_mae.max(axis=1), np.nan)
-    return WindowResults(ic, ci, gradient, best, threshold)
+    return WindowResults(ic, ci, gradient, best, threshold, np.where(usable, upper, np.nan))
 
 
 def bin_centres_of(bounds, bins):
@@ -279,7 +290,8 @@ class ThesisFlavour:
             ic[p] = 1 - (ci[p, :, 1] - ci[p, :, 0]) / (high - low)
             if n_bins:
                 gradient[p] = cld.binned_mass(values, weights, low, high, self.bins).T
-        return _blank_unusable(ic, ci, gradient, np.sqrt(behavioural_cost), usable)
+        upper = np.sqrt(_population_quantile(cost))
+        return _blank_unusable(ic, ci, gradient, np.sqrt(behavioural_cost), upper, usable)
 
     def _limits(self, values, weights):
         return cld.limits(values, self.conf_level)
@@ -315,6 +327,7 @@ class CompiledFlavour:
         self.min_points = float(min_points)
         self.batches = batches
         n_samples = params.shape[0]
+        self.upper_position = quantile_position(n_samples)
         # Batch b holds samples b, b + batches, ...: its size and count as ThesisFlavour would find them.
         self.batch_counts = np.array(
             [math.floor(len(range(b, n_samples, batches)) * (percentage / 100)) for b in range(batches)],
@@ -331,13 +344,14 @@ class CompiledFlavour:
     def analyse_rows(self, window_errors, measured, m, slots):
         n_params = self.columns.shape[0]
         ic, ci, gradient = _chunk_arrays(n_params, self.n_bins, m)
-        extreme_costs = np.empty((2, m))
+        extreme_costs = np.empty((3, m))
         common = (
             window_errors,
             measured,
             m,
             slots,
             self.count,
+            self.upper_position,
             self.columns,
             self.lows,
             self.highs,
@@ -426,7 +440,8 @@ class ImportanceFlavour:
             ic[p] = 1 - (ci[p, :, 1] - ci[p, :, 0]) / (high - low)
             if n_bins:
                 gradient[p] = cld.binned_mass(values, mass, low, high, self.bins).T
-        return _blank_unusable(ic, ci, gradient, np.sqrt(behavioural_cost), usable)
+        upper = np.sqrt(_population_quantile(cost))
+        return _blank_unusable(ic, ci, gradient, np.sqrt(behavioural_cost), upper, usable)
 
 
 class BatchedFlavour:
@@ -502,7 +517,8 @@ class McatFlavour:
             ic[p] = 1 - (ci[p, :, 1] - ci[p, :, 0]) / self.span[p]
             gradient[p] = self._cdf_slope(_nudge_ties(ordered), p).T
         # MCAT ranks by MAE itself, so its behavioural set's MAEs are read off directly.
-        return _blank_unusable(ic, ci, gradient, np.take_along_axis(mae, selected, axis=1), usable)
+        upper = _population_quantile(mae)
+        return _blank_unusable(ic, ci, gradient, np.take_along_axis(mae, selected, axis=1), upper, usable)
 
     def _likelihood(self, mae, usable):
         """``1 - mae/max(mae)`` (or ``1 - mae`` once a window had max 0), lifted above 0."""

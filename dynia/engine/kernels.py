@@ -275,24 +275,37 @@ def _select(values, length, k):
 
 
 @_jit
-def _behavioural(cost, count, bound, candidates, scratch, selected):
-    """Indices (ascending) of the first ``count`` of a stable ascending sort of ``cost``.
+def _candidates(cost, count, bound, candidates):
+    """Indices (ascending) of the costs at or below ``bound``, into ``candidates``; returns how many.
 
     ``bound`` is a guess of the count-th smallest cost (the previous
-    window's): when at least ``count`` costs lie at or below it, only those
-    are searched. Returns the count-th smallest cost.
+    window's): when at least ``count`` costs lie at or below it, the
+    behavioural set is among them; otherwise (or when ``bound`` is NaN)
+    every index is a candidate.
     """
     n = cost.shape[0]
     found = 0
     if bound == bound:  # not NaN
+        # Branch-free: every index is written, and kept (by counting it) when its cost is at or below the bound.
         for s in range(n):
-            if cost[s] <= bound:
-                candidates[found] = s
-                found += 1
+            candidates[found] = s
+            found += cost[s] <= bound
     if found < count:
         found = n
         for s in range(n):
             candidates[s] = s
+    return found
+
+
+@_jit
+def _behavioural(cost, count, candidates, found, scratch, selected):
+    """Indices (ascending) of the first ``count`` of a stable ascending sort of ``cost``, into ``selected``.
+
+    ``candidates[:found]`` (ascending) hold every index of the count
+    lowest costs and of any cost tied with the count-th (what
+    :func:`_candidates` gives); only they are searched. Returns the
+    count-th smallest cost.
+    """
     for i in range(found):
         scratch[i] = cost[candidates[i]]
     threshold = _select(scratch, found, count - 1)
@@ -311,6 +324,29 @@ def _behavioural(cost, count, bound, candidates, scratch, selected):
             selected[taken] = s
             taken += 1
     return threshold
+
+
+@_jit
+def _quantile_cost(cost, position, bound, scratch):
+    """The ``position``-th smallest of ``cost`` (0-based), searched among the costs at or above ``bound``.
+
+    ``bound`` is a guess a little below it (from the previous window): when
+    at most ``position`` costs lie below it, the answer is the
+    (position - below)-th smallest of the others; otherwise, or when
+    ``bound`` is NaN, all costs are searched. ``scratch`` is overwritten.
+    """
+    n = cost.shape[0]
+    found = 0
+    if bound == bound:  # not NaN
+        for s in range(n):  # branch-free, as in _candidates
+            scratch[found] = cost[s]
+            found += cost[s] >= bound
+    below = n - found
+    if below > position or found == 0:
+        for s in range(n):
+            scratch[s] = cost[s]
+        return _select(scratch, n, position)
+    return _select(scratch, found, position - below)
 
 
 @_jit
@@ -367,10 +403,9 @@ def _window_sums(errors, measured, t, slots, total):
 def _read_off(
     cost,
     count,
-    bound,
+    candidates,
+    found,
     columns,
-    offset,
-    stride,
     lows,
     highs,
     bins,
@@ -382,7 +417,6 @@ def _read_off(
     ci,
     gradient,
     with_gradient,
-    candidates,
     scratch,
     selected,
     weights,
@@ -392,13 +426,14 @@ def _read_off(
 ):
     """Behavioural set of one window's ``cost`` and what it gives: ``ic[:, t]``, ``ci[:, t]``, ``gradient[:, :, t]``.
 
-    Sample j of ``cost`` is column ``offset + stride*j`` of ``columns``, so a
-    batch of samples (every stride-th from offset) is read off the same way
-    as all of them. Without ``with_gradient`` the gradient is left alone.
+    The set is searched among ``candidates[:found]`` (see
+    :func:`_behavioural`), indices of ``cost`` and of the columns of
+    ``columns``: a batch of samples is read off through candidates that are
+    its members only. Without ``with_gradient`` the gradient is left alone.
     Returns the count-th smallest cost and the smallest.
     """
     n_params = columns.shape[0]
-    threshold = _behavioural(cost, count, bound, candidates, scratch, selected)
+    threshold = _behavioural(cost, count, candidates, found, scratch, selected)
     lowest = np.inf
     smallest = np.inf
     for i in range(count):
@@ -421,7 +456,7 @@ def _read_off(
     for p in range(n_params):
         low, high = lows[p], highs[p]
         for i in range(count):
-            values[i] = columns[p, offset + stride * selected[i]]
+            values[i] = columns[p, selected[i]]
         if with_gradient:
             for b in range(bins):
                 gradient[p, b, t] = 0.0
@@ -459,12 +494,19 @@ def _next_bound(threshold):
 
 
 @_jit
+def _next_quantile_bound(cost):
+    """A guess a little below the next window's quantile cost from this one's (see :func:`_quantile_cost`)."""
+    return cost * 0.8
+
+
+@_jit
 def _analyse_block(
     errors,
     measured,
     m,
     slots,
     count,
+    upper_position,
     columns,
     lows,
     highs,
@@ -486,7 +528,6 @@ def _analyse_block(
     n_samples = errors.shape[1]
     n_batches = batch_counts.shape[0]
     total = np.empty(n_samples)
-    batch_cost = np.empty(n_samples)
     candidates = np.empty(n_samples, dtype=np.int64)
     scratch = np.empty(n_samples)
     selected = np.empty(count, dtype=np.int64)
@@ -495,7 +536,13 @@ def _analyse_block(
     order = np.empty(count, dtype=np.int64)
     buffer = np.empty(count, dtype=np.int64)
     bound = np.nan
-    batch_bounds = np.full(n_batches, np.nan)
+    upper_bound = np.nan
+    # Batch b holds samples b, b + n_batches, ...; row b lists its candidates (sample indices, ascending).
+    batch_of = np.empty(n_samples, dtype=np.int64)
+    for s in range(n_samples):
+        batch_of[s] = s % max(n_batches, 1)
+    batch_candidates = np.empty((n_batches, (n_samples + n_batches - 1) // max(n_batches, 1)), dtype=np.int64)
+    batch_found = np.empty(n_batches, dtype=np.int64)
     for t in range(m):
         present = _window_sums(errors, measured, t, slots, total)
         if present < min_points:
@@ -510,13 +557,13 @@ def _analyse_block(
         for s in range(n_samples):
             mae = total[s] / present
             total[s] = mae * mae
+        found = _candidates(total, count, bound, candidates)
         threshold, smallest = _read_off(
             total,
             count,
-            bound,
+            candidates,
+            found,
             columns,
-            0,
-            1,
             lows,
             highs,
             bins,
@@ -528,7 +575,6 @@ def _analyse_block(
             ci,
             gradient,
             True,
-            candidates,
             scratch,
             selected,
             weights,
@@ -537,20 +583,35 @@ def _analyse_block(
             buffer,
         )
         bound = _next_bound(threshold)
+        upper = _quantile_cost(total, upper_position, upper_bound, scratch)
+        upper_bound = _next_quantile_bound(upper)
         extreme_costs[0, t] = smallest
         extreme_costs[1, t] = threshold
-        # Batch b holds samples b, b + n_batches, ...: its costs are these samples' costs.
+        extreme_costs[2, t] = upper
+        if n_batches == 0:
+            continue
+        # The population's candidates (every cost at or below its bound) are dealt to their batches: a batch
+        # with at least its count among them has its behavioural set and every tie there; one with fewer
+        # searches all its members.
+        batch_found[:] = 0
+        for i in range(found):
+            s = candidates[i]
+            b = batch_of[s]
+            batch_candidates[b, batch_found[b]] = s
+            batch_found[b] += 1
         for b in range(n_batches):
-            size = (n_samples - b + n_batches - 1) // n_batches
-            for j in range(size):
-                batch_cost[j] = total[b + n_batches * j]
-            threshold, _ = _read_off(
-                batch_cost[:size],
+            members = batch_candidates[b]
+            if batch_found[b] < batch_counts[b]:
+                batch_found[b] = 0
+                for s in range(b, n_samples, n_batches):
+                    members[batch_found[b]] = s
+                    batch_found[b] += 1
+            _read_off(
+                total,
                 batch_counts[b],
-                batch_bounds[b],
+                members,
+                batch_found[b],
                 columns,
-                b,
-                n_batches,
                 lows,
                 highs,
                 bins,
@@ -562,7 +623,6 @@ def _analyse_block(
                 batch_ci[b],
                 gradient,
                 False,
-                candidates,
                 scratch,
                 selected,
                 weights,
@@ -570,7 +630,6 @@ def _analyse_block(
                 order,
                 buffer,
             )
-            batch_bounds[b] = _next_bound(threshold)
 
 
 @_jit
@@ -580,6 +639,7 @@ def analyse_windows(
     m,
     slots,
     count,
+    upper_position,
     columns,
     lows,
     highs,
@@ -600,9 +660,10 @@ def analyse_windows(
     ``positions`` are the thesis limits' sorted positions, ``levels`` the
     weighted limits' CLD levels. Writes ``ic`` (n_params, m), ``ci``
     (n_params, m, 2), ``gradient`` (n_params, bins, m) and
-    ``extreme_costs`` (2, m), the smallest cost and the largest behavioural
-    cost (the count-th smallest) of every window; windows with fewer than
-    ``min_points`` measured points get NaN.
+    ``extreme_costs`` (3, m), the smallest cost, the largest behavioural
+    cost (the count-th smallest) and the ``upper_position``-th smallest
+    (0-based, the noise floor's population quantile) of every window;
+    windows with fewer than ``min_points`` measured points get NaN.
     """
     n_params = columns.shape[0]
     _analyse_block(
@@ -611,6 +672,7 @@ def analyse_windows(
         m,
         slots,
         count,
+        upper_position,
         columns,
         lows,
         highs,
@@ -637,6 +699,7 @@ def analyse_windows_batched(
     m,
     slots,
     count,
+    upper_position,
     columns,
     lows,
     highs,
@@ -669,6 +732,7 @@ def analyse_windows_batched(
         m,
         slots,
         count,
+        upper_position,
         columns,
         lows,
         highs,

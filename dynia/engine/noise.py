@@ -5,18 +5,43 @@ costs of the Monte Carlo population. When the window's data are noise only
 (the sets' outputs there differ by much less than the noise), the ranking
 that picks that set is a ranking of noise, and a narrow band is an accident
 of it (of exact ties, too: sets whose outputs are equal tie, and the stable
-sort keeps the first ones by index). The noise floor tests, per window,
-whether the behavioural set's costs spread further than noise alone makes
-them spread.
+sort keeps the first ones by index). Two tests ask two questions of every
+window, both against what noise alone does.
 
-The statistic
--------------
-Two numbers of every window come out of the engine's selection at no cost:
-the best mean absolute error (MAE) ``best`` and the behavioural threshold
-``threshold``, the largest MAE inside the behavioural set (the count-th
-smallest). The statistic is their difference, the behavioural spread
-``threshold - best``: 0 when the best sets tie, large when the window's
-data rank the sets by their parameters.
+The two statistics
+------------------
+Three mean absolute errors (MAE) of every window come out of the engine's
+selection: the best ``best``, the behavioural threshold ``threshold`` (the
+largest MAE inside the behavioural set, the count-th smallest) and
+``upper``, the MAE at the population quantile :data:`NOISE_FLOOR_QUANTILE`
+(0.9): the ``floor(0.9 (N - 1))``-th smallest of the N samples' MAEs,
+counted from 0 (:func:`quantile_position`; importance weights are not used
+for it, it is a quantile of the samples drawn).
+
+*Discrimination*, ``upper - best``, answers: does the window tell parameter
+values apart at all? Does the worst-fitting tenth of the sampled box fit
+clearly worse than the best, beyond noise? It decides the mask
+``informative``. On thesis example 1 after the last input step (at 399) the
+output decays as 70 exp(-(t-399)/3): until about step 430 slow, high-gain
+sets still predict several units there and are clearly ruled out, though
+every fast or small-gain set predicts about 0 and those tie. Such a window
+does discriminate, and only the population statistic sees it.
+
+*Behavioural spread*, ``threshold - best``, answers the narrower question
+whether the *band* is a ranking of noise: when the behavioural set ties
+within noise, which of its members are kept, and so the band, is decided by
+the noise realisation. It gives the verdict reason ``noise_ranked``
+(:mod:`dynia.verdicts`), which keeps a max IC from being called identified
+even in an informative window: the windows of example 1 from about step 417
+to 430 discriminate, yet their behavioural sets tie.
+
+A quantile of the population rather than its maximum: the maximum is one
+set, the most extreme corner of the box, whose misfit says as little about
+the window as an outlier does; the tenth of the box that fits worst is a
+share of the population, as the behavioural set is, and its MAE is as
+stable. A lower quantile such as the median leaves the window as soon as
+half of the box ties; on example 1 the median minus the best falls below
+its floor by step 420 while the window still rules out a tenth of the box.
 
 The null hypothesis
 -------------------
@@ -27,30 +52,30 @@ mean ``sigma sqrt(2/pi)`` and standard deviation
 ``s = sigma sqrt(1 - 2/pi) / sqrt(m)`` (normal noise), and by the central
 limit theorem is close to normal. Under H0 with residuals correlated across
 sets with correlation rho (they share the noise: rho near 1 when the outputs
-nearly agree), MAE_i = mu + s (sqrt(rho) Z_0 + sqrt(1 - rho) Z_i), so the
-spread is ``s sqrt(1 - rho)`` times the spread of independent normals:
-largest for independent residuals (rho = 0). That case is the least
-favourable, and a test sized for it holds for every rho.
+nearly agree), MAE_i = mu + s (sqrt(rho) Z_0 + sqrt(1 - rho) Z_i), so any
+difference of two order statistics is ``s sqrt(1 - rho)`` times that of
+independent normals: largest for independent residuals (rho = 0). That case
+is the least favourable, and a test sized for it holds for every rho.
 
-For N independent normal MAEs, the threshold sits at the quantile
-``z_q = Phi^-1(q)`` of the behavioural share q (its own spread, about
-``s sqrt(q(1-q)/N) / phi(z_q)``, is a few hundredths of s and is left out)
-and the minimum falls below ``mu + s z`` with probability
-``1 - (1 - Phi(z))^N``. A window is informative, H0 rejected at level a,
-when
+For N independent normal MAEs, the MAE at population quantile q sits at
+``z_q = Phi^-1(q)`` (its own spread, about ``s sqrt(q(1-q)/N) / phi(z_q)``,
+is a few hundredths of s and is left out) and the minimum falls below
+``mu + s z`` with probability ``1 - (1 - Phi(z))^N``. The difference of the
+quantile and the best exceeds noise, H0 rejected at level a, when
 
-    threshold - best > (z_q - z_a) s,    z_a = Phi^-1(1 - (1 - a)^(1/N)),
+    quantile MAE - best > (z_q - z_a) s,    z_a = Phi^-1(1 - (1 - a)^(1/N)),
 
-``multiple = z_q - z_a`` (:func:`critical_multiple`). A record of
-``n_steps`` has ``W = ceil(n_steps / (2n+1))`` disjoint windows (the
-overlapping ones share their data, so W is the number of independent tests);
-Bonferroni over them, ``a = level / W`` with ``level`` = 5 %, keeps the chance
-that any noise-only stretch of the record is called informative at 5 %. The
-multiple grows slowly with N and W (see the examples of
-:func:`critical_multiple`: thesis example 1 has N = 2000, q = 0.1 and W = 24,
-a record of 10^5 steps W = 5000). The MAE of few
-points is skewed to the right, so its left tail is lighter than the normal
-one: the normal approximation makes the floor a little higher, not lower.
+``multiple = z_q - z_a`` (:func:`critical_multiple`): q = 0.9 for the
+discrimination, q = the behavioural share for the behavioural spread. A
+record of ``n_steps`` has ``W = ceil(n_steps / (2n+1))`` disjoint windows
+(the overlapping ones share their data, so W is the number of independent
+tests); Bonferroni over them, ``a = level / W`` with ``level`` = 5 %, keeps
+the chance that any noise-only stretch of the record is called informative
+at 5 %. The multiple grows slowly with N and W (see the examples of
+:func:`critical_multiple`: thesis example 1 has N = 2000 and W = 24, a
+record of 10^5 steps W = 5000). The MAE of few points is skewed to the
+right, so its left tail is lighter than the normal one: the normal
+approximation makes the floor a little higher, not lower.
 
 The noise level
 ---------------
@@ -80,10 +105,13 @@ to :func:`noise_floor` when it is known.
 Examples
 --------
 >>> import numpy as np
->>> floor = noise_floor(np.full(4, 0.4), np.array([0.4, 0.45, 0.9, np.nan]), np.full(4, 21.0),
-...                     n_params=2, share=0.1, n_samples=2000, n_windows=1)
+>>> best = np.full(4, 0.4)
+>>> floor = noise_floor(best, np.array([0.4, 0.45, 1.5, np.nan]), np.array([0.4, 0.4, 0.41, np.nan]),
+...                     np.full(4, 21.0), n_params=2, share=0.1, n_samples=2000, n_windows=1)
 >>> floor.informative.tolist(), round(floor.multiple, 2)
-([False, False, True, False], 2.77)
+([False, False, True, False], 5.33)
+>>> (floor.behavioural_spread <= floor.behavioural_floor).tolist()
+[True, True, True, False]
 """
 
 import math
@@ -99,13 +127,19 @@ __all__ = [
     "noise_floor",
     "record_noise_floor",
     "critical_multiple",
+    "quantile_position",
     "fitted_noise_sigma",
     "window_points",
     "FAMILY_LEVEL",
+    "NOISE_FLOOR_QUANTILE",
+    "floor_settings",
+    "floor_fields",
 ]
 
 # The chance that any noise-only stretch of a record is called informative (Bonferroni over its windows).
 FAMILY_LEVEL = 0.05
+# The population quantile whose MAE the discrimination compares with the best (see the module documentation).
+NOISE_FLOOR_QUANTILE = 0.9
 
 
 @dataclass(frozen=True, eq=False)
@@ -115,26 +149,50 @@ class NoiseFloor:
     Attributes
     ----------
     informative : ndarray (n_steps,) bool
-        The behavioural spread exceeds the floor; False where a window had
-        no result or too few points to judge.
-    spread : ndarray (n_steps,)
-        Behavioural threshold MAE minus best MAE; NaN where no result.
+        The discrimination exceeds its floor; False where a window had no
+        result or too few points to judge.
+    discrimination : ndarray (n_steps,)
+        The MAE at population quantile :data:`NOISE_FLOOR_QUANTILE` minus
+        the best MAE; NaN where no result.
     floor : ndarray (n_steps,)
         ``multiple`` sampling standard deviations of the MAE of the window's
         points of noise ``sigma``; NaN where the window has at most
         ``n_params`` points.
+    behavioural_spread : ndarray (n_steps,)
+        Behavioural threshold MAE minus best MAE; NaN where no result.
+    behavioural_floor : ndarray (n_steps,)
+        The same as ``floor`` with ``behavioural_multiple``: the behavioural
+        set ties within noise where ``behavioural_spread`` is at most this.
     sigma : float
         The noise level estimated from the best fits (NaN when no window
         could give it).
-    multiple : float
-        The critical multiple of :func:`critical_multiple`.
+    multiple, behavioural_multiple : float
+        The critical multiples of :func:`critical_multiple` for the
+        quantile and for the behavioural share.
     """
 
     informative: np.ndarray
-    spread: np.ndarray
+    discrimination: np.ndarray
     floor: np.ndarray
+    behavioural_spread: np.ndarray
+    behavioural_floor: np.ndarray
     sigma: float
     multiple: float
+    behavioural_multiple: float
+
+
+def quantile_position(n_samples):
+    """0-based sorted position of the MAE at population quantile :data:`NOISE_FLOOR_QUANTILE` among ``n_samples``.
+
+    ``floor(0.9 (n_samples - 1))``: every engine reads the same order
+    statistic, so their floors agree bit for bit.
+
+    Examples
+    --------
+    >>> quantile_position(2000), quantile_position(1)
+    (1799, 0)
+    """
+    return math.floor(NOISE_FLOOR_QUANTILE * (n_samples - 1))
 
 
 def window_points(y, before, after):
@@ -152,23 +210,31 @@ def window_points(y, before, after):
     return (measured[last] - measured[first]).astype(float)
 
 
-def critical_multiple(share, n_samples, n_windows, level=FAMILY_LEVEL):
-    """Sampling standard deviations of a noise-only MAE that the behavioural spread must exceed.
+def critical_multiple(quantile, n_samples, n_windows, level=FAMILY_LEVEL):
+    """Sampling standard deviations of a noise-only MAE that the MAE at ``quantile`` minus the best must exceed.
 
-    ``z_q - z_a`` of the module documentation, with q = ``share`` and
-    ``a = level / n_windows``.
+    ``z_q - z_a`` of the module documentation, with q = ``quantile``, the
+    population quantile compared with the best (:data:`NOISE_FLOOR_QUANTILE`
+    for the discrimination, the behavioural share for the behavioural
+    spread), and ``a = level / n_windows``.
 
     Examples
     --------
-    >>> round(critical_multiple(0.1, 2000, 24), 2), round(critical_multiple(0.1, 20_000, 5000), 2)
-    (3.46, 4.83)
+    >>> round(critical_multiple(0.9, 2000, 24), 2), round(critical_multiple(0.1, 2000, 24), 2)
+    (6.03, 3.46)
+    >>> round(critical_multiple(0.9, 20_000, 5000), 2)
+    7.39
     """
-    if not 0 < share < 1:
-        raise SettingsError(f"the behavioural share must lie in (0, 1); got {share!r}", "percentage")
+    if not 0 < quantile < 1:
+        raise SettingsError(
+            f"the quantile compared with the best MAE must lie in (0, 1); got {quantile!r} "
+            "(the behavioural one is percentage / 100)",
+            "percentage",
+        )
     per_window = level / max(int(n_windows), 1)
     # 1 - (1 - a)^(1/N) without losing a to rounding when it is tiny.
     tail = -math.expm1(math.log1p(-per_window) / n_samples)
-    return float(norm.ppf(share) - norm.ppf(tail))
+    return float(norm.ppf(quantile) - norm.ppf(tail))
 
 
 def fitted_noise_sigma(best, points, n_params):
@@ -186,14 +252,18 @@ def fitted_noise_sigma(best, points, n_params):
     return float(np.median(best[usable] * np.sqrt(m / (m - n_params))) / math.sqrt(2 / math.pi))
 
 
-def noise_floor(best, threshold, points, *, n_params, share, n_samples, n_windows, sigma=None, level=FAMILY_LEVEL):
-    """Which windows are informative: their behavioural MAE spread exceeds what noise alone produces.
+def noise_floor(
+    best, upper, threshold, points, *, n_params, share, n_samples, n_windows, sigma=None, level=FAMILY_LEVEL
+):
+    """Which windows are informative, and where the behavioural set ties within noise.
 
     Parameters
     ----------
-    best, threshold : ndarray (n_steps,)
-        Every window's best MAE and the largest MAE of its behavioural set;
-        NaN where the window had no result.
+    best, upper, threshold : ndarray (n_steps,)
+        Every window's best MAE, its MAE at population quantile
+        :data:`NOISE_FLOOR_QUANTILE` (:func:`quantile_position`) and the
+        largest MAE of its behavioural set; NaN where the window had no
+        result.
     points : ndarray (n_steps,)
         Measured points of every window (:func:`window_points`).
     n_params : int
@@ -208,24 +278,35 @@ def noise_floor(best, threshold, points, *, n_params, share, n_samples, n_window
         The noise standard deviation, when known; default
         :func:`fitted_noise_sigma`.
     level : float, default 0.05
-        The chance that any noise-only window of the record is called informative.
+        The chance that any noise-only window of the record is called
+        informative (and the same for a behavioural set called untied).
 
     Returns
     -------
     NoiseFloor
     """
-    best, threshold = np.asarray(best, dtype=float), np.asarray(threshold, dtype=float)
-    points = np.asarray(points, dtype=float)
+    best, upper = np.asarray(best, dtype=float), np.asarray(upper, dtype=float)
+    threshold, points = np.asarray(threshold, dtype=float), np.asarray(points, dtype=float)
     sigma = fitted_noise_sigma(best, points, n_params) if sigma is None else float(sigma)
-    multiple = critical_multiple(share, n_samples, n_windows, level)
+    multiple = critical_multiple(NOISE_FLOOR_QUANTILE, n_samples, n_windows, level)
+    behavioural_multiple = critical_multiple(share, n_samples, n_windows, level)
     with np.errstate(invalid="ignore", divide="ignore"):
-        floor = np.where(points > n_params, multiple * sigma * math.sqrt(1 - 2 / math.pi) / np.sqrt(points), np.nan)
-        spread = threshold - best
-        informative = spread > floor  # NaN compares False
-    return NoiseFloor(informative=informative, spread=spread, floor=floor, sigma=sigma, multiple=multiple)
+        noise_sd = np.where(points > n_params, sigma * math.sqrt(1 - 2 / math.pi) / np.sqrt(points), np.nan)
+        discrimination = upper - best
+        informative = discrimination > multiple * noise_sd  # NaN compares False
+    return NoiseFloor(
+        informative=informative,
+        discrimination=discrimination,
+        floor=multiple * noise_sd,
+        behavioural_spread=threshold - best,
+        behavioural_floor=behavioural_multiple * noise_sd,
+        sigma=sigma,
+        multiple=multiple,
+        behavioural_multiple=behavioural_multiple,
+    )
 
 
-def record_noise_floor(best, threshold, points, slots, n_params, percentage, n_samples):
+def record_noise_floor(best, upper, threshold, points, slots, n_params, percentage, n_samples):
     """:func:`noise_floor` of an analysis whose windows hold ``slots`` steps and ``points`` measured points each.
 
     The one place that turns an analysis's settings into the test's: the
@@ -233,10 +314,32 @@ def record_noise_floor(best, threshold, points, slots, n_params, percentage, n_s
     """
     return noise_floor(
         best,
+        upper,
         threshold,
         points,
         n_params=n_params,
         share=percentage / 100,
         n_samples=n_samples,
         n_windows=math.ceil(np.asarray(points).shape[0] / slots),
+    )
+
+
+def floor_settings(floor):
+    """What an analysis records of its ``floor`` in ``result.settings``."""
+    return dict(
+        noise_sigma=floor.sigma,
+        noise_multiple=floor.multiple,
+        noise_floor_quantile=NOISE_FLOOR_QUANTILE,
+        behavioural_multiple=floor.behavioural_multiple,
+    )
+
+
+def floor_fields(floor):
+    """The :class:`~dynia.result.DyniaResult` fields of ``floor``."""
+    return dict(
+        informative=floor.informative,
+        discrimination=floor.discrimination,
+        noise_floor=floor.floor,
+        behavioural_spread=floor.behavioural_spread,
+        behavioural_floor=floor.behavioural_floor,
     )

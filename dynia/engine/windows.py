@@ -91,7 +91,7 @@ from ..result import DyniaResult
 from ..settings import AnalysisSettings
 from ..storage import ResultArrays, result_arrays
 from .flavours import FLAVOURS, compiled_engine, flavour_analysis, monte_carlo_errors
-from .noise import record_noise_floor, window_points
+from .noise import floor_fields, floor_settings, record_noise_floor, window_points
 
 __all__ = [
     "moving_window",
@@ -418,8 +418,8 @@ def _analyse(
     output.allocate(shapes, names=names, samples=params, bounds=bounds, time=time, bin_centres=flavour_impl.bin_centres)
 
     slots = before + after + 1
-    # Two numbers a step for the noise floor, which needs every window's before it can judge any.
-    best, threshold = np.full(n_steps, np.nan), np.full(n_steps, np.nan)
+    # Three numbers a step for the noise floor, which needs every window's before it can judge any.
+    best, threshold, upper = np.full(n_steps, np.nan), np.full(n_steps, np.nan), np.full(n_steps, np.nan)
 
     def analyse_chunk(start, stop, window_errors, measured):
         if compiled:
@@ -433,7 +433,7 @@ def _analyse(
         if ic_error:
             chunks["ic_se"], chunks["ci_se"] = monte_carlo_errors(results.batch_ic, results.batch_ci)
         output.write(start, stop, chunks)
-        best[start:stop], threshold[start:stop] = results.best, results.threshold
+        best[start:stop], threshold[start:stop], upper[start:stop] = results.best, results.threshold, results.upper
 
     starts = range(0, n_steps, chunk_steps)
     if progress:
@@ -462,7 +462,7 @@ def _analyse(
             write(pending.popleft())
 
     points = window_points(y, before, after)
-    floor = record_noise_floor(best, threshold, points, slots, n_params, percentage, n_samples)
+    floor = record_noise_floor(best, upper, threshold, points, slots, n_params, percentage, n_samples)
     # What the engine did wins over what the caller asked: the samples analysed
     # (after any were dropped) and the engine that ran ("auto" resolved).
     recorded = dict(settings or {})
@@ -478,8 +478,7 @@ def _analyse(
         n_behavioural=flavour_impl.count,
         engine="numba" if compiled else "numpy",
         ic_error=ic_error,
-        noise_sigma=floor.sigma,
-        noise_multiple=floor.multiple,
+        **floor_settings(floor),
     )
     if ic_error:
         recorded.update(ic_batches=flavour_impl.batches)
@@ -496,9 +495,7 @@ def _analyse(
         settings=recorded,
         ic_se=arrays.get("ic_se"),
         ci_se=arrays.get("ci_se"),
-        informative=floor.informative,
-        mae_spread=floor.spread,
-        noise_floor=floor.floor,
+        **floor_fields(floor),
     )
     # An output given by the caller is committed by the caller, once it has added the verdicts.
     return result if isinstance(store, ResultArrays) else output.commit(result)
