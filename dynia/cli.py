@@ -146,6 +146,17 @@ def _parser():
     )
     method.add_argument("--max-samples", type=int, metavar="N", help="the budget of --target-se")
     method.add_argument(
+        "--dtype",
+        choices=("float64", "float32"),
+        help="type of the result arrays: float32 halves their memory and result.nc (default float64)",
+    )
+    method.add_argument(
+        "--on-disk",
+        action="store_true",
+        help="write result.nc as the windows are analysed and read it back lazily: for records whose CLD "
+        "gradient does not fit in memory (a year of 1 Hz data)",
+    )
+    method.add_argument(
         "--second-run",
         action="store_true",
         help="narrow the range of every parameter whose highest IC reaches "
@@ -382,6 +393,8 @@ OPTIONS = {
     "ic_error": ("flag", False, _ANALYSE),
     "target_se": ("number", None, _ANALYSE),
     "max_samples": ("whole", None, _ANALYSE),
+    "dtype": ("text", "float64", _ANALYSE),
+    "on_disk": ("flag", False, _ANALYSE),
     "second_run": ("flag", False, _ANALYSE),
     "narrow_threshold": ("number", 0.75, _ANALYSE),
     "narrow_margin": ("number", 0.5, _ANALYSE),
@@ -580,6 +593,7 @@ def _analysis_settings(options):
             ic_error=options["ic_error"],
             target_se=options["target_se"],
             max_samples=options["max_samples"],
+            dtype=options["dtype"],
             # With --window the window's length is known only on the data's grid; checked then (_load).
             min_points=options["min_points"] if options.get("window") is None else 1,
         )
@@ -871,7 +885,9 @@ def _analyse(options, command_line, caught):
             print(f"dynia: warning: {line}", file=sys.stderr)
 
         def analyse(bounds, directory, narrowed=None):
-            result = run(u, y, model, bounds, settings=analysis, rng=options["seed"], progress=sys.stderr.isatty())
+            # --on-disk: the run writes result.nc itself, block by block, and the result reads it lazily.
+            settings = analysis.replace(store=directory / "result.nc") if options["on_disk"] else analysis
+            result = run(u, y, model, bounds, settings=settings, rng=options["seed"], progress=sys.stderr.isatty())
             dropped = _dynia_warnings(caught)
             for line in dropped:
                 print(f"dynia: warning: {line}", file=sys.stderr)
@@ -909,7 +925,15 @@ def _analyse(options, command_line, caught):
             )
             if options["quality"]:
                 summary["data_quality"] = quality_findings
-            report.write_analysis(directory, result, data, summary, offset=offset, plots=not options["no_plots"])
+            report.write_analysis(
+                directory,
+                result,
+                data,
+                summary,
+                offset=offset,
+                plots=not options["no_plots"],
+                saved=options["on_disk"],
+            )
             return result, parameters
 
         result, parameters = analyse(options["bounds"], staging)

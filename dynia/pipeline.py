@@ -291,7 +291,7 @@ def _analyse_samples(u, y, model, names, box, samples, settings, progress, outpu
                 conf_level=settings.conf_level,
                 flavour=settings.flavour,
                 names=names,
-                time=np.arange(y.size) * settings.dt,
+                time=_time_axis(y.size, settings.dt),
                 chunk_steps=chunk_steps,
                 progress=progress,
                 min_points=settings.min_points,
@@ -394,6 +394,13 @@ def ic_se_that_matters(result, threshold=WEAK_BELOW):
     highest = np.nanargmax(np.where(np.isnan(ic), -np.inf, ic), axis=1)
     matters[np.arange(ic.shape[0]), highest] = ~np.isnan(ic[np.arange(ic.shape[0]), highest])
     return float(np.nanmax(np.where(matters, ic_se, np.nan)))
+
+
+def _time_axis(n_steps, dt):
+    """``k * dt`` for every step, scaled in place: one array of the record's length, not two."""
+    time = np.arange(n_steps, dtype=float)
+    time *= dt
+    return time
 
 
 def _dated(result, timestamps):

@@ -45,36 +45,41 @@ def write_json(path, content):
     Path(path).write_text(json.dumps(json_ready(content), indent=2, default=_plain) + "\n")
 
 
-def write_analysis(directory, result, data, summary, *, offset=0.0, plots=True):
+def write_analysis(directory, result, data, summary, *, offset=0.0, plots=True, saved=False):
     """Write one analysis into ``directory``: ic.csv, limits.csv, samples.csv, summary.json, result.nc and figures.
 
     ``summary`` is the finished content of ``summary.json``; the per-parameter
     times in it are already the file's. ``result.nc`` is the whole result
-    (:meth:`dynia.result.DyniaResult.save`), which ``dynia.load`` reads back.
+    (:meth:`dynia.result.DyniaResult.save`), which ``dynia.load`` reads back;
+    with ``saved`` the run already wrote it there (``store=``), and it is
+    not written again.
     """
     directory = Path(directory)
     names = list(result.names)
     times = file_times(data, data.time)
-    if result.ic_se is None:
-        _write_csv(directory / "ic.csv", ["time"] + names, result.ic.T, times)
-    else:  # each parameter's IC, then its Monte Carlo standard error
-        columns = [column for name in names for column in (name, f"{name}_se")]
-        _write_csv(
-            directory / "ic.csv",
-            ["time"] + columns,
-            np.stack([result.ic, result.ic_se], axis=1).reshape(-1, data.time.size).T,
-            times,
-        )
+    # np.asarray: a result stored on disk (store=) is read here, one array at a time.
+    ic_columns, ic_values = ["time"], []
+    for p, name in enumerate(names):
+        ic_columns.append(name)
+        ic_values.append(np.asarray(result.ic[p]))
+        if result.ic_se is not None:
+            ic_columns.append(f"{name}_se")
+            ic_values.append(np.asarray(result.ic_se[p]))
+    if result.informative is not None:  # the window's noise floor, the same for every parameter
+        ic_columns.append("informative")
+        ic_values.append(np.asarray(result.informative, dtype=int))
+    _write_csv(directory / "ic.csv", ic_columns, np.column_stack(ic_values), times)
     limit_columns = [f"{name}_{side}" for name in names for side in ("lower", "upper")]
     _write_csv(
         directory / "limits.csv",
         ["time"] + limit_columns,
-        result.ci.transpose(1, 0, 2).reshape(data.time.size, -1),
+        np.asarray(result.ci).transpose(1, 0, 2).reshape(data.time.size, -1),
         times,
     )
     _write_csv(directory / "samples.csv", names, result.samples)
     write_json(directory / "summary.json", summary)
-    result.save(directory / "result.nc")
+    if not saved:
+        result.save(directory / "result.nc")
     if plots:
         _write_figures(directory, result, data, offset)
 

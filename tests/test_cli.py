@@ -11,7 +11,7 @@ from cli_cases import BASE, GOOD, HEATING
 from hypothesis import given
 from hypothesis import strategies as st
 
-from dynia import __version__
+from dynia import __version__, load
 from dynia.cli import UsageError, _bounds, main
 from dynia.models import FirstOrder
 
@@ -55,7 +55,8 @@ def test_heating_system_end_to_end(heating_run):
     }
     assert expected <= {path.name for path in out.iterdir()}
     header, ic = _read_csv(out / "ic.csv")
-    assert header == ["time", "K", "T"] and ic.shape == (801, 3)
+    assert header == ["time", "K", "T", "informative"] and ic.shape == (801, 4)
+    assert set(np.unique(ic[:, 3])) <= {0.0, 1.0}  # the noise floor's flag of every window
     np.testing.assert_allclose(ic[:3, 0], [0, 2, 4])
     header, limits = _read_csv(out / "limits.csv")
     assert header == ["time", "K_lower", "K_upper", "T_lower", "T_upper"]
@@ -356,7 +357,7 @@ def test_ic_error_reaches_the_table_the_summary_and_ic_csv(tmp_path, capsys):
     assert main(["analyse", str(HEATING), *HEATING_ARGS, "--ic-error", "--no-plots", "--out", str(out)]) == 0
     table = capsys.readouterr().out
     header, ic = _read_csv(out / "ic.csv")
-    assert header == ["time", "K", "K_se", "T", "T_se"]
+    assert header == ["time", "K", "K_se", "T", "T_se", "informative"]
     summary = json.loads((out / "summary.json").read_text())
     # 400 samples at 10 %: 8 batches of 50 keep 5 behavioural sets each, 10 of 40 would keep 4.
     assert summary["run"]["ic_batches"] == 8 and summary["settings"]["analysis"]["ic_error"] is True
@@ -387,3 +388,17 @@ def test_target_se_records_its_rounds_and_warns_when_the_budget_runs_out(tmp_pat
 def test_monte_carlo_error_options_are_checked(tmp_path, capsys, extra, message):
     status, err = _analyse(capsys, HEATING, *HEATING_ARGS, *extra, "--out", tmp_path / "x")
     assert status == 2 and message in err and not (tmp_path / "x").exists()
+
+
+def test_on_disk_float32_writes_what_the_in_memory_float32_run_writes(tmp_path, capsys):
+    common = [*HEATING_ARGS, "--dtype", "float32", "--no-plots"]
+    assert main(["analyse", str(HEATING), *common, "--on-disk", "--out", str(tmp_path / "disk")]) == 0
+    assert main(["analyse", str(HEATING), *common, "--out", str(tmp_path / "memory")]) == 0
+    for name in ("ic.csv", "limits.csv", "samples.csv"):
+        assert (tmp_path / "disk" / name).read_bytes() == (tmp_path / "memory" / name).read_bytes(), name
+    disk, memory = load(tmp_path / "disk" / "result.nc"), load(tmp_path / "memory" / "result.nc")
+    assert disk.gradient.dtype == np.float32
+    np.testing.assert_array_equal(disk.gradient, memory.gradient)
+    header, _ = _read_csv(tmp_path / "disk" / "ic.csv")
+    assert header == ["time", "K", "T", "informative"]
+    assert json.loads((tmp_path / "disk" / "summary.json").read_text())["settings"]["analysis"]["dtype"] == "float32"
