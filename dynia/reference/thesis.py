@@ -92,14 +92,24 @@ Eq. 2.3 normalises the band by "the    ``IC = 1 - (CI(2) - CI(1))/(ub - lb)``: b
 maximum and minimum acceptable values  the *sampling* range. Kept. Over the
 of the parameters in the behavioural   behavioural set's own range the IC would
 set".                                  measure the shape of the behavioural values,
-                                       not their width: a set a hundredth of the
-                                       range wide reads like one spanning all of it
-                                       (notebooks/ch2_method.py draws both).
-The simulations use ``lsim`` (section  ``example_firstorder.m`` simulates with
-3).                                    forward Euler, time step 1, from a state of
-                                       70 (``lsim`` is commented out as the
-                                       "alternative simulation method"): ported
-                                       as :func:`euler_simulation`.
+                                       not their width: on example 1 a set a tenth
+                                       of the range wide and one spanning all of it
+                                       read about the same low IC (0.15 and 0.07;
+                                       notebooks/ch2_method.py draws both).
+The uncertainty limits are read off    ``confLimits`` takes unweighted sorted
+the cumulative likelihood distribution positions ``floor(c (count-1))`` of the
+(sections 2.2.2, 2.2.3.1).             behavioural values: the likelihood never
+                                       enters the limits, so neither the band nor
+                                       the IC depends on it. Kept (the engine's
+                                       ``"weighted"`` flavour reads the CLD).
+The simulations use ``lsim`` (section  ``example_firstorder.m`` simulates the Monte
+3).                                    Carlo sets with forward Euler, time step 1,
+                                       from a state of 70 (``lsim`` is commented out
+                                       as the "alternative simulation method"):
+                                       ported as :func:`euler_simulation`. Its
+                                       measured output comes from ``lsim`` from
+                                       ``y0 = 0``: data and sets come from two
+                                       different simulators.
 =====================================  =============================================
 
 The example script, beyond the DYNIA files: :func:`euler_simulation` is its
