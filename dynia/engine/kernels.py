@@ -275,25 +275,27 @@ def _select(values, length, k):
 
 
 @_jit
-def _candidates(cost, count, bound, candidates):
-    """Indices (ascending) of the costs at or below ``bound``, into ``candidates``; returns how many.
+def _candidates(cost, first, stride, count, bound, candidates):
+    """Indices (ascending) of the samples first, first + stride, ... whose cost is at or below ``bound``.
 
-    ``bound`` is a guess of the count-th smallest cost (the previous
-    window's): when at least ``count`` costs lie at or below it, the
-    behavioural set is among them; otherwise (or when ``bound`` is NaN)
-    every index is a candidate.
+    Written into ``candidates``; returns how many. ``bound`` is a guess of
+    the count-th smallest of these costs (the previous window's): when at
+    least ``count`` costs lie at or below it, the behavioural set is among
+    them; otherwise (or when ``bound`` is NaN) every one of the samples is
+    a candidate.
     """
     n = cost.shape[0]
     found = 0
     if bound == bound:  # not NaN
         # Branch-free: every index is written, and kept (by counting it) when its cost is at or below the bound.
-        for s in range(n):
+        for s in range(first, n, stride):
             candidates[found] = s
             found += cost[s] <= bound
     if found < count:
-        found = n
-        for s in range(n):
-            candidates[s] = s
+        found = 0
+        for s in range(first, n, stride):
+            candidates[found] = s
+            found += 1
     return found
 
 
@@ -537,6 +539,7 @@ def _analyse_block(
     buffer = np.empty(count, dtype=np.int64)
     bound = np.nan
     upper_bound = np.nan
+    batch_bounds = np.full(n_batches, np.nan)
     # Batch b holds samples b, b + n_batches, ...; row b lists its candidates (sample indices, ascending).
     batch_of = np.empty(n_samples, dtype=np.int64)
     for s in range(n_samples):
@@ -557,7 +560,7 @@ def _analyse_block(
         for s in range(n_samples):
             mae = total[s] / present
             total[s] = mae * mae
-        found = _candidates(total, count, bound, candidates)
+        found = _candidates(total, 0, 1, count, bound, candidates)
         threshold, smallest = _read_off(
             total,
             count,
@@ -592,7 +595,7 @@ def _analyse_block(
             continue
         # The population's candidates (every cost at or below its bound) are dealt to their batches: a batch
         # with at least its count among them has its behavioural set and every tie there; one with fewer
-        # searches all its members.
+        # searches its members against its own bound, and all of them if that finds too few.
         batch_found[:] = 0
         for i in range(found):
             s = candidates[i]
@@ -602,11 +605,8 @@ def _analyse_block(
         for b in range(n_batches):
             members = batch_candidates[b]
             if batch_found[b] < batch_counts[b]:
-                batch_found[b] = 0
-                for s in range(b, n_samples, n_batches):
-                    members[batch_found[b]] = s
-                    batch_found[b] += 1
-            _read_off(
+                batch_found[b] = _candidates(total, b, n_batches, batch_counts[b], batch_bounds[b], members)
+            threshold, _ = _read_off(
                 total,
                 batch_counts[b],
                 members,
@@ -630,6 +630,7 @@ def _analyse_block(
                 order,
                 buffer,
             )
+            batch_bounds[b] = _next_bound(threshold)
 
 
 @_jit
