@@ -15,17 +15,18 @@
 #
 # A first-order process K/(T s + 1) with K = 2 and T = 3 is driven by the input
 # of the thesis's `example_firstorder.m`: 35 for most of the record, two dips to
-# 10 and a final step to 0 at step 400 (0-based 399). Gaussian noise is added to
-# the output. DYNIA then samples both parameters uniformly on [0, 7], simulates
-# every sample once and, at every time step, keeps the best `percentage` % of
-# the samples over a window of 2n+1 steps.
+# 10 and a final step to 0 at step 400 (0-based 399). Gaussian noise of standard
+# deviation 0.5 is added to the output. `dynia.synthetic.thesis_example(1, rng)`
+# builds this record, the same one the chapter-3 notebooks use. DYNIA then
+# samples both parameters uniformly on [0, 7], simulates every sample once and,
+# at every time step, keeps the best `percentage` % of the samples over a window
+# of 2n+1 steps.
 
 # %% tags=["parameters"]
 n_samples: int = 2000  # Monte Carlo parameter sets (thesis: 2000)
 n: int = 10  # half window: the window holds 2n+1 steps (thesis: 10)
 percentage: float = 10  # behavioural share of the samples, in percent (thesis: 10)
 bins: int = 40  # CLD gradient bins (thesis: 40)
-noise: float = 0.5  # standard deviation of the output noise (thesis: 0.5)
 seed: int = 2009  # seed of every random draw
 figure_dir: str = "figures"  # where the PNGs go
 
@@ -40,23 +41,21 @@ import dynia
 os.makedirs(figure_dir, exist_ok=True)
 
 rng = np.random.default_rng(seed)
-u = dynia.synthetic.example_firstorder_input()
-model = dynia.models.FirstOrder()
-y = model.simulate([[2.0, 3.0]], u)[0] + rng.normal(0, noise, u.size)
+example = dynia.synthetic.thesis_example(1, rng)
 
 fig, ax = plt.subplots(figsize=(8, 3))
-ax.plot(u, label="input u")
-ax.plot(y, label="measured output y")
+ax.plot(example.u, label="input u")
+ax.plot(example.y, label="measured output y")
 ax.set_xlabel("time step")
 ax.legend()
 fig.savefig(f"{figure_dir}/quickstart_data.png", dpi=120, bbox_inches="tight")
 
 # %%
-res = dynia.run(u, y, model, {"K": (0, 7), "T": (0, 7)}, n_samples=n_samples, n=n,
-                percentage=percentage, bins=bins, rng=rng)
+res = dynia.run(example.u, example.y, example.model, example.bounds, n_samples=n_samples, n=n,
+                percentage=percentage, bins=bins, ic_error=True, rng=rng)
 
 fig, axes = plt.subplots(2, 2, figsize=(12, 7), constrained_layout=True)
-for row, (name, true_value) in enumerate([("K", 2.0), ("T", 3.0)]):
+for row, (name, true_value) in enumerate(example.truth.items()):
     res.plot_information_content(name, ax=axes[row, 0])
     res.plot_identifiability(name, ax=axes[row, 1], true_value=true_value)
 fig.savefig(f"{figure_dir}/quickstart_example1.png", dpi=120)
@@ -67,9 +66,41 @@ fig.savefig(f"{figure_dir}/quickstart_example1.png", dpi=120)
 # time constant is the mirror image, with small peaks at the two short dips and
 # its highest information content after the final step to zero. That is the
 # thesis's finding for this example (its Figures 3.3 to 3.6).
+#
+# Two things the thesis's figures do not show. `ic_error=True` adds the Monte
+# Carlo standard error of every IC value (`res.ic_se`, shaded as IC +- 2 SE
+# in the left panels): another sample of the same size would give another
+# curve, this much apart. And every result carries the noise floor
+# (`res.informative`, one flag per step): a window is informative when the
+# worst-fitting tenth of the samples fits it clearly worse than the best, by
+# more than measurement noise alone would make them differ. The plots veil the
+# other windows grey. `res.summary()` gives each parameter's highest IC with
+# its error and a verdict on it:
+
+# %%
+for name, line in res.summary().items():
+    low, high = line["band"]
+    reasons = ", ".join(reason["code"] for reason in line["reasons"]) or "no reason for doubt"
+    print(f"{name}: max IC {line['max_ic']:.2f} +- {line['max_ic_se']:.3f} at step {line['time_of_max_ic']:.0f}, "
+          f"band [{low:.2f}, {high:.2f}] (true {example.truth[name]:g}): {line['verdict']} ({reasons})")
+print(f"informative windows: {res.informative.mean():.0%} of the steps, the last at step "
+      f"{np.flatnonzero(res.informative)[-1]}")
+
+# %% [markdown]
+# With the defaults the gain's highest IC is `identified`, with a band that
+# holds K = 2. The time constant's is not: it lies a few tens of steps after
+# the final step to zero, where every fast or small-gain parameter set
+# predicts about zero, so the sets the window keeps tie within the noise. Its
+# band misses T = 3, and the verdict is `suspect` (`noise_ranked`; and the
+# band touches the lower bound 0). After the last informative step printed
+# above the data are the noise around zero, and no window is informative. Read
+# the IC together with its verdict; the README's "What the verdicts mean"
+# lists the rules.
 
 # %%
 # NBVAL_CHECK_OUTPUT
 steady = np.r_[40:130, 180:320, 350:390]
 print("mean IC of K on steady non-zero input:", round(float(res.ic[0, steady].mean()), 2))
 print("mean IC of T after the final step (steps 405-440):", round(float(res.ic[1, 405:440].mean()), 2))
+print("verdicts:", {name: line["verdict"] for name, line in res.summary().items()})
+print("share of informative windows:", round(float(res.informative.mean()), 2))
