@@ -33,8 +33,8 @@ process so that its peak resident memory (``ru_maxrss``) is its own.
 10. :func:`dynia.distributed.run` on a local Dask cluster of one and of two
     single-threaded worker processes (1 GB memory limit each), 10^4 samples x
     10^6 steps (``--distributed-samples``, ``--distributed-steps``): wall
-    time, speed-up from one worker to two, and each worker's peak resident
-    memory, sampled every 0.1 s; target <= 1 GB per worker.
+    time, speed-up from one worker to two, each worker's peak resident
+    memory, sampled every 0.1 s, and CPU time; target <= 1 GB per worker.
 
 ``long-record``: a year of 1 Hz data in bounded memory, :func:`dynia.run`
 with ``dtype="float32"`` and ``store`` (a netCDF file in a temporary folder)
@@ -307,6 +307,7 @@ def _case_distributed(n_samples=10_000, n_steps=1_000_000, time_chunks=None):
             run(u[:200], y[:200], model, bounds, client=client, n_samples=200, rng=1)  # load the compiled kernels
             workers = [psutil.Process(pid) for pid in client.run(os.getpid).values()]
             peaks = [worker.memory_info().rss for worker in workers]
+            cpu_before = [sum(worker.cpu_times()[:2]) for worker in workers]
             done = threading.Event()
 
             def watch(workers=workers, peaks=peaks, done=done):
@@ -323,10 +324,13 @@ def _case_distributed(n_samples=10_000, n_steps=1_000_000, time_chunks=None):
                 seconds = time.perf_counter() - start
                 done.set()
                 watcher.join()
+            cpu = [sum(worker.cpu_times()[:2]) - before for worker, before in zip(workers, cpu_before)]
         result[f"{n_workers} workers"] = dict(
             seconds=seconds,
             sample_steps_per_s=n_samples * n_steps / seconds,
             worker_peak_rss_mb=[peak / 2**20 for peak in peaks],
+            # Work beyond one worker's is the cost of splitting it (moving blocks between workers).
+            worker_cpu_s=cpu,
             # Other jobs on the machine slow the workers down; the one-minute load average says how many.
             load_average=os.getloadavg()[0],
         )
@@ -479,6 +483,7 @@ def _describe(name, r):
         workers = "; ".join(
             f"{count} {r[count]['seconds']:.0f} s = {r[count]['sample_steps_per_s']:.3g} sample-steps/s, "
             f"worker peak RSS {', '.join(f'{peak:.0f}' for peak in r[count]['worker_peak_rss_mb'])} MB, "
+            f"worker CPU {' + '.join(f'{cpu:.0f}' for cpu in r[count]['worker_cpu_s'])} s, "
             f"load average {r[count]['load_average']:.1f}"
             for count in ("1 workers", "2 workers")
         )
