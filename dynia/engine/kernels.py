@@ -497,8 +497,13 @@ def _next_bound(threshold):
 
 @_jit
 def _next_quantile_bound(cost):
-    """A guess a little below the next window's quantile cost from this one's (see :func:`_quantile_cost`)."""
-    return cost * 0.8
+    """A guess below the next window's quantile cost from this one's (see :func:`_quantile_cost`).
+
+    0.7 of this one's: on thesis example 1 with 20 000 samples a bound that
+    close misses (finds more than the quantile's position below it) in 0.2 %
+    of the windows, and 0.8 in 6 %, each miss a search of every cost.
+    """
+    return cost * 0.7
 
 
 @_jit
@@ -541,9 +546,10 @@ def _analyse_block(
     upper_bound = np.nan
     batch_bounds = np.full(n_batches, np.nan)
     # Batch b holds samples b, b + n_batches, ...; row b lists its candidates (sample indices, ascending).
-    batch_of = np.empty(n_samples, dtype=np.int64)
-    for s in range(n_samples):
-        batch_of[s] = s % max(n_batches, 1)
+    batch_of = np.empty(n_samples if n_batches else 0, dtype=np.int64)
+    for first in range(0, batch_of.shape[0], max(n_batches, 1)):
+        for b in range(min(n_batches, n_samples - first)):
+            batch_of[first + b] = b
     batch_candidates = np.empty((n_batches, (n_samples + n_batches - 1) // max(n_batches, 1)), dtype=np.int64)
     batch_found = np.empty(n_batches, dtype=np.int64)
     for t in range(m):
