@@ -290,16 +290,20 @@ def noise_floor(
     sigma = fitted_noise_sigma(best, points, n_params) if sigma is None else float(sigma)
     multiple = critical_multiple(NOISE_FLOOR_QUANTILE, n_samples, n_windows, level)
     behavioural_multiple = critical_multiple(share, n_samples, n_windows, level)
+    # In place where it can be: on a long record every temporary is 8 bytes a step.
     with np.errstate(invalid="ignore", divide="ignore"):
-        noise_sd = np.where(points > n_params, sigma * math.sqrt(1 - 2 / math.pi) / np.sqrt(points), np.nan)
+        noise_sd = np.sqrt(points)
+        np.divide(sigma * math.sqrt(1 - 2 / math.pi), noise_sd, out=noise_sd)
+        noise_sd[points <= n_params] = np.nan
+        floor = noise_sd * multiple
         discrimination = upper - best
-        informative = discrimination > multiple * noise_sd  # NaN compares False
+        informative = discrimination > floor  # NaN compares False
     return NoiseFloor(
         informative=informative,
         discrimination=discrimination,
-        floor=multiple * noise_sd,
+        floor=floor,
         behavioural_spread=threshold - best,
-        behavioural_floor=behavioural_multiple * noise_sd,
+        behavioural_floor=np.multiply(noise_sd, behavioural_multiple, out=noise_sd),
         sigma=sigma,
         multiple=multiple,
         behavioural_multiple=behavioural_multiple,
