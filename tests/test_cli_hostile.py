@@ -388,12 +388,13 @@ def test_a_gap_in_the_time_column_is_left_missing_and_reported(tmp_path, capsys)
     numbers = {float(value) for value in re.findall(r"-?\d+(?:\.\d+)?", warned[0].split(":", 2)[2])}
     assert {20.0, 29.0} <= numbers or {19.0, 30.0} <= numbers, warned
     header, ic = _ic_table(out / "ic.csv")
-    assert header == ["time", "K", "T"]
+    assert header == ["time", "K", "T", "informative"]
     np.testing.assert_array_equal(ic[:, 0], np.arange(60.0))  # one row per grid step, the gap included
-    # Windows (n = 3) lying wholly inside the gap hold no measurement: their IC is missing, not invented.
+    # Windows (n = 3) lying wholly inside the gap hold no measurement: their IC is missing, not invented,
+    # and they inform about nothing.
     inside = (ic[:, 0] >= 23) & (ic[:, 0] <= 26)
-    assert np.isnan(ic[inside, 1:]).all()
-    assert np.isfinite(ic[(ic[:, 0] <= 15) | (ic[:, 0] >= 34), 1:]).all()
+    assert np.isnan(ic[inside, 1:3]).all() and (ic[inside, 3] == 0).all()
+    assert np.isfinite(ic[(ic[:, 0] <= 15) | (ic[:, 0] >= 34), 1:3]).all()
     summary = _summary(out)
     assert summary["data"]["gaps"], summary["data"]
     [(first, last)] = summary["data"]["gaps"]
