@@ -37,8 +37,16 @@ gathered on the client. Time chunks are submitted as the analysis goes,
 at most two per worker thread submitted and not yet analysed, and each
 chunk's blocks are released once analysed; so the cluster holds the blocks
 of a few time chunks at a time, 8 x n_samples x time_chunks bytes each
-(plus the halos), never a sample chunk's whole record (measured by
-``python -m dynia.bench --case distributed``).
+(plus the halos), never a sample chunk's whole record. ``python -m
+dynia.bench --case distributed`` runs 1e4 samples x 1e6 steps (a first-order
+model, default chunks: 400 steps per time chunk) on a local cluster: a
+worker's resident memory peaked at 565 MB with one worker and at 453 and
+449 MB with two (limit 1 GB each). Two workers were not faster than one on
+a 2-core machine shared with other jobs (load average 6): 459 s against
+298 s. The workers got about 0.6 of a core in all either way (181 s of CPU
+in 298 s; 157 + 91 s in 459 s), and two needed more CPU than one: each
+time chunk's analysis receives the other sample chunk's block from the
+other worker, and there are twice the stage-1 tasks.
 
 A model that cannot pause and resume (``model.resumable`` false: a
 :class:`~dynia.models.FunctionModel` without ``state=``, whose function
