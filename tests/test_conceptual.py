@@ -210,7 +210,11 @@ def test_records_are_deterministic_and_carry_their_noise():
     assert np.array_equal(clean.y, clean.clean)
     flowing = first.clean > 0
     assert 0.07 < np.std(first.y[flowing] / first.clean[flowing] - 1) < 0.13
-    np.testing.assert_array_equal(first.clean, hymod().simulate([[first.truth[k] for k in HYMOD_NAMES]], first.u)[0])
+    # The record is simulated on numpy (compiled=False): that path gives it bit for bit; the compiled
+    # one agrees to rounding (numba's and numpy's powers may differ in the last bit).
+    truth = [[first.truth[k] for k in HYMOD_NAMES]]
+    np.testing.assert_array_equal(first.clean, hymod(compiled=False).simulate(truth, first.u)[0])
+    np.testing.assert_allclose(first.clean, hymod().simulate(truth, first.u)[0], rtol=1e-12, atol=1e-14)
 
     vessel = tank_record(600, rng=np.random.default_rng(5), noise=0.02)
     assert np.array_equal(vessel.y, tank_record(600, rng=np.random.default_rng(5), noise=0.02).y)
