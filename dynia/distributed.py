@@ -91,7 +91,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _checks
-from .engine.flavours import compiled_engine, flavour_analysis
+from .engine.flavours import compiled_engine, flavour_analysis, monte_carlo_errors
 from .engine.noise import floor_fields, floor_settings, record_noise_floor, window_points
 from .engine.windows import ArrayErrors, StreamedErrors, window_halos, window_inputs, window_mean
 from .errors import DataError, DyniaError, ModelError
@@ -139,6 +139,7 @@ def run(
     min_points=None,
     window=None,
     engine=None,
+    ic_error=None,
 ):
     """:func:`dynia.run` on a ``dask.distributed`` cluster, with the same result.
 
@@ -172,6 +173,11 @@ def run(
     sampler : {"uniform", "lhs", "sobol"}
         As :func:`dynia.run`; its adaptive schemes need every simulation at
         once and run on one machine only.
+    ic_error : bool, default False
+        As :func:`dynia.run`: the Monte Carlo standard errors ``ic_se`` and
+        ``ci_se``, the batches read off in each time chunk's analysis.
+        (``target_se``, ``dtype`` and ``store`` are :func:`dynia.run`'s
+        only.)
 
     Returns
     -------
@@ -227,12 +233,17 @@ def run(
         min_points=min_points,
         window=window,
         engine=engine,
+        ic_error=ic_error,
     )
     settings.require(
         "dynia.distributed.run",
         sampler=SAMPLERS,
         workers=(None,),
-        why="the adaptive schemes run on one machine: use dynia.run; the cluster's workers are its threads",
+        target_se=(None,),
+        dtype=("float64",),
+        store=(None,),
+        why="the adaptive schemes run on one machine, as do target_se and results stored as they are produced: "
+        "use dynia.run; the cluster's workers are its threads",
     )
     names, box = parameter_box(bounds, model.names, type(model).__name__)
     n_samples, dt, x0, flavour = settings.n_samples, settings.dt, settings.x0, settings.flavour
@@ -278,6 +289,7 @@ def run(
             settings.bins,
             settings.conf_level,
             settings.min_points,
+            ic_error=settings.ic_error,
         )
         n_steps = y.size
         if time_chunks is None:
@@ -290,7 +302,7 @@ def run(
             blocks = _WholeRecordBlocks(
                 client, model, row_chunks, u_data, y_data, dt, x0, windows, n_steps, time_chunks
             )
-        ic, ci, gradient, best, upper, threshold = _analyse_on_cluster(
+        ic, ci, gradient, best, upper, threshold, ic_se, ci_se = _analyse_on_cluster(
             client,
             blocks,
             flavour_impl,
@@ -319,6 +331,8 @@ def run(
         engine="numba" if compiled else "numpy",
         **floor_settings(floor),
     )
+    if settings.ic_error:
+        recorded.update(ic_batches=flavour_impl.batches)
     return DyniaResult(
         names=tuple(names),
         samples=samples,
@@ -329,6 +343,8 @@ def run(
         gradient=gradient,
         bin_centres=flavour_impl.bin_centres,
         settings=recorded,
+        ic_se=ic_se,
+        ci_se=ci_se,
         **floor_fields(floor),
     )
 
@@ -353,6 +369,9 @@ def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, pr
     ci = np.empty((n_params, n_steps, 2))
     gradient = np.empty((n_params, flavour.n_bins, n_steps))
     best, upper, threshold = np.empty(n_steps), np.empty(n_steps), np.empty(n_steps)
+    batched = getattr(flavour, "batches", 0) > 0
+    ic_se = np.empty((n_params, n_steps)) if batched else None
+    ci_se = np.empty((n_params, n_steps, 2)) if batched else None
     state = client.scatter(flavour, hash=False)
     chunk_spans = {}
     finished = as_completed(loop=client.loop)
@@ -379,6 +398,8 @@ def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, pr
         results = future.result()
         ic[:, start:stop], ci[:, start:stop], gradient[:, :, start:stop] = results.ic, results.ci, results.gradient
         best[start:stop], upper[start:stop], threshold[start:stop] = results.best, results.upper, results.threshold
+        if batched:
+            ic_se[:, start:stop], ci_se[:, start:stop] = monte_carlo_errors(results.batch_ic, results.batch_ci)
         following = next(waiting, None)
         if following is not None:
             submit(*following)
@@ -386,7 +407,7 @@ def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, pr
             bar.update()
     if bar is not None:
         bar.close()
-    return ic, ci, gradient, best, upper, threshold
+    return ic, ci, gradient, best, upper, threshold, ic_se, ci_se
 
 
 def _import_distributed():

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import dynia
+import dynia.distributed
 from dynia.analysis import moving_window
 from dynia.engine.flavours import ic_batches, monte_carlo_errors
 from dynia.errors import SettingsError
@@ -162,3 +163,22 @@ def test_the_online_front_end_refuses_the_error_instead_of_ignoring_it(setting):
     settings = dynia.settings.AnalysisSettings(window="trailing", **setting)
     with pytest.raises(SettingsError, match="OnlineDynia does not support ic_error=True"):
         dynia.online.OnlineDynia(dynia.models.FirstOrder(), {"K": (0, 7), "T": (0, 7)}, settings=settings)
+
+
+def test_the_cluster_gives_the_errors_of_dynia_run():
+    distributed = pytest.importorskip("distributed")
+    u, y, model, bounds = _example()
+    with (
+        distributed.LocalCluster(n_workers=2, processes=False, dashboard_address=None) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        on_cluster = dynia.distributed.run(
+            u, y, model, bounds, client=client, sample_chunks=700, time_chunks=70, ic_error=True, rng=5
+        )
+        with pytest.raises(SettingsError, match="does not support target_se"):
+            settings = dynia.settings.AnalysisSettings(target_se=0.02, max_samples=4000)
+            dynia.distributed.run(u, y, model, bounds, client=client, settings=settings, rng=5)
+    alone = dynia.run(u, y, model, bounds, ic_error=True, rng=5)
+    np.testing.assert_array_equal(on_cluster.ic_se, alone.ic_se)
+    np.testing.assert_array_equal(on_cluster.ci_se, alone.ci_se)
+    assert on_cluster.settings["ic_batches"] == alone.settings["ic_batches"]
