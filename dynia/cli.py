@@ -913,6 +913,7 @@ def _analyse(options, command_line, caught):
                     engine=result.settings["engine"],
                     **_monte_carlo_record(result.settings),
                 ),
+                noise_floor=report.noise_floor_summary(result, data),
                 warnings=notices + dropped,
                 data=dict(
                     n_steps=int(data.time.size),
@@ -934,19 +935,20 @@ def _analyse(options, command_line, caught):
                 plots=not options["no_plots"],
                 saved=options["on_disk"],
             )
-            return result, parameters
+            table = report.verdict_table(parameters)
+            if summary["noise_floor"] is not None:
+                table += "\n" + report.noise_floor_line(summary["noise_floor"])
+            return result, parameters, table
 
-        result, parameters = analyse(options["bounds"], staging)
-        tables = [report.verdict_table(parameters)]
+        result, parameters, table = analyse(options["bounds"], staging)
+        tables = [table]
         if options["second_run"]:
             bounds, narrowed = narrowed_bounds(
                 result, options["bounds"], threshold=options["narrow_threshold"], margin=options["narrow_margin"]
             )
             (staging / "second_run").mkdir()
-            _, second = analyse(bounds, staging / "second_run", narrowed=narrowed)
-            tables.append(
-                "second run (narrowed: " + (", ".join(narrowed) or "none") + ")\n" + report.verdict_table(second)
-            )
+            _, _, second = analyse(bounds, staging / "second_run", narrowed=narrowed)
+            tables.append("second run (narrowed: " + (", ".join(narrowed) or "none") + ")\n" + second)
     print("\n\n".join(tables))
     return _done(options)
 

@@ -15,10 +15,20 @@ from pathlib import Path
 
 import numpy as np
 
+from . import segments
 from .plotting import envelope, plot_data, plot_inputs
 from .serial import json_ready
 
-__all__ = ["write_analysis", "write_identification", "verdict_table", "file_times", "sha256", "write_json"]
+__all__ = [
+    "write_analysis",
+    "write_identification",
+    "verdict_table",
+    "noise_floor_summary",
+    "noise_floor_line",
+    "file_times",
+    "sha256",
+    "write_json",
+]
 
 # Rows written to a CSV per call of writerows: bounds the strings held at once.
 _CSV_BLOCK = 10_000
@@ -90,6 +100,38 @@ def write_identification(directory, found, data, u, y, summary, *, offset=0.0, p
     write_json(directory / "identified.json", summary)
     if plots:
         _write_fit_figure(directory / "fit.png", found, data, u, y, offset)
+
+
+def noise_floor_summary(result, data):
+    """``summary.json``'s ``noise_floor``: the noise level, the multiples and where the windows are informative.
+
+    None for a result without the floor. ``informative`` lists the runs of
+    informative windows as ``[first_time, last_time]`` pairs in the file's
+    times (the window centred, or ending, at each).
+    """
+    if result.informative is None:
+        return None
+    mask = np.asarray(result.informative, dtype=bool)
+    settings = result.settings
+    return dict(
+        sigma=settings["noise_sigma"],
+        quantile=settings["noise_floor_quantile"],
+        multiple=settings["noise_multiple"],
+        behavioural_multiple=settings["behavioural_multiple"],
+        informative_share=float(mask.mean()),
+        informative=[
+            file_times(data, [data.time[start], data.time[stop - 1]]) for start, stop in segments.mask_to_segments(mask)
+        ],
+    )
+
+
+def noise_floor_line(floor):
+    """The line ``dynia analyse`` prints under the verdict table about the noise floor (``floor``: the summary's)."""
+    return (
+        f"noise floor: {100 * floor['informative_share']:.0f} % of the windows informative (their "
+        f"{floor['quantile']:g}-quantile MAE above the best by more than {floor['multiple']:.2f} standard "
+        f"deviations of the MAE of noise sigma {floor['sigma']:.3g}, estimated from the best fits)"
+    )
 
 
 def verdict_table(parameters):

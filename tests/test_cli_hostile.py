@@ -606,8 +606,10 @@ def test_success_prints_a_verdict_table(tmp_path, capsys, good):
     # The table's rows start at the margin; the reasons under it are indented.
     lines = [line for line in stdout.splitlines() if line and not line[0].isspace()]
     assert lines[0].split()[0] == "parameter" and lines[0].split()[-1] == "verdict", stdout
-    assert len(lines) == 3, stdout
+    assert len(lines) == 4 and lines[3].startswith("noise floor: "), stdout
     summary = _summary(tmp_path / "out")
+    share = summary["noise_floor"]["informative_share"]
+    assert f"{100 * share:.0f} % of the windows informative" in lines[3]
     for name in ("K", "T"):
         [row] = [line for line in lines if line.split() and line.split()[0] == name]
         assert row.split()[-1] in VERDICTS and row.split()[-1] == summary["parameters"][name]["verdict"], row
