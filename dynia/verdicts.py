@@ -40,6 +40,10 @@ parameter one of :data:`VERDICTS` and the reasons for it.
         when :func:`assess` is given the data and the model: the samples
         are simulated again and the window's median minus best MAE is
         compared with noise (see :func:`noise_only`).
+    ``"monte_carlo_error"``
+        The result has the Monte Carlo standard error of IC (``ic_error``)
+        and the max IC reaches ``weak_below`` by less than two of them:
+        another sample of the same size could call the parameter weak.
 
 Each reason is ``{"code": ..., "text": ...}``; branch on the code, the text
 is for people.
@@ -189,6 +193,7 @@ def assess(result, *, u=None, y=None, model=None, dt=None, x0=None, weak_below=W
             continue
         step = best[p]
         reasons = _bound_reasons(result, p, step) + _edge_reasons(result, step, windows[step])
+        reasons += _monte_carlo_reasons(result, p, step, weak_below)
         if noise.get(step):
             code, text = noise[step]
             reasons.append(_reason(code, f"the window at max IC (time {result.time[step]:.6g}) " + text))
@@ -204,6 +209,22 @@ def assess(result, *, u=None, y=None, model=None, dt=None, x0=None, weak_below=W
 
 def _reason(code, text):
     return {"code": code, "text": text}
+
+
+def _monte_carlo_reasons(result, p, step, weak_below):
+    """``monte_carlo_error`` when the max IC reaches ``weak_below`` but not by two of its standard errors."""
+    if result.ic_se is None:
+        return []
+    ic, se = float(result.ic[p, step]), float(result.ic_se[p, step])
+    if not ic >= weak_below > ic - 2 * se:
+        return []
+    return [
+        _reason(
+            "monte_carlo_error",
+            f"max IC {ic:.3g} +- {se:.2g} (one standard error) is within two standard errors of {weak_below:g}: "
+            "another Monte Carlo sample of this size could call it weak; raise the samples (or target_se)",
+        )
+    ]
 
 
 def _bound_reasons(result, p, step):

@@ -182,3 +182,31 @@ def test_the_cluster_gives_the_errors_of_dynia_run():
     np.testing.assert_array_equal(on_cluster.ic_se, alone.ic_se)
     np.testing.assert_array_equal(on_cluster.ci_se, alone.ci_se)
     assert on_cluster.settings["ic_batches"] == alone.settings["ic_batches"]
+
+
+def test_an_ic_within_two_standard_errors_of_the_threshold_is_not_identified():
+    from dynia.result import DyniaResult
+    from dynia.verdicts import assess
+
+    def result(ic_se):
+        ic = np.array([[0.2, 0.56, 0.3, 0.3, 0.3, 0.3, 0.3, 0.3, 0.3, 0.3, 0.3, 0.3, 0.3]])
+        steps = ic.shape[1]
+        return DyniaResult(
+            names=("K",),
+            samples=np.zeros((1, 1)),
+            bounds=np.array([[0.0, 10.0]]),
+            time=np.arange(float(steps)),
+            ic=ic,
+            ci=np.tile([4.0, 6.0], (1, steps, 1)),
+            gradient=np.zeros((1, 2, steps)),
+            bin_centres=np.zeros((1, 2)),
+            settings=dict(n=0),
+            ic_se=ic_se,
+        )
+
+    uncertain = assess(result(np.full((1, 13), 0.04)))["K"]
+    assert uncertain["verdict"] == "suspect"
+    assert [reason["code"] for reason in uncertain["reasons"]] == ["monte_carlo_error"]
+    assert "0.56 +- 0.04" in uncertain["reasons"][0]["text"]
+    assert assess(result(np.full((1, 13), 0.02)))["K"]["verdict"] == "identified"
+    assert assess(result(None))["K"]["verdict"] == "identified"
