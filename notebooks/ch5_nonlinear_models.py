@@ -200,7 +200,8 @@ def floor_verdicts(result, clean, true_values, error_sd, unit):
     """Every max IC the noise floor flags: its window, the true output and errors there, and whether its band
     holds the truth. ``error_sd`` maps the window's true output to the standard deviation of its errors."""
     for name, line in result.summary().items():
-        codes = [reason["code"] for reason in line["reasons"] if reason["code"] in ("below_noise_floor", "noise_ranked")]
+        codes = [reason["code"] for reason in line["reasons"]
+                 if reason["code"] in ("below_noise_floor", "noise_ranked")]
         if not codes:
             continue
         window = slice(*result.window_range(int(np.nanargmax(result.ic[result.index(name)]))))
@@ -268,7 +269,7 @@ fig.savefig(f"{figure_dir}/nonlinear_hymod_identifiability.png", dpi=120, bbox_i
 # read with the tables above (numbers from the default run):
 #
 # - **Quick flow, `kq`: found, where expected.** In the first run its IC
-#   rises with every storm sequence and drops to its floor in every
+#   rises with every storm sequence and drops to its lowest in every
 #   recession (mean IC 0.44 on peaks against 0.12 in recessions; on
 #   wetting-up days, which are mostly storms on a dry soil, 0.36). All its
 #   221 windows with IC >= 0.5 hold the true value 0.5; its highest IC (0.80,
@@ -433,8 +434,8 @@ fig.savefig(f"{figure_dir}/nonlinear_tank.png", dpi=120, bbox_inches="tight")
 #
 # - **First run: `c` everywhere, `A` almost nowhere.** The IC of `c` is
 #   high wherever the level is, and highest at steady levels (0.90, 0.84 in
-#   transients); its 793 windows with IC >= 0.5 all hold the true 0.3. `A` stays at
-#   its floor except while the tank first fills. A parameter set with a
+#   transients); its 793 windows with IC >= 0.5 all hold the true 0.3.
+#   `A` stays at its lowest IC except while the tank first fills. A parameter set with a
 #   slightly wrong `c` sits at a wrong level all the time, an offset that
 #   dwarfs what `A` changes, so the best 10 % of the sets are chosen by `c`
 #   and `A` is left to chance. Only while the tank fills from empty is the
@@ -451,10 +452,10 @@ fig.savefig(f"{figure_dir}/nonlinear_tank.png", dpi=120, bbox_inches="tight")
 #   confined to the band the first run agreed on, the IC of `A` is high at
 #   the first filling (0.72) and after every step of the inflow (0.38 in the
 #   20 samples after a step, and high for longer after a large one), and at
-#   its floor once the level has settled (0.13); 98 % of its windows with
-#   IC >= 0.5 hold the true 2, all of those above the noise floor. `c` becomes the mirror image: identified at
-#   steady levels (0.77), lost in transients (0.43), where the level depends
-#   on both. This is the expected picture, and the thesis's second run (its
+#   its lowest once the level has settled (0.13); 98 % of its windows with
+#   IC >= 0.5 hold the true 2, all of those above the noise floor. `c`
+#   becomes the mirror image: identified at steady levels (0.77), lost in
+#   transients (0.43), where the level depends on both. This is the expected picture, and the thesis's second run (its
 #   examples 1 and 3) is what reveals it.
 # - **A band can be narrower than the data justify.** In the second run only
 #   85 % of `c`'s windows with IC >= 0.5 hold the truth, and at its highest
