@@ -69,13 +69,13 @@ def _example1(n_samples, n_steps, seed=2009):
     return u, y, params, model
 
 
-def best_of(function, repeats):
-    """Smallest wall-clock time of ``repeats`` calls of ``function``, in seconds."""
+def best_of(function, repeats, clock=time.perf_counter):
+    """Smallest time of ``repeats`` calls of ``function``, in seconds: wall clock, or ``clock``."""
     times = []
     for _ in range(repeats):
-        start = time.perf_counter()
+        start = clock()
         function()
-        times.append(time.perf_counter() - start)
+        times.append(clock() - start)
     return min(times)
 
 
@@ -338,6 +338,60 @@ def _case_distributed(n_samples=10_000, n_steps=1_000_000, time_chunks=None):
     return result
 
 
+def _case_ic_error_cost(n_samples=20_000, n_steps=20_000):
+    """A complete run with and without the Monte Carlo error, one thread, at percentage 10, 1 and 0.1.
+
+    Timed in CPU seconds of this process (one thread), so that other jobs on the machine change the
+    ratio little.
+
+    The record repeats example 1's 500 steps, so that its windows keep changing (a record that rests
+    would let every window reuse the last one's behavioural bound).
+    """
+    from .models import FirstOrder
+    from .pipeline import run
+
+    model = FirstOrder()
+    u = np.resize(example_firstorder_input(), n_steps)
+    y = model.simulate([[2.0, 3.0]], u)[0] + np.random.default_rng(2009).normal(0, 0.5, n_steps)
+    bounds = {"K": (0, 7), "T": (0, 7)}
+    result = dict(n_samples=n_samples, n_steps=n_steps)
+    for ic_error in (False, True):  # compile the kernels
+        run(u[:500], y[:500], model, bounds, n_samples=2000, ic_error=ic_error, workers=1, rng=1)
+    for percentage in (10, 1, 0.1):
+        seconds = {}
+        for ic_error in (False, True):
+            options = dict(n_samples=n_samples, percentage=percentage, ic_error=ic_error, workers=1, rng=1)
+            seconds[ic_error] = best_of(
+                lambda options=options: run(u, y, model, bounds, **options), 2, time.process_time
+            )
+        result[f"{percentage:g} %"] = dict(plain_s=seconds[False], ic_error_s=seconds[True])
+    return result
+
+
+def _case_ic_error_honesty():
+    """Predicted IC standard error against the spread over 20 seeds (dynia.honesty), examples 1 and 2."""
+    from .honesty import ic_error_honesty
+
+    rows = []
+    for number in (1, 2):
+        for percentage, n_samples in ((10, 2000), (0.1, 50_000)):
+            check = ic_error_honesty(number, percentage, n_samples, seeds=20)
+            for p, name in enumerate(check.names):
+                rows.append(
+                    dict(
+                        example=number,
+                        percentage=percentage,
+                        n_samples=n_samples,
+                        parameter=name,
+                        empirical_median=float(np.nanmedian(check.empirical[p])),
+                        predicted_median=float(np.nanmedian(check.predicted[p])),
+                        ratio=float(check.ratio[p]),
+                        stepwise_ratio=float(check.stepwise_ratio[p]),
+                    )
+                )
+    return dict(rows=rows)
+
+
 def _case_long_record(n_samples=10_000, n_steps=30_000_000):
     import tempfile
     from pathlib import Path
@@ -400,6 +454,8 @@ CASES = {
     "cli-500000-rows": _case_cli_long_record,
     "custom-models": _case_custom_models,
     "distributed": _case_distributed,
+    "ic-error-cost": _case_ic_error_cost,
+    "ic-error-honesty": _case_ic_error_honesty,
     "long-record": _case_long_record,
 }
 
@@ -438,6 +494,26 @@ def main(argv=None):
 
 
 def _describe(name, r):
+    if name == "ic-error-cost":
+        costs = "; ".join(
+            f"{level}: {r[level]['plain_s']:.2f} s plain, {r[level]['ic_error_s']:.2f} s with ic_error "
+            f"({r[level]['ic_error_s'] / r[level]['plain_s']:.2f}x)"
+            for level in ("10 %", "1 %", "0.1 %")
+        )
+        return (
+            f"Monte Carlo error of IC, complete runs of {r['n_samples']} samples x {r['n_steps']} steps, one thread, "
+            "CPU seconds: "
+            f"{costs} (target well under 2x)"
+        )
+    if name == "ic-error-honesty":
+        lines = ["IC standard error, predicted (mean ic_se) vs empirical (SD over 20 seeds), medians over the steps:"]
+        lines += [
+            f"  example {row['example']} at {row['percentage']:g} % ({row['n_samples']} samples), {row['parameter']}: "
+            f"empirical {row['empirical_median']:.4f}, predicted {row['predicted_median']:.4f}, ratio "
+            f"{row['ratio']:.2f} (step by step {row['stepwise_ratio']:.2f}; target within 1/1.5 .. 1.5)"
+            for row in r["rows"]
+        ]
+        return "\n".join(lines)
     if name == "port-vs-engine":
         return (
             f"thesis example 1 (500 steps, 2000 samples, K and T): port {r['port_s']:.2f} s, "
