@@ -104,3 +104,75 @@ print("mean IC of K on steady non-zero input:", round(float(res.ic[0, steady].me
 print("mean IC of T after the final step (steps 405-440):", round(float(res.ic[1, 405:440].mean()), 2))
 print("verdicts:", {name: line["verdict"] for name, line in res.summary().items()})
 print("share of informative windows:", round(float(res.informative.mean()), 2))
+
+# %% [markdown]
+# ## Settings for your own record: `dynia.suggest`
+#
+# The thesis's settings suit example 1, whose time constant is three steps:
+# a window of 21 steps sees a whole response. Logged plant data are rarely
+# like that. Take a heater step test as a TCLab kit records it: one sample a
+# second for two hours, four steps of the heater power, a first-order response
+# with gain 0.6 degC per % and a time constant of 170 s, noise 0.15 degC.
+# `dynia.suggest.suggest` proposes settings from the record itself, and says
+# why (the same as `dynia suggest DATA.csv ...` on the command line; the
+# README's "Settings for your record" explains each rule):
+#
+# * the **window** spans about one dominant time constant, found by a
+#   least-squares first-order fit of the whole record with the time constant
+#   searched on a grid (no starting value), so that a window centred on a step
+#   sees the bend of the response, where gain and time constant act
+#   differently;
+# * the **behavioural share** is `100 / 10^d` % for d parameters, a tenth of
+#   each range, since the behavioural set is a fixed share of the parameter
+#   box, and 10 % of the box of two parameters caps the IC of a time constant
+#   on a record like this one;
+# * the **samples** are as many as bring a pilot run's Monte Carlo standard
+#   error of the IC (`ic_se`) near each parameter's highest IC to 0.02; the
+#   error falls as 1/sqrt(N);
+# * the **ranges** are checked against a least-squares fit of the model.
+
+# %%
+from dynia.suggest import suggest
+
+heater = dynia.models.FirstOrder()
+heater_truth = {"K": 0.6, "T": 170.0}
+heater_input = np.r_[np.zeros(60), np.full(1800, 60.0), np.full(1500, 25.0), np.full(1800, 80.0), np.full(2040, 40.0)]
+heater_output = heater.simulate([list(heater_truth.values())], heater_input)[0]
+heater_output = heater_output + rng.normal(0, 0.15, heater_input.size)
+heater_bounds = {"K": (0.0, 2.0), "T": (0.0, 500.0)}
+proposal = suggest(heater_input, heater_output, heater, heater_bounds, rng=rng)
+print(f"suggested: n = {proposal.n} (a window of {2 * proposal.n + 1} s), percentage {proposal.percentage:g}, "
+      f"{proposal.n_samples} samples")
+for reason in proposal.reasons:
+    print(" -", reason)
+heater_runs = {}
+for label, options in (("thesis defaults", {}), ("suggested", dict(n=proposal.n, percentage=proposal.percentage,
+                                                                  n_samples=proposal.n_samples))):
+    heater_runs[label] = dynia.run(heater_input, heater_output, heater, heater_bounds, ic_error=True, rng=rng,
+                                   **options)
+    line = heater_runs[label].summary()["T"]
+    low, high = line["band"]
+    print(f"{label}: T's max IC {line['max_ic']:.2f} +- {line['max_ic_se']:.3f} at {line['time_of_max_ic']:.0f} s, "
+          f"band [{low:.0f}, {high:.0f}] s (true 170): {line['verdict']} "
+          f"({', '.join(reason['code'] for reason in line['reasons']) or 'no reason for doubt'})")
+
+# %% [markdown]
+# With the thesis's defaults the time constant is not found: a 21-second
+# window sees a few percent of a 170-second response, and the best 10 % of
+# the samples span most of T's range wherever the response bends. Its
+# highest IC has a band that misses 170 s, and the verdict does not call it
+# identified (the printed line says which verdict and why; with the default
+# parameters the peak sits at the first step, in a window whose best sets tie
+# within the noise). With the suggested window, share and sample count the
+# highest IC comes from the steps of the record, its band holds the true
+# 170 s, and the verdict is `identified` (the printed lines). The
+# proposal is a starting point: its reasons say what it assumed (one dominant
+# time constant, a model that can fit the record), and `dynia suggest` on the
+# command line prints the command to run.
+
+# %%
+# NBVAL_CHECK_OUTPUT
+for label, result in heater_runs.items():
+    line = result.summary()["T"]
+    print(f"{label}: T max IC above 0.6: {line['max_ic'] > 0.6}; band holds 170 s: "
+          f"{line['band'][0] <= 170 <= line['band'][1]}; verdict {line['verdict']}")
