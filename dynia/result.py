@@ -296,9 +296,9 @@ class DyniaResult:
     def plot_information_content(self, name, ax=None):
         """Information content of ``name`` over time (thesis Figures 2.8, 3.3, ...).
 
-        With :attr:`ic_se`, IC +- 2 standard errors is shaded grey: where
-        the shading crosses a threshold, more samples could change the
-        verdict. Windows below the noise floor (:attr:`informative` False)
+        With :attr:`ic_se`, IC +- 2 standard errors is shaded blue (and a
+        legend names it and the veil): where the shading crosses a
+        threshold, more samples could change the verdict. Windows below the noise floor (:attr:`informative` False)
         are veiled in grey. Returns the matplotlib Axes. A long record is
         drawn through :func:`dynia.plotting.envelope`, so its memory does not
         grow with it.
@@ -316,12 +316,15 @@ class DyniaResult:
                 np.union1d(low_time, high_time),
                 np.interp(np.union1d(low_time, high_time), low_time, low),
                 np.interp(np.union1d(low_time, high_time), high_time, high),
-                color="0.8",
+                color="tab:blue",
+                alpha=0.3,
                 linewidth=0,
                 label="IC +- 2 standard errors",
             )
         ax.plot(*envelope(axis, self.ic[p]), color="k", linewidth=1)
         self._veil_uninformative(ax, axis)
+        if self.ic_se is not None:
+            ax.legend(loc="best", fontsize="small")
         ax.set_ylim(0, 1)
         ax.set_xlim(axis[0], axis[-1])
         ax.set_xlabel("time")
