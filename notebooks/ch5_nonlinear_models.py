@@ -330,8 +330,8 @@ fig.savefig(f"{figure_dir}/nonlinear_hymod_identifiability.png", dpi=120, bbox_i
 #   or with a behavioural set tied within noise: their bands rank noise.
 #   Here that leaves the narrowing as it was: none of `kq`'s 27 such windows
 #   is below the floor or tied, and no other parameter has any (the line
-#   above the period tables; `ks` peaks at IC 0.71). With `kq` confined, `alpha` is found on the peaks (mean IC 0.29 against
-#   0.20 in the first run; 79 windows with IC >= 0.5, 92 % of them holding
+#   above the period tables; `ks` peaks at IC 0.71). With `kq` confined,
+#   `alpha` is found on the peaks (mean IC 0.29 against 0.20 in the first run; 79 windows with IC >= 0.5, 92 % of them holding
 #   the truth, 97 % of the 73 whose behavioural set is not tied; highest IC
 #   0.65 with band [0.38, 0.73], `identified`), and `ks` is found far more
 #   often in recessions (mean IC 0.60; 231 windows with IC >= 0.5, all
@@ -470,12 +470,12 @@ fig.savefig(f"{figure_dir}/nonlinear_tank.png", dpi=120, bbox_inches="tight")
 #   (printed above), so no parameter set fits it clearly worse than another.
 #   Such windows at the start, before the tank fills, are the first run's
 #   only ones below the floor (99 % of the windows are informative).
-# - **Second run, `c` narrowed: `A` appears in the transients.** `c` is
-#   confined to [0.278, 0.331], the common part of the bands of its
-#   first-run windows with IC >= 0.75, widened by half its width on each
-#   side. Of these 752 windows (with the band clear of the bounds), the 11
-#   below the noise floor or with a tied behavioural set do not count (the
-#   line above the period tables). With `c` confined, the IC of `A` is high at
+# - **Second run, `c` narrowed: `A` appears in the transients.** The first
+#   run has 752 windows of `c` with IC >= 0.75 and the band clear of the
+#   bounds; the 11 of them below the noise floor or with a tied behavioural
+#   set do not count (the line above the period tables). The bands of the
+#   others agree, and their common part, widened by half its width on each
+#   side, is `c`'s new range [0.278, 0.331]. With `c` confined, the IC of `A` is high at
 #   the first filling (0.72) and after every step of the inflow (0.38 in the
 #   20 samples after a step, and high for longer after a large one), and at
 #   its lowest once the level has settled (0.13); 98 % of its windows with
