@@ -23,6 +23,7 @@ import json
 import math
 import os
 import platform
+import re
 import shlex
 import signal
 import sys
@@ -600,9 +601,20 @@ def _analysis_settings(options):
     try:
         return AnalysisSettings(**fields)
     except SettingsError as error:
-        option = _SETTING_OPTIONS.get(error.setting, f"--{str(error.setting).replace('_', '-')}")
-        message = str(error).replace(str(error.setting), option, 1) if error.setting else str(error)
+        message = str(error)
+        if error.setting:
+            message = message.replace(str(error.setting), _option_of(error.setting), 1)
+            # Other settings the message names, as the command line names them (those with an underscore
+            # only: a bare "n" is too common a word to rewrite).
+            for setting in sorted(set(fields) - {error.setting}, key=len, reverse=True):
+                if "_" in setting:
+                    message = re.sub(rf"(?<!-)\b{setting}\b", _option_of(setting), message)
         raise UsageError(message) from None
+
+
+def _option_of(setting):
+    """The command-line option of an AnalysisSettings field."""
+    return _SETTING_OPTIONS.get(setting, f"--{str(setting).replace('_', '-')}")
 
 
 def _check_command_options(options):

@@ -242,6 +242,10 @@ class AnalysisSettings:
                 "samples that may be spent on it",
                 "target_se" if self.max_samples is None else "max_samples",
             )
+        if self.ic_error:
+            from .engine.flavours import ic_batches  # the engine imports this module: imported at call time
+
+            ic_batches(self.n_samples, self.percentage)  # enough behavioural sets for two batches, or a clear error
         if self.ic_error and self.flavour == "mcat":
             raise SettingsError(
                 "ic_error is not available for the mcat flavour yet (its likelihood carries state from window "
