@@ -282,8 +282,8 @@ def adaptive_run(
     result.settings.clear()
     result.settings.update(settings.record(model, names, prior, n_sampled=spent, n_dropped=0))
     result.settings.update(analysed, sampler=scheme, n_evaluations=spent, weights=weights, n_blocks=n_blocks)
-    with np.errstate(over="ignore", invalid="ignore"):
-        return dataclasses.replace(result, verdicts=assess(result, u=u, y=y, model=model))
+    # moving_window gives the noise floor, so the verdicts need neither data nor simulation.
+    return dataclasses.replace(result, verdicts=assess(result))
 
 
 def _uniform_in(box, count, rng):

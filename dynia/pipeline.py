@@ -227,16 +227,16 @@ def run(
     # The arrays in memory, or in settings.store as they are produced, committed with the verdicts (dynia.storage).
     with result_arrays(settings.store, settings.dtype) as output:
         if settings.target_se is None:
-            result, sims = _analyse_samples(u, y, model, names, box, samples, settings, progress, output)
+            result = _analyse_samples(u, y, model, names, box, samples, settings, progress, output)
         else:
-            result, sims = _analyse_to_target(u, y, model, names, box, samples, settings, generator, progress, output)
-        with np.errstate(over="ignore", invalid="ignore"):
-            verdicts = assess(result, u=u, y=y, model=model, simulations=sims)
+            result = _analyse_to_target(u, y, model, names, box, samples, settings, generator, progress, output)
+        # The result carries the noise floor from the engine, so the verdicts need neither data nor simulation.
+        verdicts = assess(result)
         return output.commit(_dated(dataclasses.replace(result, verdicts=verdicts), timestamps))
 
 
 def _analyse_samples(u, y, model, names, box, samples, settings, progress, output):
-    """Simulate ``samples`` and analyse them: the result and, for a whole-record model, its simulations.
+    """Simulate ``samples`` and analyse them into a result.
 
     Sets whose simulation is not finite are dropped (and warned about).
     """
@@ -310,7 +310,7 @@ def _analyse_samples(u, y, model, names, box, samples, settings, progress, outpu
         # Some sets overflowed: their costs were not finite, so the analysis is redone without them.
         finite[np.flatnonzero(finite)[errors.diverged]] = False
     warn_dropped(n_dropped, n_sampled)
-    return result, sims
+    return result
 
 
 def _analyse_to_target(u, y, model, names, box, samples, settings, generator, progress, output):
@@ -325,7 +325,7 @@ def _analyse_to_target(u, y, model, names, box, samples, settings, generator, pr
     """
     rounds = []
     while True:
-        result, sims = _analyse_samples(u, y, model, names, box, samples, settings, progress, output)
+        result = _analyse_samples(u, y, model, names, box, samples, settings, progress, output)
         reached = ic_se_that_matters(result)
         rounds.append([int(samples.shape[0]), reached])
         # NaN: no informative step has an IC, so no error can change a conclusion.
@@ -344,7 +344,7 @@ def _analyse_to_target(u, y, model, names, box, samples, settings, generator, pr
             TargetNotReachedWarning,
             stacklevel=3,
         )
-    return result, sims
+    return result
 
 
 def ic_se_that_matters(result, threshold=WEAK_BELOW):
