@@ -507,7 +507,7 @@ def _next_quantile_bound(cost):
 
 
 @_jit
-def _analyse_block(
+def analyse_windows_batched(
     errors,
     measured,
     m,
@@ -531,7 +531,15 @@ def _analyse_block(
     batch_ic,
     batch_ci,
 ):
-    """:func:`analyse_windows`, and the same for every batch of :func:`analyse_windows_batched`."""
+    """:func:`analyse_windows`, and the IC and limits of every batch of samples from the same costs.
+
+    Batch b of the ``B = batch_counts.size`` batches holds samples b, b + B,
+    b + 2B, ...; its behavioural set is its ``batch_counts[b]`` lowest costs
+    and ``batch_positions[b]`` (2,) its thesis limits' positions. Writes
+    ``batch_ic`` (B, n_params, m) and ``batch_ci`` (B, n_params, m, 2), each
+    batch bit-identical to :func:`analyse_windows` on that batch's samples
+    alone; the window sums are formed once for all.
+    """
     n_samples = errors.shape[1]
     n_batches = batch_counts.shape[0]
     total = np.empty(n_samples)
@@ -673,7 +681,7 @@ def analyse_windows(
     windows with fewer than ``min_points`` measured points get NaN.
     """
     n_params = columns.shape[0]
-    _analyse_block(
+    analyse_windows_batched(
         errors,
         measured,
         m,
@@ -696,66 +704,6 @@ def analyse_windows(
         np.empty((0, 2), dtype=np.int64),
         np.empty((0, n_params, m)),
         np.empty((0, n_params, m, 2)),
-    )
-
-
-@_jit
-def analyse_windows_batched(
-    errors,
-    measured,
-    m,
-    slots,
-    count,
-    upper_position,
-    columns,
-    lows,
-    highs,
-    bins,
-    positions,
-    levels,
-    weighted,
-    min_points,
-    ic,
-    ci,
-    gradient,
-    extreme_costs,
-    batch_counts,
-    batch_positions,
-    batch_ic,
-    batch_ci,
-):
-    """:func:`analyse_windows`, and the IC and limits of every batch of samples from the same costs.
-
-    Batch b of the ``B = batch_counts.size`` batches holds samples b, b + B,
-    b + 2B, ...; its behavioural set is its ``batch_counts[b]`` lowest costs
-    and ``batch_positions[b]`` (2,) its thesis limits' positions. Writes
-    ``batch_ic`` (B, n_params, m) and ``batch_ci`` (B, n_params, m, 2), each
-    batch bit-identical to :func:`analyse_windows` on that batch's samples
-    alone; the window sums are formed once for all.
-    """
-    _analyse_block(
-        errors,
-        measured,
-        m,
-        slots,
-        count,
-        upper_position,
-        columns,
-        lows,
-        highs,
-        bins,
-        positions,
-        levels,
-        weighted,
-        min_points,
-        ic,
-        ci,
-        gradient,
-        extreme_costs,
-        batch_counts,
-        batch_positions,
-        batch_ic,
-        batch_ci,
     )
 
 
