@@ -31,7 +31,7 @@ $(shell mkdir -p reports && echo '$(PARAMS_ID)' | cmp -s - reports/.params || ec
 # NBVAL_CHECK_OUTPUT and checks that their code matches notebooks/.
 REFERENCES := $(patsubst notebooks/%.py,tests/notebooks/%.ipynb,$(NOTEBOOKS))
 
-.PHONY: install test bench figures references clean
+.PHONY: install test check-wheel bench figures references clean
 
 install: $(INSTALLED)
 
@@ -45,6 +45,11 @@ test: $(INSTALLED)
 	$(PY) -m ruff check dynia tests notebooks
 	$(PY) -m ruff format --check dynia tests
 	$(PY) -m pytest
+	$(MAKE) check-wheel
+
+# The wheel a user installs, used from outside the checkout (see .ci/check-wheel).
+check-wheel: $(INSTALLED)
+	.ci/check-wheel $(PY)
 
 bench: $(INSTALLED)
 	$(PY) -m dynia.bench
