@@ -481,8 +481,8 @@ print("selection of 100 windows' behavioural sets (ms): partition",
       [round(t * 1e3, 2) for t in timings["select"]["sort"]])
 
 # %%
-# NBVAL_CHECK_OUTPUT
-# Eq. 4.4 predicts a slope of 2 against S; these are checked, the timings themselves are not.
+# Eq. 4.4 predicts a slope of 2 against S. These verdicts come from timings, so they are printed but not
+# checked: a loaded machine can tip them, and no checked output may depend on machine load.
 print("engine slope against S below 1.5:", slopes["engine vs S"] < 1.5)
 print("behavioural selection (partition) slope against S below 1.5:",
       slopes["selection by partition vs S"] < 1.5)
@@ -523,12 +523,13 @@ fig.savefig(f"{figure_dir}/fig4_04.png", dpi=110)
 # on the machine and on what else runs on it (the cell prints the load
 # average before timing; on a shared 2-core machine single points can be off
 # by a factor of two or more), so the prose says what to read in them and
-# the printed numbers give their values; only the slopes' verdicts against
-# eq. 4.4 are checked.
+# the printed numbers give their values. Nothing here is checked by the test
+# suite: the slopes' verdicts against eq. 4.4 are printed, and tip on a loaded
+# machine.
 #
 # * **Samples.** The engine's run time grows about linearly in S: the fitted
 #   slope (printed above) is closer to 1 than to the 2 of eq. 4.4 (the
-#   checked verdict below: under 1.5), also over the larger half of the
+#   printed verdict below: under 1.5), also over the larger half of the
 #   sizes alone. The time
 #   per sample and step is printed for every S, with its median over the
 #   smaller and the larger half of the sizes: a few tens of nanoseconds at
