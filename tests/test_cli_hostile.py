@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from cli_cases import BASE, GOOD, HEATING
+from skips import skip_if_signal_ignored
 
 import dynia
 import dynia.cli
@@ -303,6 +304,7 @@ def _slow_run_files(folder):
 # Slow (about 3 s each): a subprocess imports dynia and starts a run of seconds before the signal arrives.
 @pytest.mark.parametrize("name, status", [("SIGTERM", 143), ("SIGHUP", 129)])
 def test_a_signal_during_the_run_leaves_nothing_behind(tmp_path, name, status):
+    skip_if_signal_ignored(name)
     data = _slow_run_files(tmp_path)
     out = tmp_path / "results"
     before = _state(data)

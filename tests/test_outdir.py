@@ -12,6 +12,7 @@ import threading
 from pathlib import Path
 
 import pytest
+from skips import skip_if_signal_ignored
 
 import dynia
 from dynia.errors import OutputError
@@ -425,6 +426,7 @@ except KeyboardInterrupt:
 )
 @pytest.mark.parametrize("existing", [False, True])
 def test_signal_in_the_block_cleans_up_and_restores_handlers(place, name, status, printed, existing):
+    skip_if_signal_ignored(name)
     if existing:
         earlier_run("results")
     before = tree(place)
@@ -468,6 +470,7 @@ except Interrupted as error:
 
 
 def test_signal_during_the_final_move_waits_until_out_is_complete(place):
+    skip_if_signal_ignored("SIGTERM")
     earlier_run("results", text="old")
     child = run_child(LATE_SIGNAL, cwd=place)
     assert (child.returncode, child.stdout) == (0, "Interrupted SIGTERM\n"), child.stderr
@@ -495,6 +498,7 @@ print(os.WIFSIGNALED(killed) and os.WTERMSIG(killed) == signal.SIGTERM, os.WEXIT
 
 
 def test_forked_child_dies_of_the_signal_without_touching_the_run(place):
+    skip_if_signal_ignored("SIGTERM")
     child = run_child(FORKED, cwd=place)
     assert (child.returncode, child.stdout) == (0, "True 5\n"), child.stderr
     assert os.listdir() == ["results"] and Path("results/ic.csv").read_text() == "parent"
