@@ -51,14 +51,17 @@ from __future__ import annotations
 import numbers
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-import control
 import numpy as np
 import scipy.linalg
 
 from ..errors import DataError, ModelError
 from ..settings import check_dt, check_x0
 from .base import Model, SimulationState
+
+if TYPE_CHECKING:
+    import control
 
 __all__ = ["LinearModel", "Stepper", "FirstOrder", "FOPDT", "SecondOrderDelay", "TransferFunction"]
 
@@ -559,6 +562,9 @@ class TransferFunction(LinearModel):
 
     def _state_space(self, params: np.ndarray):
         """Stack A (n, s, s), B (n, s, n_inputs), C (n, s), D (n, n_inputs) of every sample's system."""
+        # python-control imports matplotlib.pyplot: loaded by the first TransferFunction, not by import dynia.
+        import control
+
         matrices = []
         for sample, values in enumerate(params):
             system = self._factory(values.copy())
@@ -596,6 +602,8 @@ def _realisation(system, sample):
     is exact, though not minimal when columns share poles, and does not
     depend on whether slycot is installed.
     """
+    import control
+
     if isinstance(system, control.TransferFunction) and system.ninputs > 1:
         columns = [_realisation(system[0, j], sample) for j in range(system.ninputs)]
         return (
