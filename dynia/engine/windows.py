@@ -620,10 +620,12 @@ def window_mean(window_errors, measured, m, slots):
     """
     total = window_errors[:, 0:m].copy()
     present = measured[0:m].copy()
-    for shift in range(1, slots):
-        total += window_errors[:, shift : shift + m]
-        present += measured[shift : shift + m]
-    with np.errstate(invalid="ignore", divide="ignore"):
+    # A diverged simulation (the thesis's Euler scheme for small T) sums to inf and ranks last, as in
+    # MATLAB: an expected result, not a warning for the user.
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        for shift in range(1, slots):
+            total += window_errors[:, shift : shift + m]
+            present += measured[shift : shift + m]
         total /= present
     return np.ascontiguousarray(total.T), present
 
