@@ -26,6 +26,7 @@ core. This module needs numba; :data:`AVAILABLE` says whether it imported.
 import numpy as np
 
 from ..errors import ModelError, SettingsError
+from ..models.base import FLUSH_BELOW
 from ..settings import check_dt, check_x0
 
 try:
@@ -169,7 +170,9 @@ def simulate_errors(
         for i in range(n_states):
             _combine(upcoming[i], state_coefficients[i], state_terms[i], sources, lo, hi)
         for i in range(n_states):
-            sources[i, lo:hi] = upcoming[i, lo:hi]
+            for s in range(lo, hi):
+                x = upcoming[i, s]
+                sources[i, s] = x if abs(x) >= FLUSH_BELOW else 0.0
     for i in range(n_states):
         state[i, lo:hi] = sources[i, lo:hi]
     return bad_step, bad_sample
@@ -228,7 +231,7 @@ def _simulate_lag(
                     x = x + gamma_now[s] * now
                 if prev_state:
                     x = x + gamma_prev[s] * previous
-                state[s] = x
+                state[s] = x if abs(x) >= FLUSH_BELOW else 0.0
         if not finite and bad_step < 0:
             bad_step = k
             # The row holds |output - y|, non-finite exactly where the output

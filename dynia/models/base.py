@@ -21,6 +21,21 @@ Shape convention
 outputs
     ``(n_samples, n_steps)``; ``simulate_chunks`` yields consecutive
     ``(n_samples, m)`` pieces of it.
+
+Subnormal states
+----------------
+A state that decays towards zero, as a first-order lag's does once the
+input rests at zero, reaches the subnormal floats (below 2.2e-308) after a
+few thousand time constants, and every multiplication with a subnormal
+takes the processor's slow path, many times the cost of a normal one. Every
+simulator of the package (the built-in linear models on both engines and
+:class:`~dynia.models.StateSpaceModel`, in Python and compiled) therefore
+sets each state of magnitude below :data:`FLUSH_BELOW` (2^-960, about
+1.0e-289) to zero after every step. An output then differs from the
+unflushed recursion's by less than the output coefficients times 1e-289:
+nothing a measured record can show. A state-space model whose output
+diverges as a state reaches zero (a logarithm of a state, say) reaches it
+earlier.
 """
 
 from __future__ import annotations
@@ -34,7 +49,27 @@ import numpy as np
 
 from ..errors import DataError, ModelError
 
-__all__ = ["Model", "SimulationState", "VALUES_PER_CHUNK", "check_names"]
+__all__ = ["Model", "SimulationState", "VALUES_PER_CHUNK", "FLUSH_BELOW", "check_names", "flush_tiny"]
+
+# States of smaller magnitude are set to zero after every step (see "Subnormal states" above).
+FLUSH_BELOW = 2.0**-960
+
+
+def flush_tiny(states, scratch=None):
+    """Set, in place, the entries of ``states`` of magnitude below :data:`FLUSH_BELOW` to zero.
+
+    ``scratch``, a float array of the same shape, saves an allocation per call.
+
+    Examples
+    --------
+    >>> x = np.array([1e-300, -1e-300, 1e-280, 0.5])
+    >>> flush_tiny(x).tolist()
+    [0.0, 0.0, 1e-280, 0.5]
+    """
+    magnitude = np.abs(states, out=scratch)
+    np.copyto(states, 0.0, where=magnitude < FLUSH_BELOW)
+    return states
+
 
 # Default chunk size: 4e6 float64 values are 32 MB per output chunk, large
 # enough that the per-chunk overhead is negligible and small enough that the

@@ -45,7 +45,7 @@ import numpy as np
 
 from ..errors import DyniaError, ModelError
 from ..settings import check_dt, check_x0
-from .base import Model, SimulationState
+from .base import FLUSH_BELOW, Model, SimulationState, flush_tiny
 
 try:
     import numba
@@ -401,16 +401,27 @@ class StateSpaceModel(Model):
                 f"{self!r}: step returned shape {following.shape}; expected (n_samples, n_states) = "
                 f"({n_samples}, {self.n_states})"
             )
-        return y_k, following
+        if following is state:
+            following = following.copy()  # flushed below: never the caller's array
+        return y_k, flush_tiny(following)
 
 
 if numba is not None:
 
     @numba.njit(cache=False)
+    def _flushed(state):
+        """The state with entries below FLUSH_BELOW in magnitude set to zero, as flush_tiny does."""
+        flat = state.reshape(-1)
+        for i in range(flat.shape[0]):
+            if abs(flat[i]) < FLUSH_BELOW:
+                flat[i] = 0.0
+        return state
+
+    @numba.njit(cache=False)
     def _compiled_loop(step, output, state, piece, params, dt, sims):
         for k in range(piece.shape[0]):
             sims[:, k] = output(state, piece[k], params)
-            state = step(state, piece[k], params, dt)
+            state = _flushed(np.ascontiguousarray(step(state, piece[k], params, dt)))
         return state
 
     @numba.njit(nogil=True, cache=False)
@@ -427,11 +438,11 @@ if numba is not None:
                     # The set is dropped and the analysis redone, so the value only has to be safe.
                     diverged[i] = True
                     errors[k, i] = np.inf
-            state = step(state, piece[k], params, dt)
+            state = _flushed(np.ascontiguousarray(step(state, piece[k], params, dt)))
         return state
 
 else:  # pragma: no cover - StateSpaceModel.compiled is False without numba
-    _compiled_loop = _compiled_errors = None
+    _flushed = _compiled_loop = _compiled_errors = None
 
 
 class StateErrors:

@@ -58,7 +58,7 @@ import scipy.linalg
 
 from ..errors import DataError, ModelError
 from ..settings import check_dt, check_x0
-from .base import Model, SimulationState
+from .base import Model, SimulationState, flush_tiny
 
 if TYPE_CHECKING:
     import control
@@ -809,6 +809,7 @@ class _Recursion:
         if advance:
             for row, terms in zip(self._upcoming, self._state_terms):
                 _combine(row, terms, sources, self._scratch)
+                flush_tiny(row, self._scratch)
             self._current, self._upcoming = self._upcoming, self._current
 
 
