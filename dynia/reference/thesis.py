@@ -597,8 +597,9 @@ def plot_parameter_estimation(time, CI_t, gradient_data, lb, ub, bins, *, ax=Non
         vmax=np.nanmax(gradient_data),
         rasterized=True,
     )
+    # The colours of DyniaResult.plot_identifiability, so that both code paths read alike.
     ax.plot(time, CI_t[:, 0], color="tab:blue", linewidth=1, label="lower limit")
-    ax.plot(time, CI_t[:, 1], color="tab:green", linewidth=1, label="upper limit")
+    ax.plot(time, CI_t[:, 1], color="tab:red", linewidth=1, label="upper limit")
     ax.axis([time[0], time[-1], lb, ub])
     ax.set_xlabel("Time Step")
     ax.set_ylabel("Parameter Value")
