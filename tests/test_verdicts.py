@@ -209,9 +209,13 @@ def test_heating_time_constant_peaks_with_its_band_at_the_bound():
     # the high gains, but the sets that fit least badly tie within noise.
     assert codes(found["T"]) == ["band_at_bound", "record_edge", "noise_ranked"]
     assert found["T"]["reasons"][0]["text"].endswith("touches the lower bound 0")
-    # The gain's peak, at the end of the first 9 V plateau (398 s), passes every rule.
+    # The gain's peak, at the end of the first 9 V plateau (398 s), passes the rules of that window, but the
+    # gain of a linear model of this plant moves with the operating point: the high-IC windows of the last
+    # plateau (from 1410 s) rule out those of the second 9 V plateau (780-822 s).
     assert summary["K"]["time_of_max_ic"] == 398.0
-    assert found["K"] == {"verdict": "identified", "reasons": []}
+    assert found["K"]["verdict"] == "suspect"
+    assert codes(found["K"]) == ["windows_disagree"]
+    assert "from time 780 to 822 and [3.655, 16.07] from time 1410 to 1420" in found["K"]["reasons"][0]["text"]
 
 
 def fopdt_step(step_time):
@@ -251,10 +255,13 @@ def test_example1_time_constant_peaks_in_the_noise_after_the_last_step():
     assert found["K"] == {"verdict": "identified", "reasons": []}
     # The engine's noise floor needs neither the data nor a simulation.
     assert assess(result) == found
-    # A result without the floor: the re-simulating rule finds the same, and without the data nothing is wrong.
+    # A result without the floor: the re-simulating rule finds the same. Without the floor every window with
+    # IC >= 0.5 counts as evidence, and the noise tail's narrow bands near 7 (479-499) rule out those of the
+    # last step's response (407-433): suspect even without the data.
     bare = without_floor(result)
-    assert codes(assess(bare, u=u, y=y, model=model)["T"]) == ["noise_only"]
-    assert assess(bare)["T"] == {"verdict": "identified", "reasons": []}
+    assert codes(assess(bare, u=u, y=y, model=model)["T"]) == ["noise_only", "windows_disagree"]
+    assert codes(assess(bare)["T"]) == ["windows_disagree"]
+    assert "from time 407 to 433 and [6.045, 6.945] from time 479 to 499" in assess(bare)["T"]["reasons"][0]["text"]
 
 
 def test_samples_are_simulated_in_the_models_parameter_order():
