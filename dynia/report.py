@@ -145,7 +145,11 @@ def verdict_table(parameters):
     rows = []
     for name, entry in parameters.items():
         first, last = entry["high_ic_span"]
-        windows = (str(entry["high_ic_windows"]), "-" if first is None else str(first), "-" if last is None else str(last))
+        windows = (
+            str(entry["high_ic_windows"]),
+            "-" if first is None else str(first),
+            "-" if last is None else str(last),
+        )
         if entry["max_ic"] is None:
             rows.append((name, "-", "-", "-", "-", *windows, entry["verdict"]))
             continue

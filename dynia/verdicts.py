@@ -341,8 +341,7 @@ def _edge_reasons(result, step, window, when):
     return [
         _reason(
             "record_edge",
-            f"max IC at time {when(step)} is within one window ({length} steps) "
-            f"of the record's {edge}{truncated}",
+            f"max IC at time {when(step)} is within one window ({length} steps) of the record's {edge}{truncated}",
         )
         for distance, edge in ((step, "start"), (result.time.size - 1 - step, "end"))
         if distance < length
