@@ -43,6 +43,7 @@ from .quality import check_quality
 from .refine import narrowed_bounds
 from .settings import FLAVOURS, MAX_PARAMETER, SAMPLERS, AnalysisSettings
 from .suggest import parse_duration, suggest, window_half_width
+from .verdicts import assess
 
 __all__ = ["main"]
 
@@ -903,13 +904,17 @@ def _analyse(options, command_line, caught):
             dropped = _dynia_warnings(caught)
             for line in dropped:
                 print(f"dynia: warning: {line}", file=sys.stderr)
+            # The reasons name times as the file wrote them, as the table does.
+            result = dataclasses.replace(
+                result, verdicts=assess(result, clock=lambda step: report.file_times(data, [data.time[step]])[0])
+            )
             parameters = result.summary()
-            for name in parameters:
-                if parameters[name]["time_of_max_ic"] is not None:
-                    # The result's clock starts at the first grid point, data.time[0] after time zero.
-                    parameters[name]["time_of_max_ic"] = report.file_times(
-                        data, [data.time[0] + parameters[name]["time_of_max_ic"]]
-                    )[0]
+            for entry in parameters.values():
+                # The result's clock starts at the first grid point, data.time[0] after time zero.
+                if entry["time_of_max_ic"] is not None:
+                    entry["time_of_max_ic"] = report.file_times(data, [data.time[0] + entry["time_of_max_ic"]])[0]
+                if entry["high_ic_span"][0] is not None:
+                    entry["high_ic_span"] = report.file_times(data, data.time[0] + np.array(entry["high_ic_span"]))
             settings = _recorded(options, analysis, offset, input_offset)
             settings["bounds"] = {name: list(pair) for name, pair in bounds.items()}
             if narrowed is not None:

@@ -216,12 +216,11 @@ def run(
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
     names, box = parameter_box(bounds, model.names, repr(model))
     if settings.sampler in ADAPTIVE_SAMPLERS:
-        return _dated(
-            adaptive_run(
-                u, y, model, dict(zip(names, map(tuple, box))), scheme=settings.sampler, settings=settings, rng=rng
-            ),
-            timestamps,
+        result = adaptive_run(
+            u, y, model, dict(zip(names, map(tuple, box))), scheme=settings.sampler, settings=settings, rng=rng
         )
+        # The verdicts name times: again with the dates, when there are dates.
+        return result if timestamps is None else _assessed(_dated(result, timestamps))
     generator = np.random.default_rng(rng)
     samples = sample(settings.sampler, settings.n_samples, box, generator)
     # The arrays in memory, or in settings.store as they are produced, committed with the verdicts (dynia.storage).
@@ -230,9 +229,7 @@ def run(
             result = _analyse_samples(u, y, model, names, box, samples, settings, progress, output)
         else:
             result = _analyse_to_target(u, y, model, names, box, samples, settings, generator, progress, output)
-        # The result carries the noise floor from the engine, so the verdicts need neither data nor simulation.
-        verdicts = assess(result)
-        return output.commit(_dated(dataclasses.replace(result, verdicts=verdicts), timestamps))
+        return output.commit(_assessed(_dated(result, timestamps)))
 
 
 def _analyse_samples(u, y, model, names, box, samples, settings, progress, output):
@@ -401,6 +398,11 @@ def _time_axis(n_steps, dt):
     time = np.arange(n_steps, dtype=float)
     time *= dt
     return time
+
+
+def _assessed(result):
+    """``result`` with its verdicts: it carries the noise floor, so they need neither data nor simulation."""
+    return dataclasses.replace(result, verdicts=assess(result))
 
 
 def _dated(result, timestamps):

@@ -135,15 +135,23 @@ def noise_floor_line(floor):
 
 
 def verdict_table(parameters):
-    """The per-parameter lines ``dynia analyse`` prints: max IC, where, band, estimate, verdict and why.
+    """The per-parameter lines ``dynia analyse`` prints: max IC, where, band, estimate, evidence, verdict and why.
 
+    The evidence is the number of windows with IC >= 0.5 above the noise
+    floor and the times of the first and the last of them ("from", "to").
     ``parameters`` is ``summary["parameters"]`` of :func:`write_analysis`.
     """
-    header = ("parameter", "max IC", "at", "band", "estimate", "verdict")
+    header = ("parameter", "max IC", "at", "band", "estimate", "IC>=0.5", "from", "to", "verdict")
     rows = []
     for name, entry in parameters.items():
+        first, last = entry["high_ic_span"]
+        windows = (
+            str(entry["high_ic_windows"]),
+            "-" if first is None else str(first),
+            "-" if last is None else str(last),
+        )
         if entry["max_ic"] is None:
-            rows.append((name, "-", "-", "-", "-", entry["verdict"]))
+            rows.append((name, "-", "-", "-", "-", *windows, entry["verdict"]))
             continue
         low, high = entry["band"]
         se = entry.get("max_ic_se")
@@ -154,6 +162,7 @@ def verdict_table(parameters):
                 str(entry["time_of_max_ic"]),
                 f"[{low:.4g}, {high:.4g}]",
                 f"{entry['estimate']:.4g}",
+                *windows,
                 entry["verdict"],
             )
         )

@@ -233,14 +233,22 @@ class DyniaResult:
         :mod:`dynia.verdicts`). Parameters whose IC is missing everywhere get
         None for the numbers.
 
+        ``high_ic_windows`` counts the windows whose IC reaches the verdicts'
+        0.5 above the noise floor (:func:`dynia.verdicts.high_ic_windows`),
+        the evidence whose agreement the verdict checks, and
+        ``high_ic_span`` gives the time of the first and of the last of
+        them ([None, None] when there is none).
+
         Returns
         -------
         dict
             ``{name: {"max_ic", "time_of_max_ic", "band": [lower, upper], "estimate",
-            "verdict", "reasons"}}`` with plain Python values; with the Monte
-            Carlo errors also ``"max_ic_se"``, the standard error of the max IC.
+            "high_ic_windows", "high_ic_span": [first, last], "verdict", "reasons"}}``
+            with plain Python values; with the Monte Carlo errors also
+            ``"max_ic_se"``, the standard error of the max IC.
         """
-        from .verdicts import assess  # verdicts reads results: imported here to keep the modules acyclic
+        # verdicts reads results: imported here to keep the modules acyclic
+        from .verdicts import assess, high_ic_windows
 
         verdicts = self.verdicts if self.verdicts is not None else assess(self)
         summary = {}
@@ -257,6 +265,11 @@ class DyniaResult:
                 )
                 if self.ic_se is not None:
                     summary[name]["max_ic_se"] = float(self.ic_se[p, best])
+            steps = np.flatnonzero(high_ic_windows(self, p))
+            summary[name].update(
+                high_ic_windows=int(steps.size),
+                high_ic_span=[float(self.time[steps[0]]), float(self.time[steps[-1]])] if steps.size else [None, None],
+            )
             summary[name].update(verdict=verdicts[name]["verdict"], reasons=list(verdicts[name]["reasons"]))
         return summary
 

@@ -86,7 +86,15 @@ from .errors import SettingsError
 from .result import DyniaResult
 from .segments import mask_to_segments
 
-__all__ = ["StructureWarning", "structure_warnings", "clear_of_bounds"]
+__all__ = [
+    "StructureWarning",
+    "structure_warnings",
+    "clear_of_bounds",
+    "Disagreement",
+    "band_disagreement",
+    "window_stretches",
+    "stretch_bands",
+]
 
 # A band closer to a bound than this fraction of its width (or one gradient bin)
 # leans on the bound. Behavioural values spread evenly from some value up to
@@ -242,11 +250,115 @@ def _informative_blocks(result, p, ic_threshold, usable, min_windows, block):
     """Blocks of informative windows of parameter ``p``: a list of step index arrays."""
     with np.errstate(invalid="ignore"):
         informative = usable & (result.ic[p] >= ic_threshold) & clear_of_bounds(result, p)
-    blocks = []
-    for start, stop in mask_to_segments(informative):
+    return window_stretches(informative, block, min_windows=min_windows)
+
+
+def window_stretches(windows, length, *, min_windows=1, bridge=0):
+    """The marked windows grouped into stretches of data: a list of step index arrays, in time order.
+
+    Runs of marked windows (joined across fewer than ``bridge`` unmarked
+    steps) with fewer than ``min_windows`` steps are dropped; the others are
+    cut into stretches of ``length`` steps or a little more (the whole run
+    when shorter), so that each stands for its own stretch of data. A
+    stretch holds only marked steps.
+
+    Examples
+    --------
+    >>> marked = np.array([1, 1, 1, 0, 1, 1, 0, 0, 0, 1], dtype=bool)
+    >>> [list(map(int, steps)) for steps in window_stretches(marked, 2, bridge=2)]
+    [[0, 1, 2], [4, 5], [9]]
+    """
+    windows = np.asarray(windows, dtype=bool)
+    runs = []
+    for start, stop in mask_to_segments(windows):
+        if runs and start - runs[-1][1] < bridge:
+            runs[-1] = (runs[-1][0], stop)
+        else:
+            runs.append((start, stop))
+    stretches = []
+    for start, stop in runs:
         if stop - start >= min_windows:
-            blocks += np.array_split(np.arange(start, stop), max(1, (stop - start) // block))
-    return blocks
+            steps = start + np.flatnonzero(windows[start:stop])
+            stretches += np.array_split(steps, max(1, steps.size // length))
+    return stretches
+
+
+def stretch_bands(result, p, stretches):
+    """Band of parameter ``p`` over each stretch: the median of its windows' limits, (n_stretches, 2)."""
+    return np.array([np.median(result.ci[p, steps], axis=0) for steps in stretches]).reshape(-1, 2)
+
+
+@dataclass(frozen=True, eq=False)
+class Disagreement:
+    """Two stretches of windows whose bands of one parameter are disjoint (see :func:`band_disagreement`).
+
+    Attributes
+    ----------
+    stretches : list of ndarray
+        Steps of every stretch compared, in time order.
+    bands : ndarray, shape (n_stretches, 2)
+        Median lower and upper limit over each stretch.
+    below, above : int
+        Positions in ``stretches`` of the stretch with the lowest upper
+        limit and of the one with the highest lower limit.
+    gap : float
+        The lower limit of ``above`` minus the upper limit of ``below``.
+    tolerance : float
+        The gap that still counts as agreement.
+    """
+
+    stretches: list
+    bands: np.ndarray
+    below: int
+    above: int
+    gap: float
+    tolerance: float
+
+
+def band_disagreement(result, p, windows):
+    """Whether the bands of parameter ``p`` in the marked windows rule each other out.
+
+    The windows are grouped into stretches by :func:`window_stretches`
+    (joined across gaps shorter than one window, cut into stretches of one
+    window length, 2n+1 steps), and each stretch's band is the median of
+    its windows' limits (:func:`stretch_bands`), as for the structure
+    warnings. The stretches disagree when the highest lower limit exceeds
+    the lowest upper limit by more than the tolerance: one gradient bin
+    (the resolution of the CLD), or, with the Monte Carlo errors
+    (``result.ci_se``), two standard errors of that difference when larger.
+    A constant parameter lies in both bands; no value does.
+
+    Parameters
+    ----------
+    result : DyniaResult
+        With the half window in its settings.
+    p : int
+        The parameter's position.
+    windows : ndarray of bool, shape (n_steps,)
+        The windows whose evidence is compared.
+
+    Returns
+    -------
+    Disagreement or None
+        None when fewer than two stretches or their bands overlap within the tolerance.
+    """
+    before, after = result.window_halos
+    length = before + after + 1
+    stretches = window_stretches(windows, length, bridge=length)
+    if len(stretches) < 2:
+        return None
+    bands = stretch_bands(result, p, stretches)
+    below, above = int(np.argmin(bands[:, 1])), int(np.argmax(bands[:, 0]))
+    gap = float(bands[above, 0] - bands[below, 1])
+    low, high = result.bounds[p]
+    tolerance = float(high - low) / result.gradient.shape[1]
+    if result.ci_se is not None:
+        se_upper = np.median(result.ci_se[p, stretches[below], 1])
+        se_lower = np.median(result.ci_se[p, stretches[above], 0])
+        tolerance = max(tolerance, 2 * math.hypot(se_upper, se_lower))
+    if not gap > tolerance:  # NaN: no comparison
+        return None
+    return Disagreement(stretches=stretches, bands=bands, below=below, above=above, gap=gap, tolerance=tolerance)
 
 
 def _drift(result, p, blocks, drift_tolerance):
@@ -257,7 +369,7 @@ def _drift(result, p, blocks, drift_tolerance):
     low, high = result.bounds[p]
     centres = result.bin_centres[p]
     locations = np.array([centres[np.argmax(result.gradient[p][:, steps].sum(axis=1))] for steps in blocks])
-    bands = np.array([np.median(result.ci[p, steps], axis=0) for steps in blocks])
+    bands = stretch_bands(result, p, blocks)
     k = max(_CONFIRMING_BLOCKS, math.ceil(_CONFIRMING_SHARE * len(blocks)))
     order = np.argsort(locations, kind="stable")
     lowest, highest = int(order[k - 1]), int(order[-k])

@@ -44,6 +44,35 @@ parameter one of :data:`VERDICTS` and the reasons for it.
         The result has the Monte Carlo standard error of IC (``ic_error``)
         and the max IC reaches ``weak_below`` by less than two of them:
         another sample of the same size could call the parameter weak.
+    ``"windows_disagree"``
+        The windows that identify the parameter do not agree with each
+        other: DYNIA's model-structure warning (thesis 4.4), parameters
+        whose identified values move from one period to another. The max-IC
+        window is one of many; a band read there is an estimate only when
+        the others would give a compatible one. See below.
+
+Whether the windows agree
+-------------------------
+The evidence is the windows whose IC reaches ``weak_below`` and that lie
+above the noise floor (:func:`high_ic_windows`; the summary counts them and
+gives their span), less those whose behavioural set ties within noise
+(``noise_ranked``: their band is a ranking of noise, not evidence).
+:func:`dynia.structure.band_disagreement`, the mechanism of the structure
+warnings, groups them into stretches: runs joined across gaps shorter than
+one window (2n+1 steps), whose windows share samples, and cut into
+stretches of one window length, so that a record identifying the parameter
+throughout still gives stretches of their own data. Each stretch's band is
+the median of its windows' limits (one odd window does not move it). The
+stretches disagree when the highest lower limit among them lies above the
+lowest upper limit by more than the tolerance: one gradient bin (the CLD's
+resolution), or two Monte Carlo standard errors of that difference
+(``result.ci_se``) when larger. No single value then lies in both bands. The
+reason names the two stretches, their times (dates for a dated record) and
+bands. Correctly specified records with constant parameters (first-order
+data with random level steps, white noise, thesis examples 1 and 2, in
+several seeds and in wide and narrow ranges) leave overlaps of 20 to 70 %
+of a band's width; a gain of 2 that turns 3 half way leaves a gap of five
+bins.
 
 Each reason is ``{"code": ..., "text": ...}``; branch on the code, the text
 is for people.
@@ -54,8 +83,9 @@ import math
 import numpy as np
 
 from .errors import ModelError, SettingsError
+from .structure import band_disagreement
 
-__all__ = ["VERDICTS", "WEAK_BELOW", "assess", "noise_only", "noise_sigma"]
+__all__ = ["VERDICTS", "WEAK_BELOW", "assess", "high_ic_windows", "noise_only", "noise_sigma"]
 
 VERDICTS = ("identified", "weak", "suspect")
 
@@ -134,7 +164,9 @@ def _judge(mae, m, sigma, multiple):
     return spread <= threshold, spread, threshold
 
 
-def assess(result, *, u=None, y=None, model=None, dt=None, x0=None, weak_below=WEAK_BELOW, simulations=None):
+def assess(
+    result, *, u=None, y=None, model=None, dt=None, x0=None, weak_below=WEAK_BELOW, simulations=None, clock=None
+):
     """Verdict and reasons for every parameter of a DYNIA result.
 
     Parameters
@@ -159,6 +191,11 @@ def assess(result, *, u=None, y=None, model=None, dt=None, x0=None, weak_below=W
         The model's output for ``result.samples``, when already at hand (a
         model that simulates the whole record at once); spares simulating
         again.
+    clock : callable, optional
+        ``clock(step)`` is the time of a step as the reasons' texts write
+        it (a number, or a string such as an ISO timestamp); by default the
+        result's ``timestamps`` when it has them, else ``result.time``.
+        The command line passes the data file's own times.
 
     Returns
     -------
@@ -186,17 +223,19 @@ def assess(result, *, u=None, y=None, model=None, dt=None, x0=None, weak_below=W
     else:
         found = {} if model is None else _noise_windows(result, u, y, model, dt, x0, windows, simulations)
         noise = {step: ("noise_only", text) for step, text in found.items() if text}
+    when = _clock(result, clock)
     verdicts = {}
     for p, name in enumerate(result.names):
         if p not in best:
             verdicts[name] = dict(verdict="weak", reasons=[_reason("no_ic", "no window had enough measured points")])
             continue
         step = best[p]
-        reasons = _bound_reasons(result, p, step) + _edge_reasons(result, step, windows[step])
+        reasons = _bound_reasons(result, p, step) + _edge_reasons(result, step, windows[step], when)
         reasons += _monte_carlo_reasons(result, p, step, weak_below)
         if noise.get(step):
             code, text = noise[step]
-            reasons.append(_reason(code, f"the window at max IC (time {result.time[step]:.6g}) " + text))
+            reasons.append(_reason(code, f"the window at max IC (time {when(step)}) " + text))
+        reasons += _agreement_reasons(result, p, weak_below, when)
         ic = float(result.ic[p, step])
         if ic < weak_below:
             verdicts[name] = dict(
@@ -209,6 +248,61 @@ def assess(result, *, u=None, y=None, model=None, dt=None, x0=None, weak_below=W
 
 def _reason(code, text):
     return {"code": code, "text": text}
+
+
+def high_ic_windows(result, p, weak_below=WEAK_BELOW):
+    """Windows whose IC of parameter ``p`` reaches ``weak_below`` above the noise floor, (n_steps,) bool.
+
+    The windows that can identify the parameter: ``result.informative``
+    True (every window for a result without the floor) and IC at least
+    ``weak_below`` (NaN never is).
+    """
+    with np.errstate(invalid="ignore"):
+        reached = np.asarray(result.ic[p]) >= weak_below
+    return reached if result.informative is None else reached & np.asarray(result.informative, dtype=bool)
+
+
+def _clock(result, clock):
+    """``when(step)``: the time of a step as the reasons write it."""
+
+    def when(step):
+        if clock is not None:
+            value = clock(step)
+        elif result.timestamps is not None:
+            value = str(np.datetime_as_string(result.timestamps[step], unit="s"))
+        else:
+            value = result.time[step]
+        return value if isinstance(value, str) else f"{float(value):.6g}"
+
+    return when
+
+
+def _agreement_reasons(result, p, weak_below, when):
+    """``windows_disagree`` when the stretches of windows that identify parameter ``p`` rule each other out."""
+    windows = high_ic_windows(result, p, weak_below)
+    if result.behavioural_spread is not None:
+        with np.errstate(invalid="ignore"):
+            windows &= ~(np.asarray(result.behavioural_spread) <= np.asarray(result.behavioural_floor))
+    found = band_disagreement(result, p, windows)
+    if found is None:
+        return []
+
+    def stretch(position):
+        steps = found.stretches[position]
+        lower, upper = found.bands[position]
+        return f"[{lower:.4g}, {upper:.4g}] from time {when(steps[0])} to {when(steps[-1])}"
+
+    first, last = sorted((found.below, found.above))
+
+    return [
+        _reason(
+            "windows_disagree",
+            f"the windows with IC >= {weak_below:g} disagree: the median band {stretch(first)} and "
+            f"{stretch(last)} are {found.gap:.3g} apart (tolerance {found.tolerance:.3g}), no value lies "
+            f"in both ({len(found.stretches)} stretches compared); the parameter moves between periods or the "
+            "model structure is wrong (thesis 4.4)",
+        )
+    ]
 
 
 def _monte_carlo_reasons(result, p, step, weak_below):
@@ -240,15 +334,14 @@ def _bound_reasons(result, p, step):
     ]
 
 
-def _edge_reasons(result, step, window):
+def _edge_reasons(result, step, window, when):
     before, after = result.window_halos
     length = before + after + 1
     truncated = "; its window is truncated" if window[1] - window[0] < length else ""
     return [
         _reason(
             "record_edge",
-            f"max IC at time {result.time[step]:.6g} is within one window ({length} steps) "
-            f"of the record's {edge}{truncated}",
+            f"max IC at time {when(step)} is within one window ({length} steps) of the record's {edge}{truncated}",
         )
         for distance, edge in ((step, "start"), (result.time.size - 1 - step, "end"))
         if distance < length

@@ -67,7 +67,16 @@ def test_heating_system_end_to_end(heating_run):
     assert summary["version"] == __version__
     for name in ("K", "T"):
         entry = summary["parameters"][name]
-        assert set(entry) == {"max_ic", "time_of_max_ic", "band", "estimate", "verdict", "reasons"}
+        assert set(entry) == {
+            "max_ic",
+            "time_of_max_ic",
+            "band",
+            "estimate",
+            "high_ic_windows",
+            "high_ic_span",
+            "verdict",
+            "reasons",
+        }
         assert entry["verdict"] in ("identified", "weak", "suspect")
         assert entry["band"][0] <= entry["estimate"] <= entry["band"][1]
         column = header.index(name)

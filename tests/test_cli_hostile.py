@@ -651,7 +651,11 @@ def test_heating_record_verdicts_as_in_the_readme(tmp_path, capsys):
     assert _summary(out)["settings"]["analysis"]["n_samples"] == 2000
     assert parameters["T"]["verdict"] == "suspect"
     assert "band_at_bound" in [reason["code"] for reason in parameters["T"]["reasons"]]
-    assert parameters["K"]["verdict"] == "identified" and parameters["K"]["reasons"] == []
+    # The gain's highest IC passes that window's rules, but the last plateau's windows rule out the 9 V ones.
+    assert parameters["K"]["verdict"] == "suspect"
+    assert [reason["code"] for reason in parameters["K"]["reasons"]] == ["windows_disagree"]
+    assert parameters["K"]["high_ic_windows"] == 327 and parameters["K"]["high_ic_span"] == [122.0, 1420.0]
+    assert "K          0.884   398.0   [19.22, 23.88]  21.5      327      122.0  1420.0  suspect" in stdout
 
 
 def test_a_dead_time_peaking_at_the_record_start_is_suspect(tmp_path, capsys):

@@ -1,7 +1,9 @@
 """Verdicts on real and synthetic records: each rule fires where it should and only there."""
 
 import dataclasses
+import json
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -9,6 +11,7 @@ import pytest
 
 import dynia
 from dynia import verdicts
+from dynia.cli import main
 from dynia.errors import ModelError, SettingsError
 from dynia.result import DyniaResult
 from dynia.verdicts import VERDICTS, assess, noise_only, noise_sigma
@@ -209,9 +212,13 @@ def test_heating_time_constant_peaks_with_its_band_at_the_bound():
     # the high gains, but the sets that fit least badly tie within noise.
     assert codes(found["T"]) == ["band_at_bound", "record_edge", "noise_ranked"]
     assert found["T"]["reasons"][0]["text"].endswith("touches the lower bound 0")
-    # The gain's peak, at the end of the first 9 V plateau (398 s), passes every rule.
+    # The gain's peak, at the end of the first 9 V plateau (398 s), passes the rules of that window, but the
+    # gain of a linear model of this plant moves with the operating point: the high-IC windows of the last
+    # plateau (from 1410 s) rule out those of the second 9 V plateau (780-822 s).
     assert summary["K"]["time_of_max_ic"] == 398.0
-    assert found["K"] == {"verdict": "identified", "reasons": []}
+    assert found["K"]["verdict"] == "suspect"
+    assert codes(found["K"]) == ["windows_disagree"]
+    assert "from time 780 to 822 and [3.655, 16.07] from time 1410 to 1420" in found["K"]["reasons"][0]["text"]
 
 
 def fopdt_step(step_time):
@@ -251,10 +258,13 @@ def test_example1_time_constant_peaks_in_the_noise_after_the_last_step():
     assert found["K"] == {"verdict": "identified", "reasons": []}
     # The engine's noise floor needs neither the data nor a simulation.
     assert assess(result) == found
-    # A result without the floor: the re-simulating rule finds the same, and without the data nothing is wrong.
+    # A result without the floor: the re-simulating rule finds the same. Without the floor every window with
+    # IC >= 0.5 counts as evidence, and the noise tail's narrow bands near 7 (479-499) rule out those of the
+    # last step's response (407-433): suspect even without the data.
     bare = without_floor(result)
-    assert codes(assess(bare, u=u, y=y, model=model)["T"]) == ["noise_only"]
-    assert assess(bare)["T"] == {"verdict": "identified", "reasons": []}
+    assert codes(assess(bare, u=u, y=y, model=model)["T"]) == ["noise_only", "windows_disagree"]
+    assert codes(assess(bare)["T"]) == ["windows_disagree"]
+    assert "from time 407 to 433 and [6.045, 6.945] from time 479 to 499" in assess(bare)["T"]["reasons"][0]["text"]
 
 
 def test_samples_are_simulated_in_the_models_parameter_order():
@@ -294,3 +304,181 @@ def test_noise_rule_needs_u_y_and_model_together_and_a_matching_model():
         assess(result, u=u[:-1], y=y[:-1], model=model)
     with pytest.raises(ModelError):
         assess(result, u=u, y=y, model=dynia.models.FOPDT())
+
+
+# ---- do the windows that identify a parameter agree? (windows_disagree) --------------------------------------
+
+GAIN_STEPS = 1200
+
+
+def gain_record(seed, gain_after):
+    """First-order data, T = 3, gain 2 switching to ``gain_after`` half way; random levels held 40 steps, noise 0.2.
+
+    Simulated here by the exact zero-order-hold recursion, apart from dynia.models.
+    """
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(5, 30, GAIN_STEPS // 40), 40)
+    gain = np.where(np.arange(GAIN_STEPS) < GAIN_STEPS // 2, 2.0, gain_after)
+    pole = math.exp(-1 / 3)
+    y = np.zeros(GAIN_STEPS)
+    for k in range(GAIN_STEPS - 1):
+        y[k + 1] = pole * y[k] + gain[k] * (1 - pole) * u[k]
+    return u, y + rng.normal(0, 0.2, GAIN_STEPS)
+
+
+def gain_run(seed, gain_after, **options):
+    u, y = gain_record(seed, gain_after)
+    bounds = {"K": (0.0, 5.0), "T": (0.0, 20.0)}
+    return dynia.run(u, y, dynia.models.FirstOrder(), bounds, n=10, n_samples=2000, rng=seed, **options)
+
+
+def disagreement(text):
+    """The two stretches a windows_disagree text names: [(lower, upper, first time, last time), ...]."""
+    found = re.findall(r"\[([-\d.e+]+), ([-\d.e+]+)\] from time (\S+) to (\S+?)(?: and|,| are)", text)
+    return [(float(lower), float(upper), first, last) for lower, upper, first, last in found]
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_gain_that_changes_half_way_is_suspect_with_the_stretches_named(seed):
+    result = gain_run(seed, 3.0)
+    found = result.verdicts["K"]
+    assert found["verdict"] == "suspect" and codes(found) == ["windows_disagree"], found
+    [(low_lower, low_upper, low_first, low_last), (high_lower, high_upper, high_first, high_last)] = sorted(
+        disagreement(found["reasons"][0]["text"])
+    )
+    # The lower band covers the first gain, lies before the switch; the upper one covers the second, after it.
+    assert low_lower <= 2.0 <= low_upper < high_lower <= 3.0 <= high_upper
+    assert float(low_last) < GAIN_STEPS // 2 < float(high_first)
+    assert float(low_first) <= float(low_last) and float(high_first) <= float(high_last)
+    assert result.verdicts["T"] == {"verdict": "identified", "reasons": []}
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_a_constant_gain_is_identified(seed):
+    result = gain_run(seed, 2.0)
+    assert result.verdicts == {name: {"verdict": "identified", "reasons": []} for name in ("K", "T")}
+    summary = result.summary()["K"]
+    # The gain is identified nearly everywhere: many windows, spanning the record.
+    assert summary["high_ic_windows"] > 1000
+    assert summary["high_ic_span"][0] < 100 and summary["high_ic_span"][1] > GAIN_STEPS - 100
+
+
+@pytest.mark.parametrize("number", [1, 2])
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_thesis_examples_raise_no_disagreement(number, seed):
+    example = dynia.synthetic.thesis_example(number, np.random.default_rng(seed))
+    result = dynia.run(example.u, example.y, example.model, example.bounds, n=10, n_samples=2000, rng=seed)
+    assert not [name for name, found in result.verdicts.items() if "windows_disagree" in codes(found)]
+    # Something that could have disagreed: a parameter identified in several stretches of the record.
+    assert any(found["verdict"] == "identified" for found in result.verdicts.values())
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_white_noise_raises_no_disagreement(seed):
+    rng = np.random.default_rng(100 + seed)
+    u = np.repeat(rng.uniform(5, 30, 30), 40)
+    y = rng.normal(0, 0.2, u.size)
+    result = dynia.run(u, y, dynia.models.FirstOrder(), {"K": (0, 5), "T": (0, 20)}, n=10, n_samples=2000, rng=seed)
+    assert result.summary()["K"]["high_ic_windows"] > 1000  # K near 0 everywhere: agreeing windows
+    assert not [name for name, found in result.verdicts.items() if "windows_disagree" in codes(found)]
+
+
+def two_stretches(first, second, *, se=None, steps=60):
+    """A result on [0, 10], n = 2: IC 0.9 with band ``first`` on steps 10-19, ``second`` on 40-49, else IC 0.1."""
+    ic = np.full(steps, 0.1)
+    ic[10:20] = ic[40:50] = 0.9
+    lower, upper = np.full(steps, 0.0), np.full(steps, 10.0)
+    lower[10:20], upper[10:20] = first
+    lower[40:50], upper[40:50] = second
+    result = dataclasses.replace(handmade(ic, lower, upper), gradient=np.zeros((1, 40, steps)))
+    if se is not None:
+        result = dataclasses.replace(result, ic_se=np.zeros((1, steps)), ci_se=np.full((1, steps, 2), se))
+    return result
+
+
+def test_disjoint_bands_beyond_one_bin_disagree_and_the_reason_gives_both():
+    found = assess(two_stretches((2.0, 3.0), (4.0, 5.0)))["a"]
+    assert found["verdict"] == "suspect" and codes(found) == ["windows_disagree"]
+    assert found["reasons"][0]["text"] == (
+        # Each run of 10 windows is cut into stretches of one window length (5 steps).
+        "the windows with IC >= 0.5 disagree: the median band [2, 3] from time 5 to 7 and [4, 5] from time "
+        "20 to 22 are 1 apart (tolerance 0.25), no value lies in both (4 stretches compared); the parameter "
+        "moves between periods or the model structure is wrong (thesis 4.4)"
+    )
+
+
+def test_bands_apart_by_at_most_one_bin_agree():
+    # One bin of 40 on [0, 10] is 0.25.
+    assert assess(two_stretches((2.0, 3.0), (3.25, 4.0)))["a"]["verdict"] == "identified"
+    assert assess(two_stretches((2.0, 3.0), (3.3, 4.0)))["a"]["verdict"] == "suspect"
+
+
+def test_the_monte_carlo_error_of_the_limits_widens_the_tolerance():
+    # Two standard errors of the gap: 2 * sqrt(0.2^2 + 0.2^2) = 0.57 > the gap 0.5.
+    assert assess(two_stretches((2.0, 3.0), (3.5, 4.0), se=0.2))["a"]["verdict"] == "identified"
+    assert codes(assess(two_stretches((2.0, 3.0), (3.5, 4.0), se=0.1))["a"]) == ["windows_disagree"]
+
+
+def test_windows_below_the_floor_or_tied_within_noise_are_no_evidence():
+    result = two_stretches((2.0, 3.0), (4.0, 5.0))
+    steps = result.time.size
+    below = np.arange(steps) < 30  # the second stretch only above the floor
+    floor = dict(
+        informative=~below,
+        discrimination=np.ones(steps),
+        noise_floor=np.zeros(steps),
+        behavioural_spread=np.ones(steps),
+        behavioural_floor=np.zeros(steps),
+    )
+    # The max IC (first at step 10) is below the floor, and only one stretch is left to compare.
+    assert codes(assess(dataclasses.replace(result, **floor))["a"]) == ["below_noise_floor"]
+    tied = dict(floor, informative=np.ones(steps, dtype=bool), behavioural_floor=np.where(below, 0.0, 2.0))
+    assert codes(assess(dataclasses.replace(result, **tied))["a"]) == []
+    counted = dataclasses.replace(result, **floor).summary()["a"]
+    assert counted["high_ic_windows"] == 10 and counted["high_ic_span"] == [20.0, 24.5]
+
+
+def test_a_dated_record_names_dates():
+    pandas = pytest.importorskip("pandas")
+    u, y = gain_record(0, 3.0)
+    index = pandas.date_range("2024-03-01", periods=GAIN_STEPS, freq="min")
+    result = dynia.run(
+        pandas.Series(u, index=index),
+        pandas.Series(y, index=index),
+        dynia.models.FirstOrder(),
+        {"K": (0.0, 5.0), "T": (0.0, 20.0)},
+        n=10,
+        n_samples=2000,
+        rng=0,
+    )
+    stretches = disagreement(result.verdicts["K"]["reasons"][0]["text"])
+    assert len(stretches) == 2
+    for _, _, first, last in stretches:
+        assert first.startswith("2024-03-01T") and last.startswith("2024-03-01T"), stretches
+
+
+def test_the_command_line_reports_the_disagreement_with_the_files_dates(tmp_path, capsys):
+    u, y = gain_record(0, 3.0)
+    start = np.datetime64("2024-03-01T00:00:00")
+    times = [str(start + np.timedelta64(k, "s")) for k in range(GAIN_STEPS)]
+    rows = "\n".join(f"{t},{a!r},{b!r}" for t, a, b in zip(times, u.tolist(), y.tolist()))
+    (tmp_path / "gain.csv").write_text("time,u,y\n" + rows + "\n")
+    out = tmp_path / "results"
+    arguments = ["analyse", tmp_path / "gain.csv", "--time", "time", "--input", "u", "--output", "y"]
+    arguments += ["--model", "first-order", "--param", "K=0:5", "--param", "T=0:20", "--n", "10"]
+    arguments += ["--samples", "2000", "--seed", "0", "--no-plots", "--out", out]
+    assert main(list(map(str, arguments))) == 0
+    stdout = capsys.readouterr().out
+    parameters = json.loads((out / "summary.json").read_text())["parameters"]
+    assert parameters["K"]["verdict"] == "suspect"
+    [reason] = parameters["K"]["reasons"]
+    assert reason["code"] == "windows_disagree"
+    stretches = disagreement(reason["text"])
+    assert len(stretches) == 2 and all(first.startswith("2024-03-01T00:") for _, _, first, _ in stretches)
+    assert f"  K suspect: {reason['text']}" in stdout
+    # The table: the count and the span of the windows with IC >= 0.5, as the file writes times.
+    header, row = stdout.splitlines()[:2]
+    assert header.split()[-4:] == ["IC>=0.5", "from", "to", "verdict"]
+    first, last = parameters["K"]["high_ic_span"]
+    assert first.startswith("2024-03-01T00:") and last.startswith("2024-03-01T00:")
+    assert row.split()[-4:] == [str(parameters["K"]["high_ic_windows"]), first, last, "suspect"]
