@@ -42,8 +42,8 @@ $(INSTALLED): pyproject.toml
 	touch $@
 
 test: $(INSTALLED)
-	$(PY) -m ruff check dynia tests notebooks
-	$(PY) -m ruff format --check dynia tests
+	$(PY) -m ruff check dynia tests notebooks benchmarks
+	$(PY) -m ruff format --check dynia tests benchmarks
 	$(PY) -m pytest
 	$(MAKE) check-wheel
 
@@ -52,7 +52,7 @@ check-wheel: $(INSTALLED)
 	.ci/check-wheel $(PY)
 
 bench: $(INSTALLED)
-	$(PY) -m dynia.bench
+	$(PY) -m benchmarks.bench
 
 figures: $(REPORTS) $(THESIS_CODE_REPORTS)
 

@@ -38,7 +38,7 @@ at most two per worker thread submitted and not yet analysed, and each
 chunk's blocks are released once analysed; so the cluster holds the blocks
 of a few time chunks at a time, 8 x n_samples x time_chunks bytes each
 (plus the halos), never a sample chunk's whole record. ``python -m
-dynia.bench --case distributed`` runs 1e4 samples x 1e6 steps (a first-order
+benchmarks.bench --case distributed`` runs 1e4 samples x 1e6 steps (a first-order
 model, default chunks: 400 steps per time chunk) on a local cluster: a
 worker's resident memory peaked at 565 MB with one worker and at 453 and
 449 MB with two (limit 1 GB each). Two workers were not faster than one on

@@ -60,7 +60,7 @@ A pilot :func:`dynia.run` at the proposed window and share with few samples
 (enough for 50 behavioural sets, at least 500: ten batches of five for the
 batch means) gives the Monte Carlo standard error of each parameter's IC
 near its highest value, ``result.ic_se`` of ``ic_error=True`` (its honesty
-is checked in :mod:`dynia.honesty`). The band's limits are
+is checked in ``benchmarks/honesty.py``). The band's limits are
 quantiles of a behavioural set whose size grows with the samples, so the
 error shrinks as ``1/sqrt(N)``; the proposal is the N that brings the
 largest of them to ``ic_se_target`` (0.02), rounded up to two significant

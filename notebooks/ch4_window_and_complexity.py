@@ -67,6 +67,7 @@ parallel_repeats: int = 2  # best of this many runs
 import logging
 import os
 import time
+import timeit
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -75,10 +76,14 @@ from distributed import Client, LocalCluster
 import dynia
 import dynia.distributed
 from dynia import thesis
-from dynia.bench import best_of
 
 os.makedirs(figure_dir, exist_ok=True)
 UNINFORMED = 0.1  # IC of a parameter the window says nothing about: 90 % band of a uniform set
+
+
+def best_of(function, repeats):
+    """Smallest wall-clock time of ``repeats`` calls of ``function``, in seconds."""
+    return min(timeit.repeat(function, number=1, repeat=repeats))
 
 
 def loglog_slope(x, seconds):

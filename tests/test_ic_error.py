@@ -7,10 +7,10 @@ import pytest
 
 import dynia
 import dynia.distributed
+from benchmarks.honesty import ic_error_honesty
 from dynia.analysis import moving_window
 from dynia.engine.flavours import ic_batches, monte_carlo_errors
 from dynia.errors import SettingsError
-from dynia.honesty import ic_error_honesty
 from dynia.pipeline import TargetNotReachedWarning, ic_se_that_matters
 
 # The bar: over 20 seeds, the median predicted error and the median

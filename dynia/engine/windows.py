@@ -70,7 +70,7 @@ of the B batch estimates over sqrt(B) (batch means: these estimators'
 variance falls as 1/n). Importance-weighted samples renormalise their
 weights within each batch. Not for ``"mcat"`` yet.
 
-How honest that is (:mod:`dynia.honesty`, ``python -m dynia.bench --case
+How honest that is (``benchmarks/honesty.py``, ``python -m benchmarks.bench --case
 ic-error-honesty``, checked in ``tests/test_ic_error.py``): over 20 seeds
 on thesis examples 1 and 2, at 10 % of 2000 samples and at 0.1 % of
 50 000, the median over the steps of the predicted error lies within 0.75

@@ -10,15 +10,15 @@ mean predicted standard error (what the runs said would happen).
 
 Used by ``tests/test_ic_error.py`` (the agreement must stay within a
 factor 1.5 on the thesis's examples at percentage 10 and 0.1) and by
-``python -m dynia.bench --case ic-error-honesty``, which prints the table.
+``python -m benchmarks.bench --case ic-error-honesty``, which prints the table.
 """
 
 from dataclasses import dataclass
 
 import numpy as np
 
-from .pipeline import run
-from .synthetic import thesis_example
+from dynia.pipeline import run
+from dynia.synthetic import thesis_example
 
 __all__ = ["Honesty", "ic_error_honesty"]
 

@@ -1,6 +1,6 @@
 """Benchmark: the one-to-one port against the engine, then the engine at scale.
 
-Run with ``make bench`` or ``python -m dynia.bench``. Each case runs in its own
+Run with ``make bench`` or ``python -m benchmarks.bench``. Each case runs in its own
 process so that its peak resident memory (``ru_maxrss``) is its own.
 
 1. Thesis example 1 (500 steps, 2000 samples, both parameters): the port
@@ -50,16 +50,17 @@ import resource
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
-from .synthetic import example_firstorder_input
+from dynia.synthetic import example_firstorder_input
 
 __all__ = ["main", "best_of"]
 
 
 def _example1(n_samples, n_steps, seed=2009):
-    from .models import FirstOrder
+    from dynia.models import FirstOrder
 
     rng = np.random.default_rng(seed)
     u = example_firstorder_input(n_steps)
@@ -80,8 +81,8 @@ def best_of(function, repeats, clock=time.perf_counter):
 
 
 def _case_port_vs_engine():
-    from . import thesis
-    from .analysis import moving_window
+    from dynia import thesis
+    from dynia.engine.windows import moving_window
 
     u, y, params, model = _example1(2000, 500)
     sims = model.simulate(params, u)
@@ -97,7 +98,7 @@ def _case_port_vs_engine():
 
 
 def _case_engine(n_samples, n_steps):
-    from .analysis import moving_window
+    from dynia.engine.windows import moving_window
 
     u, y, params, model = _example1(n_samples, n_steps)
     sims = model.simulate(params, u)
@@ -106,7 +107,7 @@ def _case_engine(n_samples, n_steps):
 
 
 def _case_run(n_samples, n_steps, engine="auto"):
-    from .pipeline import run
+    from dynia.pipeline import run
 
     u, y, _, model = _example1(1, n_steps)
     start = time.perf_counter()
@@ -116,8 +117,8 @@ def _case_run(n_samples, n_steps, engine="auto"):
 
 
 def _case_throughput():
-    from . import thesis
-    from .pipeline import run
+    from dynia import thesis
+    from dynia.pipeline import run
 
     u, y, params, model = _example1(2000, 500)
     sims = model.simulate(params, u)
@@ -144,7 +145,7 @@ def _case_throughput():
 
 
 def _case_online():
-    from .online import OnlineDynia
+    from dynia.online import OnlineDynia
 
     u, y, _, model = _example1(1, 2_000)
     online = OnlineDynia(model, {"K": (0, 7), "T": (0, 7)}, n_samples=10_000, n=10, rng=1)
@@ -163,7 +164,7 @@ def _case_online():
 
 
 def _case_sampling():
-    from .pipeline import run
+    from dynia.pipeline import run
 
     u, y, _, model = _example1(1, 500)
     bounds = {"K": (0, 7), "T": (0, 7)}
@@ -182,8 +183,8 @@ def _case_cli_long_record(n_rows=500_000):
     import tempfile
     from pathlib import Path
 
-    from .cli import main as cli_main
-    from .models import FirstOrder
+    from dynia.cli import main as cli_main
+    from dynia.models import FirstOrder
 
     rng = np.random.default_rng(1)
     u = np.repeat(rng.choice([0.0, 10.0, 20.0, 30.0], n_rows // 200 + 1), 200)[:n_rows]
@@ -260,9 +261,9 @@ def _lag_functions():
 
 
 def _case_custom_models():
-    from .engine.windows import moving_window
-    from .models import FunctionModel, StateSpaceModel
-    from .pipeline import run
+    from dynia.engine.windows import moving_window
+    from dynia.models import FunctionModel, StateSpaceModel
+    from dynia.pipeline import run
 
     step, output, simulate = _lag_functions()
     lag = StateSpaceModel(step, output, [0.0], ["K", "T"], n_states=1)
@@ -292,7 +293,7 @@ def _case_distributed(n_samples=10_000, n_steps=1_000_000, time_chunks=None):
     import psutil
     from distributed import Client, LocalCluster
 
-    from .distributed import run
+    from dynia.distributed import run
 
     u, y, _, model = _example1(1, n_steps)
     bounds = {"K": (0, 7), "T": (0, 7)}
@@ -347,8 +348,8 @@ def _case_ic_error_cost(n_samples=20_000, n_steps=20_000):
     The record repeats example 1's 500 steps, so that its windows keep changing (a record that rests
     would let every window reuse the last one's behavioural bound).
     """
-    from .models import FirstOrder
-    from .pipeline import run
+    from dynia.models import FirstOrder
+    from dynia.pipeline import run
 
     model = FirstOrder()
     u = np.resize(example_firstorder_input(), n_steps)
@@ -401,7 +402,7 @@ def _case_long_record(n_samples=10_000, n_steps=30_000_000):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from .pipeline import run
+    from dynia.pipeline import run
 
     u, y, _, model = _example1(1, n_steps)
     data_rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
@@ -487,7 +488,11 @@ def main(argv=None):
         if name in args.skip:
             continue
         output = subprocess.run(
-            [sys.executable, "-m", "dynia.bench", "--case", name], check=True, capture_output=True, text=True
+            [sys.executable, "-m", "benchmarks.bench", "--case", name],
+            check=True,
+            capture_output=True,
+            text=True,
+            cwd=Path(__file__).resolve().parent.parent,
         ).stdout
         result = json.loads(output.strip().splitlines()[-1])
         print(_describe(name, result), flush=True)
