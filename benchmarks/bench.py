@@ -36,6 +36,15 @@ process so that its peak resident memory (``ru_maxrss``) is its own.
     time, speed-up from one worker to two, each worker's peak resident
     memory, sampled every 0.1 s, and CPU time; target <= 1 GB per worker.
 
+11. The yardstick: :func:`dynia.run` (first order, K and T, thesis flavour,
+    20 000 samples x 20 000 steps, n = 10 and 100) against the least work an
+    analysis has to do, one fused compiled pass that simulates every sample
+    and accumulates ``|y - sim|`` (``_bare_pass``), timed in the same run, on
+    an input that never rests and on one that rests at zero from half-way;
+    goal: within 8x of the bare pass. Then the scaling exponents of
+    :func:`dynia.run` in samples, steps and half window n (log-log slopes
+    over a factor of 4; goal about 1, 1 and 0).
+
 ``long-record``: a year of 1 Hz data in bounded memory, :func:`dynia.run`
 with ``dtype="float32"`` and ``store`` (a netCDF file in a temporary folder)
 on 10^4 samples x 3x10^7 steps (``--long-samples``, ``--long-steps``; about
@@ -443,6 +452,109 @@ def _case_long_record(n_samples=10_000, n_steps=30_000_000):
     )
 
 
+def _yardstick_inputs(n_steps, seed=0):
+    """Two inputs of the yardstick: random levels that never rest, and the same resting at zero from half-way."""
+    rng = np.random.default_rng(seed)
+    never = np.repeat(rng.uniform(0.5, 1.5, n_steps // 100 + 1), 100)[:n_steps]
+    rests = never.copy()
+    rests[n_steps // 2 :] = 0.0
+    return {"never rests": never, "rests at zero from half-way": rests}
+
+
+def _bare_pass():
+    """The least work an analysis must do: simulate every sample and accumulate |y - sim|, fused, compiled.
+
+    Samples in blocks of 64 so that the inner loop over a block vectorises; states below the simulators'
+    flush level set to zero as they do, so no subnormal arithmetic; blocks spread over numba's threads.
+    """
+    import numba
+
+    from dynia.models.base import FLUSH_BELOW
+
+    @numba.njit(parallel=True)
+    def bare(pole, gain, u, y, total):
+        width = 64
+        for block in numba.prange((pole.size + width - 1) // width):
+            lo = block * width
+            hi = min(lo + width, pole.size)
+            a, b = pole[lo:hi].copy(), gain[lo:hi].copy()
+            x, acc = np.zeros(hi - lo), np.zeros(hi - lo)
+            for k in range(u.size):
+                for i in range(hi - lo):
+                    acc[i] += abs(x[i] - y[k])
+                    following = a[i] * x[i] + b[i] * u[k]
+                    x[i] = following if abs(following) >= FLUSH_BELOW else 0.0
+            total[lo:hi] = acc
+
+    return bare
+
+
+def _case_yardstick(n_samples=20_000, n_steps=20_000):
+    """dynia.run against the bare fused pass, both inputs, n = 10 and 100; scaling exponents in S, N and n."""
+    from dynia.models import FirstOrder
+    from dynia.pipeline import run
+
+    bare = _bare_pass()
+    bounds = {"K": (0, 4), "T": (1.5, 6)}
+    params = np.random.default_rng(1).uniform([0, 1.5], [4, 6], (n_samples, 2))
+    pole = np.exp(-1.0 / params[:, 1])
+    gain = params[:, 0] * (1 - pole)
+    rows = []
+    for label, u_input in _yardstick_inputs(n_steps).items():
+        rows += _yardstick_rows(bare, label, u_input, pole, gain, bounds, n_samples)
+    u_full = _yardstick_inputs(n_steps)["never rests"]
+    y_full = FirstOrder().simulate([[2.0, 3.0]], u_full)[0]
+
+    def timed(samples, steps, n):
+        return best_of(
+            lambda: run(u_full[:steps], y_full[:steps], FirstOrder(), bounds, n_samples=samples, n=n, rng=1), 2
+        )
+
+    sizes = (n_samples // 4, n_samples // 2, n_samples)
+    lengths = (n_steps // 4, n_steps // 2, n_steps)
+    halves = (10, 30, 100)
+    small_s, small_n = n_samples // 4, n_steps // 4
+    exponents = dict(
+        samples=_loglog_slope(sizes, [timed(size, small_n, 10) for size in sizes]),
+        steps=_loglog_slope(lengths, [timed(small_s, length, 10) for length in lengths]),
+        half_window=_loglog_slope(halves, [timed(small_s, small_n, half) for half in halves]),
+    )
+    return dict(n_samples=n_samples, n_steps=n_steps, rows=rows, exponents=exponents, machine=_machine())
+
+
+def _yardstick_rows(bare, label, u, pole, gain, bounds, n_samples):
+    """The bare pass and dynia.run (n = 10 and 100) on one input, best of 3 each."""
+    from dynia.models import FirstOrder
+    from dynia.pipeline import run
+
+    y = FirstOrder().simulate([[2.0, 3.0]], u)[0] + np.random.default_rng(2).normal(0, 0.1, u.size)
+    bare(pole[:64], gain[:64], u[:100], y[:100], np.empty(64))  # compile
+    bare_s = best_of(lambda: bare(pole, gain, u, y, np.empty(pole.size)), 3)
+    run(u[:500], y[:500], FirstOrder(), bounds, n_samples=200, n=10, rng=1, flavour="thesis")  # compile
+    rows = []
+    for n in (10, 100):
+        run_s = best_of(
+            lambda n=n: run(u, y, FirstOrder(), bounds, n_samples=n_samples, n=n, rng=1, flavour="thesis"), 3
+        )
+        rows.append(dict(input=label, n=n, bare_s=bare_s, run_s=run_s, ratio=run_s / bare_s))
+    return rows
+
+
+def _loglog_slope(x, seconds):
+    return float(np.polyfit(np.log(x), np.log(seconds), 1)[0])
+
+
+def _machine():
+    """What the ratios were measured on: processor, cores, load."""
+    model = "unknown processor"
+    try:
+        with open("/proc/cpuinfo") as info:
+            model = next((line.split(":", 1)[1].strip() for line in info if line.startswith("model name")), model)
+    except OSError:
+        pass
+    return dict(processor=model, cores=os.cpu_count(), load_average=os.getloadavg()[0])
+
+
 CASES = {
     "port-vs-engine": _case_port_vs_engine,
     "engine-20000x2000": lambda: _case_engine(20_000, 2_000),
@@ -458,6 +570,7 @@ CASES = {
     "ic-error-cost": _case_ic_error_cost,
     "ic-error-honesty": _case_ic_error_honesty,
     "long-record": _case_long_record,
+    "yardstick": _case_yardstick,
 }
 
 
@@ -499,6 +612,24 @@ def main(argv=None):
 
 
 def _describe(name, r):
+    if name == "yardstick":
+        lines = [
+            f"dynia.run against the bare fused pass (simulate + accumulate |y - sim|, compiled), "
+            f"{r['n_samples']} samples x {r['n_steps']} steps, thesis flavour, wall clock, best of 3 "
+            f"({r['machine']['processor']}, {r['machine']['cores']} cores, load {r['machine']['load_average']:.1f}):"
+        ]
+        lines += [
+            f"  {row['input']}, n = {row['n']}: bare {row['bare_s']:.2f} s "
+            f"({r['n_samples'] * r['n_steps'] / row['bare_s']:.3g}/s), dynia.run {row['run_s']:.2f} s "
+            f"({r['n_samples'] * r['n_steps'] / row['run_s']:.3g}/s) -> {row['ratio']:.1f}x the bare pass (goal <= 8x)"
+            for row in r["rows"]
+        ]
+        e = r["exponents"]
+        lines.append(
+            f"  scaling exponents of dynia.run: samples {e['samples']:.2f}, steps {e['steps']:.2f}, "
+            f"half window n {e['half_window']:.2f} (goal: about 1, 1 and 0)"
+        )
+        return "\n".join(lines)
     if name == "ic-error-cost":
         costs = "; ".join(
             f"{level}: {r[level]['plain_s']:.2f} s plain, {r[level]['ic_error_s']:.2f} s with ic_error "
