@@ -351,7 +351,7 @@ def run(
 
 
 def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, progress, ahead):
-    """Stage 2, fed by stage 1: one task per time chunk; the chunk's results and best, upper and threshold MAE to the client.
+    """Stage 2, fed by stage 1: one task per time chunk; its results (with best, upper, threshold MAE) to the client.
 
     ``blocks(start, stop)`` submits stage 1 of the time chunk [start, stop)
     and returns the futures of its outputs, (block, what it hands on) per
