@@ -183,7 +183,7 @@ def run(
     -------
     DyniaResult
         Equal to ``dynia.run``'s with the same arguments, whatever the chunk
-        sizes: ``ic``, ``ci``, ``gradient``, ``samples`` and ``settings``.
+        sizes: ``ic``, ``ci``, ``median``, ``gradient``, ``samples`` and ``settings``.
         (``dynia.run``'s ``workers``, its threads, has no counterpart here:
         the cluster's workers do the work.)
 
@@ -302,7 +302,7 @@ def run(
             blocks = _WholeRecordBlocks(
                 client, model, row_chunks, u_data, y_data, dt, x0, windows, n_steps, time_chunks
             )
-        ic, ci, gradient, best, upper, threshold, ic_se, ci_se = _analyse_on_cluster(
+        ic, ci, median, gradient, best, upper, threshold, ic_se, ci_se = _analyse_on_cluster(
             client,
             blocks,
             flavour_impl,
@@ -340,6 +340,7 @@ def run(
         time=np.arange(n_steps) * float(dt),
         ic=ic,
         ci=ci,
+        median=median,
         gradient=gradient,
         bin_centres=flavour_impl.bin_centres,
         settings=recorded,
@@ -350,7 +351,7 @@ def run(
 
 
 def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, progress, ahead):
-    """Stage 2, fed by stage 1: one task per time chunk; ic, ci, gradient, best, upper and threshold MAE to the client.
+    """Stage 2, fed by stage 1: one task per time chunk; its results (with best, upper, threshold MAE) to the client.
 
     ``blocks(start, stop)`` submits stage 1 of the time chunk [start, stop)
     and returns the futures of its outputs, (block, what it hands on) per
@@ -367,6 +368,7 @@ def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, pr
     n_steps = spans[-1][1]
     ic = np.empty((n_params, n_steps))
     ci = np.empty((n_params, n_steps, 2))
+    median = np.empty((n_params, n_steps))
     gradient = np.empty((n_params, flavour.n_bins, n_steps))
     best, upper, threshold = np.empty(n_steps), np.empty(n_steps), np.empty(n_steps)
     batched = getattr(flavour, "batches", 0) > 0
@@ -397,6 +399,7 @@ def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, pr
         start, stop = chunk_spans.pop(future)
         results = future.result()
         ic[:, start:stop], ci[:, start:stop], gradient[:, :, start:stop] = results.ic, results.ci, results.gradient
+        median[:, start:stop] = results.median
         best[start:stop], upper[start:stop], threshold[start:stop] = results.best, results.upper, results.threshold
         if batched:
             ic_se[:, start:stop], ci_se[:, start:stop] = monte_carlo_errors(results.batch_ic, results.batch_ci)
@@ -407,7 +410,7 @@ def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, pr
             bar.update()
     if bar is not None:
         bar.close()
-    return ic, ci, gradient, best, upper, threshold, ic_se, ci_se
+    return ic, ci, median, gradient, best, upper, threshold, ic_se, ci_se
 
 
 def _import_distributed():

@@ -91,6 +91,8 @@ class OnlineDynia:
     ic, ci, gradient : ndarray
         Results of the latest step, (n_params,), (n_params, 2) and
         (n_params, n_bins); NaN before the first usable window.
+    median : ndarray (n_params,)
+        The CLD median of the latest step (see :attr:`dynia.result.DyniaResult.median`).
 
     Notes
     -----
@@ -253,7 +255,8 @@ class OnlineDynia:
             Lower and upper confidence limit.
         gradient : ndarray (n_params, n_bins)
             The results of the window ending at this step, also kept as
-            ``.ic``, ``.ci`` and ``.gradient``; new arrays at every update.
+            ``.ic``, ``.ci`` and ``.gradient`` (with the CLD median as
+            ``.median``); new arrays at every update.
         """
         if self._model.n_inputs == 1:
             u_t = _scalar(u_t, "u_t", self.steps, allow_nan=False)
@@ -297,7 +300,8 @@ class OnlineDynia:
         -------
         DyniaResult
             ``.ic`` (n_params, n_steps), ``.ci`` (n_params, n_steps, 2),
-            ``.gradient`` (n_params, n_bins, n_steps), with ``.time`` continuing
+            ``.median`` (n_params, n_steps), ``.gradient`` (n_params, n_bins,
+            n_steps), with ``.time`` continuing
             from the steps fed before; comparable with
             ``dynia.run(..., window="trailing")`` on the same record. Its
             noise floor (``.informative``, :mod:`dynia.engine.noise`) judges
@@ -309,11 +313,13 @@ class OnlineDynia:
         n_params, n_bins = self.bin_centres.shape
         ic = np.empty((n_params, y.size))
         ci = np.empty((n_params, y.size, 2))
+        median = np.empty((n_params, y.size))
         gradient = np.empty((n_params, n_bins, y.size))
         best, upper, threshold, points = np.empty(y.size), np.empty(y.size), np.empty(y.size), np.empty(y.size)
         first = self.steps
         for step, (u_t, y_t) in enumerate(zip(u.tolist(), y.tolist())):  # u_t a list for several inputs
             ic[:, step], ci[:, step], gradient[:, :, step] = self.update(u_t, y_t)
+            median[:, step] = self.median
             best[step], upper[step], threshold[step] = self._best, self._upper, self._threshold
             points[step] = self._present
         floor = record_noise_floor(
@@ -327,6 +333,7 @@ class OnlineDynia:
             time=(first + np.arange(y.size)) * self._dt,
             ic=ic,
             ci=ci,
+            median=median,
             gradient=gradient,
             bin_centres=self.bin_centres,
             settings=settings,
@@ -358,6 +365,7 @@ class OnlineDynia:
             usable = self._rank_diverged_last() and usable
         results = self._flavour.analyse(self._mae, np.array([usable]))
         self.ic, self.ci, self.gradient = results.ic[:, 0], results.ci[:, 0], results.gradient[:, :, 0]
+        self.median = results.median[:, 0]
         self._best, self._threshold, self._upper = (
             float(results.best[0]),
             float(results.threshold[0]),
@@ -382,6 +390,7 @@ class OnlineDynia:
         self._present = 0
         self.ic = np.full(n_params, np.nan)
         self.ci = np.full((n_params, 2), np.nan)
+        self.median = np.full(n_params, np.nan)
         self.gradient = np.full((n_params, n_bins), np.nan)
 
 

@@ -154,7 +154,7 @@ def run(
     max_samples : int, optional
         The budget of ``target_se`` (required with it).
     dtype : {"float64", "float32"}, default "float64"
-        Type of the result's IC, limits, gradient and their errors; float32
+        Type of the result's IC, limits, median, gradient and their errors; float32
         values are the float64 results rounded, at half the memory.
     store : str or os.PathLike, optional
         A netCDF file that those arrays are written to as they are produced,

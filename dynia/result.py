@@ -2,6 +2,7 @@
 
 Shapes follow the package convention (see :mod:`dynia.analysis`):
 ``ic`` (n_params, n_steps), ``ci`` (n_params, n_steps, 2) as [lower, upper],
+``median`` (n_params, n_steps),
 ``gradient`` (n_params, n_bins, n_steps), ``bin_centres`` (n_params, n_bins),
 ``samples`` (n_samples, n_params), ``bounds`` (n_params, 2); the optional
 Monte Carlo errors ``ic_se`` (n_params, n_steps) and ``ci_se`` (n_params,
@@ -85,6 +86,15 @@ class DyniaResult:
     behavioural_floor : ndarray (n_steps,) or None
         What noise alone keeps the behavioural spread below
         (``settings["behavioural_multiple"]`` of the same standard deviations).
+    median : ndarray (n_params, n_steps) or None
+        CLD median of each window's behavioural values, read off as the
+        limits are, so it lies in the band: the first sorted value whose
+        likelihood-weighted CLD reaches 0.5 ("weighted"), the sorted value at
+        position floor(0.5 (count - 1)) ("thesis", as its limits; with the
+        adaptive samplers' importance weights, where their CLD reaches 0.5),
+        MCAT's rank analogue ("mcat"). The estimate of :meth:`summary`. NaN where
+        ``ic`` is; None for results built without it (files saved before it
+        existed, :func:`dynia.reference.thesis.thesis_code_result`).
     """
 
     names: tuple
@@ -105,6 +115,7 @@ class DyniaResult:
     noise_floor: np.ndarray | None = None
     behavioural_spread: np.ndarray | None = None
     behavioural_floor: np.ndarray | None = None
+    median: np.ndarray | None = None
 
     def index(self, name):
         """Position of parameter ``name`` on the parameter axis."""
@@ -227,8 +238,10 @@ class DyniaResult:
     def summary(self):
         """Per parameter: the highest IC, when it occurs, the band and the estimate there, and a verdict.
 
-        The estimate is the centre of the bin with the largest CLD gradient
-        at the time of the highest IC. The verdict ("identified", "weak" or
+        The estimate is the CLD median (:attr:`median`) at the time of the
+        highest IC, so it always lies in the band there; a result without
+        the median (a file saved before it existed) reports the band's
+        midpoint instead. The verdict ("identified", "weak" or
         "suspect") and its reasons say what that estimate is worth (see
         :mod:`dynia.verdicts`). Parameters whose IC is missing everywhere get
         None for the numbers.
@@ -261,7 +274,7 @@ class DyniaResult:
                     max_ic=float(self.ic[p, best]),
                     time_of_max_ic=float(self.time[best]),
                     band=[float(self.ci[p, best, 0]), float(self.ci[p, best, 1])],
-                    estimate=float(self.bin_centres[p, int(np.argmax(self.gradient[p, :, best]))]),
+                    estimate=self._estimate(p, best),
                 )
                 if self.ic_se is not None:
                     summary[name]["max_ic_se"] = float(self.ic_se[p, best])
@@ -273,8 +286,14 @@ class DyniaResult:
             summary[name].update(verdict=verdicts[name]["verdict"], reasons=list(verdicts[name]["reasons"]))
         return summary
 
+    def _estimate(self, p, step):
+        """Parameter ``p``'s estimate at ``step``: its CLD median, or without one the band's midpoint."""
+        if self.median is None:
+            return float((self.ci[p, step, 0] + self.ci[p, step, 1]) / 2)
+        return float(self.median[p, step])
+
     def to_dataframe(self):
-        """Long table: one row per (time, parameter) with ic, lower and upper.
+        """Long table: one row per (time, parameter) with ic, lower and upper (and median, when the result has it).
 
         With :attr:`timestamps` a ``timestamp`` column follows ``time``; with
         the Monte Carlo errors, columns ``ic_se``, ``lower_se`` and
@@ -301,6 +320,7 @@ class DyniaResult:
                 "ic": self.ic.ravel(),
                 "lower": self.ci[:, :, 0].ravel(),
                 "upper": self.ci[:, :, 1].ravel(),
+                **({} if self.median is None else {"median": np.asarray(self.median).ravel()}),
                 **errors,
                 **({} if self.informative is None else {"informative": np.tile(self.informative, n_params)}),
             }

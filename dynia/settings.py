@@ -148,7 +148,7 @@ class AnalysisSettings:
         The budget of ``target_se``: at most this many samples, at least
         ``n_samples``.
     dtype : {"float64", "float32"}, default "float64"
-        Type of the result's time-dependent arrays (IC, limits, gradient and
+        Type of the result's time-dependent arrays (IC, limits, median, gradient and
         their errors). The engine computes in float64 either way; float32
         keeps each value rounded to the nearest float32, at half the memory
         (see :mod:`dynia.storage`).

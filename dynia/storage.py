@@ -5,8 +5,8 @@ n_steps) in float64, needs 19 GB for two parameters and 40 bins. Two
 settings of :class:`dynia.settings.AnalysisSettings` bound that:
 
 ``dtype="float32"``
-    The time-dependent arrays (``ic``, ``ci``, ``gradient``, ``ic_se``,
-    ``ci_se``) are kept in float32: the engine still computes in float64,
+    The time-dependent arrays (``ic``, ``ci``, ``median``, ``gradient``,
+    ``ic_se``, ``ci_se``) are kept in float32: the engine still computes in float64,
     and every value is the float64 result rounded to the nearest float32
     (relative error at most 6e-8, far below any Monte Carlo error), at half
     the memory and disk.
@@ -65,6 +65,7 @@ __all__ = [
 TIME_VARIABLES = {
     "ic": ("parameter", "time"),
     "ci": ("parameter", "time", "side"),
+    "median": ("parameter", "time"),
     "gradient": ("parameter", "bin", "time"),
     "ic_se": ("parameter", "time"),
     "ci_se": ("parameter", "time", "side"),

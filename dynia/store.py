@@ -11,6 +11,8 @@ Dimensions ``parameter``, ``time``, ``side``, ``bin`` and ``sample``;
 variables ``ic`` (parameter, time), ``ci`` (parameter, time, side),
 ``gradient`` (parameter, bin, time), ``bin_centres`` (parameter, bin),
 ``samples`` (sample, parameter) and ``bounds`` (parameter, side); when the
+result has its CLD median, ``median`` (parameter, time) (files written
+before it existed load with ``median`` None); when the
 result has its Monte Carlo errors, ``ic_se`` (parameter, time) and ``ci_se``
 (parameter, time, side) too; when it has its noise floor, ``informative``,
 ``discrimination``, ``noise_floor``, ``behavioural_spread`` and
@@ -82,6 +84,7 @@ _ARRAYS = {
 _NOISE_FLOOR = ("informative", "discrimination", "noise_floor", "behavioural_spread", "behavioural_floor")
 # Written when the result has them (not None), read back when the file has them.
 _OPTIONAL_ARRAYS = {
+    "median": ("parameter", "time"),
     "ic_se": ("parameter", "time"),
     "ci_se": ("parameter", "time", "side"),
 }
@@ -222,8 +225,8 @@ def load(path, *, lazy=False):
     its dtype; a numpy scalar comes back as the Python number it was written
     as.
 
-    With ``lazy=True`` the arrays along time (IC, limits, gradient and their
-    errors) stay in the file as :class:`dynia.storage.DiskArray` objects,
+    With ``lazy=True`` the arrays along time (IC, limits, median, gradient
+    and their errors) stay in the file as :class:`dynia.storage.DiskArray` objects,
     read where indexed: for results larger than memory (:mod:`dynia.storage`).
 
     Raises

@@ -40,7 +40,7 @@ def record():
 
 def assert_same(result, reference):
     assert result.names == reference.names
-    for attribute in ("samples", "bounds", "time", "ic", "ci", "gradient", "bin_centres"):
+    for attribute in ("samples", "bounds", "time", "ic", "ci", "median", "gradient", "bin_centres"):
         assert_array_equal(getattr(result, attribute), getattr(reference, attribute), err_msg=attribute)
     assert result.settings == reference.settings
 

@@ -33,6 +33,7 @@ def _data(steps=300, seed=0, zero_start=30):
 def _assert_same(a, b):
     np.testing.assert_array_equal(a.ic, b.ic)
     np.testing.assert_array_equal(a.ci, b.ci)
+    np.testing.assert_array_equal(a.median, b.median)
     np.testing.assert_array_equal(a.gradient, b.gradient)
 
 

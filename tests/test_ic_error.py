@@ -36,7 +36,7 @@ def test_both_engines_give_the_same_errors_and_leave_the_estimates_alone(example
     compiled = moving_window(*args, flavour=flavour, engine="numba", ic_error=True)
     numpy_path = moving_window(*args, flavour=flavour, engine="numpy", ic_error=True)
     for result in (compiled, numpy_path):
-        for name in ("ic", "ci", "gradient"):
+        for name in ("ic", "ci", "median", "gradient"):
             np.testing.assert_array_equal(getattr(result, name), getattr(plain, name))
     np.testing.assert_array_equal(compiled.ic_se, numpy_path.ic_se)
     np.testing.assert_array_equal(compiled.ci_se, numpy_path.ci_se)

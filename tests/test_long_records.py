@@ -22,7 +22,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 BOUNDS = {"K": (0, 7), "T": (0, 7)}
-STORED = ("ic", "ci", "gradient", "ic_se", "ci_se")
+STORED = ("ic", "ci", "median", "gradient", "ic_se", "ci_se")
 
 
 def _record(steps=400, seed=3):
@@ -108,11 +108,11 @@ def test_the_store_is_chunked_over_time(folder):
     stored = moving_window(y, _simulations(u), _samples(), [[0, 7], [0, 7]], n=4, bins=1000, chunk_steps=7, store=path)
     in_memory = moving_window(y, _simulations(u), _samples(), [[0, 7], [0, 7]], n=4, bins=1000, chunk_steps=7)
     with h5py.File(path, "r") as file:
-        for name in ("ic", "ci", "gradient"):
+        for name in ("ic", "ci", "median", "gradient"):
             dims = TIME_VARIABLES[name]
             chunks = file[name].chunks
             assert chunks[dims.index("time")] < 1500 and chunks[dims.index("parameter")] == 1
-    for name in ("ic", "ci", "gradient"):
+    for name in ("ic", "ci", "median", "gradient"):
         assert _same(getattr(stored, name), getattr(in_memory, name)), name
 
 

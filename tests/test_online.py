@@ -109,6 +109,7 @@ def test_equals_the_batch_trailing_engine_bit_for_bit(model, bounds, truth, flav
     assert_array_equal(online.samples, batch.samples)
     assert_array_equal(online.ic, batch.ic)
     assert_array_equal(online.ci, batch.ci)
+    assert_array_equal(online.median, batch.median)
     # Same flavour code on the same costs: the gradient is exact too.
     assert_array_equal(online.gradient, batch.gradient)
     assert_array_equal(online.time, batch.time)
@@ -124,6 +125,7 @@ def test_equals_moving_window_on_precomputed_simulations_with_few_points_require
     batch = moving_window(y, sims, online.samples, online.bounds, n=3, min_points=4, window="trailing")
     assert_array_equal(result.ic, batch.ic)
     assert_array_equal(result.ci, batch.ci)
+    assert_array_equal(result.median, batch.median)
     assert_array_equal(result.gradient, batch.gradient)
     # Steps 0..4 hold 4 measured points only at step 4 (y[3] is missing): NaN until then.
     assert np.isnan(result.ic[:, :4]).all() and not np.isnan(result.ic[:, 4]).any()
@@ -194,6 +196,7 @@ def test_diverging_sets_rank_last():
         batch = moving_window(y, sims, online.samples, online.bounds, n=4, flavour=flavour, window="trailing")
         assert_array_equal(result.ic, batch.ic)
         assert_array_equal(result.ci, batch.ci)
+        assert_array_equal(result.median, batch.median)
         assert_array_equal(result.gradient, batch.gradient)
         assert (result.ci[0, -1] < 0).all()  # the band ends around the true a = -0.5
 

@@ -82,7 +82,7 @@ def test_run_equals_moving_window_on_the_same_samples(window):
 
 def test_to_dataframe_and_plots(example1_run):
     table = example1_run.to_dataframe()
-    assert list(table.columns) == ["time", "parameter", "ic", "lower", "upper", "informative"]
+    assert list(table.columns) == ["time", "parameter", "ic", "lower", "upper", "median", "informative"]
     assert len(table) == 2 * 500
     row = table[(table.parameter == "T") & (table.time == 420)].iloc[0]
     assert row.ic == example1_run.ic[1, 420]

@@ -18,7 +18,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib import dates  # noqa: E402
 
-ARRAYS = ("samples", "bounds", "time", "ic", "ci", "gradient", "bin_centres")
+ARRAYS = ("samples", "bounds", "time", "ic", "ci", "median", "gradient", "bin_centres")
 BOUNDS = {"K": (0, 7), "T": (0, 7)}
 
 
@@ -255,7 +255,7 @@ def test_to_dataframe_carries_the_timestamps(thesis_result):
     pytest.importorskip("pandas")
     stamps = _stamps(thesis_result.time.size)
     table = dataclasses.replace(thesis_result, timestamps=stamps).to_dataframe()
-    assert list(table.columns) == ["time", "timestamp", "parameter", "ic", "lower", "upper", "informative"]
+    assert list(table.columns) == ["time", "timestamp", "parameter", "ic", "lower", "upper", "median", "informative"]
     assert table["timestamp"].to_numpy().tolist() == np.tile(stamps, 2).tolist()
     assert "timestamp" not in thesis_result.to_dataframe().columns
 

@@ -22,7 +22,17 @@ import math
 
 import numpy as np
 
-__all__ = ["likelihood", "limits", "weighted_limits", "binned_mass", "cumulative", "weighted_quantiles"]
+__all__ = [
+    "likelihood",
+    "limits",
+    "weighted_limits",
+    "median",
+    "weighted_median",
+    "band_and_median",
+    "binned_mass",
+    "cumulative",
+    "weighted_quantiles",
+]
 
 
 def likelihood(cost):
@@ -61,11 +71,15 @@ def limits(values, conf_level):
     -------
     ndarray (..., 2): lower, upper.
     """
-    ordered = np.sort(values, axis=-1)
-    count = ordered.shape[-1]
-    c1 = (1 - conf_level / 100) / 2
-    c2 = 1 - c1
-    return ordered[..., [math.floor(c1 * (count - 1)), math.floor(c2 * (count - 1))]]
+    return band_and_median(values, None, conf_level, weighted=False)[0]
+
+
+def median(values):
+    """The unweighted CLD median: the sorted value at 0-based position ``floor((k-1)/2)``, shape (...).
+
+    The analogue of :func:`limits` at level 0.5, so it lies between them.
+    """
+    return band_and_median(values, None, 50, weighted=False)[1]
 
 
 def weighted_limits(values, weights, conf_level):
@@ -78,14 +92,43 @@ def weighted_limits(values, weights, conf_level):
     -------
     ndarray (..., 2): lower, upper.
     """
-    ordered, cumulative_likelihood = cumulative(values, weights)
-    return np.concatenate(
-        [
+    return band_and_median(values, weights, conf_level, weighted=True)[0]
+
+
+def weighted_median(values, weights):
+    """The likelihood-weighted CLD median: the first sorted value at which the CLD reaches 0.5, shape (...)."""
+    return band_and_median(values, weights, 50, weighted=True)[1]
+
+
+def band_and_median(values, weights, conf_level, *, weighted):
+    """Confidence limits and CLD median from one sort of ``values``.
+
+    ``weighted`` reads them off the CLD of ``weights`` as
+    :func:`weighted_limits` does, at the levels ``(100 -/+ conf_level)/200``
+    and 0.5; otherwise (``weights`` unused) as :func:`limits` does, at the
+    sorted positions ``floor(c*(k-1))``, ``floor(0.5*(k-1))`` and
+    ``floor((1-c)*(k-1))``. Either way the median lies between the limits:
+    the levels, and the positions, are in that order.
+
+    Returns
+    -------
+    band : ndarray (..., 2)
+        Lower and upper limit.
+    median : ndarray (...)
+    """
+    if weighted:
+        ordered, cumulative_likelihood = cumulative(values, weights)
+        lower, middle, upper = (
             _first_reaching(ordered, cumulative_likelihood, level)
-            for level in ((100 - conf_level) / 200, (100 + conf_level) / 200)
-        ],
-        axis=-1,
-    )
+            for level in ((100 - conf_level) / 200, 0.5, (100 + conf_level) / 200)
+        )
+        return np.concatenate([lower, upper], axis=-1), middle[..., 0]
+    ordered = np.sort(values, axis=-1)
+    count = ordered.shape[-1]
+    c1 = (1 - conf_level / 100) / 2
+    c2 = 1 - c1
+    positions = [math.floor(c1 * (count - 1)), math.floor(c2 * (count - 1))]
+    return ordered[..., positions], ordered[..., math.floor(0.5 * (count - 1))]
 
 
 def _first_reaching(ordered, cumulative_likelihood, level):

@@ -62,8 +62,9 @@ MIN_BATCH_BEHAVIOURAL = 5
 class WindowResults(NamedTuple):
     """What a flavour reads off m windows.
 
-    ``ic`` (n_params, m), ``ci`` (n_params, m, 2), ``gradient`` (n_params,
-    n_bins, m); ``best``, ``threshold`` and ``upper`` (m,), the lowest MAE,
+    ``ic`` (n_params, m), ``ci`` (n_params, m, 2), ``median`` (n_params, m),
+    the CLD median read off as the limits are (so it lies between them),
+    ``gradient`` (n_params, n_bins, m); ``best``, ``threshold`` and ``upper`` (m,), the lowest MAE,
     the largest MAE of the behavioural set and the MAE at the population
     quantile of :func:`dynia.engine.noise.quantile_position`, what
     :mod:`dynia.engine.noise` tests (each the square root of a window cost
@@ -76,6 +77,7 @@ class WindowResults(NamedTuple):
 
     ic: np.ndarray
     ci: np.ndarray
+    median: np.ndarray
     gradient: np.ndarray
     best: np.ndarray
     threshold: np.ndarray
@@ -218,8 +220,16 @@ def monte_carlo_errors(batch_ic, batch_ci):
 
 
 def _chunk_arrays(n_params, n_bins, rows):
-    """Uninitialised ic (n_params, rows), ci (n_params, rows, 2), gradient (n_params, n_bins, rows)."""
-    return np.empty((n_params, rows)), np.empty((n_params, rows, 2)), np.empty((n_params, n_bins, rows))
+    """Uninitialised ic (n_params, rows), ci (n_params, rows, 2), median (n_params, rows) and gradient.
+
+    The gradient is (n_params, n_bins, rows).
+    """
+    return (
+        np.empty((n_params, rows)),
+        np.empty((n_params, rows, 2)),
+        np.empty((n_params, rows)),
+        np.empty((n_params, n_bins, rows)),
+    )
 
 
 def _population_quantile(values):
@@ -228,7 +238,7 @@ def _population_quantile(values):
     return np.partition(values, position, axis=1)[:, position]
 
 
-def _blank_unusable(ic, ci, gradient, behavioural_mae, upper, usable):
+def _blank_unusable(ic, ci, median, gradient, behavioural_mae, upper, usable):
     """The windows' results, NaN wherever a window had too few measured points.
 
     ``behavioural_mae`` (m, count) holds the behavioural set's MAEs (or
@@ -237,10 +247,11 @@ def _blank_unusable(ic, ci, gradient, behavioural_mae, upper, usable):
     """
     ic[:, ~usable] = np.nan
     ci[:, ~usable] = np.nan
+    median[:, ~usable] = np.nan
     gradient[:, :, ~usable] = np.nan
     best = np.where(usable, behavioural_mae.min(axis=1), np.nan)
     threshold = np.where(usable, behavioural_mae.max(axis=1), np.nan)
-    return WindowResults(ic, ci, gradient, best, threshold, np.where(usable, upper, np.nan))
+    return WindowResults(ic, ci, median, gradient, best, threshold, np.where(usable, upper, np.nan))
 
 
 def bin_centres_of(bounds, bins):
@@ -250,7 +261,9 @@ def bin_centres_of(bounds, bins):
 
 
 class ThesisFlavour:
-    """Cost MAE^2, lowest-cost behavioural set, likelihood 1-cost, unweighted limits."""
+    """Cost MAE^2, lowest-cost behavioural set, likelihood 1-cost, unweighted limits and median."""
+
+    weighted = False
 
     def __init__(self, params, bounds, percentage, bins, conf_level):
         n_samples = params.shape[0]
@@ -282,26 +295,22 @@ class ThesisFlavour:
         behavioural_cost = np.take_along_axis(cost, selected, axis=1)
         weights = cld.likelihood(behavioural_cost)
         rows = selected.shape[0]
-        ic, ci, gradient = _chunk_arrays(self.columns.shape[0], n_bins, rows)
+        ic, ci, median, gradient = _chunk_arrays(self.columns.shape[0], n_bins, rows)
         for p, column in enumerate(self.columns):
             values = column[selected]
             low, high = self.bounds[p]
-            ci[p] = self._limits(values, weights)
+            ci[p], median[p] = cld.band_and_median(values, weights, self.conf_level, weighted=self.weighted)
             ic[p] = 1 - (ci[p, :, 1] - ci[p, :, 0]) / (high - low)
             if n_bins:
                 gradient[p] = cld.binned_mass(values, weights, low, high, self.bins).T
         upper = np.sqrt(_population_quantile(cost))
-        return _blank_unusable(ic, ci, gradient, np.sqrt(behavioural_cost), upper, usable)
-
-    def _limits(self, values, weights):
-        return cld.limits(values, self.conf_level)
+        return _blank_unusable(ic, ci, median, gradient, np.sqrt(behavioural_cost), upper, usable)
 
 
 class WeightedFlavour(ThesisFlavour):
-    """As the thesis, but limits where the cumulative likelihood reaches the levels."""
+    """As the thesis, but limits (and median) where the cumulative likelihood reaches the levels (and 0.5)."""
 
-    def _limits(self, values, weights):
-        return cld.weighted_limits(values, weights, self.conf_level)
+    weighted = True
 
 
 class CompiledFlavour:
@@ -343,7 +352,7 @@ class CompiledFlavour:
 
     def analyse_rows(self, window_errors, measured, m, slots):
         n_params = self.columns.shape[0]
-        ic, ci, gradient = _chunk_arrays(n_params, self.n_bins, m)
+        ic, ci, median, gradient = _chunk_arrays(n_params, self.n_bins, m)
         extreme_costs = np.empty((3, m))
         common = (
             window_errors,
@@ -362,16 +371,17 @@ class CompiledFlavour:
             self.min_points,
             ic,
             ci,
+            median,
             gradient,
             extreme_costs,
         )
         # The square roots are taken here, as the numpy flavours take them, so both give the same bits.
         if not self.batches:
             kernels.analyse_windows(*common)
-            return WindowResults(ic, ci, gradient, *np.sqrt(extreme_costs))
+            return WindowResults(ic, ci, median, gradient, *np.sqrt(extreme_costs))
         batch_ic, batch_ci = np.empty((self.batches, n_params, m)), np.empty((self.batches, n_params, m, 2))
         kernels.analyse_windows_batched(*common, self.batch_counts, self.batch_positions, batch_ic, batch_ci)
-        return WindowResults(ic, ci, gradient, *np.sqrt(extreme_costs), batch_ic, batch_ci)
+        return WindowResults(ic, ci, median, gradient, *np.sqrt(extreme_costs), batch_ic, batch_ci)
 
 
 def importance_weights(weights, n_samples):
@@ -432,16 +442,18 @@ class ImportanceFlavour:
         total = mass.sum(axis=1, keepdims=True)
         mass = np.where(total > 0, mass / np.where(total > 0, total, 1), prior)  # all-equal costs >= 1
         rows = order.shape[0]
-        ic, ci, gradient = _chunk_arrays(self.columns.shape[0], n_bins, rows)
+        ic, ci, median, gradient = _chunk_arrays(self.columns.shape[0], n_bins, rows)
         for p, column in enumerate(self.columns):
             values = column[order]
             low, high = self.bounds[p]
-            ci[p] = cld.weighted_limits(values, mass if self.likelihood_limits else prior, self.conf_level)
+            ci[p], median[p] = cld.band_and_median(
+                values, mass if self.likelihood_limits else prior, self.conf_level, weighted=True
+            )
             ic[p] = 1 - (ci[p, :, 1] - ci[p, :, 0]) / (high - low)
             if n_bins:
                 gradient[p] = cld.binned_mass(values, mass, low, high, self.bins).T
         upper = np.sqrt(_population_quantile(cost))
-        return _blank_unusable(ic, ci, gradient, np.sqrt(behavioural_cost), upper, usable)
+        return _blank_unusable(ic, ci, median, gradient, np.sqrt(behavioural_cost), upper, usable)
 
 
 class BatchedFlavour:
@@ -502,6 +514,8 @@ class McatFlavour:
         ranks = np.arange(1, self.count + 1) / self.count
         low_level, high_level = (100 - conf_level) / 200, (100 + conf_level) / 200
         self.limit_index = [int(np.argmax(ranks > low_level)), int(np.argmax(ranks > high_level))]
+        # The median read off as the limits are, at level 0.5: between them, since the ranks ascend.
+        self.median_index = int(np.argmax(ranks > 0.5))
         self.cdf_levels = np.concatenate([[0.0], ranks, [1.0]])
         self.every_window_nonzero = True
 
@@ -510,15 +524,16 @@ class McatFlavour:
         selected = selected_columns(stable_rank_mask(likelihood, *self.block), self.count)
         rows = selected.shape[0]
         n_params = self.columns.shape[0]
-        ic, ci, gradient = _chunk_arrays(n_params, self.n_bins, rows)
+        ic, ci, median, gradient = _chunk_arrays(n_params, self.n_bins, rows)
         for p, column in enumerate(self.columns):
             ordered = np.sort(column[selected], axis=1)
             ci[p] = ordered[:, self.limit_index]
+            median[p] = ordered[:, self.median_index]
             ic[p] = 1 - (ci[p, :, 1] - ci[p, :, 0]) / self.span[p]
             gradient[p] = self._cdf_slope(_nudge_ties(ordered), p).T
         # MCAT ranks by MAE itself, so its behavioural set's MAEs are read off directly.
         upper = _population_quantile(mae)
-        return _blank_unusable(ic, ci, gradient, np.take_along_axis(mae, selected, axis=1), upper, usable)
+        return _blank_unusable(ic, ci, median, gradient, np.take_along_axis(mae, selected, axis=1), upper, usable)
 
     def _likelihood(self, mae, usable):
         """``1 - mae/max(mae)`` (or ``1 - mae`` once a window had max 0), lifted above 0."""

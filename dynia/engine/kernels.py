@@ -420,8 +420,9 @@ def _read_off(
     t,
     ic,
     ci,
+    median,
     gradient,
-    with_gradient,
+    whole,
     scratch,
     selected,
     weights,
@@ -429,12 +430,16 @@ def _read_off(
     order,
     buffer,
 ):
-    """Behavioural set of one window's ``cost`` and what it gives: ``ic[:, t]``, ``ci[:, t]``, ``gradient[:, :, t]``.
+    """Behavioural set of one window's ``cost`` and what it gives: ``ic``, ``ci``, ``median`` and ``gradient`` at t.
 
     The set is searched among ``candidates[:found]`` (see
     :func:`_behavioural`), indices of ``cost`` and of the columns of
     ``columns``: a batch of samples is read off through candidates that are
-    its members only. Without ``with_gradient`` the gradient is left alone.
+    its members only. Without ``whole`` (a batch's read-off, whose IC and
+    limits alone are used) the gradient and the median are left alone. The
+    median is read off as the limits are: the first sorted value whose CLD
+    reaches 0.5 (``weighted``), or the value at sorted position
+    ``(count - 1) // 2``, which is ``floor(0.5 (count - 1))``.
     Returns the count-th smallest cost and the smallest.
     """
     n_params = columns.shape[0]
@@ -462,7 +467,7 @@ def _read_off(
         low, high = lows[p], highs[p]
         for i in range(count):
             values[i] = columns[p, selected[i]]
-        if with_gradient:
+        if whole:
             for b in range(bins):
                 gradient[p, b, t] = 0.0
             for i in range(count):
@@ -479,11 +484,23 @@ def _read_off(
                     if cumulative < levels[side]:
                         reached += 1
                 ci[p, t, side] = values[order[min(reached, count - 1)]]
+            if whole:
+                cumulative = 0.0
+                reached = 0
+                for i in range(count):
+                    cumulative += weights[order[i]]
+                    if cumulative < 0.5:
+                        reached += 1
+                median[p, t] = values[order[min(reached, count - 1)]]
         else:
             for side in range(2):
                 for i in range(count):
                     scratch[i] = values[i]
                 ci[p, t, side] = _select(scratch, count, positions[side])
+            if whole:
+                for i in range(count):
+                    scratch[i] = values[i]
+                median[p, t] = _select(scratch, count, (count - 1) // 2)
         ic[p, t] = 1 - (ci[p, t, 1] - ci[p, t, 0]) / (high - low)
     return threshold, smallest
 
@@ -527,6 +544,7 @@ def analyse_windows_batched(
     min_points,
     ic,
     ci,
+    median,
     gradient,
     extreme_costs,
     batch_counts,
@@ -568,6 +586,7 @@ def analyse_windows_batched(
         if present < min_points:
             ic[:, t] = np.nan
             ci[:, t, :] = np.nan
+            median[:, t] = np.nan
             gradient[:, :, t] = np.nan
             extreme_costs[:, t] = np.nan
             for b in range(n_batches):
@@ -593,6 +612,7 @@ def analyse_windows_batched(
             t,
             ic,
             ci,
+            median,
             gradient,
             True,
             scratch,
@@ -638,6 +658,7 @@ def analyse_windows_batched(
                 t,
                 batch_ic[b],
                 batch_ci[b],
+                median,
                 gradient,
                 False,
                 scratch,
@@ -668,6 +689,7 @@ def analyse_windows(
     min_points,
     ic,
     ci,
+    median,
     gradient,
     extreme_costs,
 ):
@@ -677,7 +699,8 @@ def analyse_windows(
     come from the window inputs (row j + t belongs to slot j of window t).
     ``positions`` are the thesis limits' sorted positions, ``levels`` the
     weighted limits' CLD levels. Writes ``ic`` (n_params, m), ``ci``
-    (n_params, m, 2), ``gradient`` (n_params, bins, m) and
+    (n_params, m, 2), ``median`` (n_params, m), the CLD median read off as
+    the limits are, ``gradient`` (n_params, bins, m) and
     ``extreme_costs`` (3, m), the smallest cost, the largest behavioural
     cost (the count-th smallest) and the ``upper_position``-th smallest
     (0-based, the noise floor's population quantile) of every window;
@@ -701,6 +724,7 @@ def analyse_windows(
         min_points,
         ic,
         ci,
+        median,
         gradient,
         extreme_costs,
         np.empty(0, dtype=np.int64),

@@ -7,7 +7,8 @@ Shape convention (used by every function of the package)
 - ``params``: sampled parameter sets, (n_samples, n_params).
 - ``bounds``: sampling range of each parameter, (n_params, 2) as [low, high].
 - results: ``ic`` (n_params, n_steps); ``ci`` (n_params, n_steps, 2) as
-  [lower, upper]; ``gradient`` (n_params, n_bins, n_steps).
+  [lower, upper]; ``median`` (n_params, n_steps), the CLD median read off
+  as the limits are; ``gradient`` (n_params, n_bins, n_steps).
 
 How it works
 ------------
@@ -212,7 +213,8 @@ def moving_window(
     -------
     DyniaResult
         ``.ic`` (n_params, n_steps), ``.ci`` (n_params, n_steps, 2),
-        ``.gradient`` (n_params, n_bins, n_steps), ``.bin_centres``
+        ``.median`` (n_params, n_steps), ``.gradient`` (n_params, n_bins,
+        n_steps), ``.bin_centres``
         (n_params, n_bins) and the settings; with ``ic_error`` also
         ``.ic_se`` (n_params, n_steps) and ``.ci_se`` (n_params, n_steps,
         2), and ``settings["ic_batches"]``, the number of batches.
@@ -412,7 +414,12 @@ def _analyse(
     n_steps = y.size
     # In memory or, with a store, in a file written as the chunks come (dynia.storage).
     output = result_arrays(store, checked.dtype)
-    shapes = dict(ic=(n_params, n_steps), ci=(n_params, n_steps, 2), gradient=(n_params, flavour_impl.n_bins, n_steps))
+    shapes = dict(
+        ic=(n_params, n_steps),
+        ci=(n_params, n_steps, 2),
+        median=(n_params, n_steps),
+        gradient=(n_params, flavour_impl.n_bins, n_steps),
+    )
     if ic_error:
         shapes.update(ic_se=(n_params, n_steps), ci_se=(n_params, n_steps, 2))
     output.allocate(shapes, names=names, samples=params, bounds=bounds, time=time, bin_centres=flavour_impl.bin_centres)
@@ -429,7 +436,7 @@ def _analyse(
 
     def write(finished):
         start, stop, results = finished.result()
-        chunks = dict(ic=results.ic, ci=results.ci, gradient=results.gradient)
+        chunks = dict(ic=results.ic, ci=results.ci, median=results.median, gradient=results.gradient)
         if ic_error:
             chunks["ic_se"], chunks["ci_se"] = monte_carlo_errors(results.batch_ic, results.batch_ci)
         output.write(start, stop, chunks)
@@ -490,6 +497,7 @@ def _analyse(
         time=time,
         ic=arrays["ic"],
         ci=arrays["ci"],
+        median=arrays["median"],
         gradient=arrays["gradient"],
         bin_centres=flavour_impl.bin_centres,
         settings=recorded,
