@@ -302,7 +302,8 @@ def record_residuals(y, params, bounds, totals, simulations, chunk_steps=RESIDUA
     the simulated outputs of those sets, (len(indices), m) arrays in time
     order covering the record; it is called twice, so that memory holds
     one series (8 bytes a step) and chunks of ``chunk_steps``, never the
-    sets' whole outputs. Returns the residuals (NaN where ``y`` is).
+    sets' whole outputs. Returns the residuals (NaN where ``y`` is), or
+    None when they overflow.
 
     Examples
     --------
@@ -331,6 +332,8 @@ def record_residuals(y, params, bounds, totals, simulations, chunk_steps=RESIDUA
         measured = ~np.isnan(part)
         gram += directions[:, measured] @ directions[:, measured].T
         projection += directions[:, measured] @ part[measured]
+    if np.isinf(residuals).any() or not (np.isfinite(gram).all() and np.isfinite(projection).all()):
+        return None  # outputs beyond floating point: nothing to say about the noise
     if count:
         step = np.linalg.lstsq(gram, projection, rcond=1e-10)[0]
         for start, chunk in _time_chunks(simulations(rows), chunk_steps):
