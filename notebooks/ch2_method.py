@@ -736,11 +736,11 @@ for phi in coloured_phis:
     print(f"{phi:5.2f}  {false_share[phi]:27.2f}  {power[phi]:5.2f}  {estimated:15.2f}  {factor:11.1f}")
 
 # %% [markdown]
-# With the white-noise floor (f = 1 and the windows' noise level only), 15 and
-# 17 of 20 such pure-noise records had informative windows at phi 0.9 and
-# 0.98: a slow stretch of noise is a level that the sets with the matching
-# gain fit, and 21 points of it are worth about two independent ones at phi
-# 0.9. Calibrated for the autocorrelation, the false windows stay at the
+# With the white-noise floor (f = 1 and the windows' noise level only), 13 and
+# 19 of these 20 pure-noise records had informative windows at phi 0.9 and
+# 0.98 (with the default parameters): a slow stretch of noise is a level that
+# the sets with the matching gain fit, and 21 points of it are worth about
+# two independent ones at phi 0.9. Calibrated for the autocorrelation, the false windows stay at the
 # family-wise 5 % the floor is built for, and the power falls only as the
 # noise's slow part really hides the response: the windows lost are those on
 # low input levels. At phi 0 the estimate keeps no lag in most records and the
