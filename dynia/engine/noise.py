@@ -337,7 +337,9 @@ def add_record_errors(totals, rows):
     block = np.empty((rows.shape[0] + 1, totals.size))
     block[0] = totals
     block[1:] = rows
-    np.add.reduce(block, axis=0, out=totals)
+    # A set whose simulation overflows gets an infinite total: it is never the best.
+    with np.errstate(over="ignore", invalid="ignore"):
+        np.add.reduce(block, axis=0, out=totals)
 
 
 def record_residuals(y, params, bounds, totals, simulations, chunk_steps=RESIDUAL_CHUNK):
@@ -367,7 +369,7 @@ def record_residuals(y, params, bounds, totals, simulations, chunk_steps=RESIDUA
     True
     """
     y = np.asarray(y, dtype=float)
-    best = int(np.argmin(totals))
+    best = int(np.argmin(np.fmin(totals, np.inf)))  # a NaN total (a diverged set) is never the best
     scaled = (params - bounds[:, 0]) / np.where(bounds[:, 1] > bounds[:, 0], bounds[:, 1] - bounds[:, 0], 1.0)
     distance = np.sum((scaled - scaled[best]) ** 2, axis=1)
     distance[best] = np.inf
