@@ -120,8 +120,8 @@ before the projection, within 0.15 of 0 after). Memory: one value a step.
 From these residuals:
 
 - the autocorrelations rho_1, rho_2, ... up to lag 2n (the lags a window
-  holds), cut before the first one at most ``2 / sqrt(n)`` (n points), the
-  two-sigma limit of a white series' estimate
+  holds), cut before the first one at most ``2 / sqrt(N_r)`` (N_r residuals
+  present), the two-sigma limit of a white series' estimate
   (:func:`residual_autocorrelation`): white residuals keep no lag in about
   97.5 % of records, so their floor is the white one (f = 1), and a
   negative estimate never lowers it. f is computed for the full window of
