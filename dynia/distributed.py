@@ -92,7 +92,15 @@ import numpy as np
 
 from . import _checks
 from .engine.flavours import compiled_engine, flavour_analysis, monte_carlo_errors
-from .engine.noise import floor_fields, floor_settings, record_noise_floor, window_points
+from .engine.noise import (
+    RESIDUAL_CHUNK,
+    add_record_errors,
+    floor_fields,
+    floor_settings,
+    record_noise_floor,
+    record_residuals,
+    window_points,
+)
 from .engine.windows import ArrayErrors, StreamedErrors, window_halos, window_inputs, window_mean
 from .errors import DataError, DyniaError, ModelError
 from .pipeline import warn_dropped
@@ -312,7 +320,17 @@ def run(
             progress=progress,
             ahead=_CHUNKS_AHEAD_PER_THREAD * threads,
         )
+        # Every sample's record total absolute error, added step by step as dynia.run adds them.
+        totals = np.concatenate(client.gather(blocks.totals()))
 
+    # The record-best set and its neighbours are simulated once more here, as dynia.run does.
+    residuals = record_residuals(
+        y,
+        samples,
+        box,
+        totals,
+        lambda rows: model.simulate_chunks(samples[rows][:, model_order], u, dt=dt, x0=x0, chunk_steps=RESIDUAL_CHUNK),
+    )
     floor = record_noise_floor(
         best,
         upper,
@@ -322,6 +340,7 @@ def run(
         len(names),
         settings.percentage,
         samples.shape[0],
+        residuals,
     )
     # The same record as dynia.run's: the settings asked for, then what the analysis did.
     recorded = settings.record(model, names, box, n_sampled=n_samples, n_dropped=n_samples - samples.shape[0])
@@ -483,10 +502,20 @@ class _Windows:
         """Steps per window."""
         return self.before + self.after + 1
 
-    def block(self, errors, start, stop, n_steps):
-        """One sample chunk's input to the windows at steps [start, stop), with its measured counts."""
+    def block(self, errors, start, stop, n_steps, totals):
+        """One sample chunk's input to the windows at steps [start, stop), with its measured counts.
+
+        The chunk's own steps' errors are added to ``totals``, its samples' record totals, as the engine adds them.
+        """
         window_errors, measured = window_inputs(
             errors, start, stop, self.before, self.after, n_steps, time_major=self.compiled
+        )
+        m = stop - start
+        add_record_errors(
+            totals,
+            window_errors[self.before : self.before + m]
+            if self.compiled
+            else window_errors[:, self.before : self.before + m].T,
         )
         if self.compiled:
             return window_errors, measured
@@ -527,24 +556,36 @@ class _ChainedBlocks:
         ]
         return self._previous
 
+    def totals(self):
+        """Futures of every sample chunk's record totals, once the last time chunk is submitted."""
+        return [self._client.submit(_handed_totals, previous, pure=False) for previous in self._previous]
+
+
+def _handed_totals(output):
+    """The record totals a chained task hands on."""
+    return output[1][2]
+
 
 def _chained_window_inputs(params, first, previous, start, stop, model, u, y, dt, x0, windows):
     """Stage 1, resumable: one sample chunk's window inputs at steps [start, stop), and what to hand on.
 
     ``previous`` is the output of the task of the previous time chunk (None
-    for the first), whose second part it handed on: the simulation's state
-    and the errors from where this chunk's windows reach back to up to that
-    state's step. The steps the windows reach beyond it are simulated here.
-    Errors are kept time-major, the compiled windows' layout, which a linear
-    model simulates in without transposing.
+    for the first), whose second part it handed on: the simulation's state,
+    the errors from where this chunk's windows reach back to up to that
+    state's step and the samples' record totals of absolute error so far.
+    The steps the windows reach beyond it are simulated here. Errors are
+    kept time-major, the compiled windows' layout, which a linear model
+    simulates in without transposing.
     """
     n_steps = y.size
     reach_back, reach_ahead = max(start - windows.before, 0), min(stop + windows.after, n_steps)
     with _sample_chunk_context(first, params.shape[0]):
         if previous is None:
             state, errors = model.start_simulation(params, u, dt=dt, x0=x0), np.empty((0, params.shape[0]))
+            totals = np.zeros(params.shape[0])
         else:
-            _, (state, errors) = previous
+            _, (state, errors, totals) = previous
+            totals = totals.copy()  # the previous output may be shared with other tasks
         if reach_ahead > state.step:
             simulated_from = state.step
             sims, state = model.simulate_span(state, u, reach_ahead, time_major=True)
@@ -554,10 +595,10 @@ def _chained_window_inputs(params, first, previous, start, stop, model, u, y, dt
             except DataError as error:
                 raise DataError(f"{error} (steps counted from step {simulated_from})") from error
             errors = np.concatenate([errors, fresh]) if errors.shape[0] else fresh
-        block = windows.block(_ErrorSpan(y, reach_back, errors), start, stop, n_steps)
+        block = windows.block(_ErrorSpan(y, reach_back, errors), start, stop, n_steps, totals)
         shared = max(stop - windows.before, 0)  # where the next time chunk's windows reach back to
         # A copy, so that the errors of this chunk are freed with its block.
-        return block, (state, errors[shared - reach_back :].copy())
+        return block, (state, errors[shared - reach_back :].copy(), totals)
 
 
 class _ErrorSpan:
@@ -592,30 +633,39 @@ class _WholeRecordBlocks:
             for first, rows in row_chunks
         ]
         self._time_chunks = time_chunks
+        n_chunks = math.ceil(n_steps / time_chunks)
         self._by_time = {
             k: [client.submit(operator.getitem, inputs, k, pure=False) for inputs in whole_record]
-            for k in range(math.ceil(n_steps / time_chunks))
+            for k in range(n_chunks)
         }
+        self._totals = [client.submit(operator.getitem, inputs, n_chunks, pure=False) for inputs in whole_record]
 
     def __call__(self, start, stop):
         """The outputs' futures of the time chunk [start, stop), handed out once."""
         return self._by_time.pop(start // self._time_chunks)
 
+    def totals(self):
+        """Futures of every sample chunk's record totals of absolute error."""
+        return self._totals
+
 
 def _whole_record_window_inputs(model, params, u, y, dt, x0, windows, time_chunks, first):
     """Stage 1, not resumable: simulate one sample chunk over the record; its window inputs per time chunk.
 
-    Each time chunk's block comes with nothing to hand on, as a chained task's output does.
+    Each time chunk's block comes with nothing to hand on, as a chained task's output does; the samples'
+    record totals of absolute error follow the last.
     """
     n_steps = y.size
+    totals = np.zeros(params.shape[0])
     with _sample_chunk_context(first, params.shape[0]):
         errors = StreamedErrors(
             y, model.simulate_chunks(params, u, dt=dt, x0=x0, chunk_steps=time_chunks), params.shape[0]
         )
-        return [
-            (windows.block(errors, start, min(start + time_chunks, n_steps), n_steps), None)
+        inputs = [
+            (windows.block(errors, start, min(start + time_chunks, n_steps), n_steps, totals), None)
             for start in range(0, n_steps, time_chunks)
         ]
+    return [*inputs, totals]
 
 
 def _analyse_stage_one(flavour, windows, outputs, m):

@@ -31,13 +31,14 @@ The cost is O(n_samples x (2n+1)) per update and memory is fixed: nothing
 grows with the number of steps.
 """
 
+import copy
 import numbers
 
 import numpy as np
 
 from . import _checks
 from .engine.flavours import FLAVOUR_CLASSES, McatFlavour
-from .engine.noise import floor_fields, floor_settings, record_noise_floor
+from .engine.noise import RESIDUAL_CHUNK, floor_fields, floor_settings, record_noise_floor, record_residuals
 from .errors import DataError
 from .models import Model
 from .result import DyniaResult
@@ -306,8 +307,10 @@ class OnlineDynia:
             ``dynia.run(..., window="trailing")`` on the same record. Its
             noise floor (``.informative``, :mod:`dynia.engine.noise`) judges
             the replayed windows together, as the batch analysis does: the
-            noise level is a median over them, so a single update cannot
-            give it.
+            noise level is a median over them, and the noise's
+            autocorrelation comes from the residuals of the set with the
+            lowest total absolute error over the replayed steps, which is
+            simulated once more; a single update cannot give them.
         """
         u, y = _checks.record(u, y, n_inputs=self._model.n_inputs)
         n_params, n_bins = self.bin_centres.shape
@@ -317,13 +320,27 @@ class OnlineDynia:
         gradient = np.empty((n_params, n_bins, y.size))
         best, upper, threshold, points = np.empty(y.size), np.empty(y.size), np.empty(y.size), np.empty(y.size)
         first = self.steps
+        # The simulation from here on, to simulate the record-best set again once it is known.
+        start = copy.deepcopy(self._stepper) if first else None
+        totals = np.zeros(self.samples.shape[0])
+        width = self._errors.shape[0]
         for step, (u_t, y_t) in enumerate(zip(u.tolist(), y.tolist())):  # u_t a list for several inputs
             ic[:, step], ci[:, step], gradient[:, :, step] = self.update(u_t, y_t)
             median[:, step] = self.median
             best[step], upper[step], threshold[step] = self._best, self._upper, self._threshold
             points[step] = self._present
+            totals += self._errors[(self.steps - 1) % width]  # step by step, as the batch engine adds them
+        totals[self._diverged] = np.inf
         floor = record_noise_floor(
-            best, upper, threshold, points, self._errors.shape[0], n_params, self._percentage, self.samples.shape[0]
+            best,
+            upper,
+            threshold,
+            points,
+            width,
+            n_params,
+            self._percentage,
+            self.samples.shape[0],
+            residuals=record_residuals(y, self.samples, self.bounds, totals, self._simulations(u, start)),
         )
         settings = dict(self._settings, n_diverged=self.n_diverged, **floor_settings(floor))
         return DyniaResult(
@@ -339,6 +356,24 @@ class OnlineDynia:
             settings=settings,
             **floor_fields(floor),
         )
+
+    def _simulations(self, u, start):
+        """``simulations(rows)`` of :func:`dynia.engine.noise.record_residuals` over the replayed record.
+
+        ``start`` is the stepper as the replay began, None when it began at
+        step 0: the sets are then simulated alone, which the stepper equals
+        bit for bit; otherwise a copy of it is stepped through ``u`` again.
+        """
+
+        def simulations(rows):
+            if start is None:
+                model_params = self._model_params[rows]
+                return self._model.simulate_chunks(
+                    model_params, u, dt=self._dt, x0=self._x0, chunk_steps=RESIDUAL_CHUNK
+                )
+            return _stepped(copy.deepcopy(start), u, rows)
+
+        return simulations
 
     def _window_mean(self):
         """Each sample's MAE over the window ending at the newest step, into ``_mae``.
@@ -392,6 +427,19 @@ class OnlineDynia:
         self.ci = np.full((n_params, 2), np.nan)
         self.median = np.full(n_params, np.nan)
         self.gradient = np.full((n_params, n_bins), np.nan)
+
+
+def _stepped(stepper, u, rows):
+    """The outputs of samples ``rows`` as ``stepper`` steps through ``u``, in chunks of steps."""
+    block = []
+    with np.errstate(over="ignore", invalid="ignore"):
+        for u_t in u.tolist():
+            block.append(stepper.step(u_t)[rows])
+            if len(block) == RESIDUAL_CHUNK:
+                yield np.stack(block, axis=1)
+                block = []
+    if block:
+        yield np.stack(block, axis=1)
 
 
 def _scalar(value, name, step, *, allow_nan):

@@ -10,6 +10,7 @@ from . import _checks
 from .adaptive import adaptive_run
 from .engine.flavours import compiled_engine
 from .engine.kernels import CompiledErrors
+from .engine.noise import RESIDUAL_CHUNK
 from .engine.windows import ArrayErrors, analyse_stream, default_chunk_steps
 from .errors import ModelError, SettingsError
 from .frames import unpack
@@ -298,6 +299,7 @@ def _analyse_samples(u, y, model, names, box, samples, settings, progress, outpu
                 workers=workers,
                 ic_error=settings.ic_error,
                 store=output,
+                simulations=_simulations(u, model, analysed[:, model_order], sims, settings),
             )
         finally:
             if isinstance(errors, (CompiledErrors, StateErrors)):
@@ -308,6 +310,17 @@ def _analyse_samples(u, y, model, names, box, samples, settings, progress, outpu
         finite[np.flatnonzero(finite)[errors.diverged]] = False
     warn_dropped(n_dropped, n_sampled)
     return result
+
+
+def _simulations(u, model, params, sims, settings):
+    """``simulations(indices)`` of :func:`dynia.analysis.analyse_stream`: those samples simulated once more."""
+
+    def simulations(rows):
+        if sims is not None:
+            return [sims[rows]]
+        return model.simulate_chunks(params[rows], u, dt=settings.dt, x0=settings.x0, chunk_steps=RESIDUAL_CHUNK)
+
+    return simulations
 
 
 def _analyse_to_target(u, y, model, names, box, samples, settings, generator, progress, output):

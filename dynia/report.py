@@ -107,14 +107,21 @@ def noise_floor_summary(result, data):
 
     None for a result without the floor. ``informative`` lists the runs of
     informative windows as ``[first_time, last_time]`` pairs in the file's
-    times (the window centred, or ending, at each).
+    times (the window centred, or ending, at each). ``autocorrelation`` is
+    the lag-1 autocorrelation of the record-best fit's residuals and
+    ``size_factor`` how many times fewer independent points a window's
+    count as (:mod:`dynia.engine.noise`); a result saved before they were
+    estimated gives None and 1.
     """
     if result.informative is None:
         return None
     mask = np.asarray(result.informative, dtype=bool)
     settings = result.settings
+    autocorrelation = settings.get("noise_autocorrelation")
     return dict(
         sigma=settings["noise_sigma"],
+        autocorrelation=None if autocorrelation is None or np.isnan(autocorrelation) else autocorrelation,
+        size_factor=settings.get("noise_size_factor", 1.0),
         quantile=settings["noise_floor_quantile"],
         multiple=settings["noise_multiple"],
         behavioural_multiple=settings["behavioural_multiple"],
@@ -127,10 +134,17 @@ def noise_floor_summary(result, data):
 
 def noise_floor_line(floor):
     """The line ``dynia analyse`` prints under the verdict table about the noise floor (``floor``: the summary's)."""
+    autocorrelation, factor = floor.get("autocorrelation"), floor.get("size_factor", 1.0)
+    if autocorrelation is None:
+        noise = "white noise assumed"
+    elif factor > 1:
+        noise = f"lag-1 autocorrelation {autocorrelation:.2f}: a window's points count {factor:.3g} times fewer"
+    else:
+        noise = f"white: lag-1 autocorrelation {autocorrelation:.2f}"
     return (
         f"noise floor: {100 * floor['informative_share']:.0f} % of the windows informative (their "
         f"{floor['quantile']:g}-quantile MAE above the best by more than {floor['multiple']:.2f} standard "
-        f"deviations of the MAE of noise sigma {floor['sigma']:.3g}, estimated from the best fits)"
+        f"deviations of the MAE of noise sigma {floor['sigma']:.3g}, {noise}; estimated from the best fits)"
     )
 
 

@@ -388,7 +388,10 @@ for label, draws in heating_random.items():
 #   model is right, understate the real uncertainty. We see nothing here that
 #   shows DYNIA's selection to be better or worse than another *as a
 #   selection of information*; the record cannot tell.
-# - **DYNIA's noise floor** (`informative`, the line above the table)
+# - **DYNIA's noise floor** (`informative`, the line above the table;
+#   it assumes stationary noise, white or autocorrelated, of the level and
+#   autocorrelation that the residuals of the record's best fit show, so a
+#   stretch the model cannot fit counts as noise too)
 #   changes nothing here: every window of the fitting part is informative in
 #   the first run, and in the second only the first and last n steps are
 #   not, whose windows are cut short and which have no IC in that run (it

@@ -320,7 +320,10 @@ fig.savefig(f"{figure_dir}/nonlinear_hymod_identifiability.png", dpi=120, bbox_i
 #   reaches 0.5 in only two windows, and their band (at day 544, [0.02,
 #   0.50]) excludes the true 0.6. The verdict is `suspect` (`noise_ranked`):
 #   the behavioural set of that window ties within noise, so which sets it
-#   keeps, and so the band, is a ranking of noise. With `kq` free over
+#   keeps, and so the band, is a ranking of noise (the noise floor's noise
+#   is stationary, white or autocorrelated, of the level and autocorrelation
+#   that the residuals of the record's best fit show; a stretch the model
+#   cannot fit counts as noise too). With `kq` free over
 #   [0.1, 1], other quick-flow residence times with a different split fit
 #   the peaks as well, within the noise. The verdict rules cannot know the
 #   truth; here the tie is what gives the wrong band away.

@@ -205,7 +205,9 @@ for p, name in enumerate(online.names):
 # no verdict. The floor asks whether a window tells parameter sets apart
 # beyond what measurement noise alone does, and the noise level it compares
 # with is a median over the windows of the best fits' errors: one window
-# cannot give it. `OnlineDynia.replay(u, y)` feeds a stretch of log and
+# cannot give it. The floor assumes stationary noise, white or
+# autocorrelated, of the level and autocorrelation that the residuals of the
+# stretch's best fit show. `OnlineDynia.replay(u, y)` feeds a stretch of log and
 # returns a `DyniaResult` with the floor (`.informative`) and the verdicts,
 # judged over that stretch, as the batch analysis judges a record. Here the
 # whole record is replayed from the start:

@@ -47,10 +47,18 @@ The null hypothesis
 -------------------
 H0: within the window the residuals of the parameter sets are exchangeable
 noise, so which set fits best is decided by the noise realisation, not by
-the parameters. The MAE of m noise points of standard deviation sigma has
-mean ``sigma sqrt(2/pi)`` and standard deviation
-``s = sigma sqrt(1 - 2/pi) / sqrt(m)`` (normal noise), and by the central
-limit theorem is close to normal. Under H0 with residuals correlated across
+the parameters. The noise is assumed normal and stationary with standard
+deviation sigma and autocorrelation rho_k at lag k, the same over the
+record (white noise is rho_k = 0). The MAE of m consecutive noise points
+then has mean ``sigma sqrt(2/pi)`` and standard deviation
+``s = sigma sqrt(1 - 2/pi) sqrt(f / m)``, ``f = 1 + 2 sum_{k<m} (1 - k/m)
+rho_k`` (:func:`size_factor`: the m points count as ``m / f`` independent
+ones), and by the central limit theorem is close to normal. That f is the
+one of the mean of the residuals themselves, which bounds those of their
+absolute values and of their signs (for normal noise about rho_k^2 and
+``(2/pi) arcsin rho_k``): a smooth stretch of noise is a level the sets
+can fit, and a set's MAE moves with it as with the mean of the residuals,
+not of independent points. Under H0 with residuals correlated across
 sets with correlation rho (they share the noise: rho near 1 when the outputs
 nearly agree), MAE_i = mu + s (sqrt(rho) Z_0 + sqrt(1 - rho) Z_i), so any
 difference of two order statistics is ``s sqrt(1 - rho)`` times that of
@@ -77,10 +85,12 @@ record of 10^5 steps W = 5000). The MAE of few points is skewed to the
 right, so its left tail is lighter than the normal one: the normal
 approximation makes the floor a little higher, not lower.
 
-The noise level
----------------
-sigma comes from the best fits' residuals: every window's best MAE divided
-by ``sqrt(2/pi)`` (the MAE of normal noise), the median over the windows.
+The noise level and its autocorrelation
+---------------------------------------
+Both come from the best fits' residuals.
+
+*The windows' best fits.* Every window's best MAE divided by
+``sqrt(2/pi)`` (the MAE of normal noise), the median over the windows.
 The minimum over many sets is biased low, but not as the minimum of N
 independent MAEs is (sets share parameters, so their fits are one
 p-parameter family, not N independent tries): the best of a dense sample is
@@ -89,18 +99,59 @@ residuals are smaller by ``sqrt((m - p)/m)`` (least squares: the expected
 residual sum of squares is ``sigma^2 (m - p)``); that factor is divided out.
 Windows with ``m <= p`` points say nothing about the noise and are left out.
 The median is robust to the windows where the model cannot fit (their best
-MAE holds the misfit too) while they are fewer than half; when they are
-more, sigma is overestimated and the floor is higher: fewer windows are
-informative, never more. On thesis examples 1 and 2 (sigma 0.5 and 0.2) the
-estimate lands within 12 % of the truth.
+MAE holds the misfit too) while they are fewer than half. On thesis
+examples 1 and 2 (sigma 0.5 and 0.2) the estimate lands within 12 % of the
+truth. Under coloured noise a window's fit also absorbs the slow part of
+the noise (a level over the window is a gain to fit), so this estimate is
+low: 0.85 of sigma at lag-1 autocorrelation 0.9 in 21-step windows, 0.6 at
+0.98.
 
-Two limits of one sigma for the whole record. Errors that grow with the
-output (relative gauging errors) are smaller than sigma where the output is
-small, so windows there that do discriminate can fall below the floor.
-And a population of unrelated outputs, not one model's family over its
+*The record's best fit.* As the errors stream by, every front-end adds
+each set's absolute errors over the record, step by step in time order
+(:func:`add_record_errors`: the batch engine, the cluster and the online
+replay cut the record differently and find the same totals bit for bit).
+The set with the lowest total is simulated once more with its ``2 p``
+nearest sets (:func:`record_residuals`), and its residuals ``y - sim`` are
+projected off the differences of their outputs: a Gauss-Newton step
+within the sample, which takes off the set's misfit of the parameters, a
+smooth error of the response that is autocorrelated however white the
+noise (on thesis example 1 it gives a lag-1 autocorrelation of up to 0.7
+before the projection, within 0.15 of 0 after). Memory: one value a step.
+From these residuals:
+
+- the autocorrelations rho_1, rho_2, ... up to lag 2n (the lags a window
+  holds), cut before the first one at most ``2 / sqrt(N_r)`` (N_r residuals
+  present), the two-sigma limit of a white series' estimate
+  (:func:`residual_autocorrelation`): white residuals keep no lag in about
+  97.5 % of records, so their floor is the white one (f = 1), and a
+  negative estimate never lowers it. f is computed for the full window of
+  2n+1 steps; truncated windows and windows with missing points, whose f
+  is smaller, get a floor a little too high;
+- a second noise level, the median absolute residual over
+  ``Phi^-1(0.75)``, which the windows' fits do not bias low
+  (:func:`residual_sigma`). sigma is the larger of the two.
+
+So the floor holds for any stationary noise whose autocorrelation the
+record-best fit's residuals show. What those residuals hold that is no
+noise counts as noise: where the model cannot fit a stretch (a misfit
+smooth in time), both the autocorrelation and the residual noise level rise
+and the floor with them; fewer windows are informative, never more. The
+estimate is one for the whole record: noise whose colour or level changes
+along it gets the record's average; errors that grow with the output
+(relative gauging errors) are smaller than sigma where the output is small,
+so windows there that do discriminate can fall below the floor. A
+population of unrelated outputs, not one model's family over its
 parameters, puts the minimum MAE far below the best fit's (the minimum of N
-independent MAEs): there the estimate is low and the floor too; give sigma
-to :func:`noise_floor` when it is known.
+independent MAEs): there the windows' estimate is low; give sigma to
+:func:`noise_floor` when it is known.
+
+Measured (``notebooks/ch2_method.py``, section "The noise floor under
+coloured noise"; 20 records of 500 steps, first-order model, 2000 samples,
+n = 10, AR(1) noise of SD 1 with lag-1 autocorrelation 0, 0.5, 0.9, 0.98):
+on pure noise (K in [0, 1] on input levels in [0, 1], every set's output
+within one noise SD) no record has an informative window at any of the four
+(the white-noise floor: 0, 0, 13 and 19 of 20); on a response of up to 6
+noise SDs 88, 84, 77 and 72 % of the windows are informative.
 
 Examples
 --------
@@ -130,14 +181,22 @@ __all__ = [
     "quantile_position",
     "fitted_noise_sigma",
     "window_points",
+    "add_record_errors",
+    "record_residuals",
+    "residual_autocorrelation",
+    "size_factor",
+    "residual_sigma",
     "FAMILY_LEVEL",
     "NOISE_FLOOR_QUANTILE",
+    "RESIDUAL_CHUNK",
     "floor_settings",
     "floor_fields",
 ]
 
 # The chance that any noise-only stretch of a record is called informative (Bonferroni over its windows).
 FAMILY_LEVEL = 0.05
+# Steps per chunk of the record-best set's residuals (record_residuals): its sums are cut there.
+RESIDUAL_CHUNK = 65_536
 # The population quantile whose MAE the discrimination compares with the best (see the module documentation).
 NOISE_FLOOR_QUANTILE = 0.9
 
@@ -169,6 +228,12 @@ class NoiseFloor:
     multiple, behavioural_multiple : float
         The critical multiples of :func:`critical_multiple` for the
         quantile and for the behavioural share.
+    autocorrelation : float
+        The lag-1 autocorrelation estimated from the record-best set's
+        residuals (NaN when none were given).
+    size_factor : float
+        A window of m points counts as ``m / size_factor`` independent ones
+        (:func:`size_factor`; 1 for white residuals).
     """
 
     informative: np.ndarray
@@ -179,6 +244,8 @@ class NoiseFloor:
     sigma: float
     multiple: float
     behavioural_multiple: float
+    autocorrelation: float = math.nan
+    size_factor: float = 1.0
 
 
 def quantile_position(n_samples):
@@ -252,8 +319,193 @@ def fitted_noise_sigma(best, points, n_params):
     return float(np.median(best[usable] * np.sqrt(m / (m - n_params))) / math.sqrt(2 / math.pi))
 
 
+def add_record_errors(totals, rows):
+    """Add time-major absolute errors ``rows`` (m, n_samples) to every sample's running record total, in place.
+
+    Step by step in time order, whatever the chunks: every front-end
+    (batch, cluster, online) cuts the record differently and must find the
+    same totals bit for bit, hence the same record-best set.
+
+    Examples
+    --------
+    >>> totals = np.zeros(2)
+    >>> add_record_errors(totals, np.array([[1.0, 2.0], [0.5, 0.25]]))
+    >>> totals.tolist()
+    [1.5, 2.25]
+    """
+    # One C-ordered block, running total first: numpy reduces it row after row.
+    block = np.empty((rows.shape[0] + 1, totals.size))
+    block[0] = totals
+    block[1:] = rows
+    # A set whose simulation overflows gets an infinite total: it is never the best.
+    with np.errstate(over="ignore", invalid="ignore"):
+        np.add.reduce(block, axis=0, out=totals)
+
+
+def record_residuals(y, params, bounds, totals, simulations, chunk_steps=RESIDUAL_CHUNK):
+    """The noise estimate of the floor: residuals of the record-best set, less its own misfit of the parameters.
+
+    The set with the lowest record total absolute error (``totals``) fits
+    the record only as well as the sample allows: its misfit, output
+    differences of a smooth response, is autocorrelated even when the noise
+    is white. The linearised fit around it removes that: the residuals
+    ``r = y - sim_best`` are projected off the output differences of its
+    ``2 p`` nearest sets (in the parameter box scaled to unit ranges), a
+    Gauss-Newton step within the sample. ``simulations(indices)`` yields
+    the simulated outputs of those sets, (len(indices), m) arrays in time
+    order covering the record; it is called twice, so that memory holds
+    one series (8 bytes a step) and chunks of ``chunk_steps``, never the
+    sets' whole outputs. Returns the residuals (NaN where ``y`` is), or
+    None when they overflow.
+
+    Examples
+    --------
+    >>> t = np.arange(200.0)
+    >>> sims = np.array([gain * (1 - np.exp(-t / 10)) for gain in (1.9, 2.1, 1.0, 3.0, 1.7)])
+    >>> y = 2 * (1 - np.exp(-t / 10)) + 0.1 * np.cos(t)
+    >>> r = record_residuals(y, np.array([[1.9], [2.1], [1.0], [3.0], [1.7]]), np.array([[0.0, 4.0]]),
+    ...                      np.abs(y - sims).sum(axis=1), lambda rows: [sims[rows]])
+    >>> bool(np.abs(r - 0.1 * np.cos(t)).max() < 0.01)
+    True
+    """
+    y = np.asarray(y, dtype=float)
+    best = int(np.argmin(np.fmin(totals, np.inf)))  # a NaN total (a diverged set) is never the best
+    scaled = (params - bounds[:, 0]) / np.where(bounds[:, 1] > bounds[:, 0], bounds[:, 1] - bounds[:, 0], 1.0)
+    distance = np.sum((scaled - scaled[best]) ** 2, axis=1)
+    distance[best] = np.inf
+    count = min(2 * params.shape[1], params.shape[0] - 1)
+    rows = [best, *np.argsort(distance, kind="stable")[:count].tolist()]
+    residuals = np.empty(y.size)
+    gram, projection = np.zeros((count, count)), np.zeros(count)
+    for start, chunk in _time_chunks(simulations(rows), chunk_steps):
+        stop = start + chunk.shape[1]
+        part = residuals[start:stop]
+        np.subtract(y[start:stop], chunk[0], out=part)
+        directions = chunk[1:] - chunk[0]
+        measured = ~np.isnan(part)
+        gram += directions[:, measured] @ directions[:, measured].T
+        projection += directions[:, measured] @ part[measured]
+    if np.isinf(residuals).any() or not (np.isfinite(gram).all() and np.isfinite(projection).all()):
+        return None  # outputs beyond floating point: nothing to say about the noise
+    if count:
+        step = np.linalg.lstsq(gram, projection, rcond=1e-10)[0]
+        for start, chunk in _time_chunks(simulations(rows), chunk_steps):
+            residuals[start : start + chunk.shape[1]] -= step @ (chunk[1:] - chunk[0])
+    return residuals
+
+
+def _time_chunks(chunks, size):
+    """(first step, chunk) of a stream of (k, m) chunks, re-cut at the multiples of ``size`` steps.
+
+    Fixed cuts make the sums over them, and so the residuals, the same
+    whichever chunks a front-end's simulation comes in.
+    """
+    start, pending, held = 0, [], 0
+    for chunk in chunks:
+        pending.append(np.asarray(chunk, dtype=float))
+        held += pending[-1].shape[1]
+        if held >= size:
+            joined = np.concatenate(pending, axis=1) if len(pending) > 1 else pending[0]
+            whole = held - held % size
+            for first in range(0, whole, size):
+                yield start + first, joined[:, first : first + size]
+            start += whole
+            pending, held = [joined[:, whole:]], held - whole
+    if held:
+        yield start, np.concatenate(pending, axis=1) if len(pending) > 1 else pending[0]
+
+
+def residual_autocorrelation(residuals, max_lag):
+    """Autocorrelations of a residual series at lags 1 .. up to ``max_lag``, cut at the first not above noise.
+
+    ``residuals`` (NaN where missing) is centred and overwritten. Lag k's
+    estimate is the mean product of the pairs k steps apart, both present,
+    over the variance. The sequence stops before the first lag whose
+    estimate is at most ``2 / sqrt(n)`` (n present values), the two-sigma
+    limit of a white series' estimate: white residuals give an empty
+    sequence in about 97.5 % of records, and a negative lag-1 estimate never
+    shrinks the floor. Returns the sequence kept and the lag-1 estimate
+    (NaN when there are fewer than 3 values).
+
+    Examples
+    --------
+    >>> rho, first = residual_autocorrelation(np.array([1.0, 1, 1, -1, -1, -1] * 20), 3)
+    >>> np.round(rho, 2).tolist(), round(first, 2)
+    ([0.34], 0.34)
+    """
+    present = ~np.isnan(residuals)
+    count = int(present.sum())
+    if count < 3:
+        return np.empty(0), math.nan
+    gaps = count < residuals.size
+    residuals -= np.mean(residuals[present]) if gaps else np.mean(residuals)
+    if gaps:
+        residuals[~present] = 0.0  # a missing value adds nothing to any lag's products
+    variance = float(np.dot(residuals, residuals)) / count
+    if variance == 0:
+        return np.empty(0), math.nan
+    limit = 2 / math.sqrt(count)
+    kept, first = [], math.nan
+    for lag in range(1, min(max_lag, residuals.size - 1) + 1):
+        pairs = np.count_nonzero(present[:-lag] & present[lag:]) if gaps else residuals.size - lag
+        rho = float(np.dot(residuals[:-lag], residuals[lag:])) / max(pairs, 1) / variance
+        if lag == 1:
+            first = rho
+        if not rho > limit:
+            break
+        kept.append(rho)
+    return np.array(kept), first
+
+
+def size_factor(rho, points):
+    """How many times the variance of the mean of ``points`` correlated values exceeds that of independent ones.
+
+    ``1 + 2 sum_k (1 - k/m) rho_k`` over the lags k < m = ``points``: a
+    window of m points counts as ``m / size_factor`` independent ones.
+
+    Examples
+    --------
+    >>> size_factor(np.empty(0), 21), round(size_factor(0.9 ** np.arange(1, 30), 21), 2)
+    (1.0, 11.37)
+    """
+    lags = np.arange(1, min(len(rho), max(int(points) - 1, 0)) + 1)
+    return float(1 + 2 * np.sum((1 - lags / points) * np.asarray(rho)[: lags.size]))
+
+
+def residual_sigma(residuals):
+    """Noise standard deviation of a centred residual series (NaN where missing): median |r| / Phi^-1(0.75).
+
+    ``residuals`` is overwritten. The median keeps a stretch where the
+    model cannot fit, while it is less than half the record, from raising
+    it much.
+
+    Examples
+    --------
+    >>> round(residual_sigma(np.array([-1.0, 0.5, np.nan, 2.0])), 3)
+    1.483
+    """
+    np.abs(residuals, out=residuals)
+    present = ~np.isnan(residuals)
+    if not present.any():
+        return math.nan
+    values = residuals if present.all() else residuals[present]
+    return float(np.median(values, overwrite_input=True) / norm.ppf(0.75))
+
+
 def noise_floor(
-    best, upper, threshold, points, *, n_params, share, n_samples, n_windows, sigma=None, level=FAMILY_LEVEL
+    best,
+    upper,
+    threshold,
+    points,
+    *,
+    n_params,
+    share,
+    n_samples,
+    n_windows,
+    sigma=None,
+    level=FAMILY_LEVEL,
+    size_factor=1.0,
+    autocorrelation=math.nan,
 ):
     """Which windows are informative, and where the behavioural set ties within noise.
 
@@ -280,6 +532,11 @@ def noise_floor(
     level : float, default 0.05
         The chance that any noise-only window of the record is called
         informative (and the same for a behavioural set called untied).
+    size_factor : float, default 1
+        A window of m points counts as ``m / size_factor`` independent
+        points of noise (:func:`size_factor`; 1: white noise).
+    autocorrelation : float, optional
+        The lag-1 autocorrelation behind ``size_factor``, recorded only.
 
     Returns
     -------
@@ -293,7 +550,7 @@ def noise_floor(
     # In place where it can be: on a long record every temporary is 8 bytes a step.
     with np.errstate(invalid="ignore", divide="ignore"):
         noise_sd = np.sqrt(points)
-        np.divide(sigma * math.sqrt(1 - 2 / math.pi), noise_sd, out=noise_sd)
+        np.divide(sigma * math.sqrt(1 - 2 / math.pi) * math.sqrt(size_factor), noise_sd, out=noise_sd)
         noise_sd[points <= n_params] = np.nan
         floor = noise_sd * multiple
         discrimination = upper - best
@@ -307,15 +564,27 @@ def noise_floor(
         sigma=sigma,
         multiple=multiple,
         behavioural_multiple=behavioural_multiple,
+        autocorrelation=float(autocorrelation),
+        size_factor=float(size_factor),
     )
 
 
-def record_noise_floor(best, upper, threshold, points, slots, n_params, percentage, n_samples):
+def record_noise_floor(best, upper, threshold, points, slots, n_params, percentage, n_samples, residuals=None):
     """:func:`noise_floor` of an analysis whose windows hold ``slots`` steps and ``points`` measured points each.
 
     The one place that turns an analysis's settings into the test's: the
     batch engine, the cluster and the online replay all call it.
+    ``residuals`` (n_steps,), from :func:`record_residuals` (NaN where
+    missing), gives the autocorrelation and the second noise level of the
+    module documentation; it is overwritten. Without it the floor assumes white
+    noise.
     """
+    sigma, factor, first = fitted_noise_sigma(best, points, n_params), 1.0, math.nan
+    if residuals is not None:
+        rho, first = residual_autocorrelation(residuals, slots - 1)
+        factor = size_factor(rho, slots)
+        # The windows' fits absorb the slow part of coloured noise; the record's fit cannot.
+        sigma = float(np.fmax(sigma, residual_sigma(residuals)))
     return noise_floor(
         best,
         upper,
@@ -325,6 +594,9 @@ def record_noise_floor(best, upper, threshold, points, slots, n_params, percenta
         share=percentage / 100,
         n_samples=n_samples,
         n_windows=math.ceil(np.asarray(points).shape[0] / slots),
+        sigma=sigma,
+        size_factor=factor,
+        autocorrelation=first,
     )
 
 
@@ -335,6 +607,8 @@ def floor_settings(floor):
         noise_multiple=floor.multiple,
         noise_floor_quantile=NOISE_FLOOR_QUANTILE,
         behavioural_multiple=floor.behavioural_multiple,
+        noise_autocorrelation=floor.autocorrelation,
+        noise_size_factor=floor.size_factor,
     )
 
 

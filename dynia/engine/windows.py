@@ -92,7 +92,7 @@ from ..result import DyniaResult
 from ..settings import AnalysisSettings
 from ..storage import ResultArrays, result_arrays
 from .flavours import FLAVOURS, compiled_engine, flavour_analysis, monte_carlo_errors
-from .noise import floor_fields, floor_settings, record_noise_floor, window_points
+from .noise import add_record_errors, floor_fields, floor_settings, record_noise_floor, record_residuals, window_points
 
 __all__ = [
     "moving_window",
@@ -264,6 +264,7 @@ def moving_window(
         ic_error=ic_error,
         dtype=dtype,
         store=store,
+        simulations=lambda rows: [sims[rows]],
     )
 
 
@@ -300,6 +301,7 @@ def analyse_stream(
     ic_error=False,
     dtype="float64",
     store=None,
+    simulations=None,
 ):
     """Moving-window DYNIA fed by simulated output in consecutive time chunks.
 
@@ -307,6 +309,12 @@ def analyse_stream(
     cover ``y``; otherwise as :func:`moving_window`, which wraps this.
     ``sim_chunks`` may instead be a source of absolute errors with a
     ``rows(start, stop)`` method, such as :class:`dynia.kernels.CompiledErrors`.
+    ``simulations(indices)`` yields the simulated output of the samples
+    ``indices`` again, (len(indices), m) arrays in time order covering
+    ``y``: the noise floor estimates the noise's autocorrelation from the
+    residuals of the record-best sample and its neighbours
+    (:func:`dynia.engine.noise.record_residuals`); without it the floor
+    assumes white noise.
     """
     y = _checks.as_1d_float(y, "y", allow_nan=True)
     params = _checks.as_2d_float(params, "params")
@@ -334,6 +342,7 @@ def analyse_stream(
         ic_error=ic_error,
         dtype=dtype,
         store=store,
+        simulations=simulations,
     )
 
 
@@ -368,6 +377,7 @@ def _analyse(
     ic_error=False,
     dtype="float64",
     store=None,
+    simulations=None,
 ):
     n_samples, n_params = params.shape
     bounds = _checks.bounds_array(bounds, n_params)
@@ -425,8 +435,10 @@ def _analyse(
     output.allocate(shapes, names=names, samples=params, bounds=bounds, time=time, bin_centres=flavour_impl.bin_centres)
 
     slots = before + after + 1
-    # Three numbers a step for the noise floor, which needs every window's before it can judge any.
+    # Three numbers a step for the noise floor, which needs every window's before it can judge any, and every
+    # sample's record total absolute error, whose lowest gives the residuals the floor's noise model comes from.
     best, threshold, upper = np.full(n_steps, np.nan), np.full(n_steps, np.nan), np.full(n_steps, np.nan)
+    totals = np.zeros(n_samples)
 
     def analyse_chunk(start, stop, window_errors, measured):
         if compiled:
@@ -455,21 +467,22 @@ def _analyse(
         pending = deque()
         for start in starts:
             stop = min(start + chunk_steps, n_steps)
-            pending.append(
-                pool.submit(
-                    analyse_chunk,
-                    start,
-                    stop,
-                    *window_inputs(errors, start, stop, before, after, n_steps, time_major=compiled),
-                )
+            inputs = window_inputs(errors, start, stop, before, after, n_steps, time_major=compiled)
+            own = (
+                inputs[0][before : before + stop - start]
+                if compiled
+                else inputs[0][:, before : before + stop - start].T
             )
+            add_record_errors(totals, own)
+            pending.append(pool.submit(analyse_chunk, start, stop, *inputs))
             while len(pending) > workers:  # bounds the chunks held in memory
                 write(pending.popleft())
         while pending:
             write(pending.popleft())
 
     points = window_points(y, before, after)
-    floor = record_noise_floor(best, upper, threshold, points, slots, n_params, percentage, n_samples)
+    residuals = None if simulations is None else record_residuals(y, params, bounds, totals, simulations)
+    floor = record_noise_floor(best, upper, threshold, points, slots, n_params, percentage, n_samples, residuals)
     # What the engine did wins over what the caller asked: the samples analysed
     # (after any were dropped) and the engine that ran ("auto" resolved).
     recorded = dict(settings or {})

@@ -244,6 +244,12 @@ class Stepper:
         self._recursion = None
         self.steps = 0
 
+    def __setstate__(self, state):
+        # A copy (or an unpickled stepper) gets its own arrays; its view must look at its own output.
+        self.__dict__.update(state)
+        self._view = self._output.view()
+        self._view.flags.writeable = False
+
     def step(self, u_k) -> np.ndarray:
         """Take the input ``u_k`` of step k and return every sample's output y[k].
 
