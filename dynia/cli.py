@@ -42,7 +42,7 @@ from .pipeline import DroppedSamplesWarning, TargetNotReachedWarning, run
 from .quality import check_quality
 from .refine import narrowed_bounds
 from .settings import FLAVOURS, MAX_PARAMETER, SAMPLERS, AnalysisSettings
-from .suggest import parse_duration, suggest, window_half_width
+from .suggest import MAX_SAMPLES, parse_duration, parse_size, suggest, window_half_width
 from .verdicts import assess
 
 __all__ = ["main"]
@@ -252,6 +252,19 @@ def _parser():
     pilot.add_argument(
         "--seed", type=int, metavar="S", help="seed of the pilot runs (default: drawn at random and printed)"
     )
+    pilot.add_argument(
+        "--max-samples",
+        type=int,
+        metavar="N",
+        help=f"the most samples of the pilot and of the proposal (default {MAX_SAMPLES}); the behavioural share is "
+        "raised so that the pilot's 50 behavioural sets fit in N",
+    )
+    pilot.add_argument(
+        "--max-memory",
+        metavar="SIZE",
+        help="the most memory the pilot may take, e.g. 4GB or 512MB (default: half the memory available); "
+        "a pilot estimated above it is refused",
+    )
     pilot.add_argument("--json", action="store_true", help="print the proposal as JSON")
     pilot.add_argument("--config", metavar="FILE.toml", help="read the settings from a TOML file")
     return parser
@@ -394,7 +407,7 @@ OPTIONS = {
     "min_points": ("whole", 1, _ANALYSE),
     "ic_error": ("flag", False, _ANALYSE),
     "target_se": ("number", None, _ANALYSE),
-    "max_samples": ("whole", None, _ANALYSE),
+    "max_samples": ("whole", None, ("analyse", "suggest")),
     "dtype": ("text", "float64", _ANALYSE),
     "on_disk": ("flag", False, _ANALYSE),
     "second_run": ("flag", False, _ANALYSE),
@@ -407,6 +420,7 @@ OPTIONS = {
     "exclude_flagged": ("flag", False, _IDENTIFY),
     "starts": ("whole", 1, _IDENTIFY),
     "json": ("flag", False, ("suggest",)),
+    "max_memory": ("size", None, ("suggest",)),
 }
 
 # The command line's name of each AnalysisSettings field, for error messages.
@@ -465,6 +479,8 @@ def _options(args):
         options.update(configured)
         options["config"] = args.config
     options.update(given)
+    if options.get("max_memory") is not None:
+        options["max_memory"] = parse_size(options["max_memory"], "--max-memory")
     if options.get("window") is not None:
         if "n" in given or "n" in configured:
             raise UsageError("--window and --n both set the window; give one of them")
@@ -683,7 +699,7 @@ def _typed(value, kind, where):
         return float(value)
     if kind == "text" and isinstance(value, str):
         return value
-    if kind == "offset" and (isinstance(value, str) or is_number):
+    if kind in ("offset", "size") and (isinstance(value, str) or is_number):
         return value
     if kind == "names":
         if isinstance(value, str):
@@ -696,6 +712,7 @@ def _typed(value, kind, where):
         "number": "a number",
         "text": "a string",
         "offset": "none, first or a number",
+        "size": 'a size such as "4GB" or a number of bytes',
         "names": "a string or a list of strings",
     }[kind]
     raise UsageError(f"{where} must be {expected}; got {value!r} ({type(value).__name__})")
@@ -1042,6 +1059,11 @@ def _identify(options, command_line, caught):
             **_provenance(options, command_line),
         )
         report.write_identification(staging, found, data, u, y, summary, offset=offset, plots=not options["no_plots"])
+    fitted_steps = sum(stop - start for start, stop in found.segments)
+    print(
+        f"--method {options['method']} selected {100 * found.selected_share:.1f} % of the fitting part "
+        f"({fitted_steps} steps in {len(found.segments)} segment(s), the held-out part aside)"
+    )
     return _done(options)
 
 
@@ -1051,16 +1073,36 @@ def _suggest(options, command_line, caught):
     notices, _ = _data_warnings(data, u, y, options)
     for line in notices:
         print(f"dynia: warning: {line}", file=sys.stderr)
-    found = suggest(u, y, options["model_object"], options["bounds"], dt=data.dt, x0=options["x0"], rng=options["seed"])
+    try:
+        found = suggest(
+            u,
+            y,
+            options["model_object"],
+            options["bounds"],
+            dt=data.dt,
+            x0=options["x0"],
+            max_samples=MAX_SAMPLES if options["max_samples"] is None else options["max_samples"],
+            max_memory=options["max_memory"],
+            progress=sys.stderr.isatty(),
+            rng=options["seed"],
+        )
+    except SettingsError as error:
+        # The limits as the command line names them.
+        message = str(error)
+        for setting in ("max_samples", "max_memory"):
+            message = re.sub(rf"(?<!-)\b{setting}\b", _option_of(setting), message)
+        raise UsageError(message) from None
     dropped = _dynia_warnings(caught)
     for line in dropped:
         print(f"dynia: warning: {line}", file=sys.stderr)
     # The analyse command this proposal is for: the same data and model options, the proposed settings.
+    # suggest's own options (its seed is given anew) are not analyse's.
+    own = ("--seed", "--max-samples", "--max-memory")
     kept, words = [], iter(command_line[2:])
     for word in words:
-        if word == "--seed":
+        if word in own:
             next(words, None)
-        elif word != "--json" and not word.startswith("--seed="):
+        elif word != "--json" and not word.startswith(tuple(option + "=" for option in own)):
             kept.append(word)
     analyse = ["dynia", "analyse", *kept, *found.arguments(), "--seed", str(options["seed"]), "--out", "RESULTS"]
     if options["json"]:

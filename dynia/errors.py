@@ -17,7 +17,7 @@ Examples
 SettingsError True
 """
 
-__all__ = ["DyniaError", "DataError", "SettingsError", "ModelError", "OutputError", "Interrupted"]
+__all__ = ["DyniaError", "DataError", "SettingsError", "ModelError", "OutputError", "SuggestionError", "Interrupted"]
 
 
 class DyniaError(ValueError):
@@ -58,3 +58,7 @@ class Interrupted(Exception):
     def __init__(self, signal_name):
         super().__init__(f"interrupted by {signal_name}")
         self.signal_name = signal_name
+
+
+class SuggestionError(DyniaError):
+    """No settings can be proposed from this record (:func:`dynia.suggest.suggest`): the message says why."""

@@ -23,6 +23,11 @@ the methods can be compared on equal terms:
     Segments the caller chooses (``segments=``), e.g. random segments of the
     same total length as another method's (:func:`dynia.segments.random_segments`).
 
+``selected_share`` is the share of the fitting part's steps the selection
+keeps. A DYNIA selection above :data:`SELECTED_ALL_SHARE` (95 %) of it is
+all but the whole fitting part: every step had some IC at the threshold,
+the fit is that of ``"whole"``, and ``warnings`` says so.
+
 With ``quality=True`` the data are checked first (:func:`dynia.quality.check_quality`)
 and, with ``exclude_flagged=True``, flagged output samples are treated as
 missing and flagged input samples interpolated before anything else.
@@ -75,9 +80,12 @@ from .serial import json_number
 from .settings import AnalysisSettings, parameter_box
 from .structure import structure_warnings
 
-__all__ = ["Identification", "identify", "METHODS"]
+__all__ = ["Identification", "identify", "METHODS", "SELECTED_ALL_SHARE"]
 
 METHODS = ("dynia", "baseline", "whole", "given")
+
+# A DYNIA selection above this share of the fitting part adds nothing over fitting all of it (module docs).
+SELECTED_ALL_SHARE = 0.95
 
 
 @dataclass(frozen=True, eq=False)
@@ -109,6 +117,9 @@ class Identification:
         Model-structure warnings, notes on the selection, and a held-out part
         too quiet to validate the model (see the module documentation).
     settings : dict
+    selected_share : float
+        Share of the fitting part's steps (the record before the held-out
+        part) in ``segments``.
     """
 
     method: str
@@ -124,6 +135,7 @@ class Identification:
     warnings: list = field(default_factory=list)
     settings: dict = field(default_factory=dict)
     std_errors_hac: dict = field(default_factory=dict)
+    selected_share: float = float("nan")
 
     def to_dict(self, time):
         """JSON-ready summary; segments as [start_time, end_time] on ``time`` (n_steps,)."""
@@ -135,6 +147,7 @@ class Identification:
             std_errors_hac=fit["std_errors_hac"],
             hac_lags=fit["hac_lags"],
             segments=segments_to_times(self.segments, time),
+            selected_share=json_number(self.selected_share),
             validation_segments=segments_to_times(self.validation, time),
             validation_error=json_number(self.validation_error),
             fit_rmse=fit["rmse"],
@@ -310,6 +323,15 @@ def identify(
                 + ("" if exclude_flagged else "; exclude them with exclude_flagged=True")
             )
 
+    fitting_steps = sum(stop - start for start, stop in fit_part)
+    selected_steps = sum(stop - start for start, stop in chosen)
+    selected_share = selected_steps / fitting_steps
+    if method == "dynia" and selected_share > SELECTED_ALL_SHARE:
+        notes.append(
+            f"DYNIA selected {100 * selected_share:.1f} % of the fitting part ({selected_steps} of {fitting_steps} "
+            f"steps): nearly every step has an IC of at least {ic_threshold:g}, so the fit is that of the whole "
+            "fitting part (method 'whole') and the selection added nothing; raise ic_threshold or use mode 'joint'"
+        )
     fit = fit_segments(u, y_fit, model, chosen, bounds=bounds, dt=dt, x0=x0, n_starts=n_starts, rng=rng)
     notes += _quiet_held_out(u, y, fit, validation)
     recorded = dict(
@@ -346,6 +368,7 @@ def identify(
         quality=report,
         warnings=notes,
         settings=recorded,
+        selected_share=selected_share,
     )
 
 

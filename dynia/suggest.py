@@ -12,7 +12,14 @@ The dominant time constant
 --------------------------
 A first-order model ``y = c + sum_j K_j r_j(T)`` is fitted to the whole
 record, ``r_j(T)`` being the unit-gain first-order response (zero-order
-hold) of input j from rest at its first value. For a given T the output is
+hold) of input j in the analysis's initial state: with ``x0="zero"`` from
+rest at zero input, so that a record whose input is already on in its first
+row (a heater switched on before logging began) shows the response still
+rising toward it; with ``x0="steady"`` from rest at the input's first value,
+so that only its changes drive the response. ``u`` and ``y`` are those the
+analysis sees, the offsets (``--input-offset``, ``--offset``) already taken
+off; the level c is fitted all the same, so that a level the offsets leave
+does not pass for dynamics. For a given T the output is
 linear in the gains and the level c, which ordinary least squares gives
 exactly (variable projection), so only T is searched: on a logarithmic grid
 from dt to the record's length, then refined between the neighbours of the
@@ -25,6 +32,14 @@ span anyway. Rejected: reading the time to 63 % after each step (needs
 clean steps that settle, and reads one noisy crossing per step) and the
 decay of the autocorrelation of the output's increments (at fast sampling
 they are mostly measurement noise).
+
+When the fit explains less than :data:`MIN_EXPLAINED` (50 %) of the
+output's variance (``R^2 = 1 - RSS/TSS``), the time constant it finds is no
+property of the record (an input that never changes as the analysis sees
+it gives the shortest one, whatever the output does), and a window sized by
+it would mislead: :func:`suggest` raises
+:class:`~dynia.errors.SuggestionError` saying so, and which initial state
+would explain the output instead, rather than proposing one.
 
 The window
 ----------
@@ -52,7 +67,11 @@ with two parameters lets the best window reach about 0.3 for a time
 constant on a heater step test. The share proposed is ``100 * 0.1^d`` %
 (capped at 10 %), a tenth of each range: 10 % for one parameter (the
 thesis's choice), 1 % for two, 0.1 % for three, the s^d law of the thesis's
-section 4.2.
+section 4.2. It is raised to at least ``100 * 50 / max_samples`` %, so that
+the pilot's 50 behavioural sets fit in ``max_samples`` (:data:`MAX_SAMPLES`,
+200 000): with five parameters 0.001 % would need five million samples for
+the pilot alone; 0.025 % spans about a fifth of each range instead of a
+tenth, and the reasons say so.
 
 The number of samples
 ---------------------
@@ -64,7 +83,21 @@ is checked in ``benchmarks/honesty.py``). The band's limits are
 quantiles of a behavioural set whose size grows with the samples, so the
 error shrinks as ``1/sqrt(N)``; the proposal is the N that brings the
 largest of them to ``ic_se_target`` (0.02), rounded up to two significant
-digits, and at least enough for 50 behavioural sets.
+digits, and at least enough for 50 behavioural sets, at most
+``max_samples`` (a note then gives the error reached there).
+
+Memory
+------
+The pilot's memory is estimated before it starts (:func:`run_memory`: the
+moving window holds about four arrays of n_samples x (chunk + 2n) values,
+plus the samples, plus the whole simulation for a model that does not
+stream; within 10 % of the growth of the peak memory measured with 50 000
+samples on the heater record and 400 000 on HYMOD, to which compiling the
+engine on first use adds about 150 MB), and a pilot above ``max_memory`` (default: half the memory
+available when suggest starts, :data:`MEMORY_SHARE`) is refused with a
+:class:`~dynia.errors.SettingsError` saying what it would need. The
+proposed run's estimate is reported too, with a note when it is above the
+limit. ``progress=True`` shows the pilot's progress bar (tqdm, on stderr).
 
 The parameter ranges
 --------------------
@@ -88,6 +121,7 @@ Examples
 """
 
 import math
+import os
 import re
 from dataclasses import dataclass, field
 
@@ -97,7 +131,8 @@ from scipy.signal import lfilter
 
 from . import _checks
 from .engine.flavours import IC_BATCHES, MIN_BATCH_BEHAVIOURAL
-from .errors import DataError, SettingsError
+from .engine.windows import default_chunk_steps
+from .errors import DataError, SettingsError, SuggestionError
 from .fit import fit_segments
 from .pipeline import run
 from .serial import json_number
@@ -110,11 +145,23 @@ __all__ = [
     "dominant_time_constant",
     "parse_duration",
     "window_half_width",
+    "parse_size",
+    "run_memory",
+    "available_memory",
     "IC_SE_TARGET",
+    "MAX_SAMPLES",
+    "MEMORY_SHARE",
+    "MIN_EXPLAINED",
 ]
 
 # The Monte Carlo standard error of the IC the proposed number of samples aims at.
 IC_SE_TARGET = 0.02
+# The most samples the pilot and the proposal use (module docs, "The behavioural share").
+MAX_SAMPLES = 200_000
+# Without a max_memory, a pilot may take this share of the memory available when suggest starts.
+MEMORY_SHARE = 0.5
+# Below this share of the output's variance explained (R^2) the first-order fit sizes no window.
+MIN_EXPLAINED = 0.5
 
 _UNITS = {
     "s": 1.0,
@@ -132,6 +179,14 @@ _UNITS = {
     "days": 86400.0,
 }
 _DURATION = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*([a-zA-Z]*)\s*$")
+_BYTES = {"": 1, "b": 1, "k": 1e3, "kb": 1e3, "m": 1e6, "mb": 1e6, "g": 1e9, "gb": 1e9, "t": 1e12, "tb": 1e12}
+_BYTES.update({"kib": 2**10, "mib": 2**20, "gib": 2**30, "tib": 2**40})
+# run_memory: live arrays of n_samples x (chunk + 2n) float64 in the moving window (the errors pulled
+# from the simulation, their padded and transposed copies, the chunks in flight), measured with 1 and 2
+# workers on the heater (n = 85) and HYMOD (n = 3) pilots; and float64 values kept per sample besides
+# its parameters (states, costs, ranks).
+_WINDOW_ARRAYS = 4
+_PER_SAMPLE_VALUES = 16
 
 # Trial time constants of the first-order fit: this many, log-spaced from dt to the record's length.
 _GRID_POINTS = 60
@@ -150,6 +205,8 @@ _PEAK_MARGIN = 0.05
 # fewer than _STEP_LIKE of its steps change.
 _CHANGE_SHARE = 0.01
 _STEP_LIKE = 0.1
+# The other initial state is noted when its residual variance is below this share of the chosen one's.
+_BETTER_RESIDUAL = 0.5
 
 
 def parse_duration(text, name="window"):
@@ -173,6 +230,65 @@ def parse_duration(text, name="window"):
     if not (math.isfinite(seconds) and seconds > 0):
         raise SettingsError(f"{name} must be a positive, finite duration; got {text!r}", name)
     return seconds
+
+
+def parse_size(text, name="max_memory"):
+    """Bytes in a size such as ``"4GB"``, ``"512MiB"``, ``"2e9"`` or ``2e9`` (a bare number is bytes).
+
+    kB, MB, GB, TB (and k, M, G, T) are powers of 1000; KiB, MiB, GiB, TiB
+    powers of 1024. Raises :class:`~dynia.errors.SettingsError` naming
+    ``name`` for anything else, or a size that is not positive and finite.
+
+    >>> parse_size("4GB"), parse_size("1.5 MiB"), parse_size(1000)
+    (4000000000.0, 1572864.0, 1000.0)
+    """
+    match = _DURATION.match(str(text))
+    unit = match.group(2).lower() if match else None
+    if match is None or unit not in _BYTES:
+        raise SettingsError(
+            f"{name} must be a size such as 4GB, 512MB or 2GiB (a bare number is bytes); got {text!r}", name
+        )
+    size = float(match.group(1)) * _BYTES[unit]
+    if not (math.isfinite(size) and size > 0):
+        raise SettingsError(f"{name} must be a positive, finite size; got {text!r}", name)
+    return size
+
+
+def run_memory(model, n_samples, n_steps, n, *, n_params=None, bins=40, ic_error=True):
+    """Bytes a uniform :func:`dynia.run` of ``n_samples`` over ``n_steps`` adds, about (module docs).
+
+    The moving window holds a few arrays of ``n_samples x (chunk + 2n)``
+    float64 values, the chunk of :func:`dynia.engine.windows.default_chunk_steps`;
+    each sample keeps its parameters and a few values more; a model that
+    does not stream (``model.streams`` False) holds its whole simulation;
+    the result holds IC, limits and gradient (and their errors) per step.
+
+    >>> from dynia.models import FirstOrder
+    >>> round(run_memory(FirstOrder(), 5000, 7200, 85) / 1e6)
+    142
+    """
+    n_params = len(model.names) if n_params is None else n_params
+    width = default_chunk_steps(n_samples, 2 * n) + 2 * n
+    per_sample = _WINDOW_ARRAYS * width + n_params + _PER_SAMPLE_VALUES
+    if not getattr(model, "streams", True):
+        per_sample += n_steps
+    per_step = n_params * (bins + 3 + (3 if ic_error else 0))
+    return 8.0 * (n_samples * per_sample + n_steps * per_step)
+
+
+def available_memory():
+    """Bytes of memory available to a new allocation now (Linux's MemAvailable), or None where unknown."""
+    try:
+        with open("/proc/meminfo") as handle:
+            for line in handle:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024
+    except OSError:
+        pass
+    try:
+        return float(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
+    except (AttributeError, OSError, ValueError):
+        return None
 
 
 def window_half_width(seconds, dt, n_steps, name="window"):
@@ -213,7 +329,8 @@ class TimeScale:
     gains : tuple of float
         K of each input.
     level : float
-        The output's level c at the inputs' first values.
+        The output's level c where the response starts: at rest, at zero
+        input (``x0="zero"``) or at the inputs' first values (``"steady"``).
     rmse : float
         Root mean square of the residuals.
     explained : float
@@ -222,6 +339,8 @@ class TimeScale:
         "fast" when T came out at the grid's lower end (the output follows
         the input within a sample), "slow" at its upper end (slower than the
         record); None otherwise.
+    x0 : str
+        The initial state the responses start from ("zero" or "steady").
     """
 
     time_constant: float
@@ -230,9 +349,10 @@ class TimeScale:
     rmse: float
     explained: float
     edge: str | None = None
+    x0: str = "zero"
 
 
-def dominant_time_constant(u, y, dt=1.0):
+def dominant_time_constant(u, y, dt=1.0, x0="zero"):
     """The time constant of a first-order fit to the whole record (module docs).
 
     Parameters
@@ -241,16 +361,22 @@ def dominant_time_constant(u, y, dt=1.0):
     y : array_like, shape (n_steps,)
         NaN marks a missing value.
     dt : float, default 1.0
+    x0 : {"zero", "steady"}, default "zero"
+        The analysis's initial state: the responses start at rest at zero
+        input, or at rest at the inputs' first values.
 
     Returns
     -------
     TimeScale
     """
-    dt = check_dt(dt)
+    dt, x0 = check_dt(dt), check_x0(x0)
     columns = np.asarray(u, dtype=float)
     n_inputs = 1 if columns.ndim == 1 else columns.shape[1]
     u, y = _checks.record(u, y, n_inputs=n_inputs)
-    columns = u.reshape(u.shape[0], -1) - u.reshape(u.shape[0], -1)[0]
+    columns = u.reshape(u.shape[0], -1)
+    if x0 == "steady":
+        # At rest at the first input only the changes from it move the output; its level is in c.
+        columns = columns - columns[0]
     measured = ~np.isnan(y)
     if measured.sum() < n_inputs + 2:
         raise DataError(f"y has {int(measured.sum())} measured values; a first-order fit needs {n_inputs + 2}")
@@ -280,6 +406,7 @@ def dominant_time_constant(u, y, dt=1.0):
         rmse=math.sqrt(rss / observed.size),
         explained=1.0 - rss / spread if spread > 0 else 0.0,
         edge=edge,
+        x0=x0,
     )
 
 
@@ -310,8 +437,12 @@ class Suggestion:
         Why each setting, one sentence each.
     notes : list of str
         What the user should look at: ranges that exclude the fit, input
-        changes closer than a window, a time scale the record cannot resolve.
+        changes closer than a window, a time scale the record cannot resolve,
+        a share or a sample count held by ``max_samples``.
     dt : float
+    memory : dict
+        Estimated bytes of the ``pilot`` and of the ``proposed`` run
+        (:func:`run_memory`), and the ``limit`` the pilot was held to.
     """
 
     n: int
@@ -324,6 +455,7 @@ class Suggestion:
     reasons: list = field(default_factory=list)
     notes: list = field(default_factory=list)
     dt: float = 1.0
+    memory: dict = field(default_factory=dict)
 
     def arguments(self):
         """The ``dynia analyse`` options of this suggestion, as a list of strings."""
@@ -343,12 +475,14 @@ class Suggestion:
                 rmse=json_number(scale.rmse),
                 explained=json_number(scale.explained),
                 edge=scale.edge,
+                x0=scale.x0,
             ),
             pilot=_json_tree(self.pilot),
             fit=_json_tree(self.fit),
             reasons=list(self.reasons),
             notes=list(self.notes),
             dt=self.dt,
+            memory=_json_tree(self.memory),
         )
 
     def text(self):
@@ -364,7 +498,20 @@ class Suggestion:
         return "\n".join(lines)
 
 
-def suggest(u, y, model, bounds, *, dt=1.0, x0="zero", ic_se_target=IC_SE_TARGET, rng=None):
+def suggest(
+    u,
+    y,
+    model,
+    bounds,
+    *,
+    dt=1.0,
+    x0="zero",
+    ic_se_target=IC_SE_TARGET,
+    max_samples=MAX_SAMPLES,
+    max_memory=None,
+    progress=False,
+    rng=None,
+):
     """Propose a window, a behavioural share and a number of samples for this record and model.
 
     The reasoning is in the module documentation; every number it rests on
@@ -381,32 +528,56 @@ def suggest(u, y, model, bounds, *, dt=1.0, x0="zero", ic_se_target=IC_SE_TARGET
         The ranges the analysis would sample.
     dt : float, default 1.0
     x0 : {"zero", "steady"}, default "zero"
-        The analysis's initial state, used by the pilot and the fit.
+        The analysis's initial state, used by the time-scale fit, the pilot
+        and the least-squares fit.
     ic_se_target : float, default 0.02
         The Monte Carlo standard error of the IC the samples should reach.
+    max_samples : int, default 200000
+        The most samples of the pilot and of the proposal; the share is
+        raised so that the pilot's behavioural sets fit in it.
+    max_memory : float, optional
+        Bytes the pilot may take (:func:`parse_size` reads "4GB");
+        default: :data:`MEMORY_SHARE` of the memory available now.
+    progress : bool, default False
+        Show the pilot's progress bar (tqdm, on stderr).
     rng : numpy.random.Generator or int, optional
         Seeds of the pilot runs and of the fit's extra starts.
 
     Returns
     -------
     Suggestion
+
+    Raises
+    ------
+    dynia.errors.SuggestionError
+        When a first-order fit explains less than :data:`MIN_EXPLAINED` of
+        the output's variance: the record shows no time scale to size a
+        window by.
+    dynia.errors.SettingsError
+        When the pilot would need more memory than ``max_memory``.
     """
     dt, x0 = check_dt(dt), check_x0(x0)
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
     names, box = parameter_box(bounds, model.names, repr(model))
     bounds = {name: (float(low), float(high)) for name, (low, high) in zip(names, box)}
     target = _checks.open_interval(ic_se_target, "ic_se_target", 0.0, 1.0)
+    max_samples = _checks.whole_number(max_samples, "max_samples", minimum=_PILOT_MIN)
+    limit, limit_source = _memory_limit(max_memory)
     rng = np.random.default_rng(rng)
     n_steps = y.size
 
-    scale = dominant_time_constant(u, y, dt)
+    scale = dominant_time_constant(u, y, dt, x0)
+    other = dominant_time_constant(u, y, dt, "steady" if x0 == "zero" else "zero")
+    if scale.explained < MIN_EXPLAINED:
+        raise SuggestionError(_no_time_scale(u, scale, other))
     tau = scale.time_constant
     wanted = max(math.floor(tau / (2 * dt) + 0.5), 1)
     n = min(wanted, (n_steps - 1) // 2)
     gains = ", ".join(f"{gain:.3g}" for gain in scale.gains)
     reasons = [
-        f"dominant time constant {tau:.4g} s: a first-order fit to the whole record (gain {gains}, RMS residual "
-        f"{scale.rmse:.3g}, {100 * scale.explained:.0f} % of the output's variance explained)",
+        f"dominant time constant {tau:.4g} s: a first-order fit to the whole record from the analysis's initial "
+        f"state (x0 {x0}; gain {gains}, RMS residual {scale.rmse:.3g}, {100 * scale.explained:.0f} % of the "
+        "output's variance explained)",
         f"window 2n+1 = {2 * n + 1} steps ({(2 * n + 1) * dt:g} s), about one time constant: centred on an input "
         "change it holds the level before and the bend of the response, where gain and time constant act "
         "differently; shorter windows see a line (only their ratio), longer ones mix in settled stretches",
@@ -419,35 +590,85 @@ def suggest(u, y, model, bounds, *, dt=1.0, x0="zero", ic_se_target=IC_SE_TARGET
         )
     elif scale.edge == "slow":
         notes.append("the first-order fit finds a time constant as long as the record: the record may not settle")
-    if scale.explained < 0.5:
+    if (1 - other.explained) < _BETTER_RESIDUAL * (1 - scale.explained):
         notes.append(
-            f"a first-order model explains only {100 * scale.explained:.0f} % of the output's variance: the time "
-            "constant, and so the window, is a rough guide"
+            f"with x0 {other.x0} a first-order model explains {100 * other.explained:.0f} % of the output's variance, "
+            f"against {100 * scale.explained:.0f} % with x0 {x0}: check the initial state and the offsets"
         )
     if n < wanted:
         notes.append(f"the window is capped at the record's length ({n_steps} steps); a longer record would help")
     notes += _close_changes(u, n, dt)
 
     d = len(names)
-    percentage = min(_MAX_PERCENTAGE, 100.0 / _RANGE_SHARE_INVERSE**d)
-    reasons.append(
-        f"percentage {percentage:g}: the behavioural set is that share of the parameter box whatever the number "
-        f"of samples, and with {d} parameter(s) {percentage:g} % spans about a tenth of each range where a window "
-        f"pins them all, so their IC can reach about 0.9 (the default 10 % spans {100 * 0.1 ** (1 / d):.0f} % of each)"
-    )
+    wanted_percentage = min(_MAX_PERCENTAGE, 100.0 / _RANGE_SHARE_INVERSE**d)
+    percentage = max(wanted_percentage, _round_up_share(100.0 * _PILOT_BEHAVIOURAL / max_samples))
+    if percentage > wanted_percentage:
+        reasons.append(
+            f"percentage {percentage:g}: with {d} parameters {wanted_percentage:g} % would span about a tenth of each "
+            f"range, but its pilot alone would need {math.ceil(_PILOT_BEHAVIOURAL / (wanted_percentage / 100))} "
+            f"samples, more than max_samples {max_samples}; {percentage:g} % is the least share whose "
+            f"{_PILOT_BEHAVIOURAL} behavioural sets fit in it, and spans about "
+            f"{100 * (percentage / 100) ** (1 / d):.0f} % of each range where a window pins them all"
+        )
+        notes.append(
+            f"the behavioural share is held at {percentage:g} % by max_samples {max_samples} (a tenth of each range "
+            f"would need {wanted_percentage:g} %): the bands can be wider than the share aims at; a larger "
+            "max_samples allows a smaller share"
+        )
+    else:
+        reasons.append(
+            f"percentage {percentage:g}: the behavioural set is that share of the parameter box whatever the number "
+            f"of samples, and with {d} parameter(s) {percentage:g} % spans about a tenth of each range where a "
+            f"window pins them all, so their IC can reach about 0.9 (the default 10 % spans "
+            f"{100 * 0.1 ** (1 / d):.0f} % of each)"
+        )
 
-    pilot = _pilot(u, y, model, bounds, dt=dt, x0=x0, n=n, percentage=percentage, rng=rng)
+    pilot_samples = min(max_samples, max(_PILOT_MIN, math.ceil(_PILOT_BEHAVIOURAL / (percentage / 100))))
+    memory = dict(pilot=run_memory(model, pilot_samples, n_steps, n), limit=limit)
+    if limit is not None and memory["pilot"] > limit:
+        raise SettingsError(
+            f"max_memory: the pilot run ({pilot_samples} samples, window {2 * n + 1} steps, {n_steps} steps) would "
+            f"need about {_size(memory['pilot'])}, more than the limit of {_size(limit)} ({limit_source}); lower "
+            "max_samples or raise max_memory",
+            "max_memory",
+        )
+    pilot = _pilot(
+        u,
+        y,
+        model,
+        bounds,
+        dt=dt,
+        x0=x0,
+        n=n,
+        percentage=percentage,
+        n_samples=pilot_samples,
+        progress=progress,
+        rng=rng,
+    )
     worst = max(pilot["parameters"], key=lambda name: pilot["parameters"][name]["ic_se"])
     worst_se = pilot["parameters"][worst]["ic_se"]
     needed = pilot["n_samples"] * (worst_se / target) ** 2
     floor = math.ceil(_MIN_BEHAVIOURAL / (percentage / 100))
-    n_samples = max(_round_up(needed), floor)
+    n_samples = min(max(_round_up(needed), floor), max_samples)
     reasons.append(
         f"samples {n_samples}: a pilot with {pilot['n_samples']} samples gave an IC standard error of "
         f"{worst_se:.3f} for {worst} near its highest IC (result.ic_se); "
         f"it falls as 1/sqrt(N), so {pilot['n_samples']} x ({worst_se:.3f}/{target:g})^2 = {needed:.0f} reach "
-        f"{target:g}" + (f" (at least {floor}, for {_MIN_BEHAVIOURAL} behavioural sets)" if floor > needed else "")
+        f"{target:g}"
+        + (f" (at least {floor}, for {_MIN_BEHAVIOURAL} behavioural sets)" if floor > needed else "")
+        + (f" (at most max_samples {max_samples})" if needed > max_samples else "")
     )
+    if needed > max_samples:
+        notes.append(
+            f"{max_samples} samples (max_samples) bring the IC standard error of {worst} to about "
+            f"{worst_se * math.sqrt(pilot['n_samples'] / max_samples):.3f}, not {target:g}"
+        )
+    memory["proposed"] = run_memory(model, n_samples, n_steps, n)
+    if limit is not None and memory["proposed"] > limit:
+        notes.append(
+            f"the proposed run would need about {_size(memory['proposed'])}, more than {_size(limit)} "
+            f"({limit_source}): give fewer samples"
+        )
     for name, entry in pilot["parameters"].items():
         if entry["max_ic"] is not None and entry["max_ic"] < 0.5:
             notes.append(
@@ -492,15 +713,70 @@ def suggest(u, y, model, bounds, *, dt=1.0, x0="zero", ic_se_target=IC_SE_TARGET
         reasons=reasons,
         notes=notes,
         dt=dt,
+        memory=memory,
     )
 
 
-def _pilot(u, y, model, bounds, *, dt, x0, n, percentage, rng):
+def _no_time_scale(u, scale, other):
+    """Why no window can be proposed from ``scale``, the fit in the analysis's initial state, in one line."""
+    columns = u.reshape(u.shape[0], -1)
+    if scale.x0 == "steady":
+        columns = columns - columns[0]
+    message = (
+        f"cannot propose a window: a first-order model from the analysis's initial state (x0 {scale.x0}) explains "
+        f"{100 * max(scale.explained, 0.0):.0f} % of the output's variance, below {100 * MIN_EXPLAINED:.0f} %, so "
+        "the record shows no time constant to size a window by"
+    )
+    if not columns.any():
+        message += (
+            " (the input never moves the model: "
+            + ("it stays at its first value" if scale.x0 == "steady" else "it is zero throughout")
+            + ")"
+        )
+    if other.explained >= MIN_EXPLAINED:
+        message += (
+            f"; with x0 {other.x0} it explains {100 * other.explained:.0f} % (time constant "
+            f"{other.time_constant:.4g} s): check --x0 and the offsets"
+        )
+    else:
+        message += "; check the offsets and the model, or give the window yourself (--window or --n)"
+    return message
+
+
+def _memory_limit(max_memory):
+    """The pilot's memory limit in bytes and where it comes from; (None, None) where nothing is known."""
+    if max_memory is not None:
+        return parse_size(max_memory, "max_memory"), "max_memory"
+    available = available_memory()
+    if available is None:
+        return None, None
+    return MEMORY_SHARE * available, f"{100 * MEMORY_SHARE:.0f} % of the {_size(available)} available; max_memory"
+
+
+def _size(size):
+    """Bytes for a person: "3.2 GB", "450 MB"."""
+    for unit, scale in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if size >= scale:
+            return f"{size / scale:.2g} {unit}"
+    return f"{size:.0f} B"
+
+
+def _pilot(u, y, model, bounds, *, dt, x0, n, percentage, n_samples, progress, rng):
     """IC standard error near each parameter's highest IC, from a pilot run's ``ic_se``."""
-    n_samples = max(_PILOT_MIN, math.ceil(_PILOT_BEHAVIOURAL / (percentage / 100)))
     seed = int(rng.integers(2**63))
     result = run(
-        u, y, model, bounds, dt=dt, x0=x0, n=n, percentage=percentage, n_samples=n_samples, ic_error=True, rng=seed
+        u,
+        y,
+        model,
+        bounds,
+        dt=dt,
+        x0=x0,
+        n=n,
+        percentage=percentage,
+        n_samples=n_samples,
+        ic_error=True,
+        rng=seed,
+        progress=progress,
     )
     ic, variance = result.ic, result.ic_se**2
     parameters = {}
@@ -535,6 +811,12 @@ def _close_changes(u, n, dt):
                 f"the first at {starts[close[0] + 1] * dt:g} s: windows there see two responses at once"
             )
     return notes
+
+
+def _round_up_share(value):
+    """A percentage rounded up to two significant digits, so that 100 * 50 / 123456 reads 0.041."""
+    magnitude = 10.0 ** (math.floor(math.log10(value)) - 1)
+    return round(math.ceil(round(value / magnitude, 9)) * magnitude, 12)
 
 
 def _round_up(value):

@@ -1,5 +1,7 @@
 """dynia.identify: select, fit and validate, on data with a known model."""
 
+import json
+
 import numpy as np
 import pytest
 
@@ -83,3 +85,44 @@ def test_bad_requests_get_clear_errors(options, message):
     arguments.update({key: options.pop(key) for key in ("model", "bounds") if key in options})
     with pytest.raises(ValueError, match=message):
         identify(u, y, arguments["model"], arguments["bounds"], **options)
+
+
+def _busy_record(seed=0):
+    """A new input level every 8 steps, noise 0.05, K=2, T=5: no stretch without a response."""
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.choice([0.0, 1.0, 3.0], 75), 8)
+    return u, FirstOrder().simulate([[2.0, 5.0]], u)[0] + rng.normal(0, 0.05, u.size)
+
+
+def test_the_share_selected_is_reported_and_a_selection_of_nearly_everything_is_warned_about():
+    u, y = _record()
+    found = identify(u, y, FirstOrder(), BOUNDS, method="dynia", n_samples=2000, rng=1)
+    selected = sum(stop - start for start, stop in found.segments)
+    assert found.selected_share == pytest.approx(selected / 420) and found.selected_share < 0.95
+    assert not any("selected" in note for note in found.warnings)
+    assert found.to_dict(np.arange(u.size))["selected_share"] == found.selected_share
+    # An input that changes every 8 steps: every window informs, the selection is the fitting part.
+    u, y = _busy_record()
+    everything = identify(u, y, FirstOrder(), BOUNDS, method="dynia", n_samples=2000, rng=1)
+    assert everything.selected_share > 0.95
+    [note] = [note for note in everything.warnings if note.startswith("DYNIA selected")]
+    assert "of the fitting part" in note and "added nothing" in note
+    whole = identify(u, y, FirstOrder(), BOUNDS, method="whole")
+    assert whole.selected_share == 1.0 and not any("DYNIA selected" in note for note in whole.warnings)
+
+
+def test_the_cli_prints_and_records_the_share_selected(tmp_path, capsys):
+    from dynia.cli import main
+
+    u, y = _busy_record()
+    path = tmp_path / "record.csv"
+    np.savetxt(path, np.column_stack([np.arange(u.size), u, y]), delimiter=",", header="time,u,y", comments="")
+    common = [str(path), "--time", "time", "--input", "u", "--output", "y", "--model", "first-order"]
+    common += ["--param", "K=0:7", "--param", "T=0:20", "--samples", "2000", "--seed", "1", "--no-plots"]
+    assert main(["identify", *common, "--out", str(tmp_path / "all")]) == 0
+    captured = capsys.readouterr()
+    found = json.loads((tmp_path / "all" / "identified.json").read_text())
+    assert found["selected_share"] > 0.95
+    assert captured.out.startswith(f"--method dynia selected {100 * found['selected_share']:.1f} % of the fitting part")
+    assert "dynia: warning: DYNIA selected" in captured.err
+    assert any(note.startswith("DYNIA selected") for note in found["warnings"])
