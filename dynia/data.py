@@ -921,9 +921,7 @@ def _time_stamp(path, column, row, cell, time_format=None):
     where = f"{path}: row {row}, column {column!r}"
     if text.lower() in _MISSING:
         expected = (
-            f"a time in the format {time_format!r}"
-            if time_format
-            else "a number of seconds or an ISO 8601 timestamp"
+            f"a time in the format {time_format!r}" if time_format else "a number of seconds or an ISO 8601 timestamp"
         )
         raise DataError(f"{where}: the time is missing ({_shown(cell)}); expected {expected}")
     if time_format is not None:
