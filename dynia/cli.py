@@ -518,7 +518,7 @@ def _options(args):
                 )
     if not options.get("param"):
         raise UsageError("give a range for every model parameter with --param NAME=LOW:HIGH")
-    ranges = _ranges(options["param"])
+    _ranges(options["param"])  # checked before the model runs; against the model below
     if command != "suggest":  # suggest proposes the analysis settings
         options["analysis"] = _analysis_settings(options)
     _check_command_options(options)
@@ -538,7 +538,7 @@ def _options(args):
     options["input"] = _input_columns(options["input"], model)
     if model.n_inputs > 1 and options["quality"]:
         raise UsageError(f"--quality checks one input; the model {model!r} has {model.n_inputs}")
-    options["bounds"] = _bounds(ranges, model)
+    options["bounds"] = _bounds(options["param"], model)
     return options
 
 
@@ -829,8 +829,10 @@ def _ranges(specs):
     return ranges
 
 
-def _bounds(ranges, model):
-    """The ranges checked against the model: every parameter once, each range holding only values it accepts."""
+def _bounds(specs, model):
+    """``NAME=LOW:HIGH`` strings to an ordered {name: (low, high)}: every model parameter once, each range holding
+    only values the model accepts."""
+    ranges = _ranges(specs)
     for name in ranges:
         if name not in model.names:
             raise UsageError(f"--param {name}: {type(model).__name__} has parameters {', '.join(model.names)}")

@@ -338,7 +338,8 @@ def load_csv(
         for argument, name in (("input", input), ("output", output)):
             if name.strip() == time.strip():
                 raise SettingsError(
-                    f"{argument} names the time column {time.strip()!r}; expected the column of the {argument}'s values",
+                    f"{argument} names the time column {time.strip()!r}; "
+                    f"expected the column of the {argument}'s values",
                     argument,
                 )
     if time_format is not None and (not isinstance(time_format, str) or "%" not in time_format):
