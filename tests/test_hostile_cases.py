@@ -21,7 +21,7 @@ from dynia.errors import DataError, SettingsError
 from dynia.frames import unpack
 from dynia.models import FirstOrder
 from dynia.outdir import MARKER
-from dynia.settings import MAX_HALF_WINDOW, MAX_SAMPLES, MAX_WORKERS, AnalysisSettings
+from dynia.settings import AnalysisSettings
 
 # The data and model options of BASE, without the method options that dynia suggest does not take.
 DATA_AND_MODEL = "--time time --input u --output y --model first-order --param K=0:5 --param T=0:5".split()
@@ -147,10 +147,11 @@ def test_a_huge_whole_number_in_a_config_is_one_line(tmp_path, capsys, good, nev
 @pytest.mark.parametrize(
     "setting, value",
     [
-        ("n_samples", MAX_SAMPLES + 1),
-        ("n", MAX_HALF_WINDOW + 1),
-        ("workers", MAX_WORKERS + 1),
-        ("max_samples", MAX_SAMPLES + 1),
+        # One past dynia.settings.MAX_SAMPLES, MAX_HALF_WINDOW, MAX_WORKERS.
+        ("n_samples", 100_000_001),
+        ("n", 100_000_001),
+        ("workers", 1025),
+        ("max_samples", 100_000_001),
         ("n_samples", 2**63 - 1),
     ],
 )
@@ -259,9 +260,15 @@ def test_utf16_with_a_byte_order_mark_is_read(tmp_path):
 @pytest.mark.parametrize(
     "text, needle",
     [
-        ("time;u;y\n0;0,5;1\n1;0,5;1\n2;1;2\n", r"column 'u': '0,5' is not a number \(decimals need a point"),
+        (
+            "time;u;y\n0;0,5;1\n1;0,5;1\n2;1;2\n",
+            r"column 'u': '0,5' is not a number \(decimals need a point, not a comma: 0\.5\); export the CSV with '\.'",
+        ),
         ("time;u;y\n0,5;1;1\n1,5;1;1\n2,5;1;2\n", r"column 'time': '0,5' .* \(decimals need a point"),
-        ("time,u,y\n0,0,5,1\n1,1,5,2\n", r"row 2 has 4 cells .*\(a decimal comma in a comma-separated file"),
+        (
+            "time,u,y\n0,0,5,1\n1,1,5,2\n",
+            r"row 2 has 4 cells .*\(a decimal comma in a comma-separated file .*: export the CSV with '\.'",
+        ),
     ],
     ids=["value", "time", "split"],
 )
