@@ -17,6 +17,7 @@ Bad input ends the command with one line on stderr and exit status 2.
 
 import argparse
 import dataclasses
+import importlib.machinery
 import importlib.metadata
 import importlib.util
 import json
@@ -35,7 +36,7 @@ import numpy as np
 
 from . import __version__, models, report
 from .data import load_csv
-from .errors import DyniaError, Interrupted, SettingsError
+from .errors import DyniaError, Interrupted, ModelError, SettingsError
 from .identify import identify
 from .outdir import OutputDirectory
 from .pipeline import DroppedSamplesWarning, TargetNotReachedWarning, run
@@ -267,7 +268,16 @@ def _parser():
     )
     pilot.add_argument("--json", action="store_true", help="print the proposal as JSON")
     pilot.add_argument("--config", metavar="FILE.toml", help="read the settings from a TOML file")
+    # Not options of suggest, which writes nothing: known only to say so, instead of argparse's "ambiguous option"
+    # (--out abbreviates --output and --output-file).
+    for option in _WRITING_OPTIONS:
+        pilot.add_argument(
+            option, nargs="?", const=True, dest=f"unwritten_{option[2:].replace('-', '_')}", help=argparse.SUPPRESS
+        )
     return parser
+
+
+_WRITING_OPTIONS = ("--out", "--overwrite", "--no-plots")
 
 
 _WINDOW_HELP = (
@@ -294,6 +304,11 @@ def _add_data_and_model_options(command):
         "data", nargs="?", metavar="DATA.csv", help="CSV file with a header row: time, input and output columns"
     )
     data.add_argument("--time", help="name of the time column: seconds, or ISO 8601 timestamps")
+    data.add_argument(
+        "--time-format",
+        metavar="FORMAT",
+        help="strptime format of the time column for other timestamps, e.g. '%%d.%%m.%%Y %%H:%%M' for 01.01.2012 00:15",
+    )
     data.add_argument(
         "--input", action="append", help="name of the input column (in long format: the input's tag); give one"
     )
@@ -377,6 +392,7 @@ _IDENTIFY = ("identify",)
 OPTIONS = {
     "data": ("text", None, _ALL),
     "time": ("text", None, _ALL),
+    "time_format": ("text", None, _ALL),
     "input": ("names", None, _ALL),
     "output": ("names", None, _ALL),
     "output_file": ("text", None, _ALL),
@@ -442,7 +458,7 @@ def main(argv=None):
         # one line per error; dynia's own warnings are reported by the commands.
         with warnings.catch_warnings(record=True) as caught, np.errstate(all="ignore"):
             warnings.simplefilter("always")
-            args = parser.parse_args(argv)
+            args = parser.parse_args(_attached(parser, command_line[1:]))
             if args.command is None:
                 parser.print_help()
                 return 2
@@ -465,12 +481,25 @@ def _one_line(error):
 
 
 def _options(args):
-    """Command-line options over the config file over the defaults, every one checked."""
+    """Command-line options over the config file over the defaults, every one checked.
+
+    Every check that needs no model comes first, the output directory's included: a ``--model FILE.py`` is
+    imported (running its code, side effects and all) only once the rest of the command is known to be valid.
+    """
     command = args.command
+    unwritten = [option for option in _WRITING_OPTIONS if getattr(args, _unwritten(option), None) is not None]
+    if unwritten:
+        raise UsageError(
+            f"dynia suggest writes nothing (it prints its proposal), so it takes no {unwritten[0]}; "
+            "give --out to the dynia analyse command it proposes"
+        )
     given = {
         key: value
         for key, value in vars(args).items()
-        if value is not None and key not in ("command", "config") and value is not False
+        if value is not None
+        and key not in ("command", "config")
+        and value is not False
+        and not key.startswith("unwritten_")
     }
     options = {key: default for key, (_, default, commands) in OPTIONS.items() if command in commands}
     configured = {}
@@ -489,19 +518,24 @@ def _options(args):
         if not options.get(key):
             option = "DATA.csv" if key == "data" else f"--{key}"
             raise UsageError(f"{option} is required (on the command line or in --config)")
-    model = options["model_object"] = _model(options["model"])
-    options["input"] = _input_columns(options["input"], model)
     options["output"] = _one_column(options["output"], "--output")
+    if isinstance(options["input"], str):
+        options["input"] = [options["input"]]
     if options["output"] in options["input"] and not options["long"]:
         raise UsageError(
             f"--input and --output name the same column {options['output']!r}; "
             "the output must be logged apart from the input"
         )
-    if model.n_inputs > 1 and options["quality"]:
-        raise UsageError(f"--quality checks one input; the model {model!r} has {model.n_inputs}")
+    if not options["long"]:  # in the long layout --input and --output name tags, not columns
+        for option, names in (("--input", options["input"]), ("--output", [options["output"]])):
+            if options["time"].strip() in (name.strip() for name in names):
+                raise UsageError(
+                    f"{option} names the time column {options['time'].strip()!r} (--time); expected the column "
+                    f"of the {option[2:]}'s values"
+                )
     if not options.get("param"):
         raise UsageError("give a range for every model parameter with --param NAME=LOW:HIGH")
-    options["bounds"] = _bounds(options["param"], model)
+    _ranges(options["param"])  # checked before the model runs; against the model below
     if command != "suggest":  # suggest proposes the analysis settings
         options["analysis"] = _analysis_settings(options)
     _check_command_options(options)
@@ -509,15 +543,82 @@ def _options(args):
     options["input_offset"] = _offset(options["input_offset"], "--input-offset")
     if options.get("seed") is None:
         options["seed"] = int(np.random.SeedSequence().entropy % 2**63)
-    inputs = [path for path in (options["data"], options.get("output_file"), options.get("config")) if path]
-    options["inputs"] = inputs
-    if command == "suggest":
-        return options
-    # Checked now, before the data are read: an --out that could cost the user files is refused at once.
-    options["destination"] = OutputDirectory(
-        options["out"], overwrite=options["overwrite"], inputs=inputs, command=command
-    )
+    # Every file the run reads is an input that --out must not replace: the model's source file too.
+    sources = (options["data"], options.get("output_file"), options.get("config"), _model_file(options["model"]))
+    options["inputs"] = [path for path in sources if path]
+    if command != "suggest":
+        # Checked now, before the data are read: an --out that could cost the user files is refused at once.
+        options["destination"] = OutputDirectory(
+            options["out"], overwrite=options["overwrite"], inputs=options["inputs"], command=command
+        )
+    model = options["model_object"] = _model(options["model"])
+    options["input"] = _input_columns(options["input"], model)
+    if model.n_inputs > 1 and options["quality"]:
+        raise UsageError(f"--quality checks one input; the model {model!r} has {model.n_inputs}")
+    options["bounds"] = _bounds(options["param"], model)
     return options
+
+
+def _unwritten(option):
+    """The argparse destination of an output option that suggest knows only to refuse."""
+    return f"unwritten_{option[2:].replace('-', '_')}"
+
+
+def _attached(parser, words):
+    """``--window -60s`` as ``--window=-60s``.
+
+    argparse reads a word starting with ``-`` after an option that takes a value as another option, and fails
+    with "expected one argument"; attached, the value reaches the option's own check and its message.
+    """
+    takes_value, known = set(), set()
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for command in action.choices.values():
+                for option in command._actions:
+                    known.update(option.option_strings)
+                    if option.option_strings and option.nargs is None:
+                        takes_value.update(option.option_strings)
+    attached, index = [], 0
+    while index < len(words):
+        word = words[index]
+        if word == "--":
+            attached += words[index:]
+            break
+        following = words[index + 1] if index + 1 < len(words) else None
+        if (
+            word in takes_value
+            and following is not None
+            and following.startswith("-")
+            and not following.startswith("--")
+            and following not in known
+        ):
+            attached.append(f"{word}={following}")
+            index += 2
+            continue
+        attached.append(word)
+        index += 1
+    return attached
+
+
+def _model_file(spec):
+    """The source file of a ``--model`` of the user's, found without running it; None for a built-in."""
+    where, colon, _ = str(spec).rpartition(":")
+    if spec in MODELS or not colon or not where:
+        return None
+    if where.endswith(".py") or os.sep in where:
+        return where if os.path.isfile(where) else None
+    # As _import_model_module finds it (the working directory first), but without importing any package on the way.
+    locations = [os.getcwd(), *sys.path]
+    found = None
+    for part in where.split("."):
+        try:
+            found = importlib.machinery.PathFinder.find_spec(part, locations)
+        except (ImportError, ValueError):
+            return None
+        if found is None:
+            return None
+        locations = list(found.submodule_search_locations or [])
+    return found.origin if found.has_location else None
 
 
 def _one_column(names, option):
@@ -649,6 +750,8 @@ def _check_command_options(options):
                 raise UsageError(f"--{key.replace('_', '-')} must lie in {interval}; got {value:g}")
     if "narrow_margin" in options and not options["narrow_margin"] >= 0:
         raise UsageError(f"--narrow-margin must be >= 0; got {options['narrow_margin']:g}")
+    if options.get("seed") is not None and options["seed"] < 0:
+        raise UsageError(f"--seed must be a whole number >= 0; got {options['seed']}")
     if "starts" in options and options["starts"] < 1:
         raise UsageError(f"--starts must be a whole number >= 1; got {options['starts']}")
     if not (options["max_gap"] > 1 or math.isinf(options["max_gap"])):
@@ -718,9 +821,9 @@ def _typed(value, kind, where):
     raise UsageError(f"{where} must be {expected}; got {value!r} ({type(value).__name__})")
 
 
-def _bounds(specs, model):
-    """``NAME=LOW:HIGH`` strings to an ordered {name: (low, high)} covering every model parameter."""
-    bounds = {}
+def _ranges(specs):
+    """``NAME=LOW:HIGH`` strings to an ordered {name: (low, high)} of finite ranges, before the model is known."""
+    ranges = {}
     for spec in specs:
         name, _, interval = str(spec).partition("=")
         low, _, high = interval.partition(":")
@@ -729,24 +832,76 @@ def _bounds(specs, model):
         except ValueError:
             raise UsageError(f"--param {spec!r}: expected NAME=LOW:HIGH with numbers, e.g. K=0:7") from None
         name = name.strip()
-        if name not in model.names:
-            raise UsageError(f"--param {name}: {type(model).__name__} has parameters {', '.join(model.names)}")
-        if name in bounds:
+        if name in ranges:
             raise UsageError(f"--param {name} is given twice")
-        if not (math.isfinite(low) and math.isfinite(high) and low < high):
+        if not (math.isfinite(low) and math.isfinite(high)):
+            raise UsageError(f"--param {spec}: expected finite bounds, a range to sample from; got {low:g} to {high:g}")
+        if not low < high:
             raise UsageError(f"--param {name}: the lower bound {low:g} must be below the upper bound {high:g}")
         if max(abs(low), abs(high)) > MAX_PARAMETER:
             raise UsageError(
                 f"--param {name}: the range reaches beyond {MAX_PARAMETER:g}, where the arithmetic "
                 "overflows; give the range in the units of the data"
             )
-        bounds[name] = (low, high)
-    missing = [name for name in model.names if name not in bounds]
+        ranges[name] = (low, high)
+    return ranges
+
+
+def _bounds(specs, model):
+    """``NAME=LOW:HIGH`` strings to an ordered {name: (low, high)}: every model parameter once, each range holding
+    only values the model accepts."""
+    ranges = _ranges(specs)
+    for name in ranges:
+        if name not in model.names:
+            raise UsageError(f"--param {name}: {type(model).__name__} has parameters {', '.join(model.names)}")
+    missing = [name for name in model.names if name not in ranges]
     if missing:
         raise UsageError(
             f"no --param for {', '.join(missing)} ({type(model).__name__} has parameters {', '.join(model.names)})"
         )
-    return bounds
+    _admissible(model, ranges)
+    return ranges
+
+
+def _admissible(model, ranges):
+    """Refuse a range reaching values a built-in model refuses (a negative time constant), naming its --param.
+
+    Each end of each range is tried with the other parameters in the middle of theirs, on three steps of input;
+    user models are left to the run, which reports their own errors (probing them would run their code twice).
+    """
+    if type(model).__module__.split(".")[:2] != ["dynia", "models"] or isinstance(
+        model, (models.FunctionModel, models.StateSpaceModel)
+    ):
+        return
+    middle = [sum(ranges[name]) / 2 for name in model.names]
+    probe = np.zeros(3 if model.n_inputs == 1 else (3, model.n_inputs))
+
+    def refusal(point):
+        try:
+            model.simulate(np.array([point]), probe)
+        except ModelError as error:
+            return error
+        return None
+
+    trials = [(None, None, middle)] + [
+        (name, end, middle[:column] + [end] + middle[column + 1 :])
+        for column, name in enumerate(model.names)
+        for end in ranges[name]
+    ]
+    for name, value, point in trials:
+        error = refusal(point)
+        if error is None:
+            continue
+        if point is middle:  # refused in the middle of every range: blame the parameter the model names
+            named = [other for other in model.names if str(error).startswith(f"{other} ")]
+            if not named:
+                return  # not a matter of one range: the run says what is wrong
+            name, value = named[0], middle[model.names.index(named[0])]
+        low, high = ranges[name]
+        raise UsageError(
+            f"--param {name}={low:g}:{high:g}: {type(model).__name__} does not accept {name} = {value:g} "
+            f"({str(error).split(';')[0]}); give a range of values the model accepts"
+        )
 
 
 def _offset(value, option):
@@ -780,6 +935,7 @@ def _load(options):
             dt=options.get("dt"),
             max_gap=None if math.isinf(options["max_gap"]) else options["max_gap"],
             duplicates=options["duplicates"],
+            time_format=options.get("time_format"),
         )
         for column in options["input"]
     ]
@@ -1011,7 +1167,8 @@ def _identify(options, command_line, caught):
         notices, _ = _data_warnings(data, u, y, dict(options, quality=False))
         for line in notices:
             print(f"dynia: warning: {line}", file=sys.stderr)
-        found = identify(
+        found = _named_options(
+            identify,
             u,
             y,
             model,
@@ -1065,6 +1222,16 @@ def _identify(options, command_line, caught):
         f"({fitted_steps} steps in {len(found.segments)} segment(s), the held-out part aside)"
     )
     return _done(options)
+
+
+def _named_options(function, *args, **kwargs):
+    """``function(*args, **kwargs)``, with a SettingsError naming a setting as the command line names it."""
+    try:
+        return function(*args, **kwargs)
+    except SettingsError as error:
+        if not error.setting or str(error.setting) not in OPTIONS:
+            raise
+        raise UsageError(str(error).replace(str(error.setting), _option_of(error.setting), 1)) from None
 
 
 def _suggest(options, command_line, caught):

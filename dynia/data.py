@@ -151,6 +151,7 @@ def load_csv(
     dt=None,
     max_gap=5.0,
     duplicates="error",
+    time_format=None,
 ):
     """Read logged process data from CSV into a uniform :class:`ProcessData`.
 
@@ -196,6 +197,12 @@ def load_csv(
         signal, missing values ignored (missing when all are); a note counts
         the rows averaged. Only consecutive rows can share a time: times that
         go back are always an error.
+    time_format : str, optional
+        A :meth:`datetime.datetime.strptime` format of the time column, for
+        timestamps that are not ISO 8601, e.g. ``"%d.%m.%Y %H:%M"`` for
+        ``01.01.2012 00:15``; every time cell must match it (a ``%z`` makes
+        timestamps with UTC offset). By default numbers of seconds or ISO
+        8601 timestamps are read.
 
     Returns
     -------
@@ -213,7 +220,9 @@ def load_csv(
         logs that do not overlap in time, or a ``dt`` that gives fewer than
         2 grid points or more than 10 000 000.
     SettingsError
-        ``output_path`` given together with ``long_format``, a ``dt`` that is
+        ``time``, ``input`` or ``output`` not a column name (a str), ``input``
+        or ``output`` naming the time column, a ``time_format`` that is not a
+        str, ``output_path`` given together with ``long_format``, a ``dt`` that is
         not a finite number > 0, a ``max_gap`` that is not a number > 1
         or None, or a ``duplicates`` other than "error" and "mean".
 
@@ -321,6 +330,22 @@ def load_csv(
     ...     print(error)
     no_such_file.csv: no such file; expected a CSV file with a header row
     """
+    for argument, name in (("time", time), ("input", input), ("output", output)):
+        if not isinstance(name, str) or not name.strip():
+            what = "tag" if long_format and argument != "time" else "column"
+            raise SettingsError(f"{argument} must be the name of the {argument} {what} (a str); got {name!r}", argument)
+    if not long_format:
+        for argument, name in (("input", input), ("output", output)):
+            if name.strip() == time.strip():
+                raise SettingsError(
+                    f"{argument} names the time column {time.strip()!r}; "
+                    f"expected the column of the {argument}'s values",
+                    argument,
+                )
+    if time_format is not None and (not isinstance(time_format, str) or "%" not in time_format):
+        raise SettingsError(
+            f"time_format must be a strptime format such as '%d.%m.%Y %H:%M'; got {time_format!r}", "time_format"
+        )
     if long_format and output_path is not None:
         raise SettingsError(
             "long_format reads both signals from one file; do not give output_path with it", "output_path"
@@ -334,12 +359,13 @@ def load_csv(
         )
     average = duplicates == "mean"
     if long_format:
-        input_log, output_log = _tag_logs(_read_table(path), time, tag_column, value_column, input, output, average)
+        table = _read_table(path, time_format)
+        input_log, output_log = _tag_logs(table, time, tag_column, value_column, input, output, average)
     elif output_path is not None:
-        input_log = _column_log(_read_table(path), time, input, "input", average)
-        output_log = _column_log(_read_table(output_path), time, output, "output", average)
+        input_log = _column_log(_read_table(path, time_format), time, input, "input", average)
+        output_log = _column_log(_read_table(output_path, time_format), time, output, "output", average)
     else:
-        return _from_rows(_read_table(path), time, input, output, dt, max_gap, average)
+        return _from_rows(_read_table(path, time_format), time, input, output, dt, max_gap, average)
     return _from_logs(input_log, output_log, dt, max_gap)
 
 
@@ -507,6 +533,7 @@ class _Table:
     rows: list
     records: list
     notes: tuple
+    time_format: str | None = None
 
     def cells(self, name, argument):
         """The cells of column ``name`` (the ``argument`` of load_csv that named it), '' past a short record's end."""
@@ -563,8 +590,11 @@ class _Log:
     notes: list
 
 
-def _read_table(path):
-    """Header and data records of a CSV file or stream, or a DataError saying why there are none."""
+def _read_table(path, time_format=None):
+    """Header and data records of a CSV file or stream, or a DataError saying why there are none.
+
+    ``time_format`` is kept with the table for reading its time column.
+    """
     if hasattr(path, "read"):
         name, raw = _read_stream(path)
     else:
@@ -576,17 +606,10 @@ def _read_table(path):
             raise DataError(f"{name}: no such file; expected a CSV file with a header row") from None
         except OSError as error:
             raise DataError(f"{name}: cannot be read ({error.strerror or error}); expected a CSV file") from None
-    notes = ()
-    try:
-        # A text stream is already decoded; only its byte order mark is left to drop, as utf-8-sig does.
-        text = raw.removeprefix("\ufeff") if isinstance(raw, str) else raw.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        # Excel on Windows saves "CSV" in the ANSI code page; a degree sign in
-        # a column name should not stop a load.
-        text = raw.decode("cp1252", errors="replace")
-        notes = (f"read {name} as Windows-1252 text, since it is not valid UTF-8",)
+    text, notes = _decoded(name, raw)
     header_line = next((line for line in io.StringIO(text) if line.strip()), "")
-    reader = csv.reader(io.StringIO(text, newline=""), delimiter=_delimiter(header_line))
+    delimiter = _delimiter(header_line)
+    reader = csv.reader(io.StringIO(text, newline=""), delimiter=delimiter)
     header_row = header = None
     rows, records = [], []
     row = 0  # a csv.Error is raised before its record is counted
@@ -600,8 +623,13 @@ def _read_table(path):
             if any(cell.strip() for cell in record[len(header) :]):
                 raise DataError(
                     f"{name}: row {row} has {len(record)} cells but the header (row {header_row}) names "
-                    f"{len(header)} columns; expected one cell per column (a decimal comma in a "
-                    "comma-separated file splits a number in two)"
+                    f"{len(header)} columns; expected one cell per column"
+                    + (
+                        " (a decimal comma in a comma-separated file splits a number in two: export the CSV with "
+                        "'.' as the decimal separator)"
+                        if delimiter == "," and _split_decimals(record)
+                        else ""
+                    )
                 )
             rows.append(row)
             records.append(record)
@@ -611,7 +639,50 @@ def _read_table(path):
         raise DataError(f"{name}: the file is empty; expected a header row and at least 2 data rows")
     if not records:
         raise DataError(f"{name}: the file has a header (row {header_row}) but no data rows; expected at least 2")
-    return _Table(name, header_row, header, rows, records, notes)
+    return _Table(name, header_row, header, rows, records, notes, time_format)
+
+
+def _decoded(name, raw):
+    """The text of a file's bytes, and a note when it was not UTF-8; a DataError for what is no text."""
+    notes = ()
+    if isinstance(raw, str):  # a text stream is already decoded; only its byte order mark is left to drop
+        text = raw.removeprefix("\ufeff")
+    elif raw.startswith((b"\xff\xfe", b"\xfe\xff")):
+        # Excel's "Unicode text" and Windows' Notepad write UTF-16 with a byte order mark.
+        try:
+            text = raw.decode("utf-16")
+        except UnicodeDecodeError as error:
+            raise DataError(
+                f"{name}: starts like UTF-16 text but byte {error.start} is not UTF-16; expected a text CSV file"
+            ) from None
+        notes = (f"read {name} as UTF-16 text (it starts with UTF-16's byte order mark)",)
+    else:
+        try:
+            text = raw.decode("utf-8-sig")
+        except UnicodeDecodeError:
+            # Excel on Windows saves "CSV" in the ANSI code page; a degree sign in
+            # a column name should not stop a load.
+            text = raw.decode("cp1252", errors="replace")
+            notes = (f"read {name} as Windows-1252 text, since it is not valid UTF-8",)
+    text = text.removesuffix("\x1a")  # the end-of-file mark of DOS-era text files
+    control = _CONTROL.search(text)
+    if control is not None:
+        offset = control.start()
+        line = text.count("\n", 0, offset) + 1
+        kind = (
+            "NUL bytes (UTF-16 text without a byte order mark, or binary data)"
+            if control.group() == "\x00"
+            else f"the control character {control.group()!r}"
+        )
+        raise DataError(
+            f"{name}: line {line} holds {kind}, which no CSV text holds; expected a CSV text file "
+            "(UTF-8, UTF-16 with byte order mark, or Windows-1252); export the data as CSV"
+        )
+    return text, notes
+
+
+# Characters no CSV text file holds: C0 controls but tab, line feed, vertical tab, form feed and carriage return.
+_CONTROL = re.compile(r"[\x00-\x08\x0e-\x1f\x7f]")
 
 
 def _read_stream(stream):
@@ -626,6 +697,12 @@ def _read_stream(stream):
     if not isinstance(raw, (str, bytes, bytearray)):
         raise DataError(f"{name}: read() gave a {type(raw).__name__}; expected a text or binary CSV stream")
     return name, raw
+
+
+def _split_decimals(record):
+    """Whether a record's cells look like numbers whose decimal comma split them: a digit-only cell after a number."""
+    cells = [cell.strip() for cell in record]
+    return any(_is_number(a) and b.isdigit() for a, b in zip(cells, cells[1:]))
 
 
 def _delimiter(header_line):
@@ -794,7 +871,9 @@ def _timeline(table, column, rows, cells, repeats=False):
     With ``repeats`` consecutive rows may share a time (non-decreasing).
     """
     column = column.strip()
-    stamps = [_time_stamp(table.path, column, row, cell) for row, cell in zip(rows, cells, strict=True)]
+    stamps = [
+        _time_stamp(table.path, column, row, cell, table.time_format) for row, cell in zip(rows, cells, strict=True)
+    ]
     kind = _kind(stamps[0])
     for row, cell, stamp in zip(rows, cells, stamps, strict=True):
         if _kind(stamp) != kind:
@@ -824,7 +903,8 @@ def _timeline(table, column, rows, cells, repeats=False):
         if steps[later - 1] == 0:
             raise DataError(
                 f"{where}: duplicate timestamp {_shown(cells[later])}, already on row {rows[later - 1]}; "
-                "expected strictly increasing times"
+                "expected strictly increasing times, or pass --duplicates mean (duplicates='mean') to average "
+                "the rows that share a time"
             )
         raise DataError(
             f"{where}: {_shown(cells[later])} is earlier than {_shown(cells[later - 1])} on row "
@@ -833,14 +913,25 @@ def _timeline(table, column, rows, cells, repeats=False):
     return _Timeline(column, first, kind, rows[0], tuple(cell.strip() for cell in cells), seconds)
 
 
-def _time_stamp(path, column, row, cell):
-    """A time cell as float seconds or a datetime, or a DataError naming the row."""
+def _time_stamp(path, column, row, cell, time_format=None):
+    """A time cell as float seconds or a datetime, or a DataError naming the row.
+
+    With ``time_format`` the cell is read by :meth:`datetime.datetime.strptime` only.
+    """
     text = cell.strip()
     where = f"{path}: row {row}, column {column!r}"
     if text.lower() in _MISSING:
-        raise DataError(
-            f"{where}: the time is missing ({_shown(cell)}); expected a number of seconds or an ISO 8601 timestamp"
+        expected = (
+            f"a time in the format {time_format!r}" if time_format else "a number of seconds or an ISO 8601 timestamp"
         )
+        raise DataError(f"{where}: the time is missing ({_shown(cell)}); expected {expected}")
+    if time_format is not None:
+        try:
+            return datetime.datetime.strptime(text, time_format)
+        except ValueError:
+            raise DataError(
+                f"{where}: {_shown(cell)} does not match the time format {time_format!r} (--time-format)"
+            ) from None
     try:
         seconds = float(text)
     except ValueError:
@@ -849,13 +940,23 @@ def _time_stamp(path, column, row, cell):
         try:
             return datetime.datetime.fromisoformat(iso)
         except ValueError:
+            hint = (
+                " (decimals need a point, not a comma)"
+                if _DECIMAL_COMMA.fullmatch(text)
+                else "; give the format of other timestamps with --time-format (time_format=), "
+                "e.g. '%d.%m.%Y %H:%M' for 01.01.2012 00:15"
+            )
             raise DataError(
                 f"{where}: {_shown(cell)} is neither a number of seconds nor an ISO 8601 timestamp "
-                "such as 2024-05-01T12:00:00"
+                f"such as 2024-05-01T12:00:00{hint}"
             ) from None
     if not math.isfinite(seconds):
         raise DataError(f"{where}: {_shown(cell)} is not a finite time; expected a number of seconds")
     return seconds
+
+
+# A number written with a decimal comma: 0,5 or -1,25e3.
+_DECIMAL_COMMA = re.compile(r"[+-]?\d*,\d+([eE][+-]?\d+)?")
 
 
 def _kind(stamp):
@@ -896,8 +997,12 @@ def _values(table, column, rows, cells):
         try:
             value = float(text)
         except ValueError:
-            hint = " (decimals need a point, not a comma)" if "," in text else ""
-            raise DataError(f"{where}: {_shown(cell)} is not a number{hint}; {expected}") from None
+            if _DECIMAL_COMMA.fullmatch(text):
+                raise DataError(
+                    f"{where}: {_shown(cell)} is not a number (decimals need a point, not a comma: "
+                    f"{text.replace(',', '.')}); export the CSV with '.' as the decimal separator"
+                ) from None
+            raise DataError(f"{where}: {_shown(cell)} is not a number; {expected}") from None
         if not math.isfinite(value):
             raise DataError(f"{where}: {_shown(cell)} is not a finite number; {expected}")
         values[index] = value

@@ -1,9 +1,9 @@
 """pandas in: a record held as Series or DataFrames, with its time axis, taken apart for :func:`dynia.run`.
 
 :func:`unpack` turns ``u`` and ``y`` given as pandas objects into the arrays
-the analysis takes, and a DatetimeIndex into the grid spacing ``dt`` and the
-timestamps of every step, which :class:`dynia.result.DyniaResult` keeps as its
-``timestamps``. pandas stays optional: nothing here imports it unless the
+the analysis takes, a time index (dates, durations or seconds) into the grid
+spacing ``dt``, and a DatetimeIndex into the timestamps of every step, which
+:class:`dynia.result.DyniaResult` keeps as its ``timestamps``. pandas stays optional: nothing here imports it unless the
 caller has already done so, since a pandas object cannot exist before.
 
 Examples
@@ -47,8 +47,8 @@ def unpack(u, y, dt=None):
         The measured output; NaN (or a missing value of a nullable dtype)
         marks a missing measurement.
     dt : float, optional
-        Sample time in seconds. With a DatetimeIndex it may be left out: it is
-        the index's spacing; given, it must agree with that spacing.
+        Sample time in seconds. With a time index (see Notes) it may be left
+        out: it is the index's spacing; given, it must agree with that spacing.
 
     Returns
     -------
@@ -56,8 +56,8 @@ def unpack(u, y, dt=None):
         The values. Anything that is not a pandas object comes back as it
         was given (and the checks of :func:`dynia.run` apply to it).
     dt : float or None
-        The ``dt`` given, else the spacing of the DatetimeIndex in seconds,
-        else None.
+        The ``dt`` given, else the spacing of the time index in seconds, else
+        None.
     timestamps : ndarray of datetime64[ns] or None
         The DatetimeIndex as numpy datetimes; None without one. A
         timezone-aware index is converted to UTC and returned without its
@@ -67,22 +67,32 @@ def unpack(u, y, dt=None):
     ------
     DataError
         A DataFrame ``y`` with more than one column; values that are not
-        numbers; ``u`` and ``y`` on different indexes when either has a
-        DatetimeIndex; a DatetimeIndex with a missing time (NaT), that does
-        not strictly increase, or is not uniformly spaced (each named by its
-        position and times).
+        numbers; ``u`` and ``y`` both pandas objects on different indexes
+        (of any kind: their values would be paired by position); a time
+        index with a missing time (NaT, NaN), that does not strictly
+        increase, or is not uniformly spaced (each named by its position and
+        times).
     SettingsError
         A ``dt`` that is not a number, or differs from the index's spacing
         (``setting == "dt"``).
 
     Notes
     -----
-    Other indexes (a RangeIndex, numbers) carry no time: their values are
-    used in order and ``dt`` is what was given. A DatetimeIndex counts as
-    uniform when every spacing is within 1e-6 of the first, relative to it,
-    or within one tick of the index's unit (``pd.date_range(start, end,
-    periods=3)`` rounds each step to it); ``dt`` is then the mean spacing,
-    and ``dt`` given agrees when it is within 1e-6 of that, relative.
+    Three kinds of index carry time: a DatetimeIndex (dates; they become
+    ``timestamps``), a TimedeltaIndex (time since some start), and a
+    numeric index other than pandas' RangeIndex, read as seconds (a float
+    index of seconds, as a resampled log has). A RangeIndex (pandas'
+    default) and labels carry none: the values are used in order and
+    ``dt`` is what was given. When both ``u`` and ``y`` are pandas objects
+    their indexes must be equal, whatever their kind, so that no value of
+    ``u`` is paired with the ``y`` of another label; a numeric index of
+    sample numbers is better dropped (``reset_index(drop=True)``), with
+    ``dt`` given. A DatetimeIndex or TimedeltaIndex counts as uniform when
+    every spacing is within 1e-6 of the first, relative to it, or within one
+    tick of the index's unit (``pd.date_range(start, end, periods=3)``
+    rounds each step to it), a numeric one when every spacing is within
+    1e-6 of their mean, relative; ``dt`` is then the mean spacing, and
+    ``dt`` given agrees when it is within 1e-6 of that, relative.
     Irregular logs go through :func:`dynia.data.resample_events` or
     :func:`dynia.data.load_csv` first, which make a uniform grid.
 
@@ -106,21 +116,82 @@ def unpack(u, y, dt=None):
     y_index = y.index if isinstance(y, frame_types) else None
     u_values = _values(pandas, u, "u", many_columns=True) if u_index is not None else u
     y_values = _values(pandas, y, "y", many_columns=False) if y_index is not None else y
-    dated = [index for index in (u_index, y_index) if isinstance(index, pandas.DatetimeIndex)]
-    if not dated:
-        return u_values, y_values, dt, None
     if u_index is not None and y_index is not None and not u_index.equals(y_index):
+        # Paired by position, two indexes that differ would match a label of u with another label of y.
         raise DataError(
-            f"u and y must share one time index: u's runs {_span(u_index)}, y's {_span(y_index)}; "
-            "align them first (e.g. u.reindex(y.index)) or pass both on one DataFrame's index"
+            f"u and y must share one index, or their values would be paired by position: u's is {_span(u_index)}, "
+            f"y's {_span(y_index)}; align them first (e.g. u.reindex(y.index)), pass both on one DataFrame's index, "
+            "or pass numpy arrays (u.to_numpy()) with dt"
         )
-    index = dated[0]
-    name = "the index of u and y" if len(dated) == 2 else ("the index of u" if u_index is index else "the index of y")
-    timestamps, quantum = _timestamps(index)
-    spacing = _spacing(timestamps, quantum, name)
+    both = u_index is not None and y_index is not None
+    index = y_index if y_index is not None else u_index
+    if index is None:
+        return u_values, y_values, dt, None
+    name = "the index of u and y" if both else ("the index of y" if index is y_index else "the index of u")
+    if isinstance(index, pandas.DatetimeIndex):
+        timestamps, quantum = _timestamps(index)
+        spacing = _spacing(timestamps, quantum, name)
+    elif isinstance(index, pandas.TimedeltaIndex):
+        timestamps = None
+        spacing = _spacing(*_elapsed(index), name)
+    elif _numeric(pandas, index):
+        timestamps = None
+        spacing = _numeric_spacing(index.to_numpy(dtype=float), name)
+    else:
+        # A RangeIndex (pandas' default) or labels (text) carry no time: the values in order, dt as given.
+        return u_values, y_values, dt, None
     if spacing is not None and dt is not None:
-        _agreeing(dt, spacing, name)
+        _agreeing(dt, spacing, name, numeric=timestamps is None)
     return u_values, y_values, (spacing if dt is None else dt), timestamps
+
+
+def _numeric(pandas, index):
+    """Whether ``index`` holds numbers that are times in seconds: numeric, not boolean, not pandas' RangeIndex."""
+    kind = index.dtype
+    return (
+        not isinstance(index, pandas.RangeIndex)
+        and pandas.api.types.is_numeric_dtype(kind)
+        and not pandas.api.types.is_bool_dtype(kind)
+        and not pandas.api.types.is_complex_dtype(kind)
+    )
+
+
+def _elapsed(index):
+    """A TimedeltaIndex as timedelta64[ns], and the nanoseconds of one tick of the index's own unit."""
+    times = index.to_numpy()
+    unit, count = np.datetime_data(times.dtype)
+    return times.astype("timedelta64[ns]"), int(np.timedelta64(count, unit) // np.timedelta64(1, "ns"))
+
+
+def _numeric_spacing(seconds, name):
+    """Mean spacing of a numeric time index in seconds, after checking it is finite, increasing and uniform."""
+    how = "read as time in seconds"
+    bad = ~np.isfinite(seconds)
+    if bad.any():
+        raise DataError(
+            f"{name} ({how}) holds {seconds[bad][0]} at position {int(np.argmax(bad))}; expected a finite time per "
+            "step, or drop the index (reset_index(drop=True)) and give dt"
+        )
+    if seconds.size < 2:
+        return None
+    steps = np.diff(seconds)
+    if (steps <= 0).any():
+        at = int(np.argmax(steps <= 0)) + 1
+        relation = "repeats" if steps[at - 1] == 0 else "is below"
+        raise DataError(
+            f"{name} ({how}) must strictly increase: position {at} ({seconds[at]:g}) {relation} position {at - 1} "
+            f"({seconds[at - 1]:g}); sort it, or drop the index (reset_index(drop=True)) and give dt"
+        )
+    spacing = (seconds[-1] - seconds[0]) / (seconds.size - 1)
+    off = np.abs(steps - spacing) > _UNIFORM * spacing
+    if off.any():
+        at = int(np.argmax(off))
+        raise DataError(
+            f"{name} ({how}) is not uniformly spaced: from position {at} ({seconds[at]:g}) to {at + 1} "
+            f"({seconds[at + 1]:g}) is {steps[at]:g} s, against {spacing:g} s on average; "
+            "dynia.data.resample_events makes a uniform grid"
+        )
+    return float(spacing)
 
 
 def _values(pandas, value, name, many_columns):
@@ -185,11 +256,17 @@ def _spacing(timestamps, quantum, name):
     return int(timestamps[-1].astype(np.int64) - timestamps[0].astype(np.int64)) / (timestamps.size - 1) / 1e9
 
 
-def _agreeing(dt, spacing, name):
+def _agreeing(dt, spacing, name, numeric=False):
     if isinstance(dt, bool) or not isinstance(dt, numbers.Real) or not math.isfinite(dt):
         raise SettingsError(f"dt must be a finite number of seconds; got {dt!r}", "dt")
     if abs(dt - spacing) > _UNIFORM * spacing:
+        hint = (
+            " (a numeric index is read as time in seconds: if it holds sample numbers, drop it with "
+            "reset_index(drop=True))"
+            if numeric
+            else ""
+        )
         raise SettingsError(
-            f"dt = {dt:g} s disagrees with the {spacing:g} s spacing of {name}; leave dt out to use the index's",
+            f"dt = {dt:g} s disagrees with the {spacing:g} s spacing of {name}; leave dt out to use the index's{hint}",
             "dt",
         )

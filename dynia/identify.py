@@ -58,6 +58,7 @@ Examples
 ([(0, 210)], [(210, 300)])
 """
 
+import numbers
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -286,6 +287,18 @@ def identify(
             u, y = report.exclude(u, signal="u"), report.exclude(y, signal="y")
 
     fit_part, validation = holdout_split(y.size, held_out)
+    fit_steps = sum(stop - start for start, stop in fit_part)
+    needed, why = (
+        (analysis.window_length, f"one window, 2n+1 with n = {analysis.n}")
+        if method == "dynia"
+        else (len(names) + 1, "one more than the parameters")
+    )
+    if fit_steps < needed:
+        raise SettingsError(
+            f"held_out {held_out if isinstance(held_out, numbers.Real) else 'as given'} leaves {fit_steps} of the "
+            f"record's {y.size} steps to select and fit on; expected at least {needed} ({why}): hold out less",
+            "held_out",
+        )
     y_fit = np.where(segments_to_mask(validation, y.size), np.nan, y)
     notes = []
     dynia_result = baseline_result = None

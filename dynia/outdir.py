@@ -5,8 +5,13 @@ when the caller finishes without an exception. The rules:
 
 1. ``out`` must be a directory or not exist yet: a file, a symlink or anything else is refused and never deleted.
 2. An existing ``out`` is refused unless ``--overwrite`` is given.
-3. ``--overwrite`` replaces only a directory dynia created: one holding the marker file ``.dynia-output`` (JSON:
-   dynia's version, the command, the time of creation), which dynia writes into every result directory.
+3. ``--overwrite`` replaces only a directory dynia created and that holds nothing else: one holding the marker file
+   ``.dynia-output`` (JSON: dynia's version, the command, the time of creation, and ``files``, the path and size
+   of every file dynia wrote, and ``directories``), which dynia writes into every result directory, and no file or
+   directory the marker does not list, nor a listed file whose size changed. Anything else is named in the error
+   and the directory is left alone, so a marker echoed into a folder, or copied with results into one that holds
+   a thesis, does not make the other files deletable; a marker without ``files`` (written by hand, or by an
+   earlier dynia that did not record them) covers no file at all.
 4. Always refused, even with ``--overwrite``: an ``out`` that is an input file or contains one, that is the current
    directory or one of its parents, or that is the filesystem root, the home directory or a parent of it. Paths
    are compared after resolving ``..`` and symlinks.
@@ -75,16 +80,72 @@ def _inside(path, directory):
     return os.path.commonpath([path, directory]) == directory
 
 
-def _made_by_dynia(path):
-    """Whether ``path`` is a real directory holding dynia's marker file."""
+# How many foreign entries an error names before it only counts the rest.
+_LISTED = 5
+
+
+def _marker(path):
+    """The marker record of directory ``path`` if it is a real directory holding dynia's marker; else None."""
     marker = os.path.join(path, MARKER)
     try:
         if not (stat.S_ISDIR(os.lstat(path).st_mode) and stat.S_ISREG(os.lstat(marker).st_mode)):
-            return False
+            return None
         with open(marker) as file:
-            return json.load(file).get("created_by") == "dynia"
-    except (OSError, ValueError, AttributeError):  # unreadable, not JSON, or JSON but not an object
-        return False
+            record = json.load(file)
+    except (OSError, ValueError):  # unreadable or not JSON
+        return None
+    return record if isinstance(record, dict) and record.get("created_by") == "dynia" else None
+
+
+def _contents(path):
+    """Every entry below ``path`` but the marker: {relative path: size} for files, None for anything else."""
+    found = {}
+    for root, directories, names in os.walk(path):
+        for name in directories + names:
+            entry = os.path.join(root, name)
+            relative = os.path.relpath(entry, path)
+            if relative == MARKER:
+                continue
+            mode = os.lstat(entry).st_mode
+            found[relative] = os.lstat(entry).st_size if stat.S_ISREG(mode) else ("dir" if stat.S_ISDIR(mode) else None)
+    return found
+
+
+def _foreign(path):
+    """What in directory ``path`` dynia did not write, as its marker records: a list of relative paths.
+
+    None when ``path`` holds no valid marker. A file of a listed name whose size changed counts as foreign, and so
+    does a symlink or anything but a regular file or directory.
+    """
+    record = _marker(path)
+    if record is None:
+        return None
+    files = record.get("files")
+    files = files if isinstance(files, dict) else {}
+    directories = record.get("directories")
+    directories = set(directories) if isinstance(directories, list) else set()
+    foreign = []
+    try:
+        contents = _contents(path)
+    except OSError:  # a subdirectory that cannot be read: nothing in it can be vouched for
+        return [path]
+    for relative, size in sorted(contents.items()):
+        if size == "dir" and relative in directories:
+            continue
+        if isinstance(size, int) and not isinstance(files.get(relative), bool) and files.get(relative) == size:
+            continue
+        foreign.append(relative)
+    return foreign
+
+
+def _made_by_dynia(path):
+    """Whether ``path`` is a real directory holding dynia's marker and nothing dynia did not write."""
+    return _foreign(path) == []
+
+
+def _named(entries):
+    shown = ", ".join(entries[:_LISTED])
+    return shown if len(entries) <= _LISTED else f"{shown} and {len(entries) - _LISTED} more"
 
 
 class OutputDirectory:
@@ -163,10 +224,17 @@ class OutputDirectory:
             raise OutputError(f"{shown} exists and is not a directory; dynia never replaces it, choose another path")
         if not self.overwrite:
             raise OutputError(f"{shown} exists; choose another directory or add --overwrite")
-        if not _made_by_dynia(path):
+        foreign = _foreign(path)
+        if foreign is None:
             raise OutputError(
                 f"{shown} exists but dynia did not create it (it has no {MARKER} file); "
                 "--overwrite replaces only dynia's own results, choose another directory"
+            )
+        if foreign:
+            raise OutputError(
+                f"{shown} holds what dynia did not write ({_named(foreign)}; not listed in its {MARKER}, "
+                "or changed since); --overwrite replaces only dynia's own results: move those away or choose "
+                "another directory"
             )
         return True
 
@@ -226,7 +294,8 @@ class OutputDirectory:
             # The run before ours removed the lock file between our open and our lock: lock the new file instead.
             os.close(descriptor)
 
-    def _write_marker(self):
+    def _write_marker(self, contents=None):
+        """The marker file; ``contents`` (from :func:`_contents`) records what dynia wrote, when finished."""
         from . import __version__  # here, not at import: dynia/__init__.py may import this module first
 
         record = dict(
@@ -235,6 +304,11 @@ class OutputDirectory:
             command=self.command,
             created=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         )
+        if contents is not None:
+            record.update(
+                files={name: size for name, size in contents.items() if isinstance(size, int)},
+                directories=sorted(name for name, size in contents.items() if size == "dir"),
+            )
         (self.staging / MARKER).write_text(json.dumps(record, indent=2) + "\n")
 
     def _install_handlers(self):
@@ -267,6 +341,7 @@ class OutputDirectory:
 
     def _commit(self):
         """Move the finished staging directory to ``out`` (rule 7), or keep it beside ``out`` and raise."""
+        self._write_marker(_contents(self.staging))  # what dynia wrote, so that a later --overwrite may replace it
         self._set_permissions()
         path = self._path
         if self._existed and not _made_by_dynia(path):

@@ -98,9 +98,10 @@ def run(
     u, y : array_like, shape (n_steps,), or pandas Series / DataFrame
         Input and measured output, one value per sample time ``k*dt``. NaN in
         ``y`` marks a missing measurement. ``u`` is (n_steps, n_inputs) for a
-        model with several inputs (a DataFrame: its columns in order). With a
-        DatetimeIndex (shared by both, uniformly spaced) ``dt`` is its
-        spacing and the index becomes ``result.timestamps``
+        model with several inputs (a DataFrame: its columns in order). Two
+        pandas objects must share one index. With a time index (uniformly
+        spaced dates, durations, or a numeric index of seconds) ``dt`` is its
+        spacing, and dates become ``result.timestamps``
         (:func:`dynia.frames.unpack`).
     model : dynia.models.Model
         For example ``dynia.models.FirstOrder()``.
@@ -185,9 +186,9 @@ def run(
     >>> res.ic.shape
     (2, 80)
     """
-    # pandas in: a DatetimeIndex gives dt and becomes the result's time axis.
+    # pandas in: a time index (dates, durations, seconds) gives dt; dates become the result's time axis.
     u, y, dt_of_index, timestamps = unpack(u, y, dt if dt is not None else getattr(settings, "dt", None))
-    dt = dt if dt is not None else (dt_of_index if timestamps is not None else None)
+    dt = dt if dt is not None else dt_of_index
     settings = AnalysisSettings.build(
         settings,
         dt=dt,
@@ -215,6 +216,7 @@ def run(
             f"StateSpaceModel(...)); got {type(model).__name__}"
         )
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
+    settings.check_record(y.size)
     names, box = parameter_box(bounds, model.names, repr(model))
     if settings.sampler in ADAPTIVE_SAMPLERS:
         result = adaptive_run(

@@ -46,6 +46,9 @@ __all__ = [
     "DTYPES",
     "MAX_BINS",
     "MAX_PARAMETER",
+    "MAX_SAMPLES",
+    "MAX_HALF_WINDOW",
+    "MAX_WORKERS",
     "check_dt",
     "check_x0",
     "parameter_box",
@@ -64,14 +67,28 @@ MAX_BINS = 1000
 # Parameter ranges reaching beyond this are a typo or a unit slip; squares and
 # sums of such values overflow float64 (1.8e308) in the engine and the plots.
 MAX_PARAMETER = 1e150
+# The upper ends of the whole-number settings. Far beyond any analysis (DYNIA needs 10^3 to 10^5 samples), yet low
+# enough that the arrays they size can be allocated and their sizes computed without overflowing int64: a typo such
+# as 9223372036854775807 samples is refused here instead of crashing numpy after the data are read.
+MAX_SAMPLES = 100_000_000
+MAX_HALF_WINDOW = 100_000_000
+MAX_WORKERS = 1024
+_SAMPLES_WHY = " (DYNIA needs thousands; beyond this the samples alone fill the memory)"
 
 
-def _whole(value, name, minimum):
+def _whole(value, name, minimum, maximum=None, why=""):
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         raise SettingsError(f"{name} must be a whole number; got {value!r} ({type(value).__name__})", name)
     if value < minimum:
         raise SettingsError(f"{name} must be at least {minimum}; got {value}", name)
+    if maximum is not None and value > maximum:
+        raise SettingsError(f"{name} must be at most {_spaced(maximum)}{why}; got {_spaced(value)}", name)
     return int(value)
+
+
+def _spaced(number):
+    """A whole number with its thousands set apart by spaces: 100 000 000."""
+    return f"{number:,}".replace(",", " ")
 
 
 def _real(value, name):
@@ -111,12 +128,13 @@ class AnalysisSettings:
     Attributes
     ----------
     n_samples : int, default 2000
-        Monte Carlo parameter sets (model evaluations).
+        Monte Carlo parameter sets (model evaluations), 1 to :data:`MAX_SAMPLES`.
     sampler : {"uniform", "lhs", "sobol", "iis", "de"}, default "uniform"
         How the parameter box is sampled; "iis" and "de" are the adaptive
         schemes of :mod:`dynia.adaptive`.
     n : int, default 10
-        Half window: a window holds 2n+1 steps.
+        Half window: a window holds 2n+1 steps; 0 to :data:`MAX_HALF_WINDOW`,
+        and below the record's length (:func:`dynia.run` checks that).
     percentage : float, default 10
         Behavioural share of the samples, in percent, in (0, 100].
     bins : int, default 40
@@ -133,7 +151,8 @@ class AnalysisSettings:
     window : {"centred", "trailing"}, default "centred"
     engine : {"auto", "numba", "numpy"}, default "auto"
     workers : int or None, default None
-        Threads (None: every core). Results do not depend on it.
+        Threads (None: every core), at most :data:`MAX_WORKERS`. Results do
+        not depend on it.
     dt : float, default 1.0
         Sample time of the record.
     ic_error : bool, default False
@@ -146,7 +165,7 @@ class AnalysisSettings:
         ``ic_error``, needs ``max_samples`` and the uniform sampler.
     max_samples : int or None, default None
         The budget of ``target_se``: at most this many samples, at least
-        ``n_samples``.
+        ``n_samples`` and at most :data:`MAX_SAMPLES`.
     dtype : {"float64", "float32"}, default "float64"
         Type of the result's time-dependent arrays (IC, limits, median, gradient and
         their errors). The engine computes in float64 either way; float32
@@ -181,9 +200,9 @@ class AnalysisSettings:
         def store(name, value):
             object.__setattr__(self, name, value)
 
-        store("n_samples", _whole(self.n_samples, "n_samples", 1))
+        store("n_samples", _whole(self.n_samples, "n_samples", 1, MAX_SAMPLES, _SAMPLES_WHY))
         store("sampler", _choice(self.sampler, "sampler", SAMPLERS + ADAPTIVE_SAMPLERS))
-        store("n", _whole(self.n, "n", 0))
+        store("n", _whole(self.n, "n", 0, MAX_HALF_WINDOW))
         percentage = _real(self.percentage, "percentage")
         if not 0 < percentage <= 100:
             raise SettingsError(f"percentage must lie in (0, 100]; got {percentage:g}", "percentage")
@@ -212,7 +231,7 @@ class AnalysisSettings:
         store("window", _choice(self.window, "window", WINDOWS))
         store("engine", _choice(self.engine, "engine", ENGINES))
         if self.workers is not None:
-            store("workers", _whole(self.workers, "workers", 1))
+            store("workers", _whole(self.workers, "workers", 1, MAX_WORKERS, " threads"))
         store("dt", check_dt(self.dt))
         if not isinstance(self.ic_error, bool):
             raise SettingsError(
@@ -225,7 +244,7 @@ class AnalysisSettings:
             store("target_se", target_se)
             store("ic_error", True)  # the target is on the error, which must then be estimated
         if self.max_samples is not None:
-            store("max_samples", _whole(self.max_samples, "max_samples", self.n_samples))
+            store("max_samples", _whole(self.max_samples, "max_samples", self.n_samples, MAX_SAMPLES, _SAMPLES_WHY))
         store("dtype", _choice(self.dtype, "dtype", DTYPES))
         if self.store is not None:
             if not isinstance(self.store, (str, os.PathLike)) or not os.fspath(self.store):
@@ -301,6 +320,16 @@ class AnalysisSettings:
                 "(raise percentage or n_samples)",
                 "percentage",
             )
+
+    def check_record(self, n_steps):
+        """Raise unless the window fits a record of ``n_steps``: with n >= n_steps every window holds all of it."""
+        if self.n >= n_steps:
+            raise SettingsError(
+                f"n = {self.n} is not below the record's {n_steps} steps: every window (2n+1 = {self.window_length} "
+                "steps) would hold the whole record; expected a smaller n",
+                "n",
+            )
+        return self
 
     @property
     def window_length(self):

@@ -204,13 +204,18 @@ def test_overwrite_refuses_a_user_directory_without_dynias_marker(tmp_path, caps
 def test_overwrite_replaces_an_earlier_dynia_run(tmp_path, capsys, good):
     out = tmp_path / "results"
     _succeeded(*_analyse(capsys, good, *BASE, "--out", out))
+    # Files added since are not dynia's (issue 20): named, and the directory left alone, until they are moved away.
     _write(out / "stale.txt", "from before")
     (out / "old-subdir").mkdir()
     assert _summary(out)["settings"]["seed"] == 2
     data_before = _state(good)
+    kept = _state(out)
+    _one_error(*_analyse(capsys, good, *BASE, "--seed", "7", "--out", out, "--overwrite"), "stale.txt", "old-subdir")
+    assert _state(out) == kept
+    (out / "stale.txt").unlink()
+    (out / "old-subdir").rmdir()
     _succeeded(*_analyse(capsys, good, *BASE, "--seed", "7", "--out", out, "--overwrite"))
     names = {item.name for item in out.iterdir()}
-    assert "stale.txt" not in names and "old-subdir" not in names
     assert {"summary.json", "ic.csv", MARKER} <= names
     assert _summary(out)["settings"]["seed"] == 7
     assert _state(good) == data_before

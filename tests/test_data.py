@@ -561,7 +561,7 @@ _LONG = {"long_format": True, "input": "a", "output": "b"}
             "time,u,y\n0,1,2\n1,1,2\n1.0,1,2\n",
             {},
             r"row 4, column 'time': duplicate timestamp '1\.0', already on row 3; "
-            r"expected strictly increasing times$",
+            r"expected strictly increasing times, or pass --duplicates mean \(duplicates='mean'\) to average",
         ),
         (
             "time,u,y\n2024-01-01T00:00:01,1,2\n2024-01-01T00:00:01.000,1,2\n",

@@ -24,9 +24,11 @@ def test_numpy_arrays_come_back_untouched():
     assert unpack(lists, lists) == (lists, lists, None, None)
 
 
-def test_series_without_a_datetime_index_give_their_values_only():
-    u = pd.Series([1, 2, 3], index=[10, 20, 30])
-    y = pd.Series([0.5, np.nan, 0.7])
+@pytest.mark.parametrize("labels", [None, ["a", "b", "c"]])
+def test_series_without_a_time_index_give_their_values_only(labels):
+    # pandas' default RangeIndex, or text labels, shared by u and y: no time, the values in order.
+    u = pd.Series([1, 2, 3], index=labels)
+    y = pd.Series([0.5, np.nan, 0.7], index=labels)
     out_u, out_y, dt, stamps = unpack(u, y, dt=3.0)
     assert out_u.dtype == float and out_u.tolist() == [1.0, 2.0, 3.0]
     assert np.array_equal(out_y, [0.5, np.nan, 0.7], equal_nan=True)
@@ -136,11 +138,12 @@ def test_u_and_y_on_different_indexes_name_both():
     with pytest.raises(DataError) as caught:
         unpack(pd.Series(np.ones(6), _index()), pd.Series(np.ones(6), _index(freq="20s")))
     assert str(caught.value) == (
-        "u and y must share one time index: u's runs DatetimeIndex of 6 from 2024-05-01 12:00:00 to "
-        "2024-05-01 12:00:50, y's DatetimeIndex of 6 from 2024-05-01 12:00:00 to 2024-05-01 12:01:40; "
-        "align them first (e.g. u.reindex(y.index)) or pass both on one DataFrame's index"
+        "u and y must share one index, or their values would be paired by position: u's is DatetimeIndex of 6 "
+        "from 2024-05-01 12:00:00 to 2024-05-01 12:00:50, y's DatetimeIndex of 6 from 2024-05-01 12:00:00 to "
+        "2024-05-01 12:01:40; align them first (e.g. u.reindex(y.index)), pass both on one DataFrame's index, "
+        "or pass numpy arrays (u.to_numpy()) with dt"
     )
-    with pytest.raises(DataError, match=r"^u and y must share one time index: u's runs RangeIndex of 6 from 0 to 5"):
+    with pytest.raises(DataError, match=r"^u and y must share one index, .* u's is RangeIndex of 6 from 0 to 5"):
         unpack(pd.Series(np.ones(6)), pd.Series(np.ones(6), _index()))
 
 
