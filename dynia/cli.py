@@ -37,6 +37,7 @@ from . import __version__, models, report
 from .data import load_csv
 from .errors import DyniaError, Interrupted, SettingsError
 from .identify import identify
+from .models.base import user_code_failed
 from .outdir import OutputDirectory
 from .pipeline import DroppedSamplesWarning, TargetNotReachedWarning, run
 from .quality import check_quality
@@ -546,10 +547,8 @@ def _model(spec):
             raise UsageError(f"--model {spec}: {attribute} is a {type(found).__name__}, not a dynia.models.Model")
         try:
             found = found()
-        except DyniaError:
-            raise
-        except Exception as error:
-            raise UsageError(f"--model {spec}: calling {attribute}() raised {type(error).__name__}: {error}") from None
+        except BaseException as error:
+            raise UsageError(f"--model {spec}: {user_code_failed(f'calling {attribute}()', error)}") from None
         if not isinstance(found, models.Model):
             raise UsageError(
                 f"--model {spec}: {attribute}() returned a {type(found).__name__}, not a dynia.models.Model"
@@ -578,8 +577,8 @@ def _import_model_module(where, spec):
         raise
     except ImportError as error:
         raise UsageError(f"--model {spec}: cannot import {where}: {error}") from None
-    except Exception as error:
-        raise UsageError(f"--model {spec}: importing {where} raised {type(error).__name__}: {error}") from None
+    except BaseException as error:
+        raise UsageError(f"--model {spec}: {user_code_failed(f'importing {where}', error)}") from None
 
 
 def _analysis_settings(options):

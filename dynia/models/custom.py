@@ -45,7 +45,7 @@ import numpy as np
 
 from ..errors import DyniaError, ModelError
 from ..settings import check_dt, check_x0
-from .base import FLUSH_BELOW, Model, SimulationState, flush_tiny
+from .base import FLUSH_BELOW, Model, SimulationState, flush_tiny, user_code_failed
 
 try:
     import numba
@@ -193,19 +193,15 @@ class FunctionModel(Model):
     def _initial_state(self, params):
         try:
             return self.state(params)
-        except DyniaError:
-            raise
-        except Exception as error:
-            raise ModelError(f"{self!r}: state(params) raised {type(error).__name__}: {error}") from error
+        except BaseException as error:
+            raise user_code_failed(f"{self!r}: state(params)", error) from error
 
     def _called(self, params, u, dt, *state):
         """``fn`` on one piece of the record, its answer checked."""
         try:
             answer = self.fn(params, u, dt, *state)
-        except DyniaError:
-            raise
-        except Exception as error:
-            raise ModelError(f"{self!r}: fn raised {type(error).__name__}: {error}") from error
+        except BaseException as error:
+            raise user_code_failed(f"{self!r}: fn", error) from error
         if state:
             if not (isinstance(answer, tuple) and len(answer) == 2):
                 raise ModelError(
@@ -336,10 +332,8 @@ class StateSpaceModel(Model):
         if callable(self.x0):
             try:
                 state = np.asarray(self.x0(params), dtype=float)
-            except DyniaError:
-                raise
-            except Exception as error:
-                raise ModelError(f"{self!r}: x0(params) raised {type(error).__name__}: {error}") from error
+            except BaseException as error:
+                raise user_code_failed(f"{self!r}: x0(params)", error) from error
             if state.shape != (n_samples, self.n_states):
                 raise ModelError(
                     f"{self!r}: x0(params) returned shape {state.shape}; expected (n_samples, n_states) = "
@@ -362,6 +356,7 @@ class StateSpaceModel(Model):
         if not first:
             return self._loop(state, piece, params, dt)
         # The first step in Python: clear errors for wrong shapes before any compiled loop.
+        self.check_compiled(state, piece[0], params, dt)
         sims = np.empty((params.shape[0], piece.shape[0]))
         sims[:, 0], state = self.advance(state, piece[0], params, dt)
         rest = piece[1:]
@@ -382,15 +377,33 @@ class StateSpaceModel(Model):
             sims[:, k], state = self.advance(state, piece[k], params, dt)
         return sims, state
 
-    def advance(self, state, u_k, params, dt):
-        """One step: ``(y_k, x_next)`` of every sample, both checked."""
+    def check_compiled(self, state, u_k, params, dt):
+        """Run one step of compiled ``step`` and ``output`` through their Python implementations (``py_func``).
+
+        Compiled code does not check indexes: an index beyond an array's end
+        reads or writes memory that is not the array's, and can crash the
+        interpreter. numpy checks them, so the first step taken in Python
+        turns such a mistake into a ModelError before any compiled loop runs.
+        Nothing of the step is kept. A model that is not compiled is already
+        checked by every step it takes.
+        """
+        if self.compiled:
+            self.advance(state.copy(), u_k, params, dt, python=True)
+
+    def advance(self, state, u_k, params, dt, *, python=False):
+        """One step: ``(y_k, x_next)`` of every sample, both checked.
+
+        ``python``: call compiled functions' Python implementations (see :meth:`check_compiled`).
+        """
+        step, output = self.step_function, self.output_function
+        if python:
+            step, output = step.py_func, output.py_func
         try:
-            y_k = self.output_function(state, u_k, params)
-            following = self.step_function(state, u_k, params, dt)
-        except DyniaError:
-            raise
-        except Exception as error:
-            raise ModelError(f"{self!r}: step or output raised {type(error).__name__}: {error}") from error
+            y_k = output(state, u_k, params)
+            following = step(state, u_k, params, dt)
+        except BaseException as error:
+            where = " (in Python, checked before the compiled loop)" if python else ""
+            raise user_code_failed(f"{self!r}: step or output{where}", error) from error
         y_k = np.asarray(y_k, dtype=float)
         following = np.asarray(following, dtype=float)
         n_samples = params.shape[0]
@@ -461,7 +474,9 @@ class StateErrors:
         params = model.check_params(params)
         u = model.check_input(u)
         state = model.initial_state(params)
-        model.advance(state.copy(), u[0], params, dt)  # clear errors for wrong shapes, before compiled code
+        # Clear errors for wrong shapes and indexes, before compiled code.
+        model.check_compiled(state, u[0], params, dt)
+        model.advance(state.copy(), u[0], params, dt)
         self.y = y
         self._model = model
         self._u = u
@@ -539,6 +554,7 @@ class _ChunkStepper:
         if isinstance(self._model, StateSpaceModel):
             if self._state is None:
                 self._state = self._model.initial_state(self._params)
+                self._model.check_compiled(self._state, u_k[0], self._params, self._dt)
             y_k, self._state = self._model.advance(self._state, u_k[0], self._params, self._dt)
         else:
             if self._state is None:
