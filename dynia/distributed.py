@@ -93,7 +93,16 @@ import numpy as np
 from . import _checks
 from .engine.flavours import compiled_engine, flavour_analysis, monte_carlo_errors
 from .engine.noise import floor_fields, floor_settings, record_noise_floor, window_points
-from .engine.windows import ArrayErrors, StreamedErrors, window_halos, window_inputs, window_mean
+from .engine.windows import (
+    ArrayErrors,
+    ScaledErrors,
+    StreamedErrors,
+    check_finite_costs,
+    error_scale,
+    window_halos,
+    window_inputs,
+    window_mean,
+)
 from .errors import DataError, DyniaError, ModelError
 from .pipeline import warn_dropped
 from .result import DyniaResult
@@ -248,6 +257,7 @@ def run(
     names, box = parameter_box(bounds, model.names, type(model).__name__)
     n_samples, dt, x0, flavour = settings.n_samples, settings.dt, settings.x0, settings.flavour
     before, after = window_halos(settings.n, settings.window)
+    _checks.record_holds_a_window(y.size, settings.n)
     compiled = compiled_engine(settings.engine, flavour)
     if sample_chunks is not None:
         sample_chunks = _checks.whole_number(sample_chunks, "sample_chunks", minimum=1)
@@ -294,7 +304,7 @@ def run(
         n_steps = y.size
         if time_chunks is None:
             time_chunks = max(1, min(math.ceil(n_steps / (4 * threads)), _BLOCK_VALUES // samples.shape[0]))
-        windows = _Windows(before, after, settings.min_points, compiled)
+        windows = _Windows(before, after, settings.min_points, compiled, error_scale(y))
         row_chunks = list(_scatter_rows(client, samples[:, model_order], sample_chunks))
         if model.resumable:
             blocks = _ChainedBlocks(client, model, row_chunks, u_data, y_data, dt, x0, windows)
@@ -312,6 +322,9 @@ def run(
             progress=progress,
             ahead=_CHUNKS_AHEAD_PER_THREAD * threads,
         )
+    check_finite_costs(threshold, np.arange(n_steps) * float(dt), y)
+    for extreme in (best, upper, threshold):
+        extreme /= windows.scale  # exact: a power of two
 
     floor = record_noise_floor(
         best,
@@ -474,6 +487,7 @@ class _Windows:
     after: int
     min_points: int
     compiled: bool
+    scale: float = 1.0  # the errors' factor, dynia.engine.windows.error_scale
 
     @property
     def slots(self):
@@ -482,6 +496,8 @@ class _Windows:
 
     def block(self, errors, start, stop, n_steps):
         """One sample chunk's input to the windows at steps [start, stop), with its measured counts."""
+        if self.scale != 1.0:
+            errors = ScaledErrors(errors, self.scale)
         window_errors, measured = window_inputs(
             errors, start, stop, self.before, self.after, n_steps, time_major=self.compiled
         )

@@ -214,6 +214,7 @@ def run(
             f"StateSpaceModel(...)); got {type(model).__name__}"
         )
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
+    _checks.record_holds_a_window(y.size, settings.n)  # before any simulation
     names, box = parameter_box(bounds, model.names, repr(model))
     if settings.sampler in ADAPTIVE_SAMPLERS:
         return _dated(

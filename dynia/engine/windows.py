@@ -55,6 +55,22 @@ Flavours
     cumulative likelihood reaches ``(100-conf_level)/200`` and
     ``(100+conf_level)/200``.
 
+Magnitudes
+----------
+The cost is the MAE squared, which overflows for MAEs beyond about 1.3e154
+and underflows below about 1.5e-154 (to 0 near 1e-162): then every set
+ties and the behavioural set is the first ones by index. DYNIA on MAEs does
+not depend on the unit of the output (scaling data and model output by one
+factor keeps every ranking), so the engine analyses a record whose largest
+``|y|`` lies beyond 2^332 (about 8.7e99) or below 2^-332 (about 1.1e-100)
+with every absolute error multiplied by the power of two
+(:func:`error_scale`) that brings that largest value to the edge: exact in
+floating point, so the ranking is that of the exact MAEs, and the MAEs the
+noise floor reads are divided back. Where even then the behavioural set's
+MAE overflows (a model output more than about 1e54 times the data's
+magnitude), the analysis stops with a :class:`~dynia.errors.DataError`
+saying so rather than rank ties.
+
 The Monte Carlo error (``ic_error=True``)
 -----------------------------------------
 IC and limits are estimates from a finite Monte Carlo sample. With
@@ -80,6 +96,7 @@ of the whole one, at sorted positions whose spread does not shrink exactly
 as 1/n; no correction factor is applied.
 """
 
+import math
 from collections import deque
 from concurrent.futures import ThreadPoolExecutor
 
@@ -103,11 +120,18 @@ __all__ = [
     "window_mean",
     "StreamedErrors",
     "ArrayErrors",
+    "ScaledErrors",
+    "error_scale",
+    "check_finite_costs",
     "FLAVOURS",
     "WINDOWS",
 ]
 
 WINDOWS = ("centred", "trailing")
+
+# Records whose largest |y| lies beyond 2^SAFE_EXPONENT or below 2^-SAFE_EXPONENT have their errors scaled
+# (see "Magnitudes" in the module documentation): at that edge MAE^2 keeps 54 decades of room either side.
+SAFE_EXPONENT = 332
 
 # Values per working array of one time chunk: 2.5e5 float64 = 2 MB, which keeps
 # the dozen passes over a chunk in cache for a few thousand samples; for many
@@ -396,6 +420,7 @@ def _analyse(
     n, percentage, bins, conf_level = checked.n, checked.percentage, checked.bins, checked.conf_level
     min_points, workers = checked.min_points, checked.workers
     before, after = window_halos(n, window)
+    _checks.record_holds_a_window(y.size, n)
     names = _parameter_names(names, n_params)
     time = np.arange(y.size, dtype=float) if time is None else _checks.as_1d_float(time, "time")
     if time.size != y.size:
@@ -410,6 +435,9 @@ def _analyse(
         flavour, compiled, params, bounds, percentage, bins, conf_level, min_points, weights=weights, ic_error=ic_error
     )
     n_steps = y.size
+    scale = error_scale(y)
+    if scale != 1.0:
+        errors = ScaledErrors(errors, scale)
     # In memory or, with a store, in a file written as the chunks come (dynia.storage).
     output = result_arrays(store, checked.dtype)
     shapes = dict(ic=(n_params, n_steps), ci=(n_params, n_steps, 2), gradient=(n_params, flavour_impl.n_bins, n_steps))
@@ -433,6 +461,7 @@ def _analyse(
         if ic_error:
             chunks["ic_se"], chunks["ci_se"] = monte_carlo_errors(results.batch_ic, results.batch_ci)
         output.write(start, stop, chunks)
+        check_finite_costs(results.threshold, time[start:stop], y)
         best[start:stop], threshold[start:stop], upper[start:stop] = results.best, results.threshold, results.upper
 
     starts = range(0, n_steps, chunk_steps)
@@ -461,6 +490,8 @@ def _analyse(
         while pending:
             write(pending.popleft())
 
+    for extreme in (best, threshold, upper):
+        extreme /= scale  # exact: a power of two
     points = window_points(y, before, after)
     floor = record_noise_floor(best, upper, threshold, points, slots, n_params, percentage, n_samples)
     # What the engine did wins over what the caller asked: the samples analysed
@@ -570,6 +601,60 @@ class ArrayErrors:
 
     def rows(self, start, stop):
         return np.ascontiguousarray(self.columns(start, stop).T)
+
+
+def error_scale(y):
+    """The power of two every absolute error is multiplied by before costs are formed; 1.0 for most records.
+
+    See "Magnitudes" in the module documentation.
+
+    Examples
+    --------
+    >>> error_scale([0.5, np.nan, -3.0]), error_scale([1e200]) == 2.0**-333, error_scale([1e-170]) == 2.0**232
+    (1.0, True, True)
+    """
+    magnitude = np.abs(np.asarray(y, dtype=float))
+    largest = float(np.max(magnitude, initial=0.0, where=~np.isnan(magnitude)))
+    if largest == 0.0 or not math.isfinite(largest):
+        return 1.0
+    exponent = math.frexp(largest)[1]  # largest < 2^exponent
+    if exponent > SAFE_EXPONENT:
+        return 2.0 ** (SAFE_EXPONENT - exponent)
+    if exponent < -SAFE_EXPONENT:
+        return 2.0 ** (-SAFE_EXPONENT - exponent)
+    return 1.0
+
+
+class ScaledErrors:
+    """An error source (``rows``, and ``columns`` where it has them) whose errors are multiplied by ``scale``."""
+
+    def __init__(self, errors, scale):
+        self.y = errors.y
+        self.scale = scale
+        self._errors = errors
+
+    def rows(self, start, stop):
+        return self._errors.rows(start, stop) * self.scale
+
+    def columns(self, start, stop):
+        return self._errors.columns(start, stop) * self.scale
+
+
+def check_finite_costs(threshold, time, y):
+    """Refuse windows whose behavioural set's MAE, ``threshold`` (m,), is infinite: its squares overflowed and tied.
+
+    ``time`` (m,) holds the windows' times, ``y`` the whole record (its
+    magnitude is named in the message).
+    """
+    overflowed = np.isinf(threshold)
+    if overflowed.any():
+        largest = float(np.nanmax(np.abs(y))) if not np.isnan(y).all() else math.nan
+        raise DataError(
+            f"in the window at time {time[np.argmax(overflowed)]:g} the behavioural parameter sets' mean absolute "
+            f"error is beyond 1.3e154, so its square, the cost, overflows and they all tie, while y is at most "
+            f"{largest:.3g} in magnitude: the simulated output lies more than 1e54 times beyond the data; check the "
+            "model's output (its units, its parameter ranges)"
+        )
 
 
 def _absolute_errors(measured, sims, at):
