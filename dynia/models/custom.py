@@ -186,8 +186,10 @@ class FunctionModel(Model):
 
     def _streamed(self, params, u, dt, chunk_steps):
         state = self._initial_state(params)
+        same = _SameOutput(self, params, "fn")
         for start in range(0, u.shape[0], chunk_steps):
             sims, state = self._called(params, u[start : start + chunk_steps], dt, state)
+            same.check(sims, last=start + chunk_steps >= u.shape[0])
             yield sims
 
     def _initial_state(self, params):
@@ -199,7 +201,7 @@ class FunctionModel(Model):
     def _called(self, params, u, dt, *state):
         """``fn`` on one piece of the record, its answer checked."""
         try:
-            answer = self.fn(params, u, dt, *state)
+            answer = self.fn(_read_only(params), _read_only(u), dt, *state)
         except BaseException as error:
             raise user_code_failed(f"{self!r}: fn", error) from error
         if state:
@@ -285,8 +287,8 @@ class StateSpaceModel(Model):
     def simulate_chunks(
         self, params, u, dt: float = 1.0, x0: str = "zero", chunk_steps: int | None = None
     ) -> Iterator[np.ndarray]:
-        params = self.check_params(params)
-        u = self.check_input(u)
+        params = _read_only(self.check_params(params))
+        u = _read_only(self.check_input(u))
         dt = check_dt(dt)
         self._check_x0_setting(x0)
         chunk_steps = self.chunk_steps(params.shape[0], chunk_steps)
@@ -347,8 +349,10 @@ class StateSpaceModel(Model):
             raise ModelError(f"{self!r} starts from its own x0; x0={x0!r} is not available for it")
 
     def _chunks(self, params, u, dt, chunk_steps, state):
+        same = _SameOutput(self, params, "step and output")
         for start in range(0, u.shape[0], chunk_steps):
             sims, state = self._span(state, u[start : start + chunk_steps], params, dt, first=start == 0)
+            same.check(sims, last=start + chunk_steps >= u.shape[0])
             yield sims
 
     def _span(self, state, piece, params, dt, *, first):
@@ -490,6 +494,8 @@ class StateErrors:
         self._pool = ThreadPoolExecutor(max_workers=len(self._ranges)) if len(self._ranges) > 1 else None
         self._start = 0
         self._buffer = np.zeros((0, n_samples))
+        # The errors are |output - y|: equal for every set at every step when the output does not depend on params.
+        self._same = _SameOutput(model, params, "step and output")
 
     def rows(self, start, stop):
         """Errors for times [start, stop), shape (stop - start, n_samples)."""
@@ -531,6 +537,7 @@ class StateErrors:
             raise
         except Exception as error:
             raise ModelError(f"{model!r}: the compiled time loop failed: {type(error).__name__}: {error}") from error
+        self._same.check(errors.T, last=stop >= self._u.shape[0])
         return errors
 
     def close(self):
@@ -588,10 +595,41 @@ def _checked_output(model, sims, params, u, *, whole_record):
         and np.array_equal(sims[1], sims[0])
         and np.array_equal(sims, np.broadcast_to(sims[:1], expected))
     ):
-        distinct = np.unique(params, axis=0).shape[0]
-        if distinct > 1:
-            raise ModelError(
-                f"{model!r}: fn returned the same output for all {expected[0]} parameter sets; it must use "
-                "params (one row per set, columns in the order of names), or the input never excites the model"
-            )
+        _refuse_ignored_params(model, params, "fn")
     return sims
+
+
+def _read_only(array):
+    """A read-only view of ``array``: user code given the caller's input or the samples must not change them."""
+    view = array.view()
+    view.flags.writeable = False
+    return view
+
+
+def _refuse_ignored_params(model, params, functions):
+    """The ModelError for a model whose output was the same for every parameter set, unless the sets are too."""
+    if np.unique(params, axis=0).shape[0] > 1:
+        raise ModelError(
+            f"{model!r}: {functions} returned the same output for all {params.shape[0]} parameter sets over the "
+            "whole record; it must use params (one row per set, columns in the order of names), or the input "
+            "never excites the model"
+        )
+
+
+class _SameOutput:
+    """Whether every parameter set's output has been the same so far, fed the record chunk by chunk.
+
+    A chunk before the first input change may well be the same for all sets;
+    only a whole record that is shows a model ignoring ``params``.
+    """
+
+    def __init__(self, model, params, functions):
+        self._model, self._params, self._functions = model, params, functions
+        self.same = params.shape[0] > 1
+
+    def check(self, sims, *, last):
+        """Take the next chunk (n_samples, m); at the ``last`` one, refuse a record the same for every set."""
+        if self.same:
+            self.same = bool(np.array_equal(sims, np.broadcast_to(sims[:1], sims.shape)))
+            if self.same and last:
+                _refuse_ignored_params(self._model, self._params, self._functions)
