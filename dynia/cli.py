@@ -35,6 +35,7 @@ import numpy as np
 
 from . import __version__, models, report
 from .data import load_csv
+from .engine.windows import OverflowedWindowsWarning
 from .errors import DyniaError, Interrupted, SettingsError
 from .identify import identify
 from .models.base import user_code_failed
@@ -850,7 +851,7 @@ def _data_warnings(data, u, y, options):
 
 def _dynia_warnings(caught):
     """The messages of dynia's own warnings among those caught; the rest stay silent."""
-    ours = (DroppedSamplesWarning, TargetNotReachedWarning)
+    ours = (DroppedSamplesWarning, TargetNotReachedWarning, OverflowedWindowsWarning)
     messages = [str(item.message) for item in caught if issubclass(item.category, ours)]
     caught.clear()
     return messages

@@ -97,8 +97,9 @@ from .engine.windows import (
     ArrayErrors,
     ScaledErrors,
     StreamedErrors,
-    check_finite_costs,
+    blank_overflowed,
     error_scale,
+    report_overflowed,
     window_halos,
     window_inputs,
     window_mean,
@@ -289,7 +290,7 @@ def run(
                 "check the model and the parameter ranges"
             )
         samples = samples[finite]
-        warn_dropped(int(n_samples - samples.shape[0]), n_samples)
+        warn_dropped(int(n_samples - samples.shape[0]), n_samples, u)
         flavour_impl = flavour_analysis(
             flavour,
             compiled,
@@ -312,7 +313,7 @@ def run(
             blocks = _WholeRecordBlocks(
                 client, model, row_chunks, u_data, y_data, dt, x0, windows, n_steps, time_chunks
             )
-        ic, ci, gradient, best, upper, threshold, ic_se, ci_se = _analyse_on_cluster(
+        ic, ci, gradient, best, upper, threshold, ic_se, ci_se, overflowed = _analyse_on_cluster(
             client,
             blocks,
             flavour_impl,
@@ -322,7 +323,7 @@ def run(
             progress=progress,
             ahead=_CHUNKS_AHEAD_PER_THREAD * threads,
         )
-    check_finite_costs(threshold, np.arange(n_steps) * float(dt), y)
+    report_overflowed(overflowed, best, np.arange(n_steps) * float(dt), y)
     for extreme in (best, upper, threshold):
         extreme /= windows.scale  # exact: a power of two
 
@@ -382,6 +383,7 @@ def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, pr
     ci = np.empty((n_params, n_steps, 2))
     gradient = np.empty((n_params, flavour.n_bins, n_steps))
     best, upper, threshold = np.empty(n_steps), np.empty(n_steps), np.empty(n_steps)
+    overflowed = np.zeros(n_steps, dtype=bool)
     batched = getattr(flavour, "batches", 0) > 0
     ic_se = np.empty((n_params, n_steps)) if batched else None
     ci_se = np.empty((n_params, n_steps, 2)) if batched else None
@@ -409,6 +411,7 @@ def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, pr
     for future in finished:
         start, stop = chunk_spans.pop(future)
         results = future.result()
+        overflowed[start:stop] = blank_overflowed(results)
         ic[:, start:stop], ci[:, start:stop], gradient[:, :, start:stop] = results.ic, results.ci, results.gradient
         best[start:stop], upper[start:stop], threshold[start:stop] = results.best, results.upper, results.threshold
         if batched:
@@ -420,7 +423,7 @@ def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, pr
             bar.update()
     if bar is not None:
         bar.close()
-    return ic, ci, gradient, best, upper, threshold, ic_se, ci_se
+    return ic, ci, gradient, best, upper, threshold, ic_se, ci_se, overflowed
 
 
 def _import_distributed():

@@ -10,9 +10,11 @@ import pytest
 import dynia
 from dynia.analysis import moving_window
 from dynia.cli import main
+from dynia.engine.windows import OverflowedWindowsWarning
 from dynia.errors import DataError, ModelError, SettingsError
 from dynia.models import FirstOrder, FunctionModel, StateSpaceModel
 from dynia.online import OnlineDynia
+from dynia.pipeline import DroppedSamplesWarning
 
 numba = pytest.importorskip("numba")
 
@@ -143,12 +145,12 @@ def test_huge_data_against_unscaled_model_output_raises_no_numpy_warning():
 
 
 def test_model_output_beyond_the_data_by_1e54_is_refused_with_the_reason():
-    model = FunctionModel(lambda p, u, dt: 1e200 * FirstOrder().simulate(p, u, dt), ["K", "T"])
-    with pytest.raises(DataError, match="overflows and they all tie.*y is at most"):
+    model = FunctionModel(lambda p, u, dt: 1e200 * (1 + FirstOrder().simulate(p, u, dt)), ["K", "T"])
+    with pytest.raises(DataError, match="overflows and they tie.*y is at most"):
         dynia.run(U, Y, model, BOUNDS, rng=1, **SETTINGS)
     sims = 1e200 * FirstOrder().simulate(dynia.sampling.sample("uniform", 300, [[0, 7], [0.1, 7]], 1), U)
     with pytest.raises(DataError, match="overflows"):
-        moving_window(Y, sims, dynia.sampling.sample("uniform", 300, [[0, 7], [0.1, 7]], 1), [[0, 7], [0.1, 7]])
+        moving_window(Y, sims + 1e200, dynia.sampling.sample("uniform", 300, [[0, 7], [0.1, 7]], 1), [[0, 7], [0.1, 7]])
 
 
 # ------------------------------------------------------------------ partial model checks
@@ -223,3 +225,23 @@ def test_percentage_100_runs_and_has_no_behavioural_spread_test(tmp_path):
     assert np.isnan(dynia.load(tmp_path / "r.nc").settings["behavioural_multiple"])
     online = OnlineDynia(FirstOrder(), BOUNDS, n_samples=300, n=5, percentage=100, rng=1).replay(U, Y)
     assert np.isnan(online.settings["behavioural_multiple"])
+
+
+@pytest.mark.parametrize("engine", ["numba", "numpy"])
+def test_windows_where_the_model_output_overflows_are_blanked_with_a_warning(engine):
+    """An input of 1e300 at step 100 sends every set's output beyond 1e154 from then on: before, those windows
+    ranked overflow ties; now they have no result, and the run says so."""
+    u = U.copy()
+    u[100] = 1e300
+    with pytest.warns(OverflowedWindowsWarning, match=r"in \d+ window\(s\), the first at time 9\d"):
+        result = dynia.run(u, Y, FirstOrder(), {"K": (0.5, 7), "T": (0.1, 7)}, rng=1, engine=engine, **SETTINGS)
+    blank = np.isnan(result.ic[0])
+    assert blank[96:].all() and not blank[:90].any()  # the lags take hundreds of steps to decay below 1e154
+
+
+def test_sets_dropped_for_an_absurd_input_are_blamed_on_the_input():
+    u = U.copy()
+    u[100] = 1e308
+    with pytest.warns(DroppedSamplesWarning, match=r"the input reaches 1e\+308 in magnitude"):
+        with pytest.warns(OverflowedWindowsWarning):
+            dynia.run(u, Y, FirstOrder(), BOUNDS, rng=1, **SETTINGS)

@@ -68,8 +68,9 @@ with every absolute error multiplied by the power of two
 floating point, so the ranking is that of the exact MAEs, and the MAEs the
 noise floor reads are divided back. Where even then the behavioural set's
 MAE overflows (a model output more than about 1e54 times the data's
-magnitude), the analysis stops with a :class:`~dynia.errors.DataError`
-saying so rather than rank ties.
+magnitude), the window is left without results rather than rank ties,
+with an :class:`OverflowedWindowsWarning`; when no window is left, the
+analysis stops with a :class:`~dynia.errors.DataError` saying so.
 
 The Monte Carlo error (``ic_error=True``)
 -----------------------------------------
@@ -97,6 +98,7 @@ as 1/n; no correction factor is applied.
 """
 
 import math
+import warnings
 from collections import deque
 from concurrent.futures import ThreadPoolExecutor
 
@@ -122,7 +124,9 @@ __all__ = [
     "ArrayErrors",
     "ScaledErrors",
     "error_scale",
-    "check_finite_costs",
+    "blank_overflowed",
+    "report_overflowed",
+    "OverflowedWindowsWarning",
     "FLAVOURS",
     "WINDOWS",
 ]
@@ -448,6 +452,7 @@ def _analyse(
     slots = before + after + 1
     # Three numbers a step for the noise floor, which needs every window's before it can judge any.
     best, threshold, upper = np.full(n_steps, np.nan), np.full(n_steps, np.nan), np.full(n_steps, np.nan)
+    overflowed = np.zeros(n_steps, dtype=bool)
 
     def analyse_chunk(start, stop, window_errors, measured):
         if compiled:
@@ -457,11 +462,11 @@ def _analyse(
 
     def write(finished):
         start, stop, results = finished.result()
+        overflowed[start:stop] = blank_overflowed(results)
         chunks = dict(ic=results.ic, ci=results.ci, gradient=results.gradient)
         if ic_error:
             chunks["ic_se"], chunks["ci_se"] = monte_carlo_errors(results.batch_ic, results.batch_ci)
         output.write(start, stop, chunks)
-        check_finite_costs(results.threshold, time[start:stop], y)
         best[start:stop], threshold[start:stop], upper[start:stop] = results.best, results.threshold, results.upper
 
     starts = range(0, n_steps, chunk_steps)
@@ -490,6 +495,7 @@ def _analyse(
         while pending:
             write(pending.popleft())
 
+    report_overflowed(overflowed, best, time, y)
     for extreme in (best, threshold, upper):
         extreme /= scale  # exact: a power of two
     points = window_points(y, before, after)
@@ -640,21 +646,47 @@ class ScaledErrors:
         return self._errors.columns(start, stop) * self.scale
 
 
-def check_finite_costs(threshold, time, y):
-    """Refuse windows whose behavioural set's MAE, ``threshold`` (m,), is infinite: its squares overflowed and tied.
+class OverflowedWindowsWarning(UserWarning):
+    """Windows were left without results: their behavioural sets' MAE overflows when squared, so they tie."""
 
-    ``time`` (m,) holds the windows' times, ``y`` the whole record (its
-    magnitude is named in the message).
+
+def blank_overflowed(results):
+    """Set to NaN, in place, the windows of ``results`` (WindowResults) whose behavioural MAE is infinite; their mask.
+
+    Such a window's behavioural costs overflowed and tie, so its band would
+    be the first sets by index: no result is better than that one.
     """
-    overflowed = np.isinf(threshold)
+    overflowed = np.isinf(results.threshold)
     if overflowed.any():
-        largest = float(np.nanmax(np.abs(y))) if not np.isnan(y).all() else math.nan
-        raise DataError(
-            f"in the window at time {time[np.argmax(overflowed)]:g} the behavioural parameter sets' mean absolute "
-            f"error is beyond 1.3e154, so its square, the cost, overflows and they all tie, while y is at most "
-            f"{largest:.3g} in magnitude: the simulated output lies more than 1e54 times beyond the data; check the "
-            "model's output (its units, its parameter ranges)"
-        )
+        results.ic[:, overflowed] = np.nan
+        results.ci[:, overflowed] = np.nan
+        results.gradient[:, :, overflowed] = np.nan
+        for batched in (results.batch_ic, results.batch_ci):
+            if batched is not None:
+                batched[:, :, overflowed] = np.nan
+        for extreme in (results.best, results.threshold, results.upper):
+            extreme[overflowed] = np.nan
+    return overflowed
+
+
+def report_overflowed(overflowed, best, time, y):
+    """Warn about the windows :func:`blank_overflowed` blanked (mask ``overflowed``); refuse if no other is left.
+
+    ``best`` holds every window's best MAE (NaN without result), ``time`` the
+    windows' times, ``y`` the record (its magnitude is named).
+    """
+    if not overflowed.any():
+        return
+    largest = float(np.nanmax(np.abs(y))) if not np.isnan(y).all() else math.nan
+    what = (
+        f"the behavioural parameter sets' mean absolute error is beyond 1.3e154 in {int(overflowed.sum())} "
+        f"window(s), the first at time {time[np.argmax(overflowed)]:g}, so its square, the cost, overflows and they "
+        f"tie, while y is at most {largest:.3g} in magnitude: the simulated output lies more than 1e54 times beyond "
+        "the data there (check the input for absurd values and the model's output for its units)"
+    )
+    if np.isnan(best).all():
+        raise DataError(what)
+    warnings.warn(f"{what}; those windows are left without results", OverflowedWindowsWarning, stacklevel=4)
 
 
 def _absolute_errors(measured, sims, at):
