@@ -104,7 +104,7 @@ from .engine.windows import (
     window_inputs,
     window_mean,
 )
-from .errors import DataError, DyniaError, ModelError
+from .errors import DataError, DyniaError, ModelError, SettingsError
 from .pipeline import warn_dropped
 from .result import DyniaResult
 from .sampling import sample
@@ -271,10 +271,17 @@ def run(
     # first sample) when called, so mistakes surface here, before any cluster.
     model.simulate_chunks(samples[:1, model_order], u, dt=dt, x0=x0)
 
-    with _connected(client, distributed) as client:
+    with _connected(client, distributed) as client, _worker_loss_explained(client, distributed) as need:
         threads = max(1, sum(client.nthreads().values()))
         if sample_chunks is None:
             sample_chunks = math.ceil(n_samples / threads)
+        # What one time chunk needs, should a worker be lost before the chunks are set (as below, all sets kept).
+        need.update(
+            samples=n_samples,
+            steps=(time_chunks or max(1, min(math.ceil(y.size / (4 * threads)), _BLOCK_VALUES // n_samples)))
+            + before
+            + after,
+        )
         u_data, y_data = client.scatter([u, y], broadcast=True, hash=False)
         finite = np.concatenate(
             client.gather(
@@ -306,6 +313,7 @@ def run(
         if time_chunks is None:
             time_chunks = max(1, min(math.ceil(n_steps / (4 * threads)), _BLOCK_VALUES // samples.shape[0]))
         windows = _Windows(before, after, settings.min_points, compiled, error_scale(y))
+        need.update(samples=samples.shape[0], steps=time_chunks + windows.slots - 1)
         row_chunks = list(_scatter_rows(client, samples[:, model_order], sample_chunks))
         if model.resumable:
             blocks = _ChainedBlocks(client, model, row_chunks, u_data, y_data, dt, x0, windows)
@@ -449,6 +457,41 @@ def _connected(client, distributed):
         distributed.Client(cluster, set_as_default=False) as own,
     ):
         yield own
+
+
+@contextmanager
+def _worker_loss_explained(client, distributed):
+    """Turn a worker lost mid-run (killed at its memory limit, mostly) into a SettingsError saying what one chunk needs.
+
+    Yields a dict the caller fills with ``samples`` and ``steps``, the size
+    of one time chunk's errors and halo, which stage 2 joins on one worker.
+    """
+    limits = [info.get("memory_limit") or 0 for info in client.scheduler_info().get("workers", {}).values()]
+    need = {}
+    try:
+        yield need
+    except (
+        distributed.KilledWorker,
+        distributed.comm.CommClosedError,
+        distributed.client.FutureCancelledError,
+    ) as error:
+        if limits and all(limits):
+            limit = f"the smallest worker memory limit is {min(limits) / 2**20:.0f} MB"
+        else:
+            limit = "the workers have no memory limit, so the machine's memory ran out"
+        chunk = ""
+        if need:
+            # The joined errors, their window sums and the flavour's working copies: about three arrays of it.
+            size = 3 * 8 * need["samples"] * need["steps"] / 2**20
+            chunk = (
+                f"; one time chunk ({need['samples']} samples x {need['steps']} steps with its halo) needs about "
+                f"{size:.0f} MB on one worker"
+            )
+        raise SettingsError(
+            f"a worker of the cluster was lost ({type(error).__name__}), most likely killed at its memory limit: "
+            f"{limit}{chunk}; give a smaller time_chunks or sample_chunks, or the workers more memory",
+            "time_chunks",
+        ) from None
 
 
 def _scatter_rows(client, rows, size):

@@ -245,3 +245,26 @@ def test_sets_dropped_for_an_absurd_input_are_blamed_on_the_input():
     with pytest.warns(DroppedSamplesWarning, match=r"the input reaches 1e\+308 in magnitude"):
         with pytest.warns(OverflowedWindowsWarning):
             dynia.run(u, Y, FirstOrder(), BOUNDS, rng=1, **SETTINGS)
+
+
+def _hog(params, u, dt):
+    """A model that holds 1.6 GB while it simulates: beyond a 300 MB worker."""
+    block = np.ones((400, 2**19))
+    return params[:, :1] * u + 0.0 * block[0, 0]
+
+
+@pytest.mark.slow
+def test_a_worker_lost_at_its_memory_limit_is_named_with_the_limit():
+    distributed = pytest.importorskip("distributed")
+    from dynia.distributed import run
+
+    with (
+        distributed.LocalCluster(
+            n_workers=1, threads_per_worker=1, processes=True, memory_limit="300MB", dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster, set_as_default=False) as client,
+    ):
+        lost = r"worker memory limit is 286 MB; one time chunk \(300 samples x \d+ steps.*needs about \d+ MB"
+        with pytest.raises(SettingsError, match=lost + ".*time_chunks") as raised:
+            run(U, Y, FunctionModel(_hog, ["K", "T"]), BOUNDS, client=client, rng=1, **SETTINGS)
+    assert raised.value.setting == "time_chunks"
