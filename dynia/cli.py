@@ -36,8 +36,10 @@ import numpy as np
 
 from . import __version__, models, report
 from .data import load_csv
+from .engine.windows import OverflowedWindowsWarning
 from .errors import DyniaError, Interrupted, ModelError, SettingsError
 from .identify import identify
+from .models.base import user_code_failed
 from .outdir import OutputDirectory
 from .pipeline import DroppedSamplesWarning, TargetNotReachedWarning, run
 from .quality import check_quality
@@ -664,10 +666,8 @@ def _model(spec):
             raise UsageError(f"--model {spec}: {attribute} is a {type(found).__name__}, not a dynia.models.Model")
         try:
             found = found()
-        except DyniaError:
-            raise
-        except Exception as error:
-            raise UsageError(f"--model {spec}: calling {attribute}() raised {type(error).__name__}: {error}") from None
+        except BaseException as error:
+            raise UsageError(f"--model {spec}: {user_code_failed(f'calling {attribute}()', error)}") from None
         if not isinstance(found, models.Model):
             raise UsageError(
                 f"--model {spec}: {attribute}() returned a {type(found).__name__}, not a dynia.models.Model"
@@ -696,8 +696,8 @@ def _import_model_module(where, spec):
         raise
     except ImportError as error:
         raise UsageError(f"--model {spec}: cannot import {where}: {error}") from None
-    except Exception as error:
-        raise UsageError(f"--model {spec}: importing {where} raised {type(error).__name__}: {error}") from None
+    except BaseException as error:
+        raise UsageError(f"--model {spec}: {user_code_failed(f'importing {where}', error)}") from None
 
 
 def _analysis_settings(options):
@@ -1025,7 +1025,7 @@ def _data_warnings(data, u, y, options):
 
 def _dynia_warnings(caught):
     """The messages of dynia's own warnings among those caught; the rest stay silent."""
-    ours = (DroppedSamplesWarning, TargetNotReachedWarning)
+    ours = (DroppedSamplesWarning, TargetNotReachedWarning, OverflowedWindowsWarning)
     messages = [str(item.message) for item in caught if issubclass(item.category, ours)]
     caught.clear()
     return messages

@@ -101,8 +101,18 @@ from .engine.noise import (
     record_residuals,
     window_points,
 )
-from .engine.windows import ArrayErrors, StreamedErrors, window_halos, window_inputs, window_mean
-from .errors import DataError, DyniaError, ModelError
+from .engine.windows import (
+    ArrayErrors,
+    ScaledErrors,
+    StreamedErrors,
+    blank_overflowed,
+    error_scale,
+    report_overflowed,
+    window_halos,
+    window_inputs,
+    window_mean,
+)
+from .errors import DataError, DyniaError, ModelError, SettingsError
 from .pipeline import warn_dropped
 from .result import DyniaResult
 from .sampling import sample
@@ -256,6 +266,7 @@ def run(
     names, box = parameter_box(bounds, model.names, type(model).__name__)
     n_samples, dt, x0, flavour = settings.n_samples, settings.dt, settings.x0, settings.flavour
     before, after = window_halos(settings.n, settings.window)
+    _checks.record_holds_a_window(y.size, settings.n)
     compiled = compiled_engine(settings.engine, flavour)
     if sample_chunks is not None:
         sample_chunks = _checks.whole_number(sample_chunks, "sample_chunks", minimum=1)
@@ -268,10 +279,17 @@ def run(
     # first sample) when called, so mistakes surface here, before any cluster.
     model.simulate_chunks(samples[:1, model_order], u, dt=dt, x0=x0)
 
-    with _connected(client, distributed) as client:
+    with _connected(client, distributed) as client, _worker_loss_explained(client, distributed) as need:
         threads = max(1, sum(client.nthreads().values()))
         if sample_chunks is None:
             sample_chunks = math.ceil(n_samples / threads)
+        # What one time chunk needs, should a worker be lost before the chunks are set (as below, all sets kept).
+        need.update(
+            samples=n_samples,
+            steps=(time_chunks or max(1, min(math.ceil(y.size / (4 * threads)), _BLOCK_VALUES // n_samples)))
+            + before
+            + after,
+        )
         u_data, y_data = client.scatter([u, y], broadcast=True, hash=False)
         finite = np.concatenate(
             client.gather(
@@ -287,7 +305,7 @@ def run(
                 "check the model and the parameter ranges"
             )
         samples = samples[finite]
-        warn_dropped(int(n_samples - samples.shape[0]), n_samples)
+        warn_dropped(int(n_samples - samples.shape[0]), n_samples, u)
         flavour_impl = flavour_analysis(
             flavour,
             compiled,
@@ -302,7 +320,8 @@ def run(
         n_steps = y.size
         if time_chunks is None:
             time_chunks = max(1, min(math.ceil(n_steps / (4 * threads)), _BLOCK_VALUES // samples.shape[0]))
-        windows = _Windows(before, after, settings.min_points, compiled)
+        windows = _Windows(before, after, settings.min_points, compiled, error_scale(y))
+        need.update(samples=samples.shape[0], steps=time_chunks + windows.slots - 1)
         row_chunks = list(_scatter_rows(client, samples[:, model_order], sample_chunks))
         if model.resumable:
             blocks = _ChainedBlocks(client, model, row_chunks, u_data, y_data, dt, x0, windows)
@@ -310,7 +329,7 @@ def run(
             blocks = _WholeRecordBlocks(
                 client, model, row_chunks, u_data, y_data, dt, x0, windows, n_steps, time_chunks
             )
-        ic, ci, median, gradient, best, upper, threshold, ic_se, ci_se = _analyse_on_cluster(
+        ic, ci, median, gradient, best, upper, threshold, ic_se, ci_se, overflowed = _analyse_on_cluster(
             client,
             blocks,
             flavour_impl,
@@ -322,6 +341,9 @@ def run(
         )
         # Every sample's record total absolute error, added step by step as dynia.run adds them.
         totals = np.concatenate(client.gather(blocks.totals()))
+        report_overflowed(overflowed, best, np.arange(n_steps) * float(dt), y)
+        for extreme in (best, upper, threshold):
+            extreme /= windows.scale  # exact: a power of two
 
     # The record-best set and its neighbours are simulated once more here, as dynia.run does.
     residuals = record_residuals(
@@ -390,6 +412,7 @@ def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, pr
     median = np.empty((n_params, n_steps))
     gradient = np.empty((n_params, flavour.n_bins, n_steps))
     best, upper, threshold = np.empty(n_steps), np.empty(n_steps), np.empty(n_steps)
+    overflowed = np.zeros(n_steps, dtype=bool)
     batched = getattr(flavour, "batches", 0) > 0
     ic_se = np.empty((n_params, n_steps)) if batched else None
     ci_se = np.empty((n_params, n_steps, 2)) if batched else None
@@ -417,6 +440,7 @@ def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, pr
     for future in finished:
         start, stop = chunk_spans.pop(future)
         results = future.result()
+        overflowed[start:stop] = blank_overflowed(results)
         ic[:, start:stop], ci[:, start:stop], gradient[:, :, start:stop] = results.ic, results.ci, results.gradient
         median[:, start:stop] = results.median
         best[start:stop], upper[start:stop], threshold[start:stop] = results.best, results.upper, results.threshold
@@ -429,7 +453,7 @@ def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, pr
             bar.update()
     if bar is not None:
         bar.close()
-    return ic, ci, median, gradient, best, upper, threshold, ic_se, ci_se
+    return ic, ci, median, gradient, best, upper, threshold, ic_se, ci_se, overflowed
 
 
 def _import_distributed():
@@ -455,6 +479,41 @@ def _connected(client, distributed):
         distributed.Client(cluster, set_as_default=False) as own,
     ):
         yield own
+
+
+@contextmanager
+def _worker_loss_explained(client, distributed):
+    """Turn a worker lost mid-run (killed at its memory limit, mostly) into a SettingsError saying what one chunk needs.
+
+    Yields a dict the caller fills with ``samples`` and ``steps``, the size
+    of one time chunk's errors and halo, which stage 2 joins on one worker.
+    """
+    limits = [info.get("memory_limit") or 0 for info in client.scheduler_info().get("workers", {}).values()]
+    need = {}
+    try:
+        yield need
+    except (
+        distributed.KilledWorker,
+        distributed.comm.CommClosedError,
+        distributed.client.FutureCancelledError,
+    ) as error:
+        if limits and all(limits):
+            limit = f"the smallest worker memory limit is {min(limits) / 2**20:.0f} MB"
+        else:
+            limit = "the workers have no memory limit, so the machine's memory ran out"
+        chunk = ""
+        if need:
+            # The joined errors, their window sums and the flavour's working copies: about three arrays of it.
+            size = 3 * 8 * need["samples"] * need["steps"] / 2**20
+            chunk = (
+                f"; one time chunk ({need['samples']} samples x {need['steps']} steps with its halo) needs about "
+                f"{size:.0f} MB on one worker"
+            )
+        raise SettingsError(
+            f"a worker of the cluster was lost ({type(error).__name__}), most likely killed at its memory limit: "
+            f"{limit}{chunk}; give a smaller time_chunks or sample_chunks, or the workers more memory",
+            "time_chunks",
+        ) from None
 
 
 def _scatter_rows(client, rows, size):
@@ -496,6 +555,7 @@ class _Windows:
     after: int
     min_points: int
     compiled: bool
+    scale: float = 1.0  # the errors' factor, dynia.engine.windows.error_scale
 
     @property
     def slots(self):
@@ -507,6 +567,8 @@ class _Windows:
 
         The chunk's own steps' errors are added to ``totals``, its samples' record totals, as the engine adds them.
         """
+        if self.scale != 1.0:
+            errors = ScaledErrors(errors, self.scale)
         window_errors, measured = window_inputs(
             errors, start, stop, self.before, self.after, n_steps, time_major=self.compiled
         )

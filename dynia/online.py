@@ -39,7 +39,7 @@ import numpy as np
 from . import _checks
 from .engine.flavours import FLAVOUR_CLASSES, McatFlavour
 from .engine.noise import RESIDUAL_CHUNK, floor_fields, floor_settings, record_noise_floor, record_residuals
-from .errors import DataError
+from .errors import DataError, ModelError
 from .models import Model
 from .result import DyniaResult
 from .sampling import sample
@@ -275,6 +275,13 @@ class OnlineDynia:
             np.isfinite(simulated, out=self._finite)
             if not self._finite.all():
                 self._diverged |= ~self._finite
+                if self._diverged.all():
+                    # As dynia.run: nothing is left to rank, and NaN results would pass for a quiet window.
+                    raise ModelError(
+                        f"{self._model!r}: the simulation of every one of the {self._diverged.size} parameter "
+                        f"sets is not finite (NaN or overflow) by step {self.steps}; check the model and the "
+                        "parameter ranges"
+                    )
             self._measured[slot] = y_t == y_t
             if self._measured[slot]:
                 np.subtract(simulated, y_t, out=errors)  # |s - y| == |y - s| bit for bit

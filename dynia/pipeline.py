@@ -17,7 +17,7 @@ from .frames import unpack
 from .models import LinearModel, Model, StateSpaceModel
 from .models.custom import StateErrors
 from .sampling import sample
-from .settings import ADAPTIVE_SAMPLERS, AnalysisSettings, parameter_box
+from .settings import ADAPTIVE_SAMPLERS, MAX_PARAMETER, AnalysisSettings, parameter_box
 from .storage import result_arrays
 from .verdicts import WEAK_BELOW, assess
 
@@ -217,6 +217,7 @@ def run(
         )
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
     settings.check_record(y.size)
+    _checks.record_holds_a_window(y.size, settings.n)  # before any simulation
     names, box = parameter_box(bounds, model.names, repr(model))
     if settings.sampler in ADAPTIVE_SAMPLERS:
         result = adaptive_run(
@@ -310,7 +311,7 @@ def _analyse_samples(u, y, model, names, box, samples, settings, progress, outpu
             break
         # Some sets overflowed: their costs were not finite, so the analysis is redone without them.
         finite[np.flatnonzero(finite)[errors.diverged]] = False
-    warn_dropped(n_dropped, n_sampled)
+    warn_dropped(n_dropped, n_sampled, u)
     return result
 
 
@@ -433,13 +434,21 @@ def compiled_simulation(model):
     return isinstance(model, LinearModel) and model.n_inputs == 1
 
 
-def warn_dropped(n_dropped, n_sampled):
-    """Warn (:class:`DroppedSamplesWarning`) when more than 1 % of the sampled sets were dropped."""
+def warn_dropped(n_dropped, n_sampled, u=None):
+    """Warn (:class:`DroppedSamplesWarning`) when more than 1 % of the sampled sets were dropped.
+
+    ``u``, the input: when it holds values beyond 1e150 the overflow is
+    blamed on them, not on an unstable model.
+    """
     if n_dropped > DROPPED_WARNING_SHARE * n_sampled:
+        cause = "an unstable model overflowing"
+        if u is not None:
+            largest = float(np.max(np.abs(u)))
+            if largest > MAX_PARAMETER:
+                cause = f"the input reaches {largest:.3g} in magnitude, where the simulation overflows"
         warnings.warn(
             f"{n_dropped} of {n_sampled} parameter sets ({100 * n_dropped / n_sampled:.1f} %) were dropped "
-            "because their simulation is not finite (an unstable model overflowing); the analysis covers "
-            "only the rest of the box",
+            f"because their simulation is not finite ({cause}); the analysis covers only the rest of the box",
             DroppedSamplesWarning,
             stacklevel=3,
         )

@@ -293,7 +293,8 @@ class ThesisFlavour:
         cost[~usable] = 0.0  # any finite value: these windows are blanked below
         selected = lowest_stable(cost, self.count)
         behavioural_cost = np.take_along_axis(cost, selected, axis=1)
-        weights = cld.likelihood(behavioural_cost)
+        with np.errstate(invalid="ignore"):  # costs overflowed to inf tie: the engine blanks such windows
+            weights = cld.likelihood(behavioural_cost)
         rows = selected.shape[0]
         ic, ci, median, gradient = _chunk_arrays(self.columns.shape[0], n_bins, rows)
         for p, column in enumerate(self.columns):

@@ -531,7 +531,9 @@ def noise_floor(
     threshold, points = np.asarray(threshold, dtype=float), np.asarray(points, dtype=float)
     sigma = fitted_noise_sigma(best, points, n_params) if sigma is None else float(sigma)
     multiple = critical_multiple(NOISE_FLOOR_QUANTILE, n_samples, n_windows, level)
-    behavioural_multiple = critical_multiple(share, n_samples, n_windows, level)
+    # With share 1 the behavioural set is the whole population: no quantile below the top compares it with the
+    # best, so the spread test is undefined there (NaN: no window reads as tied).
+    behavioural_multiple = critical_multiple(share, n_samples, n_windows, level) if share < 1 else math.nan
     # In place where it can be: on a long record every temporary is 8 bytes a step.
     with np.errstate(invalid="ignore", divide="ignore"):
         noise_sd = np.sqrt(points)

@@ -56,6 +56,23 @@ Flavours
     cumulative likelihood reaches ``(100-conf_level)/200`` and
     ``(100+conf_level)/200``.
 
+Magnitudes
+----------
+The cost is the MAE squared, which overflows for MAEs beyond about 1.3e154
+and underflows below about 1.5e-154 (to 0 near 1e-162): then every set
+ties and the behavioural set is the first ones by index. DYNIA on MAEs does
+not depend on the unit of the output (scaling data and model output by one
+factor keeps every ranking), so the engine analyses a record whose largest
+``|y|`` lies beyond 2^332 (about 8.7e99) or below 2^-332 (about 1.1e-100)
+with every absolute error multiplied by the power of two
+(:func:`error_scale`) that brings that largest value to the edge: exact in
+floating point, so the ranking is that of the exact MAEs, and the MAEs the
+noise floor reads are divided back. Where even then the behavioural set's
+MAE overflows (a model output more than about 1e54 times the data's
+magnitude), the window is left without results rather than rank ties,
+with an :class:`OverflowedWindowsWarning`; when no window is left, the
+analysis stops with a :class:`~dynia.errors.DataError` saying so.
+
 The Monte Carlo error (``ic_error=True``)
 -----------------------------------------
 IC and limits are estimates from a finite Monte Carlo sample. With
@@ -81,6 +98,8 @@ of the whole one, at sorted positions whose spread does not shrink exactly
 as 1/n; no correction factor is applied.
 """
 
+import math
+import warnings
 from collections import deque
 from concurrent.futures import ThreadPoolExecutor
 
@@ -104,11 +123,20 @@ __all__ = [
     "window_mean",
     "StreamedErrors",
     "ArrayErrors",
+    "ScaledErrors",
+    "error_scale",
+    "blank_overflowed",
+    "report_overflowed",
+    "OverflowedWindowsWarning",
     "FLAVOURS",
     "WINDOWS",
 ]
 
 WINDOWS = ("centred", "trailing")
+
+# Records whose largest |y| lies beyond 2^SAFE_EXPONENT or below 2^-SAFE_EXPONENT have their errors scaled
+# (see "Magnitudes" in the module documentation): at that edge MAE^2 keeps 54 decades of room either side.
+SAFE_EXPONENT = 332
 
 # Values per working array of one time chunk: 2.5e5 float64 = 2 MB, which keeps
 # the dozen passes over a chunk in cache for a few thousand samples; for many
@@ -408,6 +436,7 @@ def _analyse(
     n, percentage, bins, conf_level = checked.n, checked.percentage, checked.bins, checked.conf_level
     min_points, workers = checked.min_points, checked.workers
     before, after = window_halos(n, window)
+    _checks.record_holds_a_window(y.size, n)
     names = _parameter_names(names, n_params)
     time = np.arange(y.size, dtype=float) if time is None else _checks.as_1d_float(time, "time")
     if time.size != y.size:
@@ -422,6 +451,9 @@ def _analyse(
         flavour, compiled, params, bounds, percentage, bins, conf_level, min_points, weights=weights, ic_error=ic_error
     )
     n_steps = y.size
+    scale = error_scale(y)
+    if scale != 1.0:
+        errors = ScaledErrors(errors, scale)
     # In memory or, with a store, in a file written as the chunks come (dynia.storage).
     output = result_arrays(store, checked.dtype)
     shapes = dict(
@@ -439,6 +471,7 @@ def _analyse(
     # sample's record total absolute error, whose lowest gives the residuals the floor's noise model comes from.
     best, threshold, upper = np.full(n_steps, np.nan), np.full(n_steps, np.nan), np.full(n_steps, np.nan)
     totals = np.zeros(n_samples)
+    overflowed = np.zeros(n_steps, dtype=bool)
 
     def analyse_chunk(start, stop, window_errors, measured):
         if compiled:
@@ -448,6 +481,7 @@ def _analyse(
 
     def write(finished):
         start, stop, results = finished.result()
+        overflowed[start:stop] = blank_overflowed(results)
         chunks = dict(ic=results.ic, ci=results.ci, median=results.median, gradient=results.gradient)
         if ic_error:
             chunks["ic_se"], chunks["ci_se"] = monte_carlo_errors(results.batch_ic, results.batch_ci)
@@ -480,6 +514,9 @@ def _analyse(
         while pending:
             write(pending.popleft())
 
+    report_overflowed(overflowed, best, time, y)
+    for extreme in (best, threshold, upper):
+        extreme /= scale  # exact: a power of two
     points = window_points(y, before, after)
     residuals = None if simulations is None else record_residuals(y, params, bounds, totals, simulations)
     floor = record_noise_floor(best, upper, threshold, points, slots, n_params, percentage, n_samples, residuals)
@@ -591,6 +628,87 @@ class ArrayErrors:
 
     def rows(self, start, stop):
         return np.ascontiguousarray(self.columns(start, stop).T)
+
+
+def error_scale(y):
+    """The power of two every absolute error is multiplied by before costs are formed; 1.0 for most records.
+
+    See "Magnitudes" in the module documentation.
+
+    Examples
+    --------
+    >>> error_scale([0.5, np.nan, -3.0]), error_scale([1e200]) == 2.0**-333, error_scale([1e-170]) == 2.0**232
+    (1.0, True, True)
+    """
+    magnitude = np.abs(np.asarray(y, dtype=float))
+    largest = float(np.max(magnitude, initial=0.0, where=~np.isnan(magnitude)))
+    if largest == 0.0 or not math.isfinite(largest):
+        return 1.0
+    exponent = math.frexp(largest)[1]  # largest < 2^exponent
+    if exponent > SAFE_EXPONENT:
+        return 2.0 ** (SAFE_EXPONENT - exponent)
+    if exponent < -SAFE_EXPONENT:
+        return 2.0 ** (-SAFE_EXPONENT - exponent)
+    return 1.0
+
+
+class ScaledErrors:
+    """An error source (``rows``, and ``columns`` where it has them) whose errors are multiplied by ``scale``."""
+
+    def __init__(self, errors, scale):
+        self.y = errors.y
+        self.scale = scale
+        self._errors = errors
+
+    def rows(self, start, stop):
+        return self._errors.rows(start, stop) * self.scale
+
+    def columns(self, start, stop):
+        return self._errors.columns(start, stop) * self.scale
+
+
+class OverflowedWindowsWarning(UserWarning):
+    """Windows were left without results: their behavioural sets' MAE overflows when squared, so they tie."""
+
+
+def blank_overflowed(results):
+    """Set to NaN, in place, the windows of ``results`` (WindowResults) whose behavioural MAE is infinite; their mask.
+
+    Such a window's behavioural costs overflowed and tie, so its band would
+    be the first sets by index: no result is better than that one.
+    """
+    overflowed = np.isinf(results.threshold)
+    if overflowed.any():
+        results.ic[:, overflowed] = np.nan
+        results.ci[:, overflowed] = np.nan
+        results.median[:, overflowed] = np.nan
+        results.gradient[:, :, overflowed] = np.nan
+        for batched in (results.batch_ic, results.batch_ci):
+            if batched is not None:
+                batched[:, :, overflowed] = np.nan
+        for extreme in (results.best, results.threshold, results.upper):
+            extreme[overflowed] = np.nan
+    return overflowed
+
+
+def report_overflowed(overflowed, best, time, y):
+    """Warn about the windows :func:`blank_overflowed` blanked (mask ``overflowed``); refuse if no other is left.
+
+    ``best`` holds every window's best MAE (NaN without result), ``time`` the
+    windows' times, ``y`` the record (its magnitude is named).
+    """
+    if not overflowed.any():
+        return
+    largest = float(np.nanmax(np.abs(y))) if not np.isnan(y).all() else math.nan
+    what = (
+        f"the behavioural parameter sets' mean absolute error is beyond 1.3e154 in {int(overflowed.sum())} "
+        f"window(s), the first at time {time[np.argmax(overflowed)]:g}, so its square, the cost, overflows and they "
+        f"tie, while y is at most {largest:.3g} in magnitude: the simulated output lies more than 1e54 times beyond "
+        "the data there (check the input for absurd values and the model's output for its units)"
+    )
+    if np.isnan(best).all():
+        raise DataError(what)
+    warnings.warn(f"{what}; those windows are left without results", OverflowedWindowsWarning, stacklevel=4)
 
 
 def _absolute_errors(measured, sims, at):

@@ -47,9 +47,17 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import DataError, ModelError
+from ..errors import DataError, DyniaError, Interrupted, ModelError
 
-__all__ = ["Model", "SimulationState", "VALUES_PER_CHUNK", "FLUSH_BELOW", "check_names", "flush_tiny"]
+__all__ = [
+    "Model",
+    "SimulationState",
+    "VALUES_PER_CHUNK",
+    "FLUSH_BELOW",
+    "check_names",
+    "flush_tiny",
+    "user_code_failed",
+]
 
 # States of smaller magnitude are set to zero after every step (see "Subnormal states" above).
 FLUSH_BELOW = 2.0**-960
@@ -433,6 +441,29 @@ class Model:
         if isinstance(chunk_steps, bool) or not isinstance(chunk_steps, numbers.Integral) or chunk_steps < 1:
             raise ModelError(f"chunk_steps must be None or an integer >= 1; got {chunk_steps!r}")
         return int(chunk_steps)
+
+
+def user_code_failed(what, error):
+    """The :class:`ModelError` for ``error``, raised by user code (``what`` names the call), or ``error`` re-raised.
+
+    Anything user code raises becomes a ModelError, ``SystemExit`` too: a
+    model that exits would end the run without a word (or with status 0
+    and nothing written). dynia's own errors, its signal interruptions and
+    Ctrl-C pass unchanged. Use as ``except BaseException as error: raise
+    user_code_failed("fn", error) from error``.
+
+    Examples
+    --------
+    >>> str(user_code_failed("FunctionModel(f): fn", SystemExit(3)))
+    'FunctionModel(f): fn raised SystemExit(3): model code must return or raise, not exit the process'
+    """
+    if isinstance(error, (DyniaError, Interrupted, KeyboardInterrupt)):
+        raise error
+    if isinstance(error, SystemExit):
+        return ModelError(
+            f"{what} raised SystemExit({error.code!r}): model code must return or raise, not exit the process"
+        )
+    return ModelError(f"{what} raised {type(error).__name__}: {error}")
 
 
 def check_names(names) -> tuple[str, ...]:

@@ -45,7 +45,7 @@ import numpy as np
 
 from ..errors import DyniaError, ModelError
 from ..settings import check_dt, check_x0
-from .base import FLUSH_BELOW, Model, SimulationState, flush_tiny
+from .base import FLUSH_BELOW, Model, SimulationState, flush_tiny, user_code_failed
 
 try:
     import numba
@@ -186,26 +186,24 @@ class FunctionModel(Model):
 
     def _streamed(self, params, u, dt, chunk_steps):
         state = self._initial_state(params)
+        same = _SameOutput(self, params, "fn")
         for start in range(0, u.shape[0], chunk_steps):
             sims, state = self._called(params, u[start : start + chunk_steps], dt, state)
+            same.check(sims, last=start + chunk_steps >= u.shape[0])
             yield sims
 
     def _initial_state(self, params):
         try:
             return self.state(params)
-        except DyniaError:
-            raise
-        except Exception as error:
-            raise ModelError(f"{self!r}: state(params) raised {type(error).__name__}: {error}") from error
+        except BaseException as error:
+            raise user_code_failed(f"{self!r}: state(params)", error) from error
 
     def _called(self, params, u, dt, *state):
         """``fn`` on one piece of the record, its answer checked."""
         try:
-            answer = self.fn(params, u, dt, *state)
-        except DyniaError:
-            raise
-        except Exception as error:
-            raise ModelError(f"{self!r}: fn raised {type(error).__name__}: {error}") from error
+            answer = self.fn(_read_only(params), _read_only(u), dt, *state)
+        except BaseException as error:
+            raise user_code_failed(f"{self!r}: fn", error) from error
         if state:
             if not (isinstance(answer, tuple) and len(answer) == 2):
                 raise ModelError(
@@ -289,8 +287,8 @@ class StateSpaceModel(Model):
     def simulate_chunks(
         self, params, u, dt: float = 1.0, x0: str = "zero", chunk_steps: int | None = None
     ) -> Iterator[np.ndarray]:
-        params = self.check_params(params)
-        u = self.check_input(u)
+        params = _read_only(self.check_params(params))
+        u = _read_only(self.check_input(u))
         dt = check_dt(dt)
         self._check_x0_setting(x0)
         chunk_steps = self.chunk_steps(params.shape[0], chunk_steps)
@@ -336,10 +334,8 @@ class StateSpaceModel(Model):
         if callable(self.x0):
             try:
                 state = np.asarray(self.x0(params), dtype=float)
-            except DyniaError:
-                raise
-            except Exception as error:
-                raise ModelError(f"{self!r}: x0(params) raised {type(error).__name__}: {error}") from error
+            except BaseException as error:
+                raise user_code_failed(f"{self!r}: x0(params)", error) from error
             if state.shape != (n_samples, self.n_states):
                 raise ModelError(
                     f"{self!r}: x0(params) returned shape {state.shape}; expected (n_samples, n_states) = "
@@ -353,8 +349,10 @@ class StateSpaceModel(Model):
             raise ModelError(f"{self!r} starts from its own x0; x0={x0!r} is not available for it")
 
     def _chunks(self, params, u, dt, chunk_steps, state):
+        same = _SameOutput(self, params, "step and output")
         for start in range(0, u.shape[0], chunk_steps):
             sims, state = self._span(state, u[start : start + chunk_steps], params, dt, first=start == 0)
+            same.check(sims, last=start + chunk_steps >= u.shape[0])
             yield sims
 
     def _span(self, state, piece, params, dt, *, first):
@@ -362,6 +360,7 @@ class StateSpaceModel(Model):
         if not first:
             return self._loop(state, piece, params, dt)
         # The first step in Python: clear errors for wrong shapes before any compiled loop.
+        self.check_compiled(state, piece[0], params, dt)
         sims = np.empty((params.shape[0], piece.shape[0]))
         sims[:, 0], state = self.advance(state, piece[0], params, dt)
         rest = piece[1:]
@@ -382,15 +381,33 @@ class StateSpaceModel(Model):
             sims[:, k], state = self.advance(state, piece[k], params, dt)
         return sims, state
 
-    def advance(self, state, u_k, params, dt):
-        """One step: ``(y_k, x_next)`` of every sample, both checked."""
+    def check_compiled(self, state, u_k, params, dt):
+        """Run one step of compiled ``step`` and ``output`` through their Python implementations (``py_func``).
+
+        Compiled code does not check indexes: an index beyond an array's end
+        reads or writes memory that is not the array's, and can crash the
+        interpreter. numpy checks them, so the first step taken in Python
+        turns such a mistake into a ModelError before any compiled loop runs.
+        Nothing of the step is kept. A model that is not compiled is already
+        checked by every step it takes.
+        """
+        if self.compiled:
+            self.advance(state.copy(), u_k, params, dt, python=True)
+
+    def advance(self, state, u_k, params, dt, *, python=False):
+        """One step: ``(y_k, x_next)`` of every sample, both checked.
+
+        ``python``: call compiled functions' Python implementations (see :meth:`check_compiled`).
+        """
+        step, output = self.step_function, self.output_function
+        if python:
+            step, output = step.py_func, output.py_func
         try:
-            y_k = self.output_function(state, u_k, params)
-            following = self.step_function(state, u_k, params, dt)
-        except DyniaError:
-            raise
-        except Exception as error:
-            raise ModelError(f"{self!r}: step or output raised {type(error).__name__}: {error}") from error
+            y_k = output(state, u_k, params)
+            following = step(state, u_k, params, dt)
+        except BaseException as error:
+            where = " (in Python, checked before the compiled loop)" if python else ""
+            raise user_code_failed(f"{self!r}: step or output{where}", error) from error
         y_k = np.asarray(y_k, dtype=float)
         following = np.asarray(following, dtype=float)
         n_samples = params.shape[0]
@@ -461,7 +478,9 @@ class StateErrors:
         params = model.check_params(params)
         u = model.check_input(u)
         state = model.initial_state(params)
-        model.advance(state.copy(), u[0], params, dt)  # clear errors for wrong shapes, before compiled code
+        # Clear errors for wrong shapes and indexes, before compiled code.
+        model.check_compiled(state, u[0], params, dt)
+        model.advance(state.copy(), u[0], params, dt)
         self.y = y
         self._model = model
         self._u = u
@@ -475,6 +494,8 @@ class StateErrors:
         self._pool = ThreadPoolExecutor(max_workers=len(self._ranges)) if len(self._ranges) > 1 else None
         self._start = 0
         self._buffer = np.zeros((0, n_samples))
+        # The errors are |output - y|: equal for every set at every step when the output does not depend on params.
+        self._same = _SameOutput(model, params, "step and output")
 
     def rows(self, start, stop):
         """Errors for times [start, stop), shape (stop - start, n_samples)."""
@@ -516,6 +537,7 @@ class StateErrors:
             raise
         except Exception as error:
             raise ModelError(f"{model!r}: the compiled time loop failed: {type(error).__name__}: {error}") from error
+        self._same.check(errors.T, last=stop >= self._u.shape[0])
         return errors
 
     def close(self):
@@ -539,6 +561,7 @@ class _ChunkStepper:
         if isinstance(self._model, StateSpaceModel):
             if self._state is None:
                 self._state = self._model.initial_state(self._params)
+                self._model.check_compiled(self._state, u_k[0], self._params, self._dt)
             y_k, self._state = self._model.advance(self._state, u_k[0], self._params, self._dt)
         else:
             if self._state is None:
@@ -572,10 +595,41 @@ def _checked_output(model, sims, params, u, *, whole_record):
         and np.array_equal(sims[1], sims[0])
         and np.array_equal(sims, np.broadcast_to(sims[:1], expected))
     ):
-        distinct = np.unique(params, axis=0).shape[0]
-        if distinct > 1:
-            raise ModelError(
-                f"{model!r}: fn returned the same output for all {expected[0]} parameter sets; it must use "
-                "params (one row per set, columns in the order of names), or the input never excites the model"
-            )
+        _refuse_ignored_params(model, params, "fn")
     return sims
+
+
+def _read_only(array):
+    """A read-only view of ``array``: user code given the caller's input or the samples must not change them."""
+    view = array.view()
+    view.flags.writeable = False
+    return view
+
+
+def _refuse_ignored_params(model, params, functions):
+    """The ModelError for a model whose output was the same for every parameter set, unless the sets are too."""
+    if np.unique(params, axis=0).shape[0] > 1:
+        raise ModelError(
+            f"{model!r}: {functions} returned the same output for all {params.shape[0]} parameter sets over the "
+            "whole record; it must use params (one row per set, columns in the order of names), or the input "
+            "never excites the model"
+        )
+
+
+class _SameOutput:
+    """Whether every parameter set's output has been the same so far, fed the record chunk by chunk.
+
+    A chunk before the first input change may well be the same for all sets;
+    only a whole record that is shows a model ignoring ``params``.
+    """
+
+    def __init__(self, model, params, functions):
+        self._model, self._params, self._functions = model, params, functions
+        self.same = params.shape[0] > 1
+
+    def check(self, sims, *, last):
+        """Take the next chunk (n_samples, m); at the ``last`` one, refuse a record the same for every set."""
+        if self.same:
+            self.same = bool(np.array_equal(sims, np.broadcast_to(sims[:1], sims.shape)))
+            if self.same and last:
+                _refuse_ignored_params(self._model, self._params, self._functions)

@@ -58,7 +58,7 @@ import scipy.linalg
 
 from ..errors import DataError, ModelError
 from ..settings import check_dt, check_x0
-from .base import Model, SimulationState, flush_tiny
+from .base import Model, SimulationState, flush_tiny, user_code_failed
 
 if TYPE_CHECKING:
     import control
@@ -573,7 +573,10 @@ class TransferFunction(LinearModel):
 
         matrices = []
         for sample, values in enumerate(params):
-            system = self._factory(values.copy())
+            try:
+                system = self._factory(values.copy())
+            except BaseException as error:
+                raise user_code_failed(f"{self!r}: factory(p) for sample {sample}", error) from error
             if not isinstance(system, (control.TransferFunction, control.StateSpace)):
                 raise TypeError(
                     f"factory must return a control.TransferFunction or control.StateSpace; "
