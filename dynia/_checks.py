@@ -107,17 +107,3 @@ def record(u, y, n_inputs=1):
     if u.shape[0] != y.size:
         raise DataError(f"u has {u.shape[0]} samples but y has {y.size}; they must be logged on the same steps")
     return u, y
-
-
-def record_holds_a_window(n_steps, n):
-    """Refuse a record of fewer than 2n+1 steps: no window of the analysis would be whole.
-
-    Every window would be truncated by both ends of the record, and the IC of
-    such windows is not comparable with anything the method reports.
-    """
-    if n_steps < 2 * n + 1:
-        raise SettingsError(
-            f"the record has {n_steps} step(s), fewer than one window of 2n+1 = {2 * n + 1} steps (n={n}); "
-            "give a longer record or a smaller n",
-            "n",
-        )

@@ -266,7 +266,7 @@ def run(
     names, box = parameter_box(bounds, model.names, type(model).__name__)
     n_samples, dt, x0, flavour = settings.n_samples, settings.dt, settings.x0, settings.flavour
     before, after = window_halos(settings.n, settings.window)
-    _checks.record_holds_a_window(y.size, settings.n)
+    settings.check_record(y.size)
     compiled = compiled_engine(settings.engine, flavour)
     if sample_chunks is not None:
         sample_chunks = _checks.whole_number(sample_chunks, "sample_chunks", minimum=1)

@@ -216,8 +216,7 @@ def run(
             f"StateSpaceModel(...)); got {type(model).__name__}"
         )
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
-    settings.check_record(y.size)
-    _checks.record_holds_a_window(y.size, settings.n)  # before any simulation
+    settings.check_record(y.size)  # before any simulation
     names, box = parameter_box(bounds, model.names, repr(model))
     if settings.sampler in ADAPTIVE_SAMPLERS:
         result = adaptive_run(

@@ -183,6 +183,12 @@ def verdict_table(parameters):
     widths = [max(len(row[column]) for row in rows + [header]) for column in range(len(header))]
     lines = ["  ".join(cell.ljust(width) for cell, width in zip(row, widths)).rstrip() for row in [header] + rows]
     for name, entry in parameters.items():
+        if entry.get("highest_ic") is not None and entry["time_of_highest_ic"] != entry["time_of_max_ic"]:
+            lines.append(
+                f"  {name}: the record's highest IC, {entry['highest_ic']:.3f} at {entry['time_of_highest_ic']}, is "
+                "in a window that is no evidence (truncated, below the noise floor or tied within noise); shown: the "
+                "highest IC among the windows that are"
+            )
         for reason in entry["reasons"]:
             lines.append(f"  {name} {entry['verdict']}: {reason['text']}")
     return "\n".join(lines)

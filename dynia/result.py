@@ -236,10 +236,15 @@ class DyniaResult:
         return mask
 
     def summary(self):
-        """Per parameter: the highest IC, when it occurs, the band and the estimate there, and a verdict.
+        """Per parameter: the reported window's IC, when it occurs, the band and the estimate there, and a verdict.
 
-        The estimate is the CLD median (:attr:`median`) at the time of the
-        highest IC, so it always lies in the band there; a result without
+        The reported window (``max_ic``, ``time_of_max_ic``) is the one of
+        highest IC among the windows that can be evidence (whole, above the
+        noise floor, behavioural set untied) when one reaches 0.5, else the
+        one of highest IC of all (:func:`dynia.verdicts.reported_step`);
+        ``highest_ic`` and ``time_of_highest_ic`` are the record's highest
+        IC wherever it lies. The estimate is the CLD median (:attr:`median`)
+        at the reported window, so it always lies in the band there; a result without
         the median (a file saved before it existed) reports the band's
         midpoint instead. The verdict ("identified", "weak" or
         "suspect") and its reasons say what that estimate is worth (see
@@ -255,26 +260,36 @@ class DyniaResult:
         Returns
         -------
         dict
-            ``{name: {"max_ic", "time_of_max_ic", "band": [lower, upper], "estimate",
-            "high_ic_windows", "high_ic_span": [first, last], "verdict", "reasons"}}``
+            ``{name: {"max_ic", "time_of_max_ic", "band": [lower, upper], "estimate", "highest_ic",
+            "time_of_highest_ic", "high_ic_windows", "high_ic_span": [first, last], "verdict", "reasons"}}``
             with plain Python values; with the Monte Carlo errors also
             ``"max_ic_se"``, the standard error of the max IC.
         """
         # verdicts reads results: imported here to keep the modules acyclic
-        from .verdicts import assess, high_ic_windows
+        from .verdicts import assess, high_ic_windows, reported_step
 
         verdicts = self.verdicts if self.verdicts is not None else assess(self)
         summary = {}
         for p, name in enumerate(self.names):
             if np.isnan(self.ic[p]).all():
-                summary[name] = dict(max_ic=None, time_of_max_ic=None, band=[None, None], estimate=None)
+                summary[name] = dict(
+                    max_ic=None,
+                    time_of_max_ic=None,
+                    band=[None, None],
+                    estimate=None,
+                    highest_ic=None,
+                    time_of_highest_ic=None,
+                )
             else:
-                best = int(np.nanargmax(self.ic[p]))
+                best = reported_step(self, p)
+                highest = int(np.nanargmax(self.ic[p]))
                 summary[name] = dict(
                     max_ic=float(self.ic[p, best]),
                     time_of_max_ic=float(self.time[best]),
                     band=[float(self.ci[p, best, 0]), float(self.ci[p, best, 1])],
                     estimate=self._estimate(p, best),
+                    highest_ic=float(self.ic[p, highest]),
+                    time_of_highest_ic=float(self.time[highest]),
                 )
                 if self.ic_se is not None:
                     summary[name]["max_ic_se"] = float(self.ic_se[p, best])

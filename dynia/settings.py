@@ -322,11 +322,15 @@ class AnalysisSettings:
             )
 
     def check_record(self, n_steps):
-        """Raise unless the window fits a record of ``n_steps``: with n >= n_steps every window holds all of it."""
-        if self.n >= n_steps:
+        """Raise unless a record of ``n_steps`` holds one whole window of 2n+1 steps.
+
+        With fewer, every window is truncated by both ends of the record, and
+        the IC of such windows is not comparable with anything the method reports.
+        """
+        if n_steps < self.window_length:
             raise SettingsError(
-                f"n = {self.n} is not below the record's {n_steps} steps: every window (2n+1 = {self.window_length} "
-                "steps) would hold the whole record; expected a smaller n",
+                f"the record has {n_steps} step(s), fewer than one window of 2n+1 = {self.window_length} steps "
+                f"(n={self.n}); give a longer record or a smaller n",
                 "n",
             )
         return self

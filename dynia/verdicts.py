@@ -1,8 +1,22 @@
 """Verdicts: what each parameter's highest information content is worth.
 
-A DYNIA result reports, per parameter, the window of highest information
-content (IC). A high IC alone is not an estimate: :func:`assess` gives each
-parameter one of :data:`VERDICTS` and the reasons for it.
+A DYNIA result reports, per parameter, one window: that of the highest
+information content (IC) among the windows that can be evidence. A high IC
+alone is not an estimate: :func:`assess` gives each parameter one of
+:data:`VERDICTS` and the reasons for it.
+
+Which window is reported
+------------------------
+A window can be evidence (:func:`evidence_windows`) when it holds all 2n+1
+steps (not cut by the record's ends), lies above the noise floor, and its
+behavioural set does not tie within noise. The reported window
+(:func:`reported_step`) is the one of highest IC among those; when none of
+them reaches ``weak_below``, it is the one of highest IC of all, and the
+rules below say why it is no estimate. A user who looked only at the
+highest IC of the record would be shown the window of a noise ranking or of
+the record's edge first, and on a record with one input step that is often
+where the highest IC lies: the windows that see only the first seconds of
+the response, or the truncated ones at the start.
 
 ``"identified"``
     The highest IC reaches ``weak_below`` and no rule below raises suspicion.
@@ -17,9 +31,11 @@ parameter one of :data:`VERDICTS` and the reasons for it.
         The band at max IC lies within 1 % of the range of a sampling bound:
         the optimum may lie outside the range, or the model cannot fit there.
     ``"record_edge"``
-        The max-IC step lies less than one full window (2n+1 steps) from the
-        first or last step, so its window is truncated or next to one that
-        is: an artefact of the record's edge is likely.
+        The window at max IC is truncated by the record's start or end (it
+        holds fewer than 2n+1 steps): its IC is read off fewer points than
+        any whole window's, and an artefact of the edge is likely. A whole
+        window next to the edge is as good as any other (a record that
+        starts just after an input step has its information there).
     ``"below_noise_floor"``
         The window at max IC lies below the noise floor of the analysis
         (``result.informative`` False, see :mod:`dynia.engine.noise`): the
@@ -85,7 +101,16 @@ import numpy as np
 from .errors import ModelError, SettingsError
 from .structure import band_disagreement
 
-__all__ = ["VERDICTS", "WEAK_BELOW", "assess", "high_ic_windows", "noise_only", "noise_sigma"]
+__all__ = [
+    "VERDICTS",
+    "WEAK_BELOW",
+    "assess",
+    "evidence_windows",
+    "high_ic_windows",
+    "noise_only",
+    "noise_sigma",
+    "reported_step",
+]
 
 VERDICTS = ("identified", "weak", "suspect")
 
@@ -214,7 +239,8 @@ def assess(
     """
     if (u is None, y is None, model is None).count(True) not in (0, 3):
         raise SettingsError("assess needs u, y and model together for the noise_only rule, or none of them")
-    best = {p: int(np.nanargmax(result.ic[p])) for p in range(len(result.names)) if not np.isnan(result.ic[p]).all()}
+    reported = {p: reported_step(result, p, weak_below) for p in range(len(result.names))}
+    best = {p: step for p, step in reported.items() if step is not None}
     windows = {step: result.window_range(step) for step in set(best.values())}
     if model is not None:
         u, y = _checked_data(result, u, y, model)
@@ -248,6 +274,48 @@ def assess(
 
 def _reason(code, text):
     return {"code": code, "text": text}
+
+
+def evidence_windows(result):
+    """Windows that can be evidence for a parameter, (n_steps,) bool: see "Which window is reported".
+
+    Whole (:attr:`~dynia.result.DyniaResult.full_windows`), above the noise
+    floor, and with the behavioural set not tied within noise; a result
+    without the floor has only the first test.
+    """
+    usable = result.full_windows.copy()
+    if result.informative is not None:
+        usable &= np.asarray(result.informative, dtype=bool)
+    if result.behavioural_spread is not None:
+        with np.errstate(invalid="ignore"):
+            usable &= ~(np.asarray(result.behavioural_spread) <= np.asarray(result.behavioural_floor))
+    return usable
+
+
+def reported_step(result, p, weak_below=WEAK_BELOW):
+    """The step whose window the verdict of parameter ``p`` judges and the summary reports; None without IC.
+
+    The highest IC among :func:`evidence_windows` when it reaches
+    ``weak_below``, else the highest IC of all.
+
+    Examples
+    --------
+    >>> import numpy as np, dynia
+    >>> u = np.r_[np.zeros(20), np.ones(100), np.zeros(80)]
+    >>> y = dynia.models.FirstOrder().simulate([[2.0, 3.0]], u)[0]
+    >>> res = dynia.run(u, y, dynia.models.FirstOrder(), {"K": (0, 5), "T": (0, 10)}, n=5, rng=1)
+    >>> step = reported_step(res, 0)
+    >>> bool(evidence_windows(res)[step]), bool(res.ic[0, step] >= 0.5)
+    (True, True)
+    """
+    ic = np.asarray(result.ic[p], dtype=float)
+    if np.isnan(ic).all():
+        return None
+    with np.errstate(invalid="ignore"):
+        candidates = np.where(evidence_windows(result) & (ic >= weak_below), ic, np.nan)
+    if not np.isnan(candidates).all():
+        return int(np.nanargmax(candidates))
+    return int(np.nanargmax(ic))
 
 
 def high_ic_windows(result, p, weak_below=WEAK_BELOW):
@@ -337,14 +405,15 @@ def _bound_reasons(result, p, step):
 def _edge_reasons(result, step, window, when):
     before, after = result.window_halos
     length = before + after + 1
-    truncated = "; its window is truncated" if window[1] - window[0] < length else ""
+    if window[1] - window[0] >= length:
+        return []
+    edge = "start" if step < before else "end"
     return [
         _reason(
             "record_edge",
-            f"max IC at time {when(step)} is within one window ({length} steps) of the record's {edge}{truncated}",
+            f"max IC at time {when(step)} is in a window truncated by the record's {edge}: it holds "
+            f"{window[1] - window[0]} of {length} steps",
         )
-        for distance, edge in ((step, "start"), (result.time.size - 1 - step, "end"))
-        if distance < length
     ]
 
 

@@ -72,6 +72,8 @@ def test_heating_system_end_to_end(heating_run):
             "time_of_max_ic",
             "band",
             "estimate",
+            "highest_ic",
+            "time_of_highest_ic",
             "high_ic_windows",
             "high_ic_span",
             "verdict",
@@ -80,7 +82,8 @@ def test_heating_system_end_to_end(heating_run):
         assert entry["verdict"] in ("identified", "weak", "suspect")
         assert entry["band"][0] <= entry["estimate"] <= entry["band"][1]
         column = header.index(name)
-        assert entry["max_ic"] == pytest.approx(np.nanmax(ic[:, 1 + column]))
+        assert entry["highest_ic"] == pytest.approx(np.nanmax(ic[:, 1 + column]))
+        assert entry["max_ic"] == pytest.approx(ic[ic[:, 0] == entry["time_of_max_ic"], 1 + column][0])
     settings = summary["settings"]
     assert settings["seed"] == 1 and settings["samples"] == 400 and settings["n"] == 10
     assert settings["bounds"] == {"K": [0.0, 40.0], "T": [0.0, 200.0]}
@@ -377,7 +380,7 @@ def test_ic_error_reaches_the_table_the_summary_and_ic_csv(tmp_path, capsys):
     # 400 samples at 10 %: 8 batches of 50 keep 5 behavioural sets each, 10 of 40 would keep 4.
     assert summary["run"]["ic_batches"] == 8 and summary["settings"]["analysis"]["ic_error"] is True
     for column, name in ((1, "K"), (3, "T")):
-        best = int(np.nanargmax(ic[:, column]))
+        best = int(np.flatnonzero(ic[:, 0] == summary["parameters"][name]["time_of_max_ic"])[0])
         assert summary["parameters"][name]["max_ic_se"] == pytest.approx(ic[best, column + 1], rel=1e-12)
         assert f"{summary['parameters'][name]['max_ic']:.3f} +- " in table
 

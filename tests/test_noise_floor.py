@@ -72,7 +72,7 @@ def test_example1_the_response_is_informative_and_the_noise_after_it_is_not(seed
 
 
 @pytest.mark.parametrize("seed", range(6))
-def test_example1_time_constant_peak_in_the_decay_and_the_noise_is_never_identified(seed):
+def test_example1_time_constant_is_reported_in_the_untied_decay_not_at_its_peak_in_the_noise(seed):
     found, result = example(1, seed)
     # From step 420 the behavioural set ties: every fast or small-gain set predicts about 0 there.
     ranked = result.behavioural_spread <= result.behavioural_floor
@@ -80,10 +80,14 @@ def test_example1_time_constant_peak_in_the_decay_and_the_noise_is_never_identif
     summary = result.summary()
     step = int(np.nanargmax(result.ic[result.index("T")]))
     # T's artefact: its highest IC in the tied decay or the noise, where a band may hit T = 3 only by chance.
-    assert step > 420
-    assert summary["T"]["verdict"] == "suspect"
-    expected = "below_noise_floor" if not result.informative[step] else "noise_ranked"
-    assert expected in [reason["code"] for reason in summary["T"]["reasons"]]
+    assert step > 420 and summary["T"]["time_of_highest_ic"] == float(step)
+    assert not result.informative[step] or ranked[step]
+    # What is reported is the highest IC among the windows that are evidence: the decay before the tie, whose
+    # band holds the true T (409-416 on these seeds, IC 0.55-0.64).
+    reported = int(summary["T"]["time_of_max_ic"])
+    assert 400 <= reported < 420 and result.informative[reported] and not ranked[reported]
+    assert summary["T"]["band"][0] <= 3.0 <= summary["T"]["band"][1]
+    assert summary["T"]["verdict"] == "identified"
     assert summary["K"]["verdict"] == "identified"
 
 
@@ -251,12 +255,13 @@ def test_record_residuals_take_the_best_sets_misfit_off_and_cut_the_same_in_any_
     bounds = np.array([[0.0, 7.0], [0.0, 7.0]])
     residuals = record_residuals(y, params, bounds, totals, lambda rows: [sims[rows]], chunk_steps=64)
     raw = y - sims[np.argmin(totals)]
+    residuals = residuals * 2.0 ** np.frexp(np.abs(y).max())[1]  # returned scaled by a power of two
     assert np.std(residuals - noise) < 0.2 * np.std(raw - noise)
     assert residual_autocorrelation(residuals.copy(), 1)[1] < 0.15 < residual_autocorrelation(raw, 1)[1]
     pieces = record_residuals(
         y, params, bounds, totals, lambda rows: [sims[rows][:, a : a + 37] for a in range(0, 400, 37)], chunk_steps=64
     )
-    assert_array_equal(pieces, residuals)
+    assert_array_equal(pieces * 2.0 ** np.frexp(np.abs(y).max())[1], residuals)
 
 
 def test_the_estimate_is_recorded_and_reported():

@@ -313,11 +313,11 @@ def test_the_cli_says_in_one_line_why_it_proposes_nothing(tmp_path, capsys):
 
 
 # The window proposed on a heater record with one step, inside it or before its first row, and what it
-# finds. With one step the window at the highest IC can be a sliver of the response's start, whose
-# behavioural set lies along the gain/time-constant ridge and is ranked by noise (on seed 3, "inside":
-# band 349-494 s, the verdict suspect, noise_ranked); seeds 4 and 5 show the transient's own windows.
+# finds. With one step the record's highest IC can be a window that sees only a sliver of the response's
+# start, whose behavioural set is ranked by noise (seed 3, "inside": band 349-494 s); the verdict reports
+# the highest IC among the windows that are evidence, in the transient itself.
 @pytest.mark.parametrize("variant", ["inside", "before"])
-@pytest.mark.parametrize("seed", [4, 5])
+@pytest.mark.parametrize("seed", [3, 4, 5])
 def test_one_heater_step_inside_or_before_the_record_gets_a_window_that_finds_the_time_constant(variant, seed):
     u, y = heater_record(variant, seed)
     bounds = {"K": (0, 2), "T": (0, 500)}
@@ -331,10 +331,9 @@ def test_one_heater_step_inside_or_before_the_record_gets_a_window_that_finds_th
         u, y, FirstOrder(), bounds, n=found.n, percentage=found.percentage, n_samples=found.n_samples, rng=2
     )
     least_squares = fit_segments(u, y, FirstOrder(), [(0, u.size)], bounds=bounds, x0="zero").parameters["T"]
-    ic = np.where(result.informative, result.ic[1], np.nan)
-    peak = int(np.nanargmax(ic))  # the highest IC of T in a window above the noise floor
-    low, high = result.ci[1][peak]
-    assert ic[peak] >= 0.6
+    reported = result.summary()["T"]
+    low, high = reported["band"]
+    assert reported["verdict"] == "identified" and reported["max_ic"] >= 0.6, reported
     assert low <= least_squares <= high
 
 

@@ -360,8 +360,11 @@ def record_residuals(y, params, bounds, totals, simulations, chunk_steps=RESIDUA
     the simulated outputs of those sets, (len(indices), m) arrays in time
     order covering the record; it is called twice, so that memory holds
     one series (8 bytes a step) and chunks of ``chunk_steps``, never the
-    sets' whole outputs. Returns the residuals (NaN where ``y`` is), or
-    None when they overflow.
+    sets' whole outputs. Returns the residuals (NaN where ``y`` is) times
+    a power of two that brings the record's largest magnitude near 1 (all
+    that is read of them, their autocorrelation, does not depend on it,
+    and records near the floating-point limits neither overflow nor
+    underflow), or None when they overflow all the same.
 
     Examples
     --------
@@ -370,7 +373,7 @@ def record_residuals(y, params, bounds, totals, simulations, chunk_steps=RESIDUA
     >>> y = 2 * (1 - np.exp(-t / 10)) + 0.1 * np.cos(t)
     >>> r = record_residuals(y, np.array([[1.9], [2.1], [1.0], [3.0], [1.7]]), np.array([[0.0, 4.0]]),
     ...                      np.abs(y - sims).sum(axis=1), lambda rows: [sims[rows]])
-    >>> bool(np.abs(r - 0.1 * np.cos(t)).max() < 0.01)
+    >>> bool(np.abs(4 * r - 0.1 * np.cos(t)).max() < 0.01)  # r is scaled by 2^-2: y reaches 2.1
     True
     """
     y = np.asarray(y, dtype=float)
@@ -380,22 +383,26 @@ def record_residuals(y, params, bounds, totals, simulations, chunk_steps=RESIDUA
     distance[best] = np.inf
     count = min(2 * params.shape[1], params.shape[0] - 1)
     rows = [best, *np.argsort(distance, kind="stable")[:count].tolist()]
+    largest = np.nanmax(np.abs(y)) if np.any(~np.isnan(y)) else 0.0
+    scale = 2.0 ** -np.frexp(largest)[1] if 0 < largest < np.inf else 1.0  # exact: a power of two
     residuals = np.empty(y.size)
     gram, projection = np.zeros((count, count)), np.zeros(count)
-    for start, chunk in _time_chunks(simulations(rows), chunk_steps):
-        stop = start + chunk.shape[1]
-        part = residuals[start:stop]
-        np.subtract(y[start:stop], chunk[0], out=part)
-        directions = chunk[1:] - chunk[0]
-        measured = ~np.isnan(part)
-        gram += directions[:, measured] @ directions[:, measured].T
-        projection += directions[:, measured] @ part[measured]
+    with np.errstate(over="ignore", invalid="ignore"):
+        for start, chunk in _time_chunks(simulations(rows), chunk_steps):
+            stop = start + chunk.shape[1]
+            chunk = chunk * scale
+            part = residuals[start:stop]
+            np.subtract(y[start:stop] * scale, chunk[0], out=part)
+            directions = chunk[1:] - chunk[0]
+            measured = ~np.isnan(part)
+            gram += directions[:, measured] @ directions[:, measured].T
+            projection += directions[:, measured] @ part[measured]
     if np.isinf(residuals).any() or not (np.isfinite(gram).all() and np.isfinite(projection).all()):
         return None  # outputs beyond floating point: nothing to say about the noise
     if count:
         step = np.linalg.lstsq(gram, projection, rcond=1e-10)[0]
         for start, chunk in _time_chunks(simulations(rows), chunk_steps):
-            residuals[start : start + chunk.shape[1]] -= step @ (chunk[1:] - chunk[0])
+            residuals[start : start + chunk.shape[1]] -= step @ ((chunk[1:] - chunk[0]) * scale)
     return residuals
 
 

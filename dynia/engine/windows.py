@@ -436,7 +436,7 @@ def _analyse(
     n, percentage, bins, conf_level = checked.n, checked.percentage, checked.bins, checked.conf_level
     min_points, workers = checked.min_points, checked.workers
     before, after = window_halos(n, window)
-    _checks.record_holds_a_window(y.size, n)
+    checked.check_record(y.size)
     names = _parameter_names(names, n_params)
     time = np.arange(y.size, dtype=float) if time is None else _checks.as_1d_float(time, "time")
     if time.size != y.size:
