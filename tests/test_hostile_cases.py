@@ -165,7 +165,8 @@ def test_every_whole_number_setting_has_an_upper_end(setting, value):
 def test_a_window_longer_than_the_record_is_refused_by_run():
     u = np.r_[np.zeros(20), np.ones(60)]
     y = FirstOrder().simulate([[2.0, 3.0]], u)[0]
-    with pytest.raises(SettingsError, match=r"^the record has 80 step\(s\), fewer than one window of 2n\+1 = 161") as caught:
+    refused = r"^the record has 80 step\(s\), fewer than one window of 2n\+1 = 161"
+    with pytest.raises(SettingsError, match=refused) as caught:
         dynia.run(u, y, FirstOrder(), {"K": (0, 7), "T": (0, 7)}, n=80, rng=1)
     assert caught.value.setting == "n"
 
