@@ -60,6 +60,13 @@ the response, or the truncated ones at the start.
         The result has the Monte Carlo standard error of IC (``ic_error``)
         and the max IC reaches ``weak_below`` by less than two of them:
         another sample of the same size could call the parameter weak.
+    ``"isolated_evidence"``
+        The reported window is evidence, but fewer windows than a quarter
+        of a window's length (:func:`evidence_needed`) are: the high IC
+        holds for one alignment of the window with the data and is gone
+        when the window slides on, so nothing checks the band against
+        anything. On a rainfall-runoff record a parameter was once called
+        identified from one 11-day window whose band missed the truth.
     ``"windows_disagree"``
         The windows that identify the parameter do not agree with each
         other: DYNIA's model-structure warning (thesis 4.4), parameters
@@ -105,6 +112,7 @@ __all__ = [
     "VERDICTS",
     "WEAK_BELOW",
     "assess",
+    "evidence_needed",
     "evidence_windows",
     "high_ic_windows",
     "noise_only",
@@ -261,6 +269,7 @@ def assess(
         if noise.get(step):
             code, text = noise[step]
             reasons.append(_reason(code, f"the window at max IC (time {when(step)}) " + text))
+        reasons += _isolation_reasons(result, p, step, weak_below)
         reasons += _agreement_reasons(result, p, weak_below, when)
         ic = float(result.ic[p, step])
         if ic < weak_below:
@@ -290,6 +299,47 @@ def evidence_windows(result):
         with np.errstate(invalid="ignore"):
             usable &= ~(np.asarray(result.behavioural_spread) <= np.asarray(result.behavioural_floor))
     return usable
+
+
+def evidence_needed(result):
+    """Windows of evidence needed before a parameter can be called identified: a quarter of a window, at least 2.
+
+    A band that holds while the window slides by a quarter of its length
+    is a property of the data there, not of one alignment of the window
+    with one event.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dynia.result import DyniaResult
+    >>> res = DyniaResult(names=("K",), samples=np.zeros((2, 1)), bounds=np.array([[0.0, 1.0]]),
+    ...                   time=np.arange(50.0), ic=np.zeros((1, 50)), ci=np.zeros((1, 50, 2)),
+    ...                   gradient=np.zeros((1, 1, 50)), bin_centres=np.zeros((1, 1)), settings=dict(n=10))
+    >>> evidence_needed(res)
+    6
+    """
+    before, after = result.window_halos
+    return max(2, math.ceil((before + after + 1) / 4))
+
+
+def _isolation_reasons(result, p, step, weak_below):
+    """``isolated_evidence`` when the reported window is evidence but too few windows are."""
+    usable = evidence_windows(result)
+    if not (usable[step] and result.ic[p, step] >= weak_below):
+        return []
+    with np.errstate(invalid="ignore"):
+        count = int(np.count_nonzero(usable & (np.asarray(result.ic[p]) >= weak_below)))
+    needed = evidence_needed(result)
+    if count >= needed:
+        return []
+    return [
+        _reason(
+            "isolated_evidence",
+            f"only {count} window(s) can be evidence (IC >= {weak_below:g}, whole, above the noise floor, behavioural "
+            f"set untied), fewer than {needed}, a quarter of a window: the band holds for one alignment of the "
+            "window with the data, and nothing checks it",
+        )
+    ]
 
 
 def reported_step(result, p, weak_below=WEAK_BELOW):

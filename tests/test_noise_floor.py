@@ -424,7 +424,7 @@ def test_the_floor_survives_save_and_load_and_older_files_load_without_it(tmp_pa
 def handmade(informative, behavioural_spread=0.4):
     steps = informative.size
     ic = np.full((1, steps), 0.3)
-    ic[0, 30] = 0.9
+    ic[0, 30], ic[0, 31] = 0.9, 0.89  # two windows: the evidence n = 2 needs
     return DyniaResult(
         names=("a",),
         samples=np.zeros((3, 1)),
