@@ -38,7 +38,14 @@ import numpy as np
 
 from . import _checks
 from .engine.flavours import FLAVOUR_CLASSES, McatFlavour
-from .engine.noise import RESIDUAL_CHUNK, floor_fields, floor_settings, record_noise_floor, record_residuals
+from .engine.noise import (
+    RESIDUAL_CHUNK,
+    add_record_errors,
+    floor_fields,
+    floor_settings,
+    record_noise_floor,
+    record_residuals,
+)
 from .errors import DataError, ModelError
 from .models import Model
 from .result import DyniaResult
@@ -336,7 +343,7 @@ class OnlineDynia:
             median[:, step] = self.median
             best[step], upper[step], threshold[step] = self._best, self._upper, self._threshold
             points[step] = self._present
-            totals += self._errors[(self.steps - 1) % width]  # step by step, as the batch engine adds them
+            add_record_errors(totals, self._errors[(self.steps - 1) % width][None])  # as the batch engine adds them
         totals[self._diverged] = np.inf
         floor = record_noise_floor(
             best,
