@@ -518,11 +518,11 @@ print(f"of the flagged steps with IC(rt) > 0.5, share whose band misses the true
 # unknown, so this check was not possible there.
 #
 # This package checks it without the truth (`dynia.engine.noise`). The floor
-# assumes stationary noise, white or autocorrelated, of the level and
-# autocorrelation that the residuals of the record's best fit show (a stretch
-# the model cannot fit counts as noise too; see the section on coloured
-# noise below). The light
-# grey veil marks the windows below the noise floor, where even the
+# assumes stationary noise, white or autocorrelated, with the level that the
+# windows' best fits show and the autocorrelation that the residuals of the
+# record's best fit show (a stretch the model cannot fit raises that
+# autocorrelation, and with it the floor; see the section on coloured noise
+# below). The light grey veil marks the windows below the noise floor, where even the
 # worst-fitting tenth of the sampled rt values fits no worse than the best
 # beyond noise; and in the windows above it, the verdicts also ask whether
 # the behavioural set ties within noise, so that the band ranks noise. The
@@ -717,10 +717,10 @@ for p, name in enumerate(example.model.names):
 #
 # ## The noise floor under coloured noise
 #
-# The floor's noise model is estimated from the record: the residuals of the
-# set with the lowest total absolute error over the record (less its own
-# misfit of the parameters) give the noise level and its autocorrelation, and
-# a window of m points counts as m / f independent ones, f = 1 + 2 sum (1 -
+# The floor's noise model is estimated from the record: the windows' best fits
+# give the noise level, the residuals of the set with the lowest total
+# absolute error over the record (less its own misfit of the parameters) give
+# its autocorrelation, and a window of m points counts as m / f independent ones, f = 1 + 2 sum (1 -
 # k/m) rho_k (`dynia.engine.noise`). Process and hydrological residuals are
 # rarely white. The cell below runs `coloured_records` records of 500 steps
 # for each lag-1 autocorrelation phi of AR(1) noise of standard deviation 1

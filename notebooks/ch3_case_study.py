@@ -495,8 +495,8 @@ for step, i in zip(truth.step_times, np.searchsorted(grid, truth.step_times)):
 # With the gain pinned to [1.8, 2.2], the time constant's information content
 # becomes pronounced, as in the thesis's Figure 3.24: the highest IC of T1,
 # about 0.9, is on the erroneous sample for every n (the lines above: "at the
-# glitch: True"), and the next highest peaks are at the input steps, a minute
-# or two after each (with the defaults up to about 0.45); they grow with the
+# glitch: True"), and the next highest peaks are at the input steps, at most
+# two minutes after each (with the defaults up to about 0.45); they grow with the
 # window and with the size of the step (the smallest steps, the first and the
 # last, barely show). The glitch
 # window holds a 72-unit error for every model that does not follow the zero

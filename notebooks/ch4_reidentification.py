@@ -376,8 +376,8 @@ for label, draws in heating_random.items():
 # - **The second-run selection** (the transients after each step) and the
 #   **baseline** (everything from the first down-step on) have the smallest
 #   validation errors, and lower gains.
-# - The standard errors are all below 1 % of the estimates, yet the gains
-#   of the selections differ by many standard errors (from about 18.9 to
+# - The standard errors are about 1 % of the estimates (0.4 to 1.4 %), yet
+#   the gains of the selections differ by many standard errors (from about 18.9 to
 #   20.1 degC/V). The plate is not a linear first-order system (its static
 #   gain changes with the operating point, and DaISy notes "discrepancies"):
 #   each selection fits the operating points it contains, and the held-out
@@ -389,9 +389,10 @@ for label, draws in heating_random.items():
 #   shows DYNIA's selection to be better or worse than another *as a
 #   selection of information*; the record cannot tell.
 # - **DYNIA's noise floor** (`informative`, the line above the table;
-#   it assumes stationary noise, white or autocorrelated, of the level and
-#   autocorrelation that the residuals of the record's best fit show, so a
-#   stretch the model cannot fit counts as noise too)
+#   it assumes stationary noise, white or autocorrelated, of the level that
+#   the windows' best fits show and the autocorrelation that the residuals of
+#   the record's best fit show, so a stretch the model cannot fit raises the
+#   floor too)
 #   changes nothing here: every window of the fitting part is informative in
 #   the first run, and in the second only the first and last n steps are
 #   not, whose windows are cut short and which have no IC in that run (it
@@ -586,16 +587,22 @@ for label in KNOWN_TRUTH:
 # `reid_synthetic_second_order.png` show the first noise seed. The gain's IC
 # is high in every steady stretch at non-zero input, so the one-run DYNIA
 # selection runs from the first step to the held-out block; the IC of the
-# dynamic parameters reaches the threshold only right after the steps, and only in the
-# second run (dashed), where the gain's range is narrowed. The second-run
-# selection is therefore the responses to the steps, much like the
-# baseline's intervals. The erroneous zero reading (red) is inside the
+# dynamic parameters reaches the threshold only right after the steps: in the
+# first run only once, theta's after the first step of the second-order
+# record, and otherwise only in the second run (dashed), where the gain's
+# range is narrowed. The second-run selection is therefore the responses to
+# the steps, much like the baseline's intervals, though in this seed it
+# leaves out the step at 42 % of the record, where that IC crosses the
+# threshold only briefly (`segments_from_ic` keeps runs of at least one
+# window). The erroneous zero reading (red) is inside the
 # one-run selection and not inside the second-run one.
 #
 # DYNIA's noise floor (printed for every seed above the tables): in the first
 # runs about 88 to 89 % of the fitting part's windows are informative. The
-# others are its first 234 to 249 steps, where the input is still 0 and every
-# parameter set predicts 0, so none fits worse than another. In the second
+# others are its first 234 to 246 steps (235 to 250 in the second runs),
+# whose windows see the input at 0 and at most a few steps after the first
+# step, at step 240, where every parameter set predicts about 0, so none fits
+# worse than another. In the second
 # runs, with the gain narrowed, 79 to 80 %: the start again, and most of the
 # last steady stretch before the held-out block, at the lowest input level
 # 0.5, where the narrowed gains predict levels within the noise of each

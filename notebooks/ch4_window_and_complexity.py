@@ -843,7 +843,7 @@ fig.savefig(f"{figure_dir}/parallel_speedup.png", dpi=110)
 # average. A speed-up near 2 needs two cores free for the two workers; where
 # the load average printed before and after the timing is near or above the
 # number of cores, other processes share them, the right panel shows the
-# analysis getting about one core or less whatever the number of workers,
+# analysis getting little more than one core at most whatever the number of workers,
 # and a second worker cannot help (it can even cost time, as the printed
 # speed-ups below 1 show where they occur). The rendered report was made on
 # such a shared machine, so its numbers say more about the machine's load
