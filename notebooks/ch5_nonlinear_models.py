@@ -300,13 +300,14 @@ fig.savefig(f"{figure_dir}/nonlinear_hymod_identifiability.png", dpi=120, bbox_i
 #   in recessions, 0.18 on peaks). The CLD gradient shows the most likely
 #   values coming down towards the true 0.04 as a recession goes on: early
 #   in it the quick reservoirs still drain, and a faster slow reservoir can
-#   stand in for them. Its windows with IC >= 0.5 all hold the truth, and
-#   its verdict is `identified`, though not at its highest IC: that lies
-#   late in a recession (day 708, the soil store 0.09 full), in a window
-#   whose behavioural set ties within noise (of its 27 windows with IC >=
-#   0.5 only 2 are not tied; why, below the next table), so the summary
-#   reports the highest of the untied ones, IC 0.54 on day 288 (band
-#   [0.0067, 0.098]).
+#   stand in for them. Its windows with IC >= 0.5 all hold the truth, but
+#   its highest IC lies late in a recession (day 708, the soil store 0.09
+#   full), in a window whose behavioural set ties within noise (of its 27
+#   windows with IC >= 0.5 only 2 are not tied; why, below the next table),
+#   so the summary reports the highest of the untied ones, IC 0.54 on day
+#   288 (band [0.0067, 0.098]). Two windows are fewer than a quarter of
+#   the 11-day window (3), so the verdict is `suspect`
+#   (`isolated_evidence`), though the band holds the truth.
 # - **Storage, `b` and `cmax`: weakly.** Their IC is highest in wetting-up
 #   periods, as expected, and lowest in recessions, when no rain tests the
 #   soil store; but it is only a little higher there than on peaks (mean IC
@@ -317,14 +318,15 @@ fig.savefig(f"{figure_dir}/nonlinear_hymod_identifiability.png", dpi=120, bbox_i
 #   for 10 mm, counts the day as a peak only). That window's behavioural
 #   set ties within noise, as do all but 2 of `b`'s 18 windows with IC >=
 #   0.5; the summary reports the higher of those 2, IC 0.51 on day 821
-#   (band [0.30, 1.29]), `identified`. All 18 hold the truth.
+#   (band [0.30, 1.29]), `suspect` (`isolated_evidence`, as for `ks`: 2
+#   windows of evidence, 3 needed). All 18 hold the truth.
 #   `cmax` never reaches 0.5 and its verdict is `weak`; its
 #   highest IC comes when the soil is nearly full instead, where `cmax`
 #   decides how much of the rain overflows. A likely reason: the discharge shows how much
 #   rain the soil holds back, which both parameters set together (the
 #   capacity is `cmax/(b+1)`), and bands of one parameter at a time cannot
 #   show such a trade-off.
-# - **The split, `alpha`: not found in the first run, and not flagged.**
+# - **The split, `alpha`: not found in the first run, and flagged.**
 #   Its IC reaches 0.5 in only two windows, days 544 (its highest) and 545,
 #   and neither band holds the true 0.6. The behavioural set of the window
 #   at day 544 ties within noise, so which sets it keeps, and so the band,
@@ -332,12 +334,14 @@ fig.savefig(f"{figure_dir}/nonlinear_hymod_identifiability.png", dpi=120, bbox_i
 #   autocorrelated, of the level that the windows' best fits show and the
 #   autocorrelation of the residuals of the record's best fit; a stretch the
 #   model cannot fit counts as noise too). The window at day 545 does not
-#   tie, so the summary reports it: IC 0.51, band [0.020, 0.51], and the
-#   verdict is `identified`, a band that misses the truth (the check at the
-#   end of the notebook lists it). With `kq` free over [0.1, 1], other
+#   tie, so the summary reports it: IC 0.51, band [0.020, 0.51], a band
+#   that misses the truth (the check at the end of the notebook lists it).
+#   It is the only window that can be evidence, so the verdict is `suspect`
+#   (`isolated_evidence`). With `kq` free over [0.1, 1], other
 #   quick-flow residence times with a different split fit the peaks as
 #   well. The verdict rules cannot know the truth; here the tie gives one
-#   window's wrong band away, but not its neighbour's.
+#   window's wrong band away, and its neighbour's is flagged because no
+#   other window backs it.
 # - **The second run** narrows `kq` to the band its windows of high IC
 #   agreed on ([0.38, 0.59]). `dynia.refine` counts the windows with IC >=
 #   0.75 whose band keeps clear of the bounds, but none below the noise floor
@@ -350,8 +354,10 @@ fig.savefig(f"{figure_dir}/nonlinear_hymod_identifiability.png", dpi=120, bbox_i
 #   0.65 with band [0.38, 0.73], `identified`), and `ks` is found far more
 #   often in recessions (mean IC 0.60; 231 windows with IC >= 0.5, all
 #   holding the truth; the summary reports IC 0.71 on day 318, band
-#   [0.0063, 0.065], `identified`). `b` is `identified` again at IC 0.51
-#   (day 643, band [0.38, 1.35]). The IC of `kq` itself falls: the IC is measured
+#   [0.0063, 0.065], `identified`). `b` is `suspect` again
+#   (`isolated_evidence`: of its 57 windows with IC >= 0.5 only 2 are not
+#   tied), at IC 0.51 (day 643, band [0.38, 1.35], holding the truth).
+#   The IC of `kq` itself falls: the IC is measured
 #   against the range, which is now narrow.
 # - **The noise floor** (printed under each summary): 96 % of the first
 #   run's windows are informative. The others are the first weeks of the
@@ -380,19 +386,23 @@ for label, result in (("first run", first), ("second run", second)):
 # differently look tied. Its band holds the truth: a false alarm of the
 # one-sigma-for-the-record kind that `dynia.engine.noise` names.
 #
-# The same test shapes the other verdicts without showing in their reasons,
-# since a verdict judges the highest IC among the windows above the floor
-# whose behavioural set does not tie:
+# The same test shapes the other verdicts, since a verdict judges the
+# highest IC among the windows above the floor whose behavioural set does
+# not tie, and counts only such windows as evidence (`isolated_evidence`
+# when fewer than 3, a quarter of the 11-day window, are left):
 #
 # - in the low flows of a late recession (`ks`, day 708 in the first run)
 #   or of a soil that is only starting to wet up (`b`, day 776) the errors
 #   are several times smaller than sigma too, and the window of the
 #   record's highest IC ties. The summary reports a lower, untied window
-#   instead, whose band holds the truth as well;
+#   instead, whose band holds the truth as well; but the ties leave only 2
+#   windows of evidence, so both are `suspect` (`isolated_evidence`), a
+#   false alarm that follows from the false ties;
 # - `alpha`'s window at day 544 is a storm peak, where the errors are
 #   larger than sigma: there the floor is too low if anything, so the tie
 #   is real, and the band misses the truth. The next window, day 545,
-#   misses it too but does not tie, and is reported as `identified`.
+#   misses it too but does not tie; as the only window of evidence it is
+#   reported as `suspect` (`isolated_evidence`).
 #
 # With errors that grow with the output, read a `noise_ranked` or
 # `below_noise_floor` verdict, and a highest IC the summary leaves out,
@@ -550,10 +560,10 @@ print("every identified band holds the truth:",
 # | parameter | expected where | found? |
 # | --- | --- | --- |
 # | HYMOD `kq` | rising limbs and peaks | yes: on storm sequences, never in recessions; every band with IC >= 0.5 holds the truth |
-# | HYMOD `ks` | recessions | yes: late in every recession, more often after `kq` is narrowed; bands hold the truth, `identified` in both runs (its first run's highest IC, in the low flows late in a recession, ties within noise, a false tie of relative errors, and is left out) |
-# | HYMOD `b` | wetting-up | weakly: highest IC on storms over a dry soil early in a wet season; mean IC in wetting-up only slightly above that on peaks; `identified` at IC 0.51 in both runs |
+# | HYMOD `ks` | recessions | yes: late in every recession, more often after `kq` is narrowed; bands hold the truth; `suspect` (`isolated_evidence`) in the first run, whose highest IC, in the low flows late in a recession, ties within noise (a false tie of relative errors) and is left out, leaving 2 windows of evidence; `identified` in the second |
+# | HYMOD `b` | wetting-up | weakly: highest IC on storms over a dry soil early in a wet season; mean IC in wetting-up only slightly above that on peaks; IC 0.51 in both runs, `suspect` (`isolated_evidence`: 2 untied windows), though its bands hold the truth |
 # | HYMOD `cmax` | wetting-up | no: highest in wetting-up, but IC never reaches 0.5 (`weak`) |
-# | HYMOD `alpha` | peaks | only in the second run; in the first its two windows with IC >= 0.5 miss the truth, and its verdict says `identified` all the same (the one of them that does not tie within noise) |
+# | HYMOD `alpha` | peaks | only in the second run; in the first its two windows with IC >= 0.5 miss the truth; its verdict is `suspect` (`isolated_evidence`: only one of them does not tie within noise) |
 # | tank `c` | steady levels | yes, in both runs; in the second its bands miss the truth in 15 % of the windows with IC >= 0.5, all of them below the floor or tied within noise, and the reported band holds it |
 # | tank `A` | transients | only in the second run, with `c` narrowed (`identified`); in the first run only the first filling (`suspect`) |
 #
@@ -567,14 +577,18 @@ print("every identified band holds the truth:",
 #   against the truth, a band can miss it because of an interaction (`alpha`,
 #   first run) or because a narrowed range makes it narrower than the noise
 #   allows (the tank's `c`, second run).
-# - The verdicts catch part of this: an edge artefact below the noise
-#   floor (the tank's `A`, first run), and the tank's `c` in the second
-#   run, whose bands that miss the truth all lie below the floor or in
-#   windows whose behavioural set ties within noise, which the verdict does
-#   not judge. They do not catch `alpha` in the first run: one of its two
-#   wrong windows does not tie, and its band is called `identified` (listed
-#   above; the one identified band that misses the truth). And the noise
-#   floor assumes errors of one size for the whole record: with errors that
-#   grow with the output it finds ties in low flows among sets that do fit
-#   differently: here it leaves the highest IC of `b` and `ks` out of their
-#   verdicts, and adds `noise_ranked` to the second run's `cmax`.
+# - The verdicts catch these here: an edge artefact below the noise
+#   floor (the tank's `A`, first run); the tank's `c` in the second run,
+#   whose bands that miss the truth all lie below the floor or in windows
+#   whose behavioural set ties within noise, which the verdict does not
+#   judge; and `alpha` in the first run, whose one untied wrong window is
+#   called `suspect` (`isolated_evidence`) because no other window backs
+#   it. Every band called `identified` holds the truth (the check above).
+#   The price is false alarms: the noise floor assumes errors of one size
+#   for the whole record, and with errors that grow with the output it
+#   finds ties in low flows among sets that do fit differently. Here, in
+#   the first run, it leaves the highest IC of `b` and `ks` out of their
+#   verdicts, and so few untied windows that both are `suspect`
+#   (`isolated_evidence`; `b` again in the second run, with 2 untied
+#   windows of 57) although their bands hold the truth; and it adds
+#   `noise_ranked` to the second run's `cmax`.

@@ -232,7 +232,7 @@ for name, line in replayed.summary().items():
 # `identified` at 856 s, in the transient after the step to 8 V at 800 s (IC
 # 0.83, band [40.3, 73.5] s). Its highest IC of all, 0.91 at the end of the
 # record (1600 s, band [1.3, 18.7] s), is not the one reported: that window
-# is whole and above the floor, so its behavioural set ties within noise: in
+# is whole and above the floor, but its behavioural set ties within noise: in
 # the plate's slow drift at the end the sets the window keeps fit it equally
 # well, so which of them it keeps, and the band, is a ranking of noise. The
 # gain's highest IC, 0.87 at 416 s (the window from 376 to 416 s, over the
