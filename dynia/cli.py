@@ -1020,9 +1020,7 @@ def _data_warnings(data, u, y, options, where="see data_quality in summary.json"
             )
         if findings:
             kinds = sorted({entry["kind"] for entry in findings})
-            lines.append(
-                f"data quality: {len(findings)} finding(s) ({', '.join(kinds)}); {where}"
-            )
+            lines.append(f"data quality: {len(findings)} finding(s) ({', '.join(kinds)}); {where}")
     return lines, findings
 
 
