@@ -39,7 +39,13 @@ property of the record (an input that never changes as the analysis sees
 it gives the shortest one, whatever the output does), and a window sized by
 it would mislead: :func:`suggest` raises
 :class:`~dynia.errors.SuggestionError` saying so, and which initial state
-would explain the output instead, rather than proposing one.
+would explain the output instead, rather than proposing one. It raises the
+same, saying what is missing, for an output that never changes, for one
+value (a logger's 1.797e308) that holds most of the output's variance, and
+for a fit whose best time constant is the shortest tried, dt (an output that
+follows the input within one sample resolves no time constant). The fit
+runs on values scaled to unit size, so that neither 1e200 overflows nor
+1e-170 underflows; T does not depend on the scale.
 
 The window
 ----------
@@ -105,8 +111,11 @@ The model itself is fitted by least squares to the whole record within the
 ranges (:func:`dynia.fit.fit_segments`, from the middle of the ranges and
 two random starts, in the initial state of the analysis). An estimate on a
 bound means the range excludes the best fit: the band of every window would
-lean on that bound; the proposal says which range to widen. A parameter the
-record does not determine is named too.
+lean on that bound; the proposal says which range to widen, unless the
+model refuses values beyond that bound (a negative time constant or dead
+time: it is tried there, the others at their estimates): then the range
+stays and the note says the record asks for a value the model excludes. A
+parameter the record does not determine is named too.
 
 Examples
 --------
