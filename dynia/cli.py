@@ -982,8 +982,11 @@ def _offset_value(offset, values, path, option):
     return float(offset)
 
 
-def _data_warnings(data, u, y, options):
-    """Lines for stderr and summary.json: gaps, absurd magnitudes and (with --quality) data-quality findings."""
+def _data_warnings(data, u, y, options, where="see data_quality in summary.json"):
+    """Lines for stderr and summary.json: gaps, absurd magnitudes and (with --quality) data-quality findings.
+
+    ``where`` ends the line that counts the findings: where the command puts them.
+    """
     lines = []
     for start, stop in data.gaps:
         first, last = report.file_times(data, [data.time[start], data.time[stop - 1]])
@@ -1017,9 +1020,7 @@ def _data_warnings(data, u, y, options):
             )
         if findings:
             kinds = sorted({entry["kind"] for entry in findings})
-            lines.append(
-                f"data quality: {len(findings)} finding(s) ({', '.join(kinds)}); see data_quality in summary.json"
-            )
+            lines.append(f"data quality: {len(findings)} finding(s) ({', '.join(kinds)}); {where}")
     return lines, findings
 
 
@@ -1237,9 +1238,15 @@ def _named_options(function, *args, **kwargs):
 def _suggest(options, command_line, caught):
     data, offset, input_offset = _load(options)
     u, y = data.u - input_offset, data.y - offset
-    notices, _ = _data_warnings(data, u, y, options)
-    for line in notices:
-        print(f"dynia: warning: {line}", file=sys.stderr)
+    # suggest writes no summary.json: the findings go with the proposal, as JSON or one warning line each.
+    where = "see data_quality in the JSON output" if options["json"] else "listed in the warnings below"
+    notices, findings = _data_warnings(data, u, y, options, where)
+    if not options["json"]:
+        notices += [
+            f"data quality: {entry['signal']} {entry['kind']} from {entry['start_time']} to {entry['end_time']}: "
+            f"{entry['reason']}"
+            for entry in findings
+        ]
     try:
         found = suggest(
             u,
@@ -1259,8 +1266,9 @@ def _suggest(options, command_line, caught):
         for setting in ("max_samples", "max_memory"):
             message = re.sub(rf"(?<!-)\b{setting}\b", _option_of(setting), message)
         raise UsageError(message) from None
+    # Printed once there is a proposal: a record that gets none ends in its one error line, which says why.
     dropped = _dynia_warnings(caught)
-    for line in dropped:
+    for line in notices + dropped:
         print(f"dynia: warning: {line}", file=sys.stderr)
     # The analyse command this proposal is for: the same data and model options, the proposed settings.
     # suggest's own options (its seed is given anew) are not analyse's.
@@ -1280,6 +1288,7 @@ def _suggest(options, command_line, caught):
                     seed=options["seed"],
                     command=analyse,
                     warnings=notices + dropped,
+                    **({"data_quality": findings} if options["quality"] else {}),
                     version=__version__,
                     command_line=command_line,
                 ),

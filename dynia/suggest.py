@@ -39,7 +39,13 @@ property of the record (an input that never changes as the analysis sees
 it gives the shortest one, whatever the output does), and a window sized by
 it would mislead: :func:`suggest` raises
 :class:`~dynia.errors.SuggestionError` saying so, and which initial state
-would explain the output instead, rather than proposing one.
+would explain the output instead, rather than proposing one. It raises the
+same, saying what is missing, for an output that never changes, for one
+value (a logger's 1.797e308) that holds most of the output's variance, and
+for a fit whose best time constant is the shortest tried, dt (an output that
+follows the input within one sample resolves no time constant). The fit
+runs on values scaled to unit size, so that neither 1e200 overflows nor
+1e-170 underflows; T does not depend on the scale.
 
 The window
 ----------
@@ -105,8 +111,11 @@ The model itself is fitted by least squares to the whole record within the
 ranges (:func:`dynia.fit.fit_segments`, from the middle of the ranges and
 two random starts, in the initial state of the analysis). An estimate on a
 bound means the range excludes the best fit: the band of every window would
-lean on that bound; the proposal says which range to widen. A parameter the
-record does not determine is named too.
+lean on that bound; the proposal says which range to widen, unless the
+model refuses values beyond that bound (a negative time constant or dead
+time: it is tried there, the others at their estimates): then the range
+stays and the note says the record asks for a value the model excludes. A
+parameter the record does not determine is named too.
 
 Examples
 --------
@@ -132,7 +141,7 @@ from scipy.signal import lfilter
 from . import _checks
 from .engine.flavours import IC_BATCHES, MIN_BATCH_BEHAVIOURAL
 from .engine.windows import default_chunk_steps
-from .errors import DataError, SettingsError, SuggestionError
+from .errors import DataError, ModelError, SettingsError, SuggestionError
 from .fit import fit_segments
 from .pipeline import run
 from .serial import json_number
@@ -205,6 +214,10 @@ _PEAK_MARGIN = 0.05
 # fewer than _STEP_LIKE of its steps change.
 _CHANGE_SHARE = 0.01
 _STEP_LIKE = 0.1
+# A bound is probed this share of its range beyond it (_refusal_beyond).
+_BEYOND = 0.05
+# No window is proposed when one value holds more than this share of the output's squared deviations.
+_ONE_VALUE_SHARE = 0.5
 # The other initial state is noted when its residual variance is below this share of the chosen one's.
 _BETTER_RESIDUAL = 0.5
 
@@ -380,7 +393,13 @@ def dominant_time_constant(u, y, dt=1.0, x0="zero"):
     measured = ~np.isnan(y)
     if measured.sum() < n_inputs + 2:
         raise DataError(f"y has {int(measured.sum())} measured values; a first-order fit needs {n_inputs + 2}")
-    observed = y[measured]
+    # The fit on unit-scaled values, so that neither the squares of 1e200 overflow nor those of 1e-170 underflow:
+    # T and the share explained do not depend on the scale; gains, level and RMS residual are scaled back.
+    centre = float(np.median(y[measured]))
+    spread_y = _unit(y[measured] - centre)
+    observed = (y[measured] - centre) / spread_y
+    spread_u = np.array([_unit(column) for column in columns.T])
+    columns = columns / spread_u
 
     def solve(log_tau):
         pole = math.exp(-dt / math.exp(log_tau))
@@ -401,13 +420,19 @@ def dominant_time_constant(u, y, dt=1.0, x0="zero"):
     edge = "fast" if best == 0 else "slow" if best == grid.size - 1 else None
     return TimeScale(
         time_constant=float(math.exp(log_tau)),
-        gains=tuple(float(value) for value in coefficients[1:]),
-        level=float(coefficients[0]),
-        rmse=math.sqrt(rss / observed.size),
+        gains=tuple(float(value) * spread_y / scale for value, scale in zip(coefficients[1:], spread_u)),
+        level=float(coefficients[0]) * spread_y + centre,
+        rmse=math.sqrt(rss / observed.size) * spread_y,
         explained=1.0 - rss / spread if spread > 0 else 0.0,
         edge=edge,
         x0=x0,
     )
+
+
+def _unit(values):
+    """The largest magnitude among ``values``, or 1 where all are 0: a divisor that leaves them within [-1, 1]."""
+    largest = float(np.max(np.abs(values))) if values.size else 0.0
+    return largest if largest > 0 else 1.0
 
 
 @dataclass(frozen=True)
@@ -566,10 +591,24 @@ def suggest(
     rng = np.random.default_rng(rng)
     n_steps = y.size
 
+    measured = y[~np.isnan(y)]
+    if measured.size and (measured == measured[0]).all():
+        raise SuggestionError(
+            f"cannot propose a window: the output never changes (every measured value is {measured[0]:g}), so the "
+            "record holds no response to size a window by, nor any information on the parameters"
+        )
     scale = dominant_time_constant(u, y, dt, x0)
     other = dominant_time_constant(u, y, dt, "steady" if x0 == "zero" else "zero")
-    if scale.explained < MIN_EXPLAINED:
-        raise SuggestionError(_no_time_scale(u, scale, other))
+    if not scale.explained >= MIN_EXPLAINED:  # NaN too
+        raise SuggestionError(_no_time_scale(u, y, scale, other, dt))
+    if scale.edge == "fast":
+        # The shortest trial time constant fits best: a step in the output one sample after the input's, or a pure
+        # delay, looks the same; a 3-step window sized by it would rest on no time scale of the record.
+        raise SuggestionError(
+            f"cannot propose a window: the output follows the input within one sample ({dt:g} s), so the record "
+            "resolves no time constant at this sampling to size a window by (a first-order fit finds the shortest "
+            "it tries, dt); sample faster, or give the window yourself (--window or --n)"
+        )
     tau = scale.time_constant
     wanted = max(math.floor(tau / (2 * dt) + 0.5), 1)
     n = min(wanted, (n_steps - 1) // 2)
@@ -583,12 +622,7 @@ def suggest(
         "differently; shorter windows see a line (only their ratio), longer ones mix in settled stretches",
     ]
     notes = []
-    if scale.edge == "fast":
-        notes.append(
-            f"the output follows the input within one sample ({dt:g} s): no time constant is resolvable at this "
-            "sampling, the window is the shortest (3 steps)"
-        )
-    elif scale.edge == "slow":
+    if scale.edge == "slow":
         notes.append("the first-order fit finds a time constant as long as the record: the record may not settle")
     if (1 - other.explained) < _BETTER_RESIDUAL * (1 - scale.explained):
         notes.append(
@@ -691,10 +725,20 @@ def suggest(
         )
         if at_bound:
             side = "lower" if estimate - low <= high - estimate else "upper"
-            notes.append(
-                f"the range [{low:g}, {high:g}] of {name} excludes the least-squares fit: its estimate lies on the "
-                f"{side} bound {low if side == 'lower' else high:g}; widen the range beyond it"
-            )
+            bound = low if side == "lower" else high
+            refusal = _refusal_beyond(model, fitted.parameters, name, bound, high - low, side)
+            if refusal is None:
+                notes.append(
+                    f"the range [{low:g}, {high:g}] of {name} excludes the least-squares fit: its estimate lies on "
+                    f"the {side} bound {bound:g}; widen the range beyond it"
+                )
+            else:
+                notes.append(
+                    f"the least-squares estimate of {name} lies on the {side} bound {bound:g} of its range, the "
+                    f"{'least' if side == 'lower' else 'greatest'} value {type(model).__name__} accepts ({refusal}): "
+                    "keep the range; the record would fit a value the model excludes, so check the model and the "
+                    "alignment of input and output"
+                )
         elif not fitted.identifiable[name]:
             notes.append(f"least squares on the whole record does not determine {name}: no window will pin it")
     reasons.append(
@@ -717,16 +761,44 @@ def suggest(
     )
 
 
-def _no_time_scale(u, scale, other):
+def _refusal_beyond(model, estimates, name, bound, width, side):
+    """Why ``model`` refuses ``name`` just beyond ``bound`` (the others at their estimates), or None if it accepts it.
+
+    Models declare their admissible values by refusing the others (a negative time constant or dead time: a
+    :class:`~dynia.errors.ModelError`); a range is never to be widened into them.
+    """
+    beyond = bound - _BEYOND * width if side == "lower" else bound + _BEYOND * width
+    point = np.array([[beyond if other == name else estimates[other] for other in model.names]])
+    try:
+        with np.errstate(all="ignore"):
+            output = model.simulate(point, np.zeros(3 if model.n_inputs == 1 else (3, model.n_inputs)))
+    except ModelError as error:
+        return str(error).split(";")[0]
+    if not np.isfinite(output).all():
+        return f"{name} = {beyond:g} gives a non-finite output"
+    return None
+
+
+def _no_time_scale(u, y, scale, other, dt):
     """Why no window can be proposed from ``scale``, the fit in the analysis's initial state, in one line."""
     columns = u.reshape(u.shape[0], -1)
     if scale.x0 == "steady":
         columns = columns - columns[0]
+    explained = max(scale.explained, 0.0) if math.isfinite(scale.explained) else 0.0
     message = (
         f"cannot propose a window: a first-order model from the analysis's initial state (x0 {scale.x0}) explains "
-        f"{100 * max(scale.explained, 0.0):.0f} % of the output's variance, below {100 * MIN_EXPLAINED:.0f} %, so "
+        f"{100 * explained:.0f} % of the output's variance, below {100 * MIN_EXPLAINED:.0f} %, so "
         "the record shows no time constant to size a window by"
     )
+    # One value far from the rest (a logger's overflow or fill value) is the variance no model explains.
+    deviation = np.abs(y - np.nanmedian(y))
+    deviation = np.nan_to_num(deviation / _unit(deviation[~np.isnan(deviation)]), nan=0.0)
+    largest = int(np.argmax(deviation))
+    if deviation[largest] ** 2 > _ONE_VALUE_SHARE * np.sum(deviation**2):
+        message += (
+            f" (one value, {y[largest]:g} at step {largest} ({largest * dt:g} s from the start), holds "
+            f"{100 * deviation[largest] ** 2 / np.sum(deviation**2):.0f} % of the output's variance: check the data)"
+        )
     if not columns.any():
         message += (
             " (the input never moves the model: "
