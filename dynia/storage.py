@@ -328,6 +328,7 @@ class ResultFile(ResultArrays):
                 self._describe(file, result, attrs, variables)
             self._datasets = {}
             self._h5.close()
+            self._sink.check()  # HDF5's last writes, at its close
             self._sink.close()
             self._h5 = self._sink = None
             os.replace(self._partial, self.path)

@@ -41,16 +41,18 @@ variable to 2 GB, which the gradient of a long record passes.
 Examples
 --------
 >>> import numpy as np, tempfile, pathlib, dynia
+>>> limits = np.array([[[np.nan, np.nan], [0.1, 0.9], [0.25, 0.75], [0.05, 0.95]]])
+>>> gradient = np.array([[[np.nan, 0.5, 0.5, 0.5], [np.nan, 0.5, 0.5, 0.5]]])
 >>> res = dynia.DyniaResult(names=("K",), samples=np.zeros((3, 1)), bounds=np.array([[0.0, 1.0]]),
-...                         time=np.arange(4.0), ic=np.array([[np.nan, 0.2, 0.5, 0.1]]),
-...                         ci=np.zeros((1, 4, 2)), gradient=np.zeros((1, 2, 4)), bin_centres=np.zeros((1, 2)),
+...                         time=np.arange(4.0), ic=1 - (limits[..., 1] - limits[..., 0]),
+...                         ci=limits, gradient=gradient, bin_centres=np.array([[0.25, 0.75]]),
 ...                         settings={"n": 1, "bounds": {"K": (0.0, 1.0)}})
 >>> res.to_xarray().ic.dims
 ('parameter', 'time')
 >>> with tempfile.TemporaryDirectory() as folder:
 ...     res.save(pathlib.Path(folder, "result.nc"))
 ...     back = dynia.load(pathlib.Path(folder, "result.nc"))
->>> back.settings, back.ic
+>>> back.settings, back.ic.round(2)
 ({'n': 1, 'bounds': {'K': (0.0, 1.0)}}, array([[nan, 0.2, 0.5, 0.1]]))
 """
 
@@ -58,12 +60,22 @@ import dataclasses
 import json
 import numbers
 import os
+import warnings
 
 import numpy as np
 
 from .errors import DataError, SettingsError
 
-__all__ = ["to_xarray", "save", "load", "metadata", "FORMAT_VERSION", "TIMESTAMP_ATTRIBUTES", "check_time_block"]
+__all__ = [
+    "to_xarray",
+    "save",
+    "load",
+    "metadata",
+    "FORMAT_VERSION",
+    "TIMESTAMP_ATTRIBUTES",
+    "check_time_block",
+    "StoredVerdictsWarning",
+]
 
 # Written as the attribute "dynia_result"; a later layout raises it, and load refuses what it cannot read.
 FORMAT_VERSION = 1
@@ -236,9 +248,11 @@ def load(path, *, lazy=False):
     (files written before them load unchecked); every array is checked
     against what an analysis can produce (:func:`check_time_block` and the
     rules for the fixed arrays); the verdicts are derived again from the
-    arrays (:func:`dynia.verdicts.assess`) and must agree with those stored,
-    in verdict and reason codes (the texts may name times as the data file
-    wrote them). A lazy load checks the fixed arrays at once and the arrays
+    arrays (:func:`dynia.verdicts.assess`): a stored verdict that agrees
+    with its derived one, in verdict and reason codes, is kept (with its
+    texts, which may write times as the data file did); one that does not
+    (forged, or written by a dynia whose rules differed) is replaced by the
+    derived one, with a :class:`StoredVerdictsWarning`. A lazy load checks the fixed arrays at once and the arrays
     along time one on-disk block at a time, when a read first touches the
     block, so it stays as fast as the reads it is asked for; checking the
     verdicts reads IC (all of it) and some limits, once.
@@ -248,8 +262,8 @@ def load(path, *, lazy=False):
     DataError
         ``path`` is missing, not netCDF-4, or not a result written by
         :func:`save` (of this format version or an earlier one); or any part
-        of it is malformed, fails its checksum, holds a value no analysis
-        gives, or verdicts the arrays do not give. The message names the
+        of it is malformed, fails its checksum, or holds a value no analysis
+        gives. The message names the
         file and the part. With ``lazy=True``, reads of a block that fails
         its checksum or its ranges raise it too.
 
@@ -305,12 +319,13 @@ def _result(name, dataset, lazy):
         _check_floor(name, arrays)
         if "informative" in arrays:
             arrays["informative"] = arrays["informative"].astype(bool)
+    spans = np.ptp(arrays["samples"], axis=0) if arrays["samples"].size else np.zeros(len(names))
     if lazy:
-        arrays.update(_lazy(name, dataset, names, arrays["bounds"]))
+        arrays.update(_lazy(name, dataset, names, arrays["bounds"], spans))
     else:
         along_time = {key: arrays[key] for key in _TIME_ARRAYS if key in arrays}
         for key, values in along_time.items():
-            check_time_block(name, names, arrays["bounds"], key, values, along_time)
+            check_time_block(name, names, arrays["bounds"], spans, key, values, along_time)
     timestamps = None
     if "timestamp" in dataset.variables:
         stamps = dataset["timestamp"]
@@ -414,7 +429,7 @@ def _check_floor(name, arrays):
             raise DataError(f"{name}: {key} holds negative or infinite values; expected >= 0 or NaN; {_DAMAGED}")
 
 
-def check_time_block(name, names, bounds, key, values, companions):
+def check_time_block(name, names, bounds, spans, key, values, companions):
     """Refuse (:class:`~dynia.errors.DataError`) values of ``key`` that no analysis gives, for steps of one block.
 
     ``values`` holds array ``key`` (one of the arrays along time, in the
@@ -424,14 +439,17 @@ def check_time_block(name, names, bounds, key, values, companions):
     array's own dtype (a float32 array is the float64 result rounded to
     nearest, and that rounding keeps every order below):
 
-    - ``ic`` in [0, 1], NaN exactly where the limits are;
+    - ``ic`` in [0, 1], NaN exactly where the limits are, and equal to
+      1 - (upper - lower) / range, the range that of the bounds or (MCAT)
+      ``spans``, that of the samples (to the dtype's rounding);
     - ``ci``: each limit within the bounds (rounded to the dtype), lower at
       most upper, both NaN or neither;
     - ``median`` within the limits, NaN exactly where they are;
     - ``gradient`` (likelihood mass per bin) in [0, 1], NaN exactly where IC is;
     - ``ic_se`` and ``ci_se`` non-negative or NaN.
 
-    ``name`` (the file) and ``names`` (the parameters) are for the message.
+    ``name`` (the file) and ``names`` (the parameters) are for the message;
+    ``bounds`` is (n_params, 2), ``spans`` the samples' max - min per parameter.
     """
 
     def refuse(bad, what):
@@ -442,14 +460,28 @@ def check_time_block(name, names, bounds, key, values, companions):
     values = np.asarray(values)
     if values.dtype.kind != "f":
         raise DataError(f"{name}: {key} holds {values.dtype}; expected floating point numbers")
-    with np.errstate(invalid="ignore"):
+    if key in ("ic", "median") and "ci" in companions:
+        # The limits first, so that a forged limit is named as such rather than as the IC or median it disowns.
+        check_time_block(name, names, bounds, spans, "ci", companions["ci"], {})
+    with np.errstate(invalid="ignore", divide="ignore"):  # NaN compares False; a span of 0 never agrees
         if key == "ic":
             outside = (values < 0) | (values > 1)
             if outside.any():
                 refuse(outside, "lies outside [0, 1]")
-            mismatch = np.isnan(values) != np.isnan(companions["ci"][..., 0]) if "ci" in companions else None
-            if mismatch is not None and mismatch.any():
-                refuse(mismatch, "is NaN where the limits are not, or not NaN where they are")
+            if "ci" in companions:
+                limits = companions["ci"]
+                mismatch = np.isnan(values) != np.isnan(limits[..., 0])
+                if mismatch.any():
+                    refuse(mismatch, "is NaN where the limits are not, or not NaN where they are")
+                # Rounding to the dtype moves IC by half an ulp and each limit by half of its own.
+                width, size = limits[..., 1] - limits[..., 0], np.abs(limits).sum(axis=-1, dtype=float)
+                agrees = np.isnan(values)
+                for extent in (bounds[:, 1] - bounds[:, 0], spans):
+                    extent = np.asarray(extent, dtype=float)[:, None]
+                    tolerance = 4 * np.finfo(values.dtype).eps * (1 + size / extent)
+                    agrees |= np.abs(values - (1 - width.astype(float) / extent)) <= tolerance
+                if not agrees.all():
+                    refuse(~agrees, "is not 1 - (upper - lower) / range for its limits")
         elif key == "ci":
             low, high = (bounds[:, side].astype(values.dtype)[:, None] for side in (0, 1))
             lower, upper = values[..., 0], values[..., 1]
@@ -480,7 +512,7 @@ def _companions(key):
     return {"ic": ("ci",), "median": ("ci",), "gradient": ("ic",)}.get(key, ())
 
 
-def _lazy(name, dataset, names, bounds):
+def _lazy(name, dataset, names, bounds, spans):
     """The arrays along time as DiskArrays that check each block on its first read."""
     import functools
 
@@ -493,20 +525,25 @@ def _lazy(name, dataset, names, bounds):
                 f"{name}: {key} has dimensions {dataset[key].dims}; a lazy load needs {TIME_VARIABLES[key]} "
                 "(the order dynia writes), load it with lazy=False"
             )
-    check = functools.partial(_check_stored_block, name, names, np.asarray(bounds))
+    check = functools.partial(_check_stored_block, name, names, np.asarray(bounds), spans)
     return disk_arrays(name, keys, check=check)
 
 
-def _check_stored_block(name, names, bounds, key, file, start, stop):
+def _check_stored_block(name, names, bounds, spans, key, file, start, stop):
     """:func:`check_time_block` for steps [start, stop) of variable ``key`` of the open h5py ``file``."""
     from .storage import read_block
 
     companions = {other: read_block(file, other, start, stop) for other in _companions(key) if other in file}
-    check_time_block(name, names, bounds, key, read_block(file, key, start, stop), companions)
+    check_time_block(name, names, bounds, spans, key, read_block(file, key, start, stop), companions)
 
 
 def _checked_verdicts(name, result, stored):
-    """``stored`` when it has the form of verdicts and agrees with those the arrays give; else a DataError."""
+    """The verdicts of ``stored`` that agree with those the arrays give; the arrays' own in place of the others.
+
+    A DataError when ``stored`` has not the form of verdicts. Agreeing means the same verdict and reason codes
+    (the texts may write times as the data file did); a stored ``noise_only`` of a result without the floor is
+    taken on trust, as it came from the data and the model.
+    """
     from .verdicts import VERDICTS, assess
 
     if list(stored) != list(result.names):
@@ -530,7 +567,9 @@ def _checked_verdicts(name, result, stored):
                 "'reasons': [{'code': ..., 'text': ...}, ...]}"
             )
     derived = assess(result)
+    checked = {}
     for parameter, entry in stored.items():
+        checked[parameter] = entry
         codes = [reason["code"] for reason in entry["reasons"]]
         verdict, expected = derived[parameter]["verdict"], [reason["code"] for reason in derived[parameter]["reasons"]]
         if result.informative is None and "noise_only" in codes:
@@ -538,12 +577,20 @@ def _checked_verdicts(name, result, stored):
             codes = [code for code in codes if code != "noise_only"]
             verdict = "suspect" if verdict == "identified" else verdict
         if (entry["verdict"], codes) != (verdict, expected):
-            raise DataError(
-                f"{name}: verdicts[{parameter!r}] say {entry['verdict']!r} ({', '.join(codes) or 'no reasons'}) but "
-                f"the arrays give {derived[parameter]['verdict']!r} ({', '.join(expected) or 'no reasons'}); "
-                f"{_DAMAGED}, or its verdicts were not made by dynia.verdicts.assess with its defaults"
+            warnings.warn(
+                f"{name}: the stored verdict of {parameter!r} is {entry['verdict']!r} "
+                f"({', '.join(codes) or 'no reasons'}) but its arrays give {derived[parameter]['verdict']!r} "
+                f"({', '.join(expected) or 'no reasons'}); loaded with the verdict the arrays give (the file was "
+                "altered, or written by a dynia whose verdict rules differ, or with other settings of assess)",
+                StoredVerdictsWarning,
+                stacklevel=4,
             )
-    return stored
+            checked[parameter] = derived[parameter]
+    return checked
+
+
+class StoredVerdictsWarning(UserWarning):
+    """A file's stored verdict differs from the one its arrays give; :func:`load` returns the latter."""
 
 
 def _encoded(value, where, setting):
