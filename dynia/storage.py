@@ -629,6 +629,8 @@ class _Variable:
         self.name = name
         self.check = check
         self._checked = None
+        self._layout = None
+        self._all_checked = False
 
     def opened(self):
         if self.dataset is None:
@@ -641,18 +643,20 @@ class _Variable:
     def read(self, index):
         """``index`` of the variable (a tuple over all its axes or fewer), its blocks checked first."""
         dataset = self.opened()
-        if self.check is not None:
-            axis = TIME_VARIABLES[self.name].index("time")
-            n_steps = dataset.shape[axis]
-            block = dataset.chunks[axis] if dataset.chunks else _CHECK_BLOCK
-            if self._checked is None:
-                self._checked = np.zeros(-(-n_steps // block), dtype=bool)
-            span = _time_span(index, dataset.ndim, axis, n_steps)
+        if self.check is not None and not self._all_checked:
+            if self._checked is None:  # the layout, read once: HDF5 answers each question at a cost
+                axis = TIME_VARIABLES[self.name].index("time")
+                block = dataset.chunks[axis] if dataset.chunks else _CHECK_BLOCK
+                self._layout = (dataset.ndim, axis, dataset.shape[axis], block)
+                self._checked = np.zeros(-(-dataset.shape[axis] // block), dtype=bool)
+            ndim, axis, n_steps, block = self._layout
+            span = _time_span(index, ndim, axis, n_steps)
             if span is not None:
                 for number in range(span[0] // block, (span[1] - 1) // block + 1):
                     if not self._checked[number]:
                         self.check(self.name, dataset.file, number * block, min((number + 1) * block, n_steps))
                         self._checked[number] = True
+                self._all_checked = bool(self._checked.all())
         return _read(dataset, index, self.filename, self.name)
 
 
@@ -660,8 +664,9 @@ def _time_span(index, ndim, axis, n_steps):
     """Steps [first, last + 1) that ``index`` reads along ``axis``; None when it reads none."""
     if any(item is None for item in index) or sum(item is Ellipsis for item in index) > 1:
         return (0, n_steps) if n_steps else None  # unusual indices: check every block, h5py judges the index
-    if Ellipsis in index:
-        at = index.index(Ellipsis)
+    ellipsis = [at for at, item in enumerate(index) if item is Ellipsis]  # not `in`: arrays compare elementwise
+    if ellipsis:
+        at = ellipsis[0]
         index = index[:at] + (slice(None),) * (ndim - len(index) + 1) + index[at + 1 :]
     item = index[axis] if axis < len(index) else slice(None)
     if isinstance(item, slice):
