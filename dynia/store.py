@@ -303,6 +303,8 @@ def _result(name, dataset, lazy):
     missing += [key for key in ("settings", "verdicts") if key not in dataset.attrs]
     if missing:
         raise DataError(f"{name}: has no {', '.join(map(repr, missing))}; expected every part of a saved result")
+    if dataset.sizes.get("side") != 2:
+        raise DataError(f"{name}: dimension 'side' has {dataset.sizes.get('side')} entries; expected lower, upper")
     names = tuple(str(label) for label in _values(name, dataset, "parameter", ("parameter",)))
     settings = _settings(name, dataset)
     stored_verdicts = _attribute(name, dataset, "verdicts", (dict, type(None)), "an object or null")
