@@ -16,7 +16,9 @@ Bad input ends the command with one line on stderr and exit status 2.
 """
 
 import argparse
+import contextlib
 import dataclasses
+import errno
 import importlib.machinery
 import importlib.metadata
 import importlib.util
@@ -37,7 +39,7 @@ import numpy as np
 from . import __version__, models, report
 from .data import load_csv
 from .engine.windows import OverflowedWindowsWarning
-from .errors import DyniaError, Interrupted, ModelError, SettingsError
+from .errors import DyniaError, Interrupted, ModelError, OutputError, SettingsError
 from .identify import identify
 from .models.base import user_code_failed
 from .outdir import OutputDirectory
@@ -1063,7 +1065,7 @@ def _recorded(options, analysis, offset, input_offset):
 
 def _analyse(options, command_line, caught):
     model = options["model_object"]
-    with options["destination"] as staging:
+    with options["destination"] as staging, _written_into(options["out"], staging):
         data, offset, input_offset = _load(options)
         u, y = data.u - input_offset, data.y - offset
         analysis = options["analysis"].replace(dt=data.dt)
@@ -1144,6 +1146,32 @@ def _analyse(options, command_line, caught):
     return _done(options)
 
 
+# Errors of a write that failed for want of room or of a working disk, when the error names no file.
+_WRITE_ERRORS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO, errno.EROFS})
+
+
+@contextlib.contextmanager
+def _written_into(out, staging):
+    """A failed write into ``staging`` as one error naming --out; the caller's OutputDirectory then removes it.
+
+    The result file's own error (:class:`~dynia.errors.OutputError` naming its path in ``staging``) and an
+    :class:`OSError` of a table or figure written there (naming its file, or a full disk naming none).
+    """
+    folder = str(staging) + os.sep
+    try:
+        yield
+    except OutputError as error:
+        if folder not in str(error):
+            raise
+        raise OutputError(f"--out {out}: cannot write the results: {str(error).replace(folder, '')}") from None
+    except OSError as error:
+        name = None if error.filename is None else os.path.abspath(os.fspath(error.filename))
+        if not (name.startswith(folder) if name is not None else error.errno in _WRITE_ERRORS):
+            raise
+        where = "" if name is None else f"{name[len(folder) :]}: "
+        raise OutputError(f"--out {out}: cannot write the results: {where}{error.strerror or error}") from None
+
+
 def _monte_carlo_record(settings):
     """What summary.json's ``run`` says of the Monte Carlo error: batches, and the target's rounds."""
     if not settings.get("ic_error"):
@@ -1161,7 +1189,7 @@ def _monte_carlo_record(settings):
 
 def _identify(options, command_line, caught):
     model = options["model_object"]
-    with options["destination"] as staging:
+    with options["destination"] as staging, _written_into(options["out"], staging):
         data, offset, input_offset = _load(options)
         u, y = data.u - input_offset, data.y - offset
         analysis = options["analysis"].replace(dt=data.dt)

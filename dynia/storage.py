@@ -42,8 +42,12 @@ Examples
 (('DiskArray', 'float32', (60,)), True)
 """
 
+import contextlib
 import dataclasses
 import os
+import re
+import secrets
+import sys
 import tempfile
 
 import numpy as np
@@ -58,7 +62,10 @@ __all__ = [
     "ResultFile",
     "result_arrays",
     "write_result",
+    "write_netcdf",
     "disk_arrays",
+    "read_block",
+    "PartialFile",
 ]
 
 # The result arrays that lie along time, with the file's dimensions (as dynia.store lays them out).
@@ -151,6 +158,13 @@ class ResultFile(ResultArrays):
     returns the result reading from it. :meth:`discard` (also on an error in
     ``with``) deletes the partial file.
 
+    Every numeric variable carries a Fletcher-32 checksum, which
+    :func:`dynia.load` verifies. Each block is flushed to disk as it is
+    written, so that a write error (a full disk, a file size limit) is
+    raised there, as an :class:`~dynia.errors.OutputError` naming ``path``,
+    and not later from HDF5's caches where it cannot be reported; the
+    partial file is then closed without a word from HDF5 and deleted.
+
     Parameters
     ----------
     path : str or os.PathLike
@@ -180,7 +194,9 @@ class ResultFile(ResultArrays):
         super().__init__(dtype)
         self.path = os.path.abspath(os.fspath(path))
         self._partial = None
-        self._file = None
+        self._h5 = None
+        self._sink = None
+        self._datasets = {}
         self._variables = {}
         self._buffers = {}
         self._block = 0
@@ -192,7 +208,6 @@ class ResultFile(ResultArrays):
 
         Called again (a retried analysis), it starts a new file.
         """
-        import h5netcdf
         import h5py
 
         self.discard()
@@ -202,40 +217,64 @@ class ResultFile(ResultArrays):
         try:
             handle, self._partial = tempfile.mkstemp(prefix=f".{base}.", suffix=".partial", dir=folder)
             os.close(handle)
-            self._file = h5netcdf.File(self._partial, "w")
         except OSError as error:
             self._partial = None
             raise OutputError(f"{self.path}: cannot be written ({error.strerror or error})") from None
+        with self._writing():
+            # The h5py file is ours, h5netcdf only lays out the variables (_netcdf): after a write error it is
+            # closed without h5netcdf's final writes, and HDF5 writes through a PartialFile, which can be abandoned.
+            self._sink = PartialFile(self._partial)
+            self._h5 = h5py.File(self._sink, "w", track_order=True)
+            with _netcdf(self._h5, "w") as file:
+                self._create(file, shapes, names, samples, bounds, time, bin_centres)
+            self._h5.flush()
+
+    def _create(self, file, shapes, names, samples, bounds, time, bin_centres):
+        import h5py
+
         samples, bounds, time = np.asarray(samples), np.asarray(bounds), np.asarray(time)
         n_bins = shapes["gradient"][1]
         self._n_steps = time.size
         self._block = int(min(max(_CHUNK_BYTES // (n_bins * self.dtype.itemsize), 1), max(self._n_steps, 1)))
-        file = self._file
         file.dimensions = dict(parameter=len(names), time=self._n_steps, side=2, bin=n_bins, sample=samples.shape[0])
         file.create_variable("parameter", ("parameter",), dtype=h5py.string_dtype(), data=np.array(names, dtype=object))
         file.create_variable(
             "side", ("side",), dtype=h5py.string_dtype(), data=np.array(["lower", "upper"], dtype=object)
         )
-        stamps = file.create_variable("time", ("time",), dtype="f8", data=time, chunks=(self._block,))
+        stamps = file.create_variable("time", ("time",), dtype="f8", data=time, chunks=(self._block,), fletcher32=True)
         stamps.attrs.update(units="s", long_name="time from the start of the record")
         for name, data, dims in (
             ("samples", samples, ("sample", "parameter")),
             ("bounds", bounds, ("parameter", "side")),
             ("bin_centres", bin_centres, ("parameter", "bin")),
         ):
-            file.create_variable(name, dims, dtype="f8", data=data)
+            file.create_variable(name, dims, dtype="f8", data=data, fletcher32=True)
         self._buffers = {}
         for name, shape in shapes.items():
             chunks = tuple(
                 self._block if dim == "time" else (1 if dim == "parameter" else size)
                 for dim, size in zip(TIME_VARIABLES[name], shape)
             )
-            file.create_variable(name, TIME_VARIABLES[name], dtype=self.dtype, chunks=chunks)
+            file.create_variable(name, TIME_VARIABLES[name], dtype=self.dtype, chunks=chunks, fletcher32=True)
             buffer_shape = tuple(
                 self._block if dim == "time" else size for dim, size in zip(TIME_VARIABLES[name], shape)
             )
             self._buffers[name] = np.full(buffer_shape, np.nan, dtype=self.dtype)
+        # Held open, so that no dataset closes (writing its cached chunks) when a temporary handle dies.
+        self._datasets = {name: self._h5[name] for name in self._buffers}
         self._block_start = 0
+
+    @contextlib.contextmanager
+    def _writing(self):
+        """Turn a write error into an OutputError naming ``path``, the partial file discarded."""
+        try:
+            yield
+            if self._sink is not None:
+                self._sink.check()
+        except (OSError, RuntimeError) as error:
+            reason = write_error(self._sink.error if self._sink is not None and self._sink.error else error)
+            self.discard()
+            raise OutputError(f"{self.path}: cannot be written ({reason})") from None
 
     def write(self, start, stop, chunks):
         """Write ``chunks`` (name to the values of steps [start, stop)); steps must come in order.
@@ -257,17 +296,20 @@ class ResultFile(ResultArrays):
 
     def _flush(self, block_stop):
         width = block_stop - self._block_start
-        for name, buffer in self._buffers.items():
-            self._file.variables[name][_time_index(name, self._block_start, block_stop)] = buffer[
-                _time_index(name, 0, width)
-            ]
-            buffer.fill(np.nan)
+        with self._writing():
+            for name, buffer in self._buffers.items():
+                self._datasets[name][_time_index(name, self._block_start, block_stop)] = buffer[
+                    _time_index(name, 0, width)
+                ]
+                buffer.fill(np.nan)
+            self._h5.flush()
         self._block_start = block_stop
 
     def arrays(self):
         """The variables written, as :class:`DiskArray` objects on the partial file."""
-        self._file.flush()
-        self._variables = {name: _Variable(self._file.variables[name], self._partial, name) for name in self._buffers}
+        with self._writing():
+            self._h5.flush()
+        self._variables = {name: _Variable(self._datasets[name], self._partial, name) for name in self._buffers}
         return {name: DiskArray(variable) for name, variable in self._variables.items()}
 
     def commit(self, result):
@@ -275,35 +317,21 @@ class ResultFile(ResultArrays):
 
         ``result`` is the finished result whose arrays this file holds.
         """
-        from .store import TIMESTAMP_ATTRIBUTES, metadata
+        from .store import metadata
 
         attrs, variables = metadata(
             result,
             reserved=(*TIME_VARIABLES, "time", "timestamp", "parameter", "side", "samples", "bounds", "bin_centres"),
         )
-        file = self._file
-        for name, (dims, values) in variables.items():
-            for axis, dim in enumerate(dims):
-                if dim not in file.dimensions:
-                    file.dimensions[dim] = values.shape[axis]
-            file.create_variable(name, dims, data=values)
-        if result.timestamps is not None:
-            stamps = file.create_variable(
-                "timestamp",
-                ("time",),
-                dtype="i8",
-                data=np.asarray(result.timestamps, dtype="datetime64[ns]").view(np.int64),
-                chunks=(self._block,),
-            )
-            stamps.attrs.update(TIMESTAMP_ATTRIBUTES)
-        file.attrs.update(attrs)
-        file.close()
-        self._file = None
-        try:
+        with self._writing():
+            with _netcdf(self._h5, "a") as file:
+                self._describe(file, result, attrs, variables)
+            self._datasets = {}
+            self._h5.close()
+            self._sink.check()  # HDF5's last writes, at its close
+            self._sink.close()
+            self._h5 = self._sink = None
             os.replace(self._partial, self.path)
-        except OSError as error:
-            self.discard()
-            raise OutputError(f"{self.path}: cannot be written ({error.strerror or error})") from None
         self._partial = None
         # The arrays handed out before move with the file; the rest stays as the result holds it.
         reopened = disk_arrays(self.path, self._variables)
@@ -313,20 +341,224 @@ class ResultFile(ResultArrays):
         self._variables = {}  # a later discard (a reuse of this object) leaves the committed file alone
         return dataclasses.replace(result, **committed)
 
+    def _describe(self, file, result, attrs, variables):
+        """Write the settings' array variables, the timestamps and the attributes through the h5netcdf ``file``."""
+        from .store import TIMESTAMP_ATTRIBUTES
+
+        for name, (dims, values) in variables.items():
+            for axis, dim in enumerate(dims):
+                if dim not in file.dimensions:
+                    file.dimensions[dim] = values.shape[axis]
+            file.create_variable(name, dims, data=values, fletcher32=values.dtype.kind in "biuf")
+        if result.timestamps is not None:
+            stamps = file.create_variable(
+                "timestamp",
+                ("time",),
+                dtype="i8",
+                data=np.asarray(result.timestamps, dtype="datetime64[ns]").view(np.int64),
+                chunks=(self._block,),
+                fletcher32=True,
+            )
+            stamps.attrs.update(TIMESTAMP_ATTRIBUTES)
+        file.attrs.update(attrs)
+
     def discard(self):
         """Close and delete the partial file, if any; arrays read from it raise :class:`~dynia.errors.DataError`."""
-        for variable in self._variables.values():
-            variable.dataset = None
-        self._variables = {}
-        if self._file is not None:
-            self._file.close()
-            self._file = None
+        # After a write error HDF5 fails again on every close, and h5py prints each failure: silenced, as the
+        # file is deleted next and the error that matters is the one being raised.
+        if self._sink is not None:
+            self._sink.abandon()
+        with _quiet():
+            for variable in self._variables.values():
+                variable.dataset = None
+            self._variables = {}
+            self._datasets = {}
+            if self._h5 is not None:
+                try:
+                    self._h5.close()
+                except Exception:
+                    pass
+                self._h5 = None
+        if self._sink is not None:
+            self._sink.close()
+            self._sink = None
         if self._partial is not None:
             try:
                 os.remove(self._partial)
             except FileNotFoundError:
                 pass
             self._partial = None
+
+
+class PartialFile:
+    """A file being written, as h5py's ``fileobj`` driver writes it: the first write error abandons it.
+
+    HDF5 writes from its caches whenever it closes an object, and after a
+    write error (a full disk) every such write fails again: h5py prints each
+    failure, and the library can crash at exit while it still holds the
+    file. Here the first failing write is kept in :attr:`error` and the file
+    abandoned: that write and every later one succeed for HDF5 without
+    touching the disk, so HDF5 goes on and lets go of the file quietly, and
+    the writer raises :attr:`error` at its next check (:meth:`check`). A
+    file about to be deleted is abandoned too (:meth:`abandon`).
+    """
+
+    def __init__(self, path):
+        # 0o666: the permissions the umask gives, as a file written in place would get.
+        self._descriptor = os.open(path, os.O_RDWR | os.O_CREAT | os.O_TRUNC, 0o666)
+        self._position = 0
+        self.error = None
+        self.abandoned = False
+
+    def seek(self, offset, whence=os.SEEK_SET):
+        self._position = os.lseek(self._descriptor, offset, whence)
+        return self._position
+
+    def tell(self):
+        return self._position
+
+    def readinto(self, buffer):
+        data = os.pread(self._descriptor, len(memoryview(buffer).cast("B")), self._position)
+        memoryview(buffer).cast("B")[: len(data)] = data
+        self._position += len(data)
+        return len(data)
+
+    def read(self, size=-1):
+        size = os.fstat(self._descriptor).st_size - self._position if size is None or size < 0 else size
+        data = os.pread(self._descriptor, size, self._position)
+        self._position += len(data)
+        return data
+
+    def write(self, data):
+        data = memoryview(data).cast("B")
+        if not self.abandoned:
+            try:
+                written = 0
+                while written < len(data):
+                    written += _pwrite(self._descriptor, data[written:], self._position + written)
+            except OSError as error:
+                self._failed(error)
+        self._position += len(data)
+        return len(data)
+
+    def truncate(self, size=None):
+        if not self.abandoned:
+            try:
+                os.ftruncate(self._descriptor, self._position if size is None else size)
+            except OSError as error:
+                self._failed(error)
+        return size
+
+    def _failed(self, error):
+        # Raised here, the error would reach HDF5 as a failed write, and the storm described above would follow.
+        self.error = error
+        self.abandoned = True
+
+    def check(self):
+        """Raise the write error, if a write failed."""
+        if self.error is not None:
+            raise self.error
+
+    def flush(self):
+        pass  # every write went to the system at once
+
+    def abandon(self):
+        """Write nothing from now on: the file is going to be deleted."""
+        self.abandoned = True
+
+    def close(self):
+        if self._descriptor is not None:
+            os.close(self._descriptor)
+            self._descriptor = None
+
+
+def _pwrite(descriptor, data, offset):
+    """``os.pwrite``: where the tests make the disk fill up."""
+    return os.pwrite(descriptor, data, offset)
+
+
+@contextlib.contextmanager
+def _netcdf(h5file, mode):
+    """An h5netcdf view of the open h5py ``h5file``, to create variables with their netCDF dimensions.
+
+    Closed on leaving (its attributes go into HDF5's cache; the owner's flush reports any write error). On an
+    error it is marked closed instead: its close, and its ``__del__``, would write again into a file that failed.
+    """
+    import h5netcdf
+
+    file = h5netcdf.File(h5file, mode)
+    try:
+        yield file
+        file.close()
+    except BaseException:
+        file._closed = True
+        raise
+
+
+@contextlib.contextmanager
+def _quiet():
+    """Nothing printed to stderr, nor as an unraisable exception (h5py's objects failing to close)."""
+    import gc
+
+    stderr, hook = sys.stderr, sys.unraisablehook
+    sys.stderr, sys.unraisablehook = open(os.devnull, "w"), lambda unraisable: None
+    try:
+        yield
+        gc.collect()  # objects of the closed file that die now die quietly
+    finally:
+        sys.stderr.close()
+        sys.stderr, sys.unraisablehook = stderr, hook
+
+
+def write_error(error):
+    """The reason of a write ``error`` in a few words: the system's message (HDF5 puts it in its text)."""
+    if isinstance(error, OSError) and error.errno is not None:
+        return error.strerror or os.strerror(error.errno)
+    found = re.search(r"error message = '([^']*)'", str(error))
+    if found:
+        return found.group(1)
+    return str(error).splitlines()[0] if str(error) else type(error).__name__
+
+
+def write_netcdf(write, path):
+    """Call ``write(file)`` to write a file beside ``path`` (``file`` a :class:`PartialFile`), then rename it.
+
+    On a write error the partial file is deleted, HDF5 kept quiet (see
+    :class:`PartialFile`), and an :class:`~dynia.errors.OutputError` names
+    ``path``, which is left as it was.
+    """
+    path = os.path.abspath(os.fspath(path))
+    folder, base = os.path.split(path)
+    partial = os.path.join(folder, f".{base}.{os.getpid()}-{secrets.token_hex(4)}.partial")
+    try:
+        sink = PartialFile(partial)
+    except OSError as error:
+        raise OutputError(f"{path}: cannot be written ({error.strerror or error})") from None
+    try:
+        try:
+            write(sink)
+            sink.check()
+        except BaseException:
+            sink.abandon()
+            with _quiet():  # what the failed write leaves open is closed, quietly
+                pass
+            raise
+        finally:
+            sink.close()
+        os.replace(partial, path)
+    except (OSError, RuntimeError) as error:
+        _remove(partial)
+        raise OutputError(f"{path}: cannot be written ({write_error(sink.error or error)})") from None
+    except BaseException:
+        _remove(partial)
+        raise
+
+
+def _remove(path):
+    try:
+        os.remove(path)
+    except FileNotFoundError:
+        pass
 
 
 def write_result(result, path, dtype=None):
@@ -352,21 +584,53 @@ def write_result(result, path, dtype=None):
         return file.commit(result)
 
 
-def disk_arrays(path, names):
-    """The variables ``names`` of the netCDF file ``path`` as :class:`DiskArray` objects, by name."""
+def disk_arrays(path, names, check=None):
+    """The variables ``names`` of the netCDF file ``path`` as :class:`DiskArray` objects, by name.
+
+    ``check``, when given, is called as ``check(name, file, start, stop)``
+    (``file`` the open h5py file) for each on-disk block of steps
+    [start, stop) the first time a read touches it, and raises to refuse
+    the block (:func:`dynia.load` checks its ranges so).
+    """
     import h5py
 
     file = h5py.File(path, "r")
-    return {name: DiskArray(_Variable(file[name], path, name)) for name in names}
+    return {name: DiskArray(_Variable(file[name], path, name, check)) for name in names}
+
+
+# Steps checked at once along time in a variable stored without chunks (files of other writers).
+_CHECK_BLOCK = 2**16
+
+
+def read_block(file, name, start, stop):
+    """Steps [start, stop) of variable ``name`` (one of TIME_VARIABLES) of the open h5py ``file``, all parameters."""
+    return _read(file[name], _time_index(name, start, stop), file.filename, name)
+
+
+def _read(dataset, index, filename, name):
+    """``dataset[index]``; a DataError naming the file when HDF5 cannot read it (a checksum that fails)."""
+    try:
+        return np.asarray(dataset[index])
+    except OSError as error:
+        raise DataError(
+            f"{filename}: {name} cannot be read ({str(error).splitlines()[0]}); the file is damaged or was altered"
+        ) from None
 
 
 class _Variable:
-    """What DiskArrays read: a variable of a file, moved with the file when it is renamed, gone when deleted."""
+    """What DiskArrays read: a variable of a file, moved with the file when it is renamed, gone when deleted.
 
-    def __init__(self, dataset, filename, name):
+    With ``check`` (see :func:`disk_arrays`) each block along time is checked on the first read that touches it.
+    """
+
+    def __init__(self, dataset, filename, name, check=None):
         self.dataset = dataset
         self.filename = os.fspath(filename)
         self.name = name
+        self.check = check
+        self._checked = None
+        self._layout = None
+        self._all_checked = False
 
     def opened(self):
         if self.dataset is None:
@@ -375,6 +639,42 @@ class _Variable:
                 "an interruption, or a retry with other samples); use the result the analysis returned"
             )
         return self.dataset
+
+    def read(self, index):
+        """``index`` of the variable (a tuple over all its axes or fewer), its blocks checked first."""
+        dataset = self.opened()
+        if self.check is not None and not self._all_checked:
+            if self._checked is None:  # the layout, read once: HDF5 answers each question at a cost
+                axis = TIME_VARIABLES[self.name].index("time")
+                block = dataset.chunks[axis] if dataset.chunks else _CHECK_BLOCK
+                self._layout = (dataset.ndim, axis, dataset.shape[axis], block)
+                self._checked = np.zeros(-(-dataset.shape[axis] // block), dtype=bool)
+            ndim, axis, n_steps, block = self._layout
+            span = _time_span(index, ndim, axis, n_steps)
+            if span is not None:
+                for number in range(span[0] // block, (span[1] - 1) // block + 1):
+                    if not self._checked[number]:
+                        self.check(self.name, dataset.file, number * block, min((number + 1) * block, n_steps))
+                        self._checked[number] = True
+                self._all_checked = bool(self._checked.all())
+        return _read(dataset, index, self.filename, self.name)
+
+
+def _time_span(index, ndim, axis, n_steps):
+    """Steps [first, last + 1) that ``index`` reads along ``axis``; None when it reads none."""
+    if any(item is None for item in index) or sum(item is Ellipsis for item in index) > 1:
+        return (0, n_steps) if n_steps else None  # unusual indices: check every block, h5py judges the index
+    ellipsis = [at for at, item in enumerate(index) if item is Ellipsis]  # not `in`: arrays compare elementwise
+    if ellipsis:
+        at = ellipsis[0]
+        index = index[:at] + (slice(None),) * (ndim - len(index) + 1) + index[at + 1 :]
+    item = index[axis] if axis < len(index) else slice(None)
+    if isinstance(item, slice):
+        steps = range(*item.indices(n_steps))
+        return (min(steps[0], steps[-1]), max(steps[0], steps[-1]) + 1) if len(steps) else None
+    steps = np.asarray(item)
+    steps = np.flatnonzero(steps) if steps.dtype == bool else steps.astype(np.int64, copy=False) % max(n_steps, 1)
+    return (int(steps.min()), int(steps.max()) + 1) if steps.size else None
 
 
 class DiskArray(NDArrayOperatorsMixin):
@@ -434,7 +734,9 @@ class DiskArray(NDArrayOperatorsMixin):
                 leading.append(int(item) % size)
             return DiskArray(self._variable, self._leading + tuple(leading))
         try:
-            return np.asarray(self._variable.opened()[self._leading + key])
+            return self._variable.read(self._leading + key)
+        except DataError:
+            raise
         except (TypeError, ValueError):
             # Selections HDF5 cannot make (fancy indices out of order, repeated): read the view, index in memory.
             return np.asarray(self)[key]
@@ -448,7 +750,7 @@ class DiskArray(NDArrayOperatorsMixin):
         return np.asarray(self).astype(dtype)
 
     def __array__(self, dtype=None, copy=None):
-        values = np.asarray(self._variable.opened()[self._leading + (Ellipsis,)])
+        values = self._variable.read(self._leading + (Ellipsis,))
         return values if dtype is None else values.astype(dtype, copy=False)
 
     def __array_ufunc__(self, ufunc, method, *inputs, **kwargs):
@@ -456,13 +758,13 @@ class DiskArray(NDArrayOperatorsMixin):
         return getattr(ufunc, method)(*inputs, **kwargs)
 
     def __reduce__(self):
-        return _reopened, (self.filename, self.name, self._leading)
+        return _reopened, (self.filename, self.name, self._leading, self._variable.check)
 
     def __repr__(self):
         return f"DiskArray({self.name!r} in {self.filename!r}, shape={self.shape}, dtype={self.dtype})"
 
 
-def _reopened(filename, name, leading):
+def _reopened(filename, name, leading, check=None):
     import h5py
 
-    return DiskArray(_Variable(h5py.File(filename, "r")[name], filename, name), leading)
+    return DiskArray(_Variable(h5py.File(filename, "r")[name], filename, name, check), leading)

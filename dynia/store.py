@@ -41,28 +41,41 @@ variable to 2 GB, which the gradient of a long record passes.
 Examples
 --------
 >>> import numpy as np, tempfile, pathlib, dynia
+>>> limits = np.array([[[np.nan, np.nan], [0.1, 0.9], [0.25, 0.75], [0.05, 0.95]]])
+>>> gradient = np.array([[[np.nan, 0.5, 0.5, 0.5], [np.nan, 0.5, 0.5, 0.5]]])
 >>> res = dynia.DyniaResult(names=("K",), samples=np.zeros((3, 1)), bounds=np.array([[0.0, 1.0]]),
-...                         time=np.arange(4.0), ic=np.array([[np.nan, 0.2, 0.5, 0.1]]),
-...                         ci=np.zeros((1, 4, 2)), gradient=np.zeros((1, 2, 4)), bin_centres=np.zeros((1, 2)),
+...                         time=np.arange(4.0), ic=1 - (limits[..., 1] - limits[..., 0]),
+...                         ci=limits, gradient=gradient, bin_centres=np.array([[0.25, 0.75]]),
 ...                         settings={"n": 1, "bounds": {"K": (0.0, 1.0)}})
 >>> res.to_xarray().ic.dims
 ('parameter', 'time')
 >>> with tempfile.TemporaryDirectory() as folder:
 ...     res.save(pathlib.Path(folder, "result.nc"))
 ...     back = dynia.load(pathlib.Path(folder, "result.nc"))
->>> back.settings, back.ic
+>>> back.settings, back.ic.round(2)
 ({'n': 1, 'bounds': {'K': (0.0, 1.0)}}, array([[nan, 0.2, 0.5, 0.1]]))
 """
 
+import dataclasses
 import json
 import numbers
 import os
+import warnings
 
 import numpy as np
 
-from .errors import DataError, OutputError, SettingsError
+from .errors import DataError, SettingsError
 
-__all__ = ["to_xarray", "save", "load", "metadata", "FORMAT_VERSION", "TIMESTAMP_ATTRIBUTES"]
+__all__ = [
+    "to_xarray",
+    "save",
+    "load",
+    "metadata",
+    "FORMAT_VERSION",
+    "TIMESTAMP_ATTRIBUTES",
+    "check_time_block",
+    "StoredVerdictsWarning",
+]
 
 # Written as the attribute "dynia_result"; a later layout raises it, and load refuses what it cannot read.
 FORMAT_VERSION = 1
@@ -199,25 +212,27 @@ def save(result, path):
         of the settings, an ndarray; numpy scalars are written as Python
         numbers. The message names the setting.
     OutputError
-        ``path`` cannot be written (a missing folder, no permission).
+        ``path`` cannot be written (a missing folder, no permission, a full
+        disk); the file is written under a temporary name beside ``path``
+        and renamed when complete, so ``path`` is then left as it was.
     """
-    from .storage import DiskArray, write_result
+    from .storage import DiskArray, write_netcdf, write_result
 
     if isinstance(result.ic, DiskArray):
         write_result(result, path)
         return
     dataset = to_xarray(result)
-    encoding = {name: {"_FillValue": None} for name in dataset.variables}
+    # Fletcher-32 checksums on every numeric variable, so that load tells a damaged file from a result.
+    encoding = {
+        name: {"_FillValue": None, "fletcher32": dataset[name].dtype.kind in "biuf"} for name in dataset.variables
+    }
     if "timestamp" in dataset.variables:
         encoding["timestamp"].update(units=_TIMESTAMP_UNITS, calendar="proleptic_gregorian", dtype="int64")
-    try:
-        dataset.to_netcdf(path, engine="h5netcdf", encoding=encoding)
-    except OSError as error:
-        raise OutputError(f"{os.fspath(path)}: cannot be written ({error.strerror or error})") from None
+    write_netcdf(lambda partial: dataset.to_netcdf(partial, engine="h5netcdf", encoding=encoding), path)
 
 
 def load(path, *, lazy=False):
-    """The :class:`~dynia.result.DyniaResult` that :func:`save` wrote to ``path``.
+    """The :class:`~dynia.result.DyniaResult` that :func:`save` wrote to ``path``, checked.
 
     Every array comes back bit-identical (NaN where NaN), with the names, the
     timestamps, and the settings and verdicts equal to those saved: a tuple
@@ -229,11 +244,28 @@ def load(path, *, lazy=False):
     and their errors) stay in the file as :class:`dynia.storage.DiskArray` objects,
     read where indexed: for results larger than memory (:mod:`dynia.storage`).
 
+    Nothing in the file is trusted. The arrays carry Fletcher-32 checksums
+    (files written before them load unchecked); every array is checked
+    against what an analysis can produce (:func:`check_time_block` and the
+    rules for the fixed arrays); the verdicts are derived again from the
+    arrays (:func:`dynia.verdicts.assess`): a stored verdict that agrees
+    with its derived one, in verdict and reason codes, is kept (with its
+    texts, which may write times as the data file did); one that does not
+    (forged, or written by a dynia whose rules differed) is replaced by the
+    derived one, with a :class:`StoredVerdictsWarning`. A lazy load checks the fixed arrays at once and the arrays
+    along time one on-disk block at a time, when a read first touches the
+    block, so it stays as fast as the reads it is asked for; checking the
+    verdicts reads IC (all of it) and some limits, once.
+
     Raises
     ------
     DataError
         ``path`` is missing, not netCDF-4, or not a result written by
-        :func:`save` (of this format version or an earlier one).
+        :func:`save` (of this format version or an earlier one); or any part
+        of it is malformed, fails its checksum, or holds a value no analysis
+        gives. The message names the
+        file and the part. With ``lazy=True``, reads of a block that fails
+        its checksum or its ranges raise it too.
 
     Examples
     --------
@@ -241,19 +273,25 @@ def load(path, *, lazy=False):
     """
     import xarray as xr
 
-    from .result import DyniaResult  # result imports this module for its methods
-
     name = os.fspath(path)
     if not os.path.isfile(name):
         raise DataError(f"{name}: no such file; expected a netCDF file written by DyniaResult.save")
     try:
-        dataset = (xr.open_dataset if lazy else xr.load_dataset)(
+        dataset = xr.open_dataset(
             name, engine="h5netcdf", mask_and_scale=False, decode_times=False, decode_timedelta=False
         )
     except (OSError, ValueError) as error:
         raise DataError(
             f"{name}: cannot be read as netCDF-4 ({error}); expected a file written by DyniaResult.save"
         ) from None
+    with dataset:
+        return _result(name, dataset, lazy)
+
+
+def _result(name, dataset, lazy):
+    """The checked result of the open ``dataset`` of file ``name`` (see :func:`load`)."""
+    from .result import DyniaResult  # result imports this module for its methods
+
     version = dataset.attrs.get("dynia_result")
     if not isinstance(version, numbers.Integral) or not 1 <= version <= FORMAT_VERSION:
         found = "no dynia_result attribute" if version is None else f"format version {version}"
@@ -265,46 +303,296 @@ def load(path, *, lazy=False):
     missing += [key for key in ("settings", "verdicts") if key not in dataset.attrs]
     if missing:
         raise DataError(f"{name}: has no {', '.join(map(repr, missing))}; expected every part of a saved result")
-    settings = {}
-    for key, value in json.loads(dataset.attrs["settings"], object_hook=_decoded).items():
-        is_variable = isinstance(value, dict) and value.keys() == {_VARIABLE}
-        settings[key] = dataset[value[_VARIABLE]].values if is_variable else value
-    arrays = {key: _loaded(dataset, key, dims, lazy) for key, dims in _ARRAYS.items()}
-    arrays.update((key, _loaded(dataset, key, dims, lazy)) for key, dims in _OPTIONAL_ARRAYS.items() if key in dataset)
+    if dataset.sizes.get("side") != 2:
+        raise DataError(f"{name}: dimension 'side' has {dataset.sizes.get('side')} entries; expected lower, upper")
+    names = tuple(str(label) for label in _values(name, dataset, "parameter", ("parameter",)))
+    settings = _settings(name, dataset)
+    stored_verdicts = _attribute(name, dataset, "verdicts", (dict, type(None)), "an object or null")
+    eager = {key: dims for key, dims in _ARRAYS.items() if not (lazy and key in _TIME_ARRAYS)}
+    eager.update(
+        (key, dims) for key, dims in _OPTIONAL_ARRAYS.items() if key in dataset and not (lazy and key in _TIME_ARRAYS)
+    )
+    arrays = {key: _values(name, dataset, key, dims) for key, dims in eager.items()}
+    time = _values(name, dataset, "time", ("time",))
+    _check_fixed(name, names, time, arrays)
     # An older file's floor (mae_spread) tested another statistic: it loads as no floor, not as this one.
     if "discrimination" in dataset:
-        arrays.update((key, dataset[key].values) for key in _NOISE_FLOOR if key in dataset)
-    if "informative" in arrays:
-        arrays["informative"] = arrays["informative"].astype(bool)
+        arrays.update((key, _values(name, dataset, key, ("time",))) for key in _NOISE_FLOOR if key in dataset)
+        _check_floor(name, arrays)
+        if "informative" in arrays:
+            arrays["informative"] = arrays["informative"].astype(bool)
+    spans = np.ptp(arrays["samples"], axis=0) if arrays["samples"].size else np.zeros(len(names))
+    if lazy:
+        arrays.update(_lazy(name, dataset, names, arrays["bounds"], spans))
+    else:
+        along_time = {key: arrays[key] for key in _TIME_ARRAYS if key in arrays}
+        for key, values in along_time.items():
+            check_time_block(name, names, arrays["bounds"], spans, key, values, along_time)
     timestamps = None
     if "timestamp" in dataset.variables:
         stamps = dataset["timestamp"]
         if stamps.attrs.get("units") != _TIMESTAMP_UNITS:
             raise DataError(f"{name}: timestamp has units {stamps.attrs.get('units')!r}; expected {_TIMESTAMP_UNITS!r}")
-        timestamps = stamps.values.astype(np.int64).view("datetime64[ns]")
-    return DyniaResult(
-        names=tuple(str(label) for label in dataset["parameter"].values),
-        time=dataset["time"].values,
-        settings=settings,
-        verdicts=json.loads(dataset.attrs["verdicts"], object_hook=_decoded),
-        timestamps=timestamps,
-        **arrays,
-    )
+        timestamps = _values(name, dataset, "timestamp", ("time",))
+        if timestamps.dtype.kind not in "iu":
+            raise DataError(f"{name}: timestamp holds {timestamps.dtype}; expected int64 nanoseconds")
+        timestamps = timestamps.astype(np.int64).view("datetime64[ns]")
+    result = DyniaResult(names=names, time=time, settings=settings, timestamps=timestamps, **arrays)
+    if stored_verdicts is None:
+        return result
+    return dataclasses.replace(result, verdicts=_checked_verdicts(name, result, stored_verdicts))
 
 
-def _loaded(dataset, key, dims, lazy):
-    """Variable ``key`` in the order ``dims``: in memory, or with ``lazy`` a DiskArray when it lies along time."""
+# The arrays along time: checked block by block (check_time_block), read lazily with lazy=True.
+_TIME_ARRAYS = ("ic", "ci", "median", "gradient", "ic_se", "ci_se")
+_DAMAGED = "the file is damaged or was altered"
+
+
+def _values(name, dataset, key, dims):
+    """Variable ``key`` read whole in the order ``dims``; a DataError for other dimensions or a failed checksum."""
+    variable = dataset[key]
+    if set(variable.dims) != set(dims) or len(variable.dims) != len(dims):
+        raise DataError(f"{name}: {key} has dimensions {variable.dims}; expected {dims}")
+    try:
+        values = variable.transpose(*dims).values
+    except (OSError, RuntimeError) as error:
+        raise DataError(f"{name}: {key} cannot be read ({_first_line(error)}); {_DAMAGED}") from None
+    if values.dtype.kind not in "bfiuSUO":
+        raise DataError(f"{name}: {key} holds {values.dtype}; expected numbers")
+    return values
+
+
+def _first_line(error):
+    return str(error).splitlines()[0] if str(error) else type(error).__name__
+
+
+def _attribute(name, dataset, key, kinds, expected):
+    """JSON attribute ``key`` decoded; a DataError unless it is JSON text of a value of type ``kinds``."""
+    text = dataset.attrs[key]
+    if not isinstance(text, str):
+        raise DataError(f"{name}: attribute {key!r} holds {type(text).__name__} {text!r}; expected JSON text")
+    try:
+        value = json.loads(text, object_hook=_decoded)
+    except _Malformed as error:
+        raise DataError(f"{name}: attribute {key!r}: {error}; expected JSON as DyniaResult.save writes it") from None
+    except ValueError as error:
+        raise DataError(f"{name}: attribute {key!r} is not JSON ({error}); expected JSON text") from None
+    if not isinstance(value, kinds):
+        raise DataError(f"{name}: attribute {key!r} holds a JSON {type(value).__name__}; expected {expected}")
+    return value
+
+
+def _settings(name, dataset):
+    """The settings attribute, with array settings read from their variables."""
+    settings = {}
+    for key, value in _attribute(name, dataset, "settings", dict, "an object").items():
+        if isinstance(value, dict) and _VARIABLE in value:
+            variable = value[_VARIABLE]
+            if value.keys() != {_VARIABLE} or not isinstance(variable, str) or variable not in dataset.variables:
+                raise DataError(
+                    f"{name}: settings[{key!r}] is {value!r}; expected {{{_VARIABLE!r}: the name of a variable of "
+                    "the file}"
+                )
+            value = _values(name, dataset, variable, dataset[variable].dims)
+        settings[key] = value
+    return settings
+
+
+def _check_fixed(name, names, time, arrays):
+    """The arrays that do not lie along time: shapes, finite, samples and bin centres within bounds, time rising."""
+    n_params = len(names)
+    if len(set(names)) != n_params:
+        raise DataError(f"{name}: parameter names {list(names)} repeat; {_DAMAGED}")
+    bounds = arrays["bounds"]
+    if bounds.dtype.kind != "f" or not np.isfinite(bounds).all() or not (bounds[:, 0] < bounds[:, 1]).all():
+        raise DataError(f"{name}: bounds {bounds.tolist()} are not finite low < high pairs; {_DAMAGED}")
+    if time.dtype.kind != "f" or not np.isfinite(time).all() or not (np.diff(time) > 0).all():
+        raise DataError(f"{name}: time is not finite and rising; {_DAMAGED}")
+    for key in ("samples", "bin_centres"):
+        values = arrays[key]
+        along = values.T if key == "samples" else values
+        outside = ~((along >= bounds[:, :1]) & (along <= bounds[:, 1:]))
+        if values.dtype.kind != "f" or outside.any():
+            p = int(np.argwhere(outside)[0][0]) if outside.any() else 0
+            raise DataError(
+                f"{name}: {key} of {names[p]!r} lie outside its bounds {bounds[p].tolist()} or are not numbers; "
+                f"{_DAMAGED}"
+            )
+
+
+def _check_floor(name, arrays):
+    """The noise floor: the mask 0 or 1, the statistics non-negative (NaN where a window has none)."""
+    informative = arrays.get("informative")
+    if informative is not None and not np.isin(informative, (0, 1)).all():
+        raise DataError(f"{name}: informative holds values other than 0 and 1; {_DAMAGED}")
+    for key in _NOISE_FLOOR[1:]:
+        values = arrays.get(key)
+        if values is not None and (values.dtype.kind != "f" or (values < 0).any() or np.isinf(values).any()):
+            raise DataError(f"{name}: {key} holds negative or infinite values; expected >= 0 or NaN; {_DAMAGED}")
+
+
+def check_time_block(name, names, bounds, spans, key, values, companions):
+    """Refuse (:class:`~dynia.errors.DataError`) values of ``key`` that no analysis gives, for steps of one block.
+
+    ``values`` holds array ``key`` (one of the arrays along time, in the
+    module's dimension order) for every parameter over some steps;
+    ``companions`` the other arrays for the same steps (``ci`` for ``ic``
+    and ``median``, ``ic`` for ``gradient``). The rules, exact in the
+    array's own dtype (a float32 array is the float64 result rounded to
+    nearest, and that rounding keeps every order below):
+
+    - ``ic`` in [0, 1], NaN exactly where the limits are, and equal to
+      1 - (upper - lower) / range, the range that of the bounds or (MCAT)
+      ``spans``, that of the samples (to the dtype's rounding);
+    - ``ci``: each limit within the bounds (rounded to the dtype), lower at
+      most upper, both NaN or neither;
+    - ``median`` within the limits, NaN exactly where they are;
+    - ``gradient`` (likelihood mass per bin) in [0, 1], NaN exactly where IC is;
+    - ``ic_se`` and ``ci_se`` non-negative or NaN.
+
+    ``name`` (the file) and ``names`` (the parameters) are for the message;
+    ``bounds`` is (n_params, 2), ``spans`` the samples' max - min per parameter.
+    """
+
+    def refuse(bad, what):
+        where = np.argwhere(bad)[0]
+        step = f"parameter {names[where[0]]!r}" if bad.ndim > 1 else "a step"
+        raise DataError(f"{name}: {key} {what} (first at {step}); {_DAMAGED}")
+
+    values = np.asarray(values)
+    if values.dtype.kind != "f":
+        raise DataError(f"{name}: {key} holds {values.dtype}; expected floating point numbers")
+    if key in ("ic", "median") and "ci" in companions:
+        # The limits first, so that a forged limit is named as such rather than as the IC or median it disowns.
+        check_time_block(name, names, bounds, spans, "ci", companions["ci"], {})
+    with np.errstate(invalid="ignore", divide="ignore"):  # NaN compares False; a span of 0 never agrees
+        if key == "ic":
+            outside = (values < 0) | (values > 1)
+            if outside.any():
+                refuse(outside, "lies outside [0, 1]")
+            if "ci" in companions:
+                limits = companions["ci"]
+                mismatch = np.isnan(values) != np.isnan(limits[..., 0])
+                if mismatch.any():
+                    refuse(mismatch, "is NaN where the limits are not, or not NaN where they are")
+                # Rounding to the dtype moves IC by half an ulp and each limit by half of its own.
+                width, size = limits[..., 1] - limits[..., 0], np.abs(limits).sum(axis=-1, dtype=float)
+                agrees = np.isnan(values)
+                for extent in (bounds[:, 1] - bounds[:, 0], spans):
+                    extent = np.asarray(extent, dtype=float)[:, None]
+                    tolerance = 4 * np.finfo(values.dtype).eps * (1 + size / extent)
+                    agrees |= np.abs(values - (1 - width.astype(float) / extent)) <= tolerance
+                if not agrees.all():
+                    refuse(~agrees, "is not 1 - (upper - lower) / range for its limits")
+        elif key == "ci":
+            low, high = (bounds[:, side].astype(values.dtype)[:, None] for side in (0, 1))
+            lower, upper = values[..., 0], values[..., 1]
+            bad = (lower < low) | (upper > high) | (lower > upper) | np.isinf(values).any(-1)
+            if bad.any():
+                refuse(bad, "has limits outside the bounds, or a lower limit above the upper")
+            if (np.isnan(lower) != np.isnan(upper)).any():
+                refuse(np.isnan(lower) != np.isnan(upper), "has one limit NaN and the other not")
+        elif key == "median":
+            limits = companions["ci"]
+            bad = (values < limits[..., 0]) | (values > limits[..., 1]) | (np.isnan(values) != np.isnan(limits[..., 0]))
+            if bad.any():
+                refuse(bad, "lies outside the limits, or is NaN where they are not")
+        elif key == "gradient":
+            tolerance = 4 * np.finfo(values.dtype).eps  # a bin's mass is a sum of weights summing to 1
+            bad = (values < 0) | (values > 1 + tolerance) | np.isinf(values)
+            if "ic" in companions:
+                bad |= np.isnan(values) != np.isnan(companions["ic"])[:, None, :]
+            if bad.any():
+                refuse(bad, "lies outside [0, 1], or is NaN where IC is not")
+        else:
+            bad = (values < 0) | np.isinf(values)
+            if bad.any():
+                refuse(bad, "is negative or infinite")
+
+
+def _companions(key):
+    return {"ic": ("ci",), "median": ("ci",), "gradient": ("ic",)}.get(key, ())
+
+
+def _lazy(name, dataset, names, bounds, spans):
+    """The arrays along time as DiskArrays that check each block on its first read."""
+    import functools
+
     from .storage import TIME_VARIABLES, disk_arrays
 
-    variable = dataset[key]
-    if not (lazy and key in TIME_VARIABLES):
-        return variable.transpose(*dims).values
-    if variable.dims != dims:
-        raise DataError(
-            f"{dataset.encoding['source']}: {key} has dimensions {variable.dims}; a lazy load needs {dims} "
-            "(the order dynia writes), load it with lazy=False"
+    keys = [key for key in _TIME_ARRAYS if key in dataset]
+    for key in keys:
+        if dataset[key].dims != TIME_VARIABLES[key]:
+            raise DataError(
+                f"{name}: {key} has dimensions {dataset[key].dims}; a lazy load needs {TIME_VARIABLES[key]} "
+                "(the order dynia writes), load it with lazy=False"
+            )
+    check = functools.partial(_check_stored_block, name, names, np.asarray(bounds), spans)
+    return disk_arrays(name, keys, check=check)
+
+
+def _check_stored_block(name, names, bounds, spans, key, file, start, stop):
+    """:func:`check_time_block` for steps [start, stop) of variable ``key`` of the open h5py ``file``."""
+    from .storage import read_block
+
+    companions = {other: read_block(file, other, start, stop) for other in _companions(key) if other in file}
+    check_time_block(name, names, bounds, spans, key, read_block(file, key, start, stop), companions)
+
+
+def _checked_verdicts(name, result, stored):
+    """The verdicts of ``stored`` that agree with those the arrays give; the arrays' own in place of the others.
+
+    A DataError when ``stored`` has not the form of verdicts. Agreeing means the same verdict and reason codes
+    (the texts may write times as the data file did); a stored ``noise_only`` of a result without the floor is
+    taken on trust, as it came from the data and the model.
+    """
+    from .verdicts import VERDICTS, assess
+
+    if list(stored) != list(result.names):
+        raise DataError(f"{name}: verdicts name {list(stored)}; expected the parameters {list(result.names)}")
+    for parameter, entry in stored.items():
+        well_formed = (
+            isinstance(entry, dict)
+            and entry.keys() == {"verdict", "reasons"}
+            and entry["verdict"] in VERDICTS
+            and isinstance(entry["reasons"], list)
+            and all(
+                isinstance(reason, dict)
+                and reason.keys() == {"code", "text"}
+                and all(isinstance(part, str) for part in reason.values())
+                for reason in entry["reasons"]
+            )
         )
-    return disk_arrays(dataset.encoding["source"], [key])[key]
+        if not well_formed:
+            raise DataError(
+                f"{name}: verdicts[{parameter!r}] is {entry!r}; expected {{'verdict': one of {list(VERDICTS)}, "
+                "'reasons': [{'code': ..., 'text': ...}, ...]}"
+            )
+    derived = assess(result)
+    checked = {}
+    for parameter, entry in stored.items():
+        checked[parameter] = entry
+        codes = [reason["code"] for reason in entry["reasons"]]
+        verdict, expected = derived[parameter]["verdict"], [reason["code"] for reason in derived[parameter]["reasons"]]
+        if result.informative is None and "noise_only" in codes:
+            # A result without the floor gets noise_only from the data and the model, which the file does not hold.
+            codes = [code for code in codes if code != "noise_only"]
+            verdict = "suspect" if verdict == "identified" else verdict
+        if (entry["verdict"], codes) != (verdict, expected):
+            warnings.warn(
+                f"{name}: the stored verdict of {parameter!r} is {entry['verdict']!r} "
+                f"({', '.join(codes) or 'no reasons'}) but its arrays give {derived[parameter]['verdict']!r} "
+                f"({', '.join(expected) or 'no reasons'}); loaded with the verdict the arrays give (the file was "
+                "altered, or written by a dynia whose verdict rules differ, or with other settings of assess)",
+                StoredVerdictsWarning,
+                stacklevel=4,
+            )
+            checked[parameter] = derived[parameter]
+    return checked
+
+
+class StoredVerdictsWarning(UserWarning):
+    """A file's stored verdict differs from the one its arrays give; :func:`load` returns the latter."""
 
 
 def _encoded(value, where, setting):
@@ -328,5 +616,13 @@ def _encoded(value, where, setting):
     )
 
 
+class _Malformed(ValueError):
+    """A JSON attribute that is JSON but not as :func:`save` writes it."""
+
+
 def _decoded(mapping):
-    return tuple(mapping[_TUPLE]) if mapping.keys() == {_TUPLE} else mapping
+    if mapping.keys() != {_TUPLE}:
+        return mapping
+    if not isinstance(mapping[_TUPLE], list):
+        raise _Malformed(f"{mapping!r} tags a tuple but holds no list")
+    return tuple(mapping[_TUPLE])
