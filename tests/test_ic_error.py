@@ -189,7 +189,8 @@ def test_an_ic_within_two_standard_errors_of_the_threshold_is_not_identified():
     from dynia.verdicts import assess
 
     def result(ic_se):
-        ic = np.array([[0.2, 0.56, 0.3, 0.3, 0.3, 0.3, 0.3, 0.3, 0.3, 0.3, 0.3, 0.3, 0.3]])
+        # Two windows of evidence, as n = 0 needs (dynia.verdicts.evidence_needed).
+        ic = np.array([[0.2, 0.56, 0.55, 0.3, 0.3, 0.3, 0.3, 0.3, 0.3, 0.3, 0.3, 0.3, 0.3]])
         steps = ic.shape[1]
         return DyniaResult(
             names=("K",),
