@@ -107,3 +107,30 @@ def record(u, y, n_inputs=1):
     if u.shape[0] != y.size:
         raise DataError(f"u has {u.shape[0]} samples but y has {y.size}; they must be logged on the same steps")
     return u, y
+
+
+def generator(rng, name="rng"):
+    """``numpy.random.default_rng(rng)``, or a SettingsError naming ``name`` when ``rng`` cannot seed one.
+
+    Accepted as numpy accepts them (SPEC 7): None, a whole number >= 0, a sequence of them, a
+    SeedSequence, a BitGenerator or a Generator.
+
+    Examples
+    --------
+    >>> generator(1).integers(10) == np.random.default_rng(1).integers(10)
+    np.True_
+    >>> generator(-5)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    dynia.errors.SettingsError: rng must be None, a whole number >= 0 (a seed), ...; got -5
+    """
+    if isinstance(rng, bool):
+        rng = object()  # True is an int to numpy; as a seed it is a mistake
+    try:
+        return np.random.default_rng(rng)
+    except (TypeError, ValueError):
+        raise SettingsError(
+            f"{name} must be None, a whole number >= 0 (a seed), a sequence of them, a SeedSequence, a BitGenerator "
+            f"or a numpy Generator; got {rng!r}",
+            name,
+        ) from None

@@ -215,7 +215,7 @@ def adaptive_run(
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
     names, prior = parameter_box(bounds, model.names, type(model).__name__)
     order = [names.index(name) for name in model.names]
-    rng = np.random.default_rng(rng)
+    rng = _checks.generator(rng)
     n_samples = settings.n_samples
     fraction = settings.percentage / 100
     n_blocks = blocks or max(1, min(50, y.size // (2 * n + 1)))

@@ -273,7 +273,7 @@ def run(
     if time_chunks is not None:
         time_chunks = _checks.whole_number(time_chunks, "time_chunks", minimum=1)
 
-    samples = sample(settings.sampler, n_samples, box, np.random.default_rng(rng))
+    samples = sample(settings.sampler, n_samples, box, _checks.generator(rng))
     model_order = [names.index(name) for name in model.names]
     # simulate_chunks checks u, dt and x0 (and the model's constraints on the
     # first sample) when called, so mistakes surface here, before any cluster.

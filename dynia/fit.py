@@ -490,7 +490,7 @@ def fit_segments(
                 "n_starts > 1 draws starts uniformly in the bounds, which must then be finite "
                 "for every fitted parameter"
             )
-        starts += list(np.random.default_rng(rng).uniform(lower, upper, (n_starts - 1, free.size)))
+        starts += list(_checks.generator(rng).uniform(lower, upper, (n_starts - 1, free.size)))
     best, nfev = None, 0
     for point in starts:
         if not np.isfinite(residuals(point)).all():

@@ -277,7 +277,7 @@ def identify(
     dt, x0 = analysis.dt, analysis.x0
     names, box = parameter_box(bounds, model.names, type(model).__name__)
     bounds = {name: tuple(map(float, row)) for name, row in zip(names, box)}
-    rng = np.random.default_rng(rng)
+    rng = _checks.generator(rng)
     time = np.arange(y.size) * dt
 
     report = None

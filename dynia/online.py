@@ -198,7 +198,7 @@ class OnlineDynia:
 
         self.names = tuple(names)
         self.bounds = box
-        self.samples = sample(settings.sampler, n_samples, box, np.random.default_rng(rng))
+        self.samples = sample(settings.sampler, n_samples, box, _checks.generator(rng))
         self.samples.flags.writeable = False
         model_order = [names.index(name) for name in model.names]
         self._model_params = self.samples[:, model_order]

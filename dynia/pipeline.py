@@ -224,7 +224,7 @@ def run(
         )
         # The verdicts name times: again with the dates, when there are dates.
         return result if timestamps is None else _assessed(_dated(result, timestamps))
-    generator = np.random.default_rng(rng)
+    generator = _checks.generator(rng)
     samples = sample(settings.sampler, settings.n_samples, box, generator)
     # The arrays in memory, or in settings.store as they are produced, committed with the verdicts (dynia.storage).
     with result_arrays(settings.store, settings.dtype) as output:

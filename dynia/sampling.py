@@ -72,4 +72,4 @@ def _prepare(n_samples, bounds, rng):
     n_samples = _checks.whole_number(n_samples, "n_samples", minimum=1)
     bounds = _checks.as_2d_float(bounds, "bounds", columns=2)
     _checks.bounds_array(bounds, bounds.shape[0])
-    return n_samples, bounds, np.random.default_rng(rng)
+    return n_samples, bounds, _checks.generator(rng)

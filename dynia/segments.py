@@ -403,7 +403,7 @@ def random_segments(lengths, n_steps, rng=None, *, exclude=None):
         raise SettingsError(
             f"the lengths total {sum(lengths)} steps but only {int(free.sum())} of the {n_steps} steps are free"
         )
-    rng = np.random.default_rng(rng)
+    rng = _checks.generator(rng)
     for _ in range(_PLACEMENT_ATTEMPTS):
         placed = _place(lengths, free, rng)
         if placed is not None:

@@ -588,7 +588,7 @@ def suggest(
     target = _checks.open_interval(ic_se_target, "ic_se_target", 0.0, 1.0)
     max_samples = _checks.whole_number(max_samples, "max_samples", minimum=_PILOT_MIN)
     limit, limit_source = _memory_limit(max_memory)
-    rng = np.random.default_rng(rng)
+    rng = _checks.generator(rng)
     n_steps = y.size
 
     measured = y[~np.isnan(y)]

@@ -140,7 +140,7 @@ def thesis_example(number, rng):
         noise = 0.2
     else:
         raise SettingsError(f"number must be 1 or 2 (the thesis's two examples); got {number!r}", "number")
-    rng = np.random.default_rng(rng)
+    rng = _checks.generator(rng)
     y_true = model.simulate([list(truth.values())], u, x0="zero")[0]
     y = y_true + rng.normal(0, noise, u.size)
     return ThesisExample(u=u, y=y, y_true=y_true, model=model, truth=truth, bounds=bounds, noise=noise)
@@ -343,7 +343,7 @@ def cooling_water_loop(
     >>> float(u[time_u == truth.glitch_time][0]), float(y[time_y == truth.glitch_time_output][0])
     (0.0, 0.0)
     """
-    rng = np.random.default_rng(rng)
+    rng = _checks.generator(rng)
     days = _checks.open_interval(days, "days", 0, math.inf)
     gain = _checks.open_interval(gain, "gain", 0, math.inf)
     time_constant = _checks.open_interval(time_constant, "time_constant", 0, math.inf)

@@ -392,3 +392,12 @@ def test_the_command_line_entry_point_has_no_traceback_for_a_huge_config_integer
     )
     assert done.returncode == 2 and done.stderr.startswith("dynia: error: --samples must be at most"), done.stderr
     assert "Traceback" not in done.stderr and not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("rng", [-5, True, "abc", 1.5])
+def test_an_rng_that_cannot_seed_a_generator_is_one_settings_error(rng):
+    u = np.r_[np.zeros(20), np.ones(60)]
+    y = FirstOrder().simulate([[2.0, 3.0]], u)[0]
+    with pytest.raises(SettingsError, match=r"^rng must be None, a whole number >= 0") as caught:
+        dynia.run(u, y, FirstOrder(), {"K": (0, 4), "T": (0.5, 6)}, n_samples=100, n=5, rng=rng)
+    assert caught.value.setting == "rng"
