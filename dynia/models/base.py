@@ -448,8 +448,8 @@ def user_code_failed(what, error):
 
     Anything user code raises becomes a ModelError, ``SystemExit`` too: a
     model that exits would end the run without a word (or with status 0
-    and nothing written). dynia's own errors, its signal interruptions and
-    Ctrl-C pass unchanged. Use as ``except BaseException as error: raise
+    and nothing written). dynia's own errors, its signal interruptions,
+    Ctrl-C and a generator's close pass unchanged. Use as ``except BaseException as error: raise
     user_code_failed("fn", error) from error``.
 
     Examples
@@ -457,8 +457,8 @@ def user_code_failed(what, error):
     >>> str(user_code_failed("FunctionModel(f): fn", SystemExit(3)))
     'FunctionModel(f): fn raised SystemExit(3): model code must return or raise, not exit the process'
     """
-    if isinstance(error, (DyniaError, Interrupted, KeyboardInterrupt)):
-        raise error
+    if isinstance(error, (DyniaError, Interrupted, KeyboardInterrupt, GeneratorExit)):
+        raise error  # dynia's own, the user's Ctrl-C, and a stream closed by its consumer
     if isinstance(error, SystemExit):
         return ModelError(
             f"{what} raised SystemExit({error.code!r}): model code must return or raise, not exit the process"
