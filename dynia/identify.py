@@ -13,7 +13,8 @@ the methods can be compared on equal terms:
     (``"joint"``) reaches ``ic_threshold`` in windows above the noise floor
     (``DyniaResult.informative``: never a window that only ranks noise).
     Also reports the model-structure
-    warnings of :func:`dynia.structure.structure_warnings`.
+    warnings of :func:`dynia.structure.structure_warnings` and the
+    analysis's ``windows_disagree`` verdict reasons (:mod:`dynia.verdicts`).
 ``"baseline"``
     The accepted intervals of :func:`dynia.baseline.find_intervals`
     (Bittencourt et al., 2015) on the fitting part.
@@ -311,6 +312,13 @@ def identify(
             fit_part,
         )
         notes += [str(warning) for warning in structure_warnings(dynia_result)]
+        # DYNIA's own model-structure warning (its verdicts): the windows that identify a parameter disagree.
+        notes += [
+            f"{name}: {reason['text']}"
+            for name, verdict in dynia_result.verdicts.items()
+            for reason in verdict["reasons"]
+            if reason["code"] == "windows_disagree"
+        ]
     elif method == "baseline":
         fitting = segments_to_mask(fit_part, y.size)
         baseline_result = find_intervals(np.where(fitting, u, np.nan), y_fit, dt=dt, **(baseline_options or {}))

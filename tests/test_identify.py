@@ -126,3 +126,24 @@ def test_the_cli_prints_and_records_the_share_selected(tmp_path, capsys):
     assert captured.out.startswith(f"--method dynia selected {100 * found['selected_share']:.1f} % of the fitting part")
     assert "dynia: warning: DYNIA selected" in captured.err
     assert any(note.startswith("DYNIA selected") for note in found["warnings"])
+
+
+def _gain_change_record(seed=0, steps=1200):
+    """First order, T = 3, gain 2 switching to 3 half-way; random levels held 40 steps, noise 0.2."""
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(5, 30, steps // 40), 40)
+    gain = np.where(np.arange(steps) < steps // 2, 2.0, 3.0)
+    pole = np.exp(-1 / 3)
+    y = np.zeros(steps)
+    for k in range(steps - 1):
+        y[k + 1] = pole * y[k] + gain[k] * (1 - pole) * u[k]
+    return u, y + rng.normal(0, 0.2, steps)
+
+
+def test_dynias_model_structure_warning_reaches_the_identification():
+    u, y = _gain_change_record()
+    found = identify(
+        u, y, FirstOrder(), {"K": (0.0, 5.0), "T": (0.0, 20.0)}, method="dynia", n=10, n_samples=2000, rng=0
+    )
+    disagree = [note for note in found.warnings if "the windows with IC >= 0.5 disagree" in note]
+    assert len(disagree) == 1 and disagree[0].startswith("K: ")
