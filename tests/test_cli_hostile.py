@@ -20,87 +20,33 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from cli_cases import BASE, GOOD, HEATING
+from cli_cases import (
+    BASE,
+    GOOD,
+    HEATING,
+    assert_clean_streams,
+    cli_analyse,
+    cli_one_error,
+    cli_run,
+    cli_succeeded,
+    tree_state,
+    write_text_file,
+)
 from skips import skip_if_signal_ignored
 
 import dynia
 import dynia.cli
 import dynia.report
-from dynia.cli import main
 from dynia.models import FOPDT, TransferFunction
 from dynia.outdir import MARKER, OutputDirectory
 from dynia.pipeline import DroppedSamplesWarning
 from dynia.verdicts import VERDICTS
 
-# Text that must never reach the user: a traceback, a Python warning (RuntimeWarning, UserWarning, ...),
-# numpy's floating-point complaints, matplotlib's chatter.
-FORBIDDEN = re.compile(r"Traceback|\b\w*Warning\b|encountered in|[Mm]atplotlib|warnings\.warn")
-
-
-# ------------------------------------------------------------------ helpers
-
-
-def _write(path, text):
-    path.write_text(text)
-    return path
-
 
 def _csv(path, time, u, y):
     """A wide CSV of time, u, y; a NaN in y becomes an empty cell."""
     rows = [f"{float(t)!r},{float(a)!r},{'' if np.isnan(b) else repr(float(b))}" for t, a, b in zip(time, u, y)]
-    return _write(path, "time,u,y\n" + "\n".join(rows) + "\n")
-
-
-def _run(capsys, command, *args):
-    """Run ``dynia COMMAND ARGS`` in this process: (exit status, stdout, stderr)."""
-    status = main([command, *map(str, args)])
-    captured = capsys.readouterr()
-    return status, captured.out, captured.err
-
-
-def _analyse(capsys, *args):
-    return _run(capsys, "analyse", *args)
-
-
-def _clean(out, err):
-    """Neither stream shows a traceback or a warning of numpy, matplotlib or Python's warnings module."""
-    for name, text in (("stdout", out), ("stderr", err)):
-        found = FORBIDDEN.search(text)
-        assert found is None, f"{name} holds {found.group()!r}:\n{text}"
-
-
-def _succeeded(status, out, err):
-    assert status == 0, err
-    _clean(out, err)
-    lines = err.splitlines()
-    assert all(line.startswith("dynia:") for line in lines), err
-
-
-def _one_error(status, out, err, *needles):
-    """Exit status 2 and exactly one ``dynia: error:`` line on stderr holding every needle."""
-    assert status == 2, (status, err)
-    _clean(out, err)
-    lines = err.splitlines()
-    assert len(lines) == 1 and lines[0].startswith("dynia: error:"), err
-    for needle in needles:
-        assert needle in lines[0], f"{needle!r} not in {lines[0]!r}"
-    return lines[0]
-
-
-def _state(path):
-    """Every file and directory at or under ``path``: bytes digest and permission bits; None if absent."""
-    path = Path(path)
-    if not os.path.lexists(path):
-        return None
-
-    def entry(item):
-        mode = os.lstat(item).st_mode
-        content = hashlib.sha256(item.read_bytes()).hexdigest() if stat.S_ISREG(mode) else stat.S_IFMT(mode)
-        return content, stat.S_IMODE(mode)
-
-    if not path.is_dir():
-        return {".": entry(path)}
-    return {".": entry(path)} | {str(item.relative_to(path)): entry(item) for item in sorted(path.rglob("*"))}
+    return write_text_file(path, "time,u,y\n" + "\n".join(rows) + "\n")
 
 
 def _litter(directory):
@@ -125,7 +71,7 @@ def _ic_table(path):
 
 @pytest.fixture
 def good(tmp_path):
-    return _write(tmp_path / "data.csv", GOOD)
+    return write_text_file(tmp_path / "data.csv", GOOD)
 
 
 @pytest.fixture
@@ -144,45 +90,45 @@ def never_analysed(monkeypatch):
 
 @pytest.mark.parametrize("overwrite", [[], ["--overwrite"]])
 def test_out_equal_to_the_input_file_is_refused(tmp_path, capsys, good, never_analysed, overwrite):
-    before = _state(tmp_path)
-    line = _one_error(*_analyse(capsys, good, *BASE, "--out", good, *overwrite), "--out")
-    assert _state(tmp_path) == before and good.read_text() == GOOD, line
+    before = tree_state(tmp_path)
+    line = cli_one_error(*cli_analyse(capsys, good, *BASE, "--out", good, *overwrite), "--out")
+    assert tree_state(tmp_path) == before and good.read_text() == GOOD, line
     assert _litter(tmp_path) == []
 
 
 def test_out_equal_to_the_inputs_directory_with_overwrite_is_refused(tmp_path, capsys, never_analysed):
     folder = tmp_path / "plant"
     folder.mkdir()
-    data = _write(folder / "data.csv", GOOD)
-    _write(folder / "notes.txt", "my notes")
+    data = write_text_file(folder / "data.csv", GOOD)
+    write_text_file(folder / "notes.txt", "my notes")
     # Even a folder that looks like dynia's own results is refused when it holds the input.
-    _write(folder / MARKER, json.dumps({"created_by": "dynia"}))
-    before = _state(tmp_path)
-    _one_error(*_analyse(capsys, data, *BASE, "--out", folder, "--overwrite"), "--out")
-    assert _state(tmp_path) == before
+    write_text_file(folder / MARKER, json.dumps({"created_by": "dynia"}))
+    before = tree_state(tmp_path)
+    cli_one_error(*cli_analyse(capsys, data, *BASE, "--out", folder, "--overwrite"), "--out")
+    assert tree_state(tmp_path) == before
     assert _litter(tmp_path) == []
 
 
 @pytest.mark.parametrize("out", [".", ".."])
 def test_out_current_directory_or_its_parent_is_refused(tmp_path, capsys, monkeypatch, out):
     (tmp_path / "inputs").mkdir()
-    data = _write(tmp_path / "inputs" / "data.csv", GOOD)
+    data = write_text_file(tmp_path / "inputs" / "data.csv", GOOD)
     # The working directory is the results of an earlier run (marker and all), inside a user project.
     project = tmp_path / "project"
     project.mkdir()
-    _write(project / "analysis.py", "print('mine')\n")
+    write_text_file(project / "analysis.py", "print('mine')\n")
     previous = project / "results"
-    _succeeded(*_analyse(capsys, data, *BASE, "--out", previous))
+    cli_succeeded(*cli_analyse(capsys, data, *BASE, "--out", previous))
     monkeypatch.chdir(previous)
-    before = _state(tmp_path)
+    before = tree_state(tmp_path)
 
     def refuse(*args, **kwargs):
         raise AssertionError("the analysis started")
 
     monkeypatch.setattr(dynia.cli, "run", refuse)
-    _one_error(*_analyse(capsys, data, *BASE, "--out", out, "--overwrite"), "--out")
-    _one_error(*_analyse(capsys, data, *BASE, "--out", out), "--out")
-    assert _state(tmp_path) == before
+    cli_one_error(*cli_analyse(capsys, data, *BASE, "--out", out, "--overwrite"), "--out")
+    cli_one_error(*cli_analyse(capsys, data, *BASE, "--out", out), "--out")
+    assert tree_state(tmp_path) == before
     assert _litter(tmp_path) == []
 
 
@@ -190,35 +136,37 @@ def test_out_current_directory_or_its_parent_is_refused(tmp_path, capsys, monkey
 def test_overwrite_refuses_a_user_directory_without_dynias_marker(tmp_path, capsys, good, never_analysed, marker):
     mine = tmp_path / "mine"
     mine.mkdir()
-    _write(mine / "thesis.tex", "\\chapter{Results}\n")
+    write_text_file(mine / "thesis.tex", "\\chapter{Results}\n")
     (mine / "figures").mkdir()
-    _write(mine / "figures" / "plot.txt", "1 2 3\n")
+    write_text_file(mine / "figures" / "plot.txt", "1 2 3\n")
     if marker is not None:
-        _write(mine / MARKER, marker)
-    before = _state(tmp_path)
-    _one_error(*_analyse(capsys, good, *BASE, "--out", mine, "--overwrite"), "--out")
-    assert _state(tmp_path) == before
+        write_text_file(mine / MARKER, marker)
+    before = tree_state(tmp_path)
+    cli_one_error(*cli_analyse(capsys, good, *BASE, "--out", mine, "--overwrite"), "--out")
+    assert tree_state(tmp_path) == before
     assert _litter(tmp_path) == []
 
 
 def test_overwrite_replaces_an_earlier_dynia_run(tmp_path, capsys, good):
     out = tmp_path / "results"
-    _succeeded(*_analyse(capsys, good, *BASE, "--out", out))
+    cli_succeeded(*cli_analyse(capsys, good, *BASE, "--out", out))
     # Files added since are not dynia's (issue 20): named, and the directory left alone, until they are moved away.
-    _write(out / "stale.txt", "from before")
+    write_text_file(out / "stale.txt", "from before")
     (out / "old-subdir").mkdir()
     assert _summary(out)["settings"]["seed"] == 2
-    data_before = _state(good)
-    kept = _state(out)
-    _one_error(*_analyse(capsys, good, *BASE, "--seed", "7", "--out", out, "--overwrite"), "stale.txt", "old-subdir")
-    assert _state(out) == kept
+    data_before = tree_state(good)
+    kept = tree_state(out)
+    cli_one_error(
+        *cli_analyse(capsys, good, *BASE, "--seed", "7", "--out", out, "--overwrite"), "stale.txt", "old-subdir"
+    )
+    assert tree_state(out) == kept
     (out / "stale.txt").unlink()
     (out / "old-subdir").rmdir()
-    _succeeded(*_analyse(capsys, good, *BASE, "--seed", "7", "--out", out, "--overwrite"))
+    cli_succeeded(*cli_analyse(capsys, good, *BASE, "--seed", "7", "--out", out, "--overwrite"))
     names = {item.name for item in out.iterdir()}
     assert {"summary.json", "ic.csv", MARKER} <= names
     assert _summary(out)["settings"]["seed"] == 7
-    assert _state(good) == data_before
+    assert tree_state(good) == data_before
     assert _litter(tmp_path) == []
     assert sorted(item.name for item in tmp_path.iterdir()) == ["data.csv", "results"]
 
@@ -234,11 +182,11 @@ def test_unwritable_parent_is_an_error_before_analysis(tmp_path, capsys, good, n
             probe.mkdir()
             probe.rmdir()
             pytest.skip("running as root: a 0o500 directory is writable, the refusal cannot be provoked")
-        before = _state(tmp_path)
+        before = tree_state(tmp_path)
         started = time.monotonic()
-        _one_error(*_analyse(capsys, good, *BASE, "--out", locked / "out"), "--out")
+        cli_one_error(*cli_analyse(capsys, good, *BASE, "--out", locked / "out"), "--out")
         assert time.monotonic() - started < 5
-        assert _state(tmp_path) == before
+        assert tree_state(tmp_path) == before
         assert _litter(tmp_path) == []
     finally:
         locked.chmod(0o700)
@@ -246,10 +194,10 @@ def test_unwritable_parent_is_an_error_before_analysis(tmp_path, capsys, good, n
 
 def test_a_parent_that_is_a_file_is_an_error_before_analysis(tmp_path, capsys, good, never_analysed):
     # The same refusal as for an unwritable parent, provokable as root too: nobody can create a directory in a file.
-    notes = _write(tmp_path / "notes.txt", "mine\n")
-    before = _state(tmp_path)
-    _one_error(*_analyse(capsys, good, *BASE, "--out", notes / "out"), "--out")
-    assert _state(tmp_path) == before
+    notes = write_text_file(tmp_path / "notes.txt", "mine\n")
+    before = tree_state(tmp_path)
+    cli_one_error(*cli_analyse(capsys, good, *BASE, "--out", notes / "out"), "--out")
+    assert tree_state(tmp_path) == before
     assert _litter(tmp_path) == []
 
 
@@ -258,16 +206,16 @@ def test_a_second_run_on_the_same_out_fails_fast_with_a_lock_message(tmp_path, c
     first = OutputDirectory(out, inputs=[good], command="analyse")
     staging = first.__enter__()
     try:
-        _write(staging / "summary.json", '{"first": true}\n')
+        write_text_file(staging / "summary.json", '{"first": true}\n')
         started = time.monotonic()
-        line = _one_error(*_analyse(capsys, good, *BASE, "--out", out), "--out")
+        line = cli_one_error(*cli_analyse(capsys, good, *BASE, "--out", out), "--out")
         assert time.monotonic() - started < 5
         assert "another dynia run" in line or "lock" in line, line
         # The second run neither took nor removed the first one's staging directory or lock file, so a third
         # run is refused too.
         assert (staging / "summary.json").read_text() == '{"first": true}\n'
         assert (tmp_path / ".results.dynia-lock").exists()
-        _one_error(*_analyse(capsys, good, *BASE, "--out", out, "--overwrite"), "--out")
+        cli_one_error(*cli_analyse(capsys, good, *BASE, "--out", out, "--overwrite"), "--out")
         assert (staging / "summary.json").read_text() == '{"first": true}\n'
     except BaseException:
         first.__exit__(*sys.exc_info())
@@ -284,12 +232,12 @@ def test_out_appearing_during_the_run_is_left_alone_and_the_results_kept_beside_
     def racing_writer(directory, *args, **kwargs):
         # Another program (or the user) creates --out while dynia is busy.
         out.mkdir()
-        _write(out / "theirs.txt", "written by someone else\n")
+        write_text_file(out / "theirs.txt", "written by someone else\n")
         return original(directory, *args, **kwargs)
 
     monkeypatch.setattr(dynia.report, "write_analysis", racing_writer)
-    status, stdout, err = _analyse(capsys, good, *BASE, "--out", out)
-    line = _one_error(status, stdout, err, "--out")
+    status, stdout, err = cli_analyse(capsys, good, *BASE, "--out", out)
+    line = cli_one_error(status, stdout, err, "--out")
     assert sorted(item.name for item in out.iterdir()) == ["theirs.txt"]
     assert (out / "theirs.txt").read_text() == "written by someone else\n"
     [kept] = [item for item in tmp_path.iterdir() if item.name.startswith("results.dynia-")]
@@ -312,7 +260,7 @@ def test_a_signal_during_the_run_leaves_nothing_behind(tmp_path, name, status):
     skip_if_signal_ignored(name)
     data = _slow_run_files(tmp_path)
     out = tmp_path / "results"
-    before = _state(data)
+    before = tree_state(data)
     command = [
         sys.executable,
         "-m",
@@ -355,11 +303,11 @@ def test_a_signal_during_the_run_leaves_nothing_behind(tmp_path, name, status):
             process.kill()
             process.communicate()
     assert process.returncode == status, stderr
-    _clean(stdout, stderr)
+    assert_clean_streams(stdout, stderr)
     assert stderr.splitlines() == [f"dynia: interrupted by {name}; nothing was written"], stderr
     assert not os.path.lexists(out)
     assert _litter(tmp_path) == []
-    assert _state(data) == before
+    assert tree_state(data) == before
 
 
 @pytest.mark.parametrize("umask, file_mode, directory_mode", [(0o022, 0o644, 0o755), (0o027, 0o640, 0o750)])
@@ -367,7 +315,7 @@ def test_result_permissions_follow_the_umask(tmp_path, capsys, good, umask, file
     out = tmp_path / "results"
     previous = os.umask(umask)
     try:
-        _succeeded(*_analyse(capsys, good, *BASE, "--out", out))
+        cli_succeeded(*cli_analyse(capsys, good, *BASE, "--out", out))
     finally:
         os.umask(previous)
     assert stat.S_IMODE(out.stat().st_mode) == directory_mode
@@ -388,8 +336,8 @@ def test_a_gap_in_the_time_column_is_left_missing_and_reported(tmp_path, capsys)
     y = 2 * (1 - np.exp(-np.clip(time - 10, 0, None) / 3))
     data = _csv(tmp_path / "gappy.csv", time, u, y)
     out = tmp_path / "results"
-    status, stdout, err = _analyse(capsys, data, *BASE, "--out", out)
-    _succeeded(status, stdout, err)
+    status, stdout, err = cli_analyse(capsys, data, *BASE, "--out", out)
+    cli_succeeded(status, stdout, err)
     warned = [line for line in err.splitlines() if line.startswith("dynia: warning:")]
     assert len(warned) == 1, err
     numbers = {float(value) for value in re.findall(r"-?\d+(?:\.\d+)?", warned[0].split(":", 2)[2])}
@@ -417,7 +365,7 @@ def test_a_burst_of_close_rows_does_not_shrink_the_grid(tmp_path, capsys):
     y = 2 * (1 - np.exp(-np.clip(time - 10, 0, None) / 3))
     data = _csv(tmp_path / "burst.csv", time, u, y)
     out = tmp_path / "results"
-    _succeeded(*_analyse(capsys, data, *BASE, "--out", out))
+    cli_succeeded(*cli_analyse(capsys, data, *BASE, "--out", out))
     summary = _summary(out)
     assert summary["data"]["dt"] == pytest.approx(1.0, rel=0.05)
     assert summary["data"]["n_steps"] <= 200
@@ -428,10 +376,10 @@ def test_a_burst_of_close_rows_does_not_shrink_the_grid(tmp_path, capsys):
 def test_an_absurd_value_is_reported_never_a_traceback(tmp_path, capsys, column):
     text = GOOD.replace("20,1.0,2.0", "20,1e308,2.0" if column == "u" else "20,1.0,1e308")
     assert text != GOOD
-    data = _write(tmp_path / "data.csv", text)
+    data = write_text_file(tmp_path / "data.csv", text)
     out = tmp_path / "results"
-    status, stdout, err = _analyse(capsys, data, *BASE, "--out", out)
-    _clean(stdout, err)
+    status, stdout, err = cli_analyse(capsys, data, *BASE, "--out", out)
+    assert_clean_streams(stdout, err)
     assert all(line.startswith("dynia:") for line in err.splitlines()), err
     warned = [line for line in err.splitlines() if line.startswith("dynia: warning:") and "1e+308" in line]
     assert status in (0, 2), err
@@ -440,17 +388,17 @@ def test_an_absurd_value_is_reported_never_a_traceback(tmp_path, capsys, column)
         assert any("1e+308" in line for line in _summary(out)["warnings"])
     else:
         assert len(err.splitlines()) == 1 and "1e+308" in err, err
-    assert _state(data) == {".": (hashlib.sha256(text.encode()).hexdigest(), stat.S_IMODE(data.stat().st_mode))}
+    assert tree_state(data) == {".": (hashlib.sha256(text.encode()).hexdigest(), stat.S_IMODE(data.stat().st_mode))}
     assert _litter(tmp_path) == []
 
 
 @pytest.mark.parametrize("column", ["y", "u"])
 def test_an_absurd_value_is_a_magnitude_finding_with_quality(tmp_path, capsys, column):
     text = GOOD.replace("20,1.0,2.0", "20,1e308,2.0" if column == "u" else "20,1.0,1e308")
-    data = _write(tmp_path / "data.csv", text)
+    data = write_text_file(tmp_path / "data.csv", text)
     out = tmp_path / "results"
-    status, stdout, err = _analyse(capsys, data, *BASE, "--quality", "--out", out)
-    _succeeded(status, stdout, err)
+    status, stdout, err = cli_analyse(capsys, data, *BASE, "--quality", "--out", out)
+    cli_succeeded(status, stdout, err)
     findings = _summary(out)["data_quality"]
     magnitude = [entry for entry in findings if entry["kind"] == "magnitude"]
     assert len(magnitude) == 1, findings
@@ -484,7 +432,7 @@ def test_dropping_more_than_one_percent_of_the_samples_warns_in_the_api():
 
 def test_a_parameter_range_where_the_arithmetic_overflows_is_refused(tmp_path, capsys, good, never_analysed):
     args = [arg if arg != "K=0:5" else "K=0:1e308" for arg in BASE]
-    _one_error(*_analyse(capsys, good, *args, "--out", tmp_path / "out"), "--param K", "1e+150")
+    cli_one_error(*cli_analyse(capsys, good, *args, "--out", tmp_path / "out"), "--param K", "1e+150")
 
 
 @pytest.mark.parametrize("plots", [["--no-plots"], []])
@@ -498,8 +446,8 @@ def test_dropping_more_than_one_percent_of_the_samples_is_in_the_summary(tmp_pat
 
     monkeypatch.setattr(dynia.models.FirstOrder, "finite_samples", finite_but_every_twentieth)
     out = tmp_path / "results"
-    status, stdout, err = _analyse(capsys, good, *BASE, *plots, "--out", out)
-    _succeeded(status, stdout, err)
+    status, stdout, err = cli_analyse(capsys, good, *BASE, *plots, "--out", out)
+    cli_succeeded(status, stdout, err)
     summary = _summary(out)
     assert summary["run"]["n_dropped"] == 5 and summary["run"]["n_sampled"] == 100
     assert any("5 of 100 parameter sets (5.0 %) were dropped" in text for text in summary["warnings"])
@@ -514,29 +462,29 @@ def test_dropping_more_than_one_percent_of_the_samples_is_in_the_summary(tmp_pat
     [("0.9", ["--conf-level", "90"]), ("40", ["--conf-level"]), ("100", ["--conf-level"]), ("nan", ["--conf-level"])],
 )
 def test_conf_level_out_of_range_is_an_error(tmp_path, capsys, good, never_analysed, value, needles):
-    _one_error(*_analyse(capsys, good, *BASE, "--conf-level", value, "--out", tmp_path / "out"), *needles)
+    cli_one_error(*cli_analyse(capsys, good, *BASE, "--conf-level", value, "--out", tmp_path / "out"), *needles)
     assert not (tmp_path / "out").exists() and _litter(tmp_path) == []
 
 
 def test_conf_level_90_is_fine(tmp_path, capsys, good):
     out = tmp_path / "out"
-    _succeeded(*_analyse(capsys, good, *BASE, "--conf-level", "90", "--out", out))
+    cli_succeeded(*cli_analyse(capsys, good, *BASE, "--conf-level", "90", "--out", out))
     assert _summary(out)["settings"]["analysis"]["conf_level"] == 90
 
 
 def test_min_points_above_the_window_is_an_error(tmp_path, capsys, good, never_analysed):
     # --n 3: a window holds 7 steps.
-    _one_error(*_analyse(capsys, good, *BASE, "--min-points", "8", "--out", tmp_path / "out"), "--min-points")
+    cli_one_error(*cli_analyse(capsys, good, *BASE, "--min-points", "8", "--out", tmp_path / "out"), "--min-points")
     assert not (tmp_path / "out").exists()
 
 
 def test_min_points_equal_to_the_window_is_fine(tmp_path, capsys, good):
-    _succeeded(*_analyse(capsys, good, *BASE, "--min-points", "7", "--out", tmp_path / "out"))
+    cli_succeeded(*cli_analyse(capsys, good, *BASE, "--min-points", "7", "--out", tmp_path / "out"))
 
 
 def test_the_same_column_as_input_and_output_is_an_error(tmp_path, capsys, good, never_analysed):
     args = [arg if arg != "y" else "u" for arg in BASE]
-    line = _one_error(*_analyse(capsys, good, *args, "--out", tmp_path / "out"), "--input", "--output")
+    line = cli_one_error(*cli_analyse(capsys, good, *args, "--out", tmp_path / "out"), "--input", "--output")
     assert "'u'" in line
     assert not (tmp_path / "out").exists()
 
@@ -547,23 +495,23 @@ TWO_INPUTS = "time,u,u2,y\n" + "".join(
 
 
 def test_a_repeated_input_is_an_error(tmp_path, capsys, never_analysed):
-    data = _write(tmp_path / "two.csv", TWO_INPUTS)
-    line = _one_error(*_analyse(capsys, data, *BASE, "--input", "u2", "--out", tmp_path / "out"), "--input")
+    data = write_text_file(tmp_path / "two.csv", TWO_INPUTS)
+    line = cli_one_error(*cli_analyse(capsys, data, *BASE, "--input", "u2", "--out", tmp_path / "out"), "--input")
     assert "one" in line
     assert not (tmp_path / "out").exists()
 
 
 def test_two_inputs_in_a_config_file_are_an_error(tmp_path, capsys, never_analysed):
-    data = _write(tmp_path / "two.csv", TWO_INPUTS)
-    config = _write(tmp_path / "run.toml", 'input = ["u", "u2"]\n')
+    data = write_text_file(tmp_path / "two.csv", TWO_INPUTS)
+    config = write_text_file(tmp_path / "run.toml", 'input = ["u", "u2"]\n')
     args = [arg for arg in BASE if arg not in ("--input", "u")]
-    line = _one_error(*_analyse(capsys, data, *args, "--config", config, "--out", tmp_path / "out"), "--input")
+    line = cli_one_error(*cli_analyse(capsys, data, *args, "--config", config, "--out", tmp_path / "out"), "--input")
     assert "one" in line
 
 
 @pytest.mark.parametrize("bins", ["1001", "0"])
 def test_bins_out_of_range_is_an_error(tmp_path, capsys, good, never_analysed, bins):
-    _one_error(*_analyse(capsys, good, *BASE, "--bins", bins, "--out", tmp_path / "out"), "--bins")
+    cli_one_error(*cli_analyse(capsys, good, *BASE, "--bins", bins, "--out", tmp_path / "out"), "--bins")
 
 
 @pytest.mark.parametrize(
@@ -580,13 +528,13 @@ def test_config_values_of_the_wrong_type_are_errors_never_truthy(tmp_path, capsy
     out = tmp_path / "results"
     # An earlier dynia run: were "false" read as true, the run would replace it.
     out.mkdir()
-    _write(out / MARKER, json.dumps({"created_by": "dynia"}))
-    _write(out / "summary.json", '{"old": true}\n')
-    config = _write(tmp_path / "run.toml", line + "\n")
-    before = _state(tmp_path)
-    message = _one_error(*_analyse(capsys, good, *BASE, "--config", config, "--out", out), key)
+    write_text_file(out / MARKER, json.dumps({"created_by": "dynia"}))
+    write_text_file(out / "summary.json", '{"old": true}\n')
+    config = write_text_file(tmp_path / "run.toml", line + "\n")
+    before = tree_state(tmp_path)
+    message = cli_one_error(*cli_analyse(capsys, good, *BASE, "--config", config, "--out", out), key)
     assert "--config" in message or str(config) in message
-    assert _state(tmp_path) == before
+    assert tree_state(tmp_path) == before
     assert _litter(tmp_path) == []
 
 
@@ -594,12 +542,12 @@ def test_a_time_constant_range_below_the_grid_step_is_handled(tmp_path, capsys, 
     # Every T in 0..0.001 s is a static gain at dt = 1 s: the run either works or says so naming --param T.
     args = [arg if arg != "T=0:5" else "T=0:0.001" for arg in BASE]
     out = tmp_path / "results"
-    status, stdout, err = _analyse(capsys, good, *args, "--out", out)
+    status, stdout, err = cli_analyse(capsys, good, *args, "--out", out)
     if status == 0:
-        _succeeded(status, stdout, err)
+        cli_succeeded(status, stdout, err)
         assert set(_summary(out)["parameters"]) == {"K", "T"}
     else:
-        _one_error(status, stdout, err, "--param T")
+        cli_one_error(status, stdout, err, "--param T")
         assert not out.exists()
     assert _litter(tmp_path) == []
 
@@ -608,8 +556,8 @@ def test_a_time_constant_range_below_the_grid_step_is_handled(tmp_path, capsys, 
 
 
 def test_success_prints_a_verdict_table(tmp_path, capsys, good):
-    status, stdout, err = _analyse(capsys, good, *BASE, "--out", tmp_path / "out")
-    _succeeded(status, stdout, err)
+    status, stdout, err = cli_analyse(capsys, good, *BASE, "--out", tmp_path / "out")
+    cli_succeeded(status, stdout, err)
     # The table's rows start at the margin; the reasons under it are indented.
     lines = [line for line in stdout.splitlines() if line and not line[0].isspace()]
     assert lines[0].split()[0] == "parameter" and lines[0].split()[-1] == "verdict", stdout
@@ -625,7 +573,7 @@ def test_success_prints_a_verdict_table(tmp_path, capsys, good):
 # Slow (about 5 s): the README's full run, 2000 samples on 801 steps.
 def test_heating_record_verdicts_as_in_the_readme(tmp_path, capsys):
     out = tmp_path / "heating"
-    status, stdout, err = _analyse(
+    status, stdout, err = cli_analyse(
         capsys,
         HEATING,
         "--time",
@@ -651,7 +599,7 @@ def test_heating_record_verdicts_as_in_the_readme(tmp_path, capsys):
         "--out",
         out,
     )
-    _succeeded(status, stdout, err)
+    cli_succeeded(status, stdout, err)
     parameters = _summary(out)["parameters"]
     assert _summary(out)["settings"]["analysis"]["n_samples"] == 2000
     # T's highest IC (1580 s, band on the bound, tied within noise) is no evidence; the transient at 836 s is.
@@ -674,7 +622,7 @@ def test_a_dead_time_peaking_in_a_tied_window_at_the_record_start_is_reported_wh
     y = FOPDT().simulate([[2.0, 10.0, 3.0]], u)[0] + np.random.default_rng(5).normal(0, 0.01, time.size)
     data = _csv(tmp_path / "step.csv", time, u, y)
     out = tmp_path / "results"
-    status, stdout, err = _analyse(
+    status, stdout, err = cli_analyse(
         capsys,
         data,
         "--time",
@@ -700,7 +648,7 @@ def test_a_dead_time_peaking_in_a_tied_window_at_the_record_start_is_reported_wh
         "--out",
         out,
     )
-    _succeeded(status, stdout, err)
+    cli_succeeded(status, stdout, err)
     theta = _summary(out)["parameters"]["theta"]
     assert theta["time_of_highest_ic"] == 3 and theta["time_of_max_ic"] == 5, theta
     assert theta["band"][0] <= 3.0 <= theta["band"][1] and theta["verdict"] == "identified", theta
@@ -709,7 +657,7 @@ def test_a_dead_time_peaking_in_a_tied_window_at_the_record_start_is_reported_wh
 
 def test_no_plots_writes_no_figures(tmp_path, capsys, good):
     out = tmp_path / "results"
-    _succeeded(*_analyse(capsys, good, *BASE, "--no-plots", "--out", out))
+    cli_succeeded(*cli_analyse(capsys, good, *BASE, "--no-plots", "--out", out))
     assert list(out.rglob("*.png")) == []
     assert (out / "summary.json").exists() and (out / "ic.csv").exists()
 
@@ -732,11 +680,11 @@ def test_each_summary_records_only_its_commands_options(tmp_path, capsys):
     u = np.repeat([0.0, 1.0, 0.5, 2.0], 30)
     y = dynia.models.FirstOrder().simulate([[2.0, 3.0]], u)[0] + np.random.default_rng(1).normal(0, 0.01, u.size)
     data = _csv(tmp_path / "steps.csv", time, u, y)
-    _succeeded(*_run(capsys, "identify", data, *BASE, "--out", tmp_path / "fit"))
+    cli_succeeded(*cli_run(capsys, "identify", data, *BASE, "--out", tmp_path / "fit"))
     identified = json.loads((tmp_path / "fit" / "identified.json").read_text())
     assert IDENTIFY_ONLY <= set(identified["settings"]), sorted(identified["settings"])
     assert sorted(ANALYSE_ONLY & set(identified["settings"])) == []
-    _succeeded(*_analyse(capsys, data, *BASE, "--out", tmp_path / "dynia"))
+    cli_succeeded(*cli_analyse(capsys, data, *BASE, "--out", tmp_path / "dynia"))
     analysed = _summary(tmp_path / "dynia")
     assert ANALYSE_ONLY <= set(analysed["settings"]), sorted(analysed["settings"])
     assert sorted(IDENTIFY_ONLY & set(analysed["settings"])) == []

@@ -11,8 +11,15 @@ import sys
 
 import numpy as np
 import pytest
-from cli_cases import BASE, GOOD
-from test_cli_hostile import _analyse, _one_error, _state, _succeeded, _write
+from cli_cases import (
+    BASE,
+    GOOD,
+    cli_analyse,
+    cli_one_error,
+    cli_succeeded,
+    tree_state,
+    write_text_file,
+)
 
 import dynia
 import dynia.cli
@@ -29,7 +36,7 @@ DATA_AND_MODEL = "--time time --input u --output y --model first-order --param K
 
 @pytest.fixture
 def good(tmp_path):
-    return _write(tmp_path / "data.csv", GOOD)
+    return write_text_file(tmp_path / "data.csv", GOOD)
 
 
 @pytest.fixture
@@ -46,7 +53,7 @@ def never_analysed(monkeypatch):
 def _model_file(path, side_effect=None):
     """A --model FILE.py returning FirstOrder; on import it writes ``side_effect`` if given."""
     effect = f"pathlib.Path({str(side_effect)!r}).write_text('ran')\n" if side_effect else ""
-    return _write(
+    return write_text_file(
         path,
         f"import pathlib\n{effect}from dynia.models import FirstOrder\n\n\ndef model():\n    return FirstOrder()\n",
     )
@@ -57,25 +64,25 @@ def _model_file(path, side_effect=None):
 
 def test_overwrite_never_deletes_the_model_file_the_run_imports(tmp_path, capsys, good):
     out = tmp_path / "results"
-    _succeeded(*_analyse(capsys, good, *BASE, "--out", out))
+    cli_succeeded(*cli_analyse(capsys, good, *BASE, "--out", out))
     # The model kept with the results it made: the run reads it, so --out may not replace it.
     model = _model_file(out / "mymodel.py")
     options = [option if option != "first-order" else f"{model}:model" for option in BASE]
-    before = _state(tmp_path)
-    _one_error(*_analyse(capsys, good, *options, "--out", out, "--overwrite"), "--out", "mymodel.py")
-    assert _state(tmp_path) == before
+    before = tree_state(tmp_path)
+    cli_one_error(*cli_analyse(capsys, good, *options, "--out", out, "--overwrite"), "--out", "mymodel.py")
+    assert tree_state(tmp_path) == before
 
 
 def test_a_model_module_is_a_protected_input_too(tmp_path, capsys, good, monkeypatch):
     out = tmp_path / "results"
-    _succeeded(*_analyse(capsys, good, *BASE, "--out", out))
+    cli_succeeded(*cli_analyse(capsys, good, *BASE, "--out", out))
     _model_file(out / "plantmodel.py")
     monkeypatch.chdir(out.parent)
     monkeypatch.syspath_prepend(str(out))  # the module is found on the path, MODULE:NAME
     options = [option if option != "first-order" else "plantmodel:model" for option in BASE]
-    before = _state(out)
-    _one_error(*_analyse(capsys, good, *options, "--out", out, "--overwrite"), "--out", "plantmodel.py")
-    assert _state(out) == before
+    before = tree_state(out)
+    cli_one_error(*cli_analyse(capsys, good, *options, "--out", out, "--overwrite"), "--out", "plantmodel.py")
+    assert tree_state(out) == before
 
 
 @pytest.mark.parametrize(
@@ -88,31 +95,31 @@ def test_a_model_module_is_a_protected_input_too(tmp_path, capsys, good, monkeyp
 def test_overwrite_refuses_files_dynia_did_not_write_and_names_them(tmp_path, capsys, good, never_analysed, marker):
     mine = tmp_path / "mine"
     mine.mkdir()
-    _write(mine / "thesis.tex", "\\chapter{Results}\n")
-    _write(mine / MARKER, marker)
-    before = _state(tmp_path)
-    _one_error(*_analyse(capsys, good, *BASE, "--out", mine, "--overwrite"), "--out", "thesis.tex")
-    assert _state(tmp_path) == before
+    write_text_file(mine / "thesis.tex", "\\chapter{Results}\n")
+    write_text_file(mine / MARKER, marker)
+    before = tree_state(tmp_path)
+    cli_one_error(*cli_analyse(capsys, good, *BASE, "--out", mine, "--overwrite"), "--out", "thesis.tex")
+    assert tree_state(tmp_path) == before
 
 
 def test_overwrite_refuses_a_result_file_changed_since(tmp_path, capsys, good):
     out = tmp_path / "results"
-    _succeeded(*_analyse(capsys, good, *BASE, "--out", out))
+    cli_succeeded(*cli_analyse(capsys, good, *BASE, "--out", out))
     with open(out / "summary.json", "a") as summary:
         summary.write("\n% my notes on this run\n")
-    before = _state(out)
-    _one_error(*_analyse(capsys, good, *BASE, "--out", out, "--overwrite"), "summary.json")
-    assert _state(out) == before
+    before = tree_state(out)
+    cli_one_error(*cli_analyse(capsys, good, *BASE, "--out", out, "--overwrite"), "summary.json")
+    assert tree_state(out) == before
 
 
 def test_the_marker_records_what_dynia_wrote_and_overwrite_replaces_it(tmp_path, capsys, good):
     out = tmp_path / "results"
-    _succeeded(*_analyse(capsys, good, *BASE, "--out", out))
+    cli_succeeded(*cli_analyse(capsys, good, *BASE, "--out", out))
     record = json.loads((out / MARKER).read_text())
     written = {str(path.relative_to(out)) for path in out.rglob("*") if path.is_file() and path.name != MARKER}
     assert set(record["files"]) == written and "ic.csv" in written
     assert all(record["files"][name] == (out / name).stat().st_size for name in written)
-    _succeeded(*_analyse(capsys, good, *BASE, "--seed", "7", "--out", out, "--overwrite"))
+    cli_succeeded(*cli_analyse(capsys, good, *BASE, "--seed", "7", "--out", out, "--overwrite"))
     assert json.loads((out / "summary.json").read_text())["settings"]["seed"] == 7
 
 
@@ -122,11 +129,11 @@ def test_the_marker_records_what_dynia_wrote_and_overwrite_replaces_it(tmp_path,
 @pytest.mark.parametrize("where", ["command line", "config"])
 def test_a_negative_seed_is_one_line_before_the_data_are_read(tmp_path, capsys, good, never_analysed, where):
     if where == "config":
-        config = _write(tmp_path / "run.toml", "seed = -5\n")
+        config = write_text_file(tmp_path / "run.toml", "seed = -5\n")
         options = [option for option in BASE if option not in ("--seed", "2")] + ["--config", config]
     else:
         options = [*BASE, "--seed", "-5"]
-    _one_error(*_analyse(capsys, good, *options, "--out", tmp_path / "out"), "--seed", "-5")
+    cli_one_error(*cli_analyse(capsys, good, *options, "--out", tmp_path / "out"), "--seed", "-5")
 
 
 @pytest.mark.parametrize(
@@ -139,9 +146,9 @@ def test_a_negative_seed_is_one_line_before_the_data_are_read(tmp_path, capsys, 
 )
 def test_a_huge_whole_number_in_a_config_is_one_line(tmp_path, capsys, good, never_analysed, key, value, option):
     text = f"{key} = {value}\n" + ("target_se = 0.05\n" if key == "max_samples" else "")
-    config = _write(tmp_path / "run.toml", text)
+    config = write_text_file(tmp_path / "run.toml", text)
     options = [word for word in BASE if word not in ("--samples", "100", "--n", "3")]
-    _one_error(*_analyse(capsys, good, *options, "--config", config, "--out", tmp_path / "out"), option)
+    cli_one_error(*cli_analyse(capsys, good, *options, "--config", config, "--out", tmp_path / "out"), option)
 
 
 @pytest.mark.parametrize(
@@ -246,14 +253,14 @@ def test_a_file_that_is_no_text_is_named_as_such(tmp_path, capsys, content, need
     path.write_bytes(content)
     with pytest.raises(DataError, match=needle):
         load_csv(path, time="time", input="u", output="y")
-    _one_error(*_analyse(capsys, path, *BASE, "--out", tmp_path / "out"), "data.csv", needle)
+    cli_one_error(*cli_analyse(capsys, path, *BASE, "--out", tmp_path / "out"), "data.csv", needle)
 
 
 def test_utf16_with_a_byte_order_mark_is_read(tmp_path):
     path = tmp_path / "data.csv"
     path.write_bytes(GOOD.replace(",", "\t").encode("utf-16"))  # Excel's "Unicode text"
     data = load_csv(path, time="time", input="u", output="y")
-    plain = load_csv(_write(tmp_path / "plain.csv", GOOD), time="time", input="u", output="y")
+    plain = load_csv(write_text_file(tmp_path / "plain.csv", GOOD), time="time", input="u", output="y")
     assert np.array_equal(data.u, plain.u) and np.array_equal(data.y, plain.y)
     assert any("UTF-16" in note for note in data.notes)
 
@@ -274,7 +281,7 @@ def test_utf16_with_a_byte_order_mark_is_read(tmp_path):
     ids=["value", "time", "split"],
 )
 def test_decimal_commas_are_named(tmp_path, capsys, text, needle):
-    path = _write(tmp_path / "data.csv", text)
+    path = write_text_file(tmp_path / "data.csv", text)
     with pytest.raises(DataError, match=needle):
         load_csv(path, time="time", input="u", output="y")
 
@@ -283,7 +290,7 @@ def test_a_time_column_of_other_dates_is_read_with_time_format(tmp_path, capsys)
     rows = "".join(
         f"{day:02d}.01.2012 00:00,{1.0 if day > 5 else 0.0},{2.0 if day > 6 else 0.0}\n" for day in range(1, 31)
     )
-    path = _write(tmp_path / "days.csv", "time,u,y\n" + rows)
+    path = write_text_file(tmp_path / "days.csv", "time,u,y\n" + rows)
     with pytest.raises(DataError, match=r"'01\.01\.2012 00:00' is neither .* --time-format"):
         load_csv(path, time="time", input="u", output="y")
     data = load_csv(path, time="time", input="u", output="y", time_format="%d.%m.%Y %H:%M")
@@ -291,12 +298,12 @@ def test_a_time_column_of_other_dates_is_read_with_time_format(tmp_path, capsys)
     with pytest.raises(DataError, match=r"row 2, column 'time': '01\.01\.2012 00:00' does not match .* '%Y-%m-%d'"):
         load_csv(path, time="time", input="u", output="y", time_format="%Y-%m-%d")
     out = tmp_path / "out"
-    _succeeded(*_analyse(capsys, path, *BASE, "--time-format", "%d.%m.%Y %H:%M", "--out", out))
+    cli_succeeded(*cli_analyse(capsys, path, *BASE, "--time-format", "%d.%m.%Y %H:%M", "--out", out))
     assert json.loads((out / "summary.json").read_text())["data"]["dt"] == 86400.0
 
 
 def test_the_duplicate_timestamp_error_points_at_duplicates_mean(tmp_path):
-    path = _write(tmp_path / "data.csv", "time,u,y\n0,1,2\n1,1,2\n1,1,3\n2,1,2\n")
+    path = write_text_file(tmp_path / "data.csv", "time,u,y\n0,1,2\n1,1,2\n1,1,3\n2,1,2\n")
     with pytest.raises(DataError, match=r"duplicate timestamp .* --duplicates mean"):
         load_csv(path, time="time", input="u", output="y")
 
@@ -305,18 +312,18 @@ def test_the_duplicate_timestamp_error_points_at_duplicates_mean(tmp_path):
 def test_load_csv_without_a_column_name_is_a_settings_error(tmp_path, argument):
     names = dict(time="time", input="u", output="y") | {argument: None}
     with pytest.raises(SettingsError, match=rf"^{argument} must be the name of the {argument} column \(a str\)"):
-        load_csv(_write(tmp_path / "data.csv", GOOD), **names)
+        load_csv(write_text_file(tmp_path / "data.csv", GOOD), **names)
 
 
 @pytest.mark.parametrize("argument", ["input", "output"])
 def test_the_time_column_is_no_signal(tmp_path, capsys, never_analysed, argument):
     names = dict(time="time", input="u", output="y") | {argument: "time"}
-    path = _write(tmp_path / "data.csv", GOOD)
+    path = write_text_file(tmp_path / "data.csv", GOOD)
     with pytest.raises(SettingsError, match=rf"^{argument} names the time column 'time'"):
         load_csv(path, **names)
     options = list(BASE)
     options[options.index(f"--{argument}") + 1] = "time"
-    _one_error(*_analyse(capsys, path, *options, "--out", tmp_path / "out"), f"--{argument}", "time column")
+    cli_one_error(*cli_analyse(capsys, path, *options, "--out", tmp_path / "out"), f"--{argument}", "time column")
 
 
 # ------------------------------------------------------------------ poor messages: options
@@ -334,12 +341,12 @@ def test_the_time_column_is_no_signal(tmp_path, capsys, never_analysed, argument
 def test_param_ranges_the_model_cannot_take_are_one_line(tmp_path, capsys, good, never_analysed, param, needle):
     name = param.split("=")[0]
     options = [param if word.startswith(f"{name}=") else word for word in BASE]
-    _one_error(*_analyse(capsys, good, *options, "--out", tmp_path / "out"), needle)
+    cli_one_error(*cli_analyse(capsys, good, *options, "--out", tmp_path / "out"), needle)
 
 
 def test_held_out_leaving_no_window_blames_held_out(tmp_path, capsys, good):
     _, _, err = _run_identify(capsys, good, *BASE, "--held-out", "0.999", "--out", tmp_path / "out")
-    line = _one_error(2, "", err, "--held-out 0.999", "leaves 1 of the record's 40 steps")
+    line = cli_one_error(2, "", err, "--held-out 0.999", "leaves 1 of the record's 40 steps")
     assert "threshold" not in line
     assert not (tmp_path / "out").exists()
 
@@ -354,14 +361,16 @@ def _run_identify(capsys, *args):
 @pytest.mark.parametrize("window", ["-60s", "-1h"])
 def test_a_negative_window_reaches_its_own_check(tmp_path, capsys, good, never_analysed, window):
     options = [word for word in BASE if word not in ("--n", "3")]
-    _one_error(*_analyse(capsys, good, *options, "--window", window, "--out", tmp_path / "out"), "--window", window)
+    cli_one_error(
+        *cli_analyse(capsys, good, *options, "--window", window, "--out", tmp_path / "out"), "--window", window
+    )
 
 
 @pytest.mark.parametrize("option", [["--out", "d"], ["--overwrite"], ["--no-plots"]])
 def test_suggest_says_it_writes_nothing(tmp_path, capsys, good, never_analysed, option):
     status = dynia.cli.main(["suggest", str(good), *DATA_AND_MODEL, *option])
     err = capsys.readouterr().err
-    _one_error(status, "", err, "suggest writes nothing", option[0])
+    cli_one_error(status, "", err, "suggest writes nothing", option[0])
 
 
 def test_the_model_file_runs_only_after_every_option_is_checked(tmp_path, capsys, good, never_analysed):
@@ -376,12 +385,12 @@ def test_the_model_file_runs_only_after_every_option_is_checked(tmp_path, capsys
         ["--out", tmp_path / "out", "--window", "1h", "--n", "2"],
         ["--out", tmp_path / "out", "--param", "K=0:1"],  # given twice
     ):
-        _one_error(*_analyse(capsys, good, *options, *bad))
+        cli_one_error(*cli_analyse(capsys, good, *options, *bad))
         assert not ran.exists(), bad
 
 
 def test_the_command_line_entry_point_has_no_traceback_for_a_huge_config_integer(tmp_path, good):
-    config = _write(tmp_path / "run.toml", "samples = 9223372036854775807\n")
+    config = write_text_file(tmp_path / "run.toml", "samples = 9223372036854775807\n")
     options = [word for word in BASE if word not in ("--samples", "100")]
     done = subprocess.run(
         [sys.executable, "-m", "dynia.cli", "analyse", str(good), *options, "--config", str(config), "--out", "o"],

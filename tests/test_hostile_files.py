@@ -24,8 +24,13 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
-from cli_cases import BASE, GOOD
-from test_cli_hostile import _analyse, _one_error, _write
+from cli_cases import (
+    BASE,
+    GOOD,
+    cli_analyse,
+    cli_one_error,
+    write_text_file,
+)
 
 import dynia
 import dynia.report
@@ -339,7 +344,7 @@ def test_a_full_disk_in_save_keeps_the_old_file(result, tmp_path, monkeypatch, c
 
 
 def test_a_full_disk_writing_a_table_is_one_error_naming_out(tmp_path, monkeypatch, capsys):
-    data = _write(tmp_path / "data.csv", GOOD)
+    data = write_text_file(tmp_path / "data.csv", GOOD)
     write_analysis = dynia.report.write_analysis
 
     def full(directory, *args, **kwargs):
@@ -348,7 +353,7 @@ def test_a_full_disk_writing_a_table_is_one_error_naming_out(tmp_path, monkeypat
 
     monkeypatch.setattr(dynia.report, "write_analysis", full)
     out = tmp_path / "out"
-    line = _one_error(*_analyse(capsys, data, *BASE, "--out", out), f"--out {out}", "No space left on device")
+    line = cli_one_error(*cli_analyse(capsys, data, *BASE, "--out", out), f"--out {out}", "No space left on device")
     assert "Traceback" not in line and sorted(os.listdir(tmp_path)) == ["data.csv"]
 
 
@@ -357,14 +362,14 @@ import errno, os
 import dynia.storage
 
 _calls = []
-_write = dynia.storage._pwrite
+_original_pwrite = dynia.storage._pwrite
 
 
 def _pwrite(descriptor, data, offset):
     _calls.append(1)
     if len(_calls) >= int(os.environ["DYNIA_TEST_FULL_AFTER"]):
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
-    return _write(descriptor, data, offset)
+    return _original_pwrite(descriptor, data, offset)
 
 
 dynia.storage._pwrite = _pwrite
@@ -372,7 +377,7 @@ dynia.storage._pwrite = _pwrite
 
 
 def _command(tmp_path, *, site=None, limit=None, after=None):
-    data = _write(tmp_path / "data.csv", GOOD)
+    data = write_text_file(tmp_path / "data.csv", GOOD)
     out = tmp_path / "out"
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [site and str(site), str(ROOT)])))
     if after is not None:

@@ -9,7 +9,7 @@ import json
 
 import numpy as np
 import pytest
-from test_cli_hostile import _one_error, _write
+from cli_cases import cli_one_error, write_text_file
 
 from dynia.cli import main
 from dynia.errors import SuggestionError
@@ -53,8 +53,8 @@ def _suggest(capsys, path, *options):
     ids=["constant-output", "40-rows", "huge-cell", "zero-input", "constant-input-steady"],
 )
 def test_a_record_without_information_gets_one_error_line_and_no_proposal(tmp_path, capsys, u, y, options, needles):
-    path = _write(tmp_path / "record.csv", _record(u, y))
-    _one_error(*_suggest(capsys, path, *options), "cannot propose a window", *needles)
+    path = write_text_file(tmp_path / "record.csv", _record(u, y))
+    cli_one_error(*_suggest(capsys, path, *options), "cannot propose a window", *needles)
     x0 = options[1] if options else "zero"
     with pytest.raises(SuggestionError, match="^cannot propose a window") as caught:
         suggest(u, y, FirstOrder(), BOUNDS, x0=x0, rng=1)
@@ -98,7 +98,7 @@ def glitch(tmp_path_factory):
     u = np.repeat([0.0, 50.0, 20.0, 70.0, 30.0], 200)
     y = 21 + FirstOrder().simulate([[0.6, 20.0]], u)[0] + np.random.default_rng(0).normal(0, 0.1, u.size)
     y[300] += 40
-    return _write(tmp_path_factory.mktemp("glitch") / "glitch.csv", _record(u, y))
+    return write_text_file(tmp_path_factory.mktemp("glitch") / "glitch.csv", _record(u, y))
 
 
 def test_quality_findings_come_with_the_proposal_not_in_a_summary_it_does_not_write(glitch, capsys):
