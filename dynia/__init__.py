@@ -1,86 +1,131 @@
 """Dynamic Identifiability Analysis (DYNIA) of process data.
 
-The pipeline has one module per stage: :mod:`dynia.sampling` draws parameter
-sets, :mod:`dynia.models` simulates them, :mod:`dynia.engine` runs the
-moving-window analysis and :mod:`dynia.result` holds what comes out.
-:func:`dynia.run` chains them. :mod:`dynia.settings` holds the one
-:class:`~dynia.settings.AnalysisSettings` every front-end takes and
-:mod:`dynia.errors` the error types. :mod:`dynia.reference` holds plain
-ports of the thesis's MATLAB and of MCAT's ``id_time.m``, kept as the
+The verbs are at the top level, each loading its module on first use, so
+``import dynia`` stays quick and loads no plotting, file or cluster library:
+
+* :func:`dynia.run` samples parameter sets, simulates them and runs the
+  moving-window analysis, returning a :class:`~dynia.result.DyniaResult`;
+* :func:`dynia.suggestion` proposes a window, a behavioural share and a number of
+  samples for a record, with the reasons;
+* :func:`dynia.second_run` narrows what is identified and re-analyses the rest;
+* :func:`dynia.identification` fits a model by least squares on the data DYNIA (or a
+  baseline) selects and validates it on held-out data;
+* :func:`dynia.load` reads a saved result back; :func:`dynia.load_csv` reads
+  logged plant data onto a uniform grid.
+
+Every front-end takes one :class:`~dynia.settings.AnalysisSettings`; every
+mistake raises a subclass of :class:`~dynia.errors.DyniaError`.
+
+The stages have one module each: :mod:`dynia.sampling` draws parameter sets,
+:mod:`dynia.models` simulates them (:mod:`dynia.models.conceptual` holds the
+nonlinear case-study models), :mod:`dynia.engine` runs the moving window,
+:mod:`dynia.result` and :mod:`dynia.verdicts` hold what comes out, and
+:mod:`dynia.io` reads records and writes results. After the analysis,
+:mod:`dynia.segments`, :mod:`dynia.fit`, :mod:`dynia.baseline`,
+:mod:`dynia.quality` and :mod:`dynia.structure` turn IC curves into fitted
+models and warnings. :mod:`dynia.online` (:class:`~dynia.online.OnlineDynia`),
+:mod:`dynia.adaptive` and :mod:`dynia.distributed` are the other front-ends
+over the same engine; :mod:`dynia.cli` is the ``dynia`` command.
+:mod:`dynia.reference` holds plain ports of the thesis's MATLAB
+(:mod:`dynia.thesis` is the same module) and of MCAT's ``id_time.m``, the
 oracles the fast engine is tested against.
 
-After the analysis: :mod:`dynia.segments` turns IC curves into data segments,
-:mod:`dynia.fit` fits the model on them by least squares, :mod:`dynia.baseline` is the
-interval search of Bittencourt et al. (2015) to compare with,
-:mod:`dynia.quality` flags glitches, outliers and stuck values,
-:mod:`dynia.structure` warns when a constant parameter's estimate drifts, and
-:mod:`dynia.identify` chains them (``dynia identify`` on the command line).
-:mod:`dynia.online` updates the analysis one logged sample at a time, and
-:mod:`dynia.distributed` runs it on a Dask cluster.
+Examples
+--------
+>>> import dynia
+>>> callable(dynia.identify), callable(dynia.suggest)
+(True, True)
 """
 
-from . import (
-    adaptive,
-    analysis,
-    baseline,
-    cld,
-    conceptual,
-    data,
-    engine,
-    errors,
-    fit,
-    identify,
-    mcat,
-    models,
-    online,
-    quality,
-    reference,
-    refine,
-    sampling,
-    segments,
-    settings,
-    structure,
-    synthetic,
-    thesis,
+import importlib
+
+from .errors import (
+    DataError,
+    DyniaError,
+    Interrupted,
+    ModelError,
+    NothingSelected,
+    OutputError,
+    SettingsError,
+    SuggestionError,
 )
-from .engine.windows import moving_window
-from .errors import DyniaError
-from .pipeline import run
-from .refine import second_run
-from .result import DyniaResult
-from .settings import AnalysisSettings
-from .store import load
 
 __version__ = "0.1.0"
 
+# Public name -> (module, attribute), imported on first use.
+_VERBS = {
+    "run": ("pipeline", "run"),
+    "identify": ("identification", "identify"),
+    "suggest": ("suggestion", "suggest"),
+    "second_run": ("refine", "second_run"),
+    "load": ("io.netcdf", "load"),
+    "load_csv": ("io.csv", "load_csv"),
+    "moving_window": ("engine.windows", "moving_window"),
+    "AnalysisSettings": ("settings", "AnalysisSettings"),
+    "DyniaResult": ("result", "DyniaResult"),
+    "Identification": ("identification", "Identification"),
+    "Suggestion": ("suggestion", "Suggestion"),
+    "OnlineDynia": ("online", "OnlineDynia"),
+    "ProcessData": ("io.csv", "ProcessData"),
+}
+
+_SUBMODULES = frozenset(
+    {
+        "adaptive",
+        "analysis",
+        "baseline",
+        "cld",
+        "cli",
+        "decimation",
+        "distributed",
+        "engine",
+        "errors",
+        "fit",
+        "identification",
+        "io",
+        "mcat",
+        "models",
+        "online",
+        "pipeline",
+        "quality",
+        "reference",
+        "refine",
+        "result",
+        "sampling",
+        "segments",
+        "settings",
+        "structure",
+        "suggestion",
+        "synthetic",
+        "thesis",
+        "verdicts",
+    }
+)
+
 __all__ = [
-    "run",
-    "second_run",
-    "load",
-    "moving_window",
-    "DyniaResult",
-    "AnalysisSettings",
+    *_VERBS,
     "DyniaError",
-    "adaptive",
-    "analysis",
-    "baseline",
-    "cld",
-    "conceptual",
-    "data",
-    "engine",
-    "errors",
-    "fit",
-    "identify",
-    "mcat",
-    "models",
-    "online",
-    "quality",
-    "reference",
-    "refine",
-    "sampling",
-    "segments",
-    "settings",
-    "structure",
-    "synthetic",
-    "thesis",
+    "DataError",
+    "SettingsError",
+    "ModelError",
+    "OutputError",
+    "SuggestionError",
+    "NothingSelected",
+    "Interrupted",
+    "__version__",
 ]
+
+
+def __getattr__(name):
+    if name in _VERBS:
+        module, attribute = _VERBS[name]
+        value = getattr(importlib.import_module(f"{__name__}.{module}"), attribute)
+        globals()[name] = value
+        return value
+    if name in _SUBMODULES:
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__) | _SUBMODULES)

@@ -16,7 +16,7 @@ the low-cost regions found so far. The mixture density is
 
 with the prior box among the components, so g > 0 wherever the prior is.
 Each sample gets the importance weight prior(theta) / g(theta) ("deterministic
-mixture" weights), and :func:`dynia.analysis.moving_window` with these
+mixture" weights), and :func:`dynia.engine.moving_window` with these
 weights estimates, per window, the prior's lowest-cost fraction and the
 weighted quantiles of each parameter inside it: the uniform analysis, with
 far more samples where it matters. Every estimation sample serves every

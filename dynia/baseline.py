@@ -24,7 +24,7 @@ model from. :func:`find_intervals` implements their scheme:
    coefficient is zero: the output must depend on the input, at
    significance ``significance``.
 
-Shapes follow the package convention (see :mod:`dynia.analysis`): ``u``,
+Shapes follow the package convention (see :mod:`dynia.engine`): ``u``,
 ``y`` and ``setpoint`` are (n_steps,), one value per sample time ``k*dt``.
 Intervals are index pairs ``[start, stop)``, sorted, non-overlapping and
 inside the record, so ``y[start:stop]`` is the data of one interval.

@@ -4,7 +4,7 @@
 :class:`~dynia.result.DyniaResult`, bit for bit, but simulates and analyses on
 the workers of a ``dask.distributed`` cluster: the cores of this machine by
 default, or a cluster of many machines. Arrays follow the shape convention of
-:mod:`dynia.analysis`.
+:mod:`dynia.engine`.
 
 How the work is split
 ---------------------

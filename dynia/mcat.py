@@ -1,4 +1,10 @@
-"""Old home of the MCAT port, kept so existing imports work: see :mod:`dynia.reference.mcat`."""
+"""``dynia.mcat``: the same module object as :mod:`dynia.reference.mcat`, under its short name.
 
-from .reference.mcat import *  # noqa: F403
-from .reference.mcat import __all__  # noqa: F401
+``import dynia.mcat`` and ``from dynia import mcat`` give :mod:`dynia.reference.mcat` itself, not a copy.
+"""
+
+import sys
+
+from .reference import mcat
+
+sys.modules[__name__] = mcat

@@ -5,12 +5,12 @@ logging system records a new input/output pair, simulate only that step and
 run one window of the moving-window calculations. :class:`OnlineDynia` does
 this with a window that ends at the newest step: the window at step ``t``
 holds steps ``t-2n .. t`` (clipped to the start of the record), the
-``window="trailing"`` of :func:`dynia.analysis.moving_window`. Its result for
+``window="trailing"`` of :func:`dynia.engine.moving_window`. Its result for
 step ``t`` is therefore final as soon as step ``t`` is logged, and the whole
 history equals the batch analysis ``dynia.run(..., window="trailing")`` on
 the same record and seed, bit for bit.
 
-Shapes follow the package convention (see :mod:`dynia.analysis`); one update
+Shapes follow the package convention (see :mod:`dynia.engine`); one update
 gives one time step of it: ``ic`` (n_params,), ``ci`` (n_params, 2) as
 [lower, upper], ``gradient`` (n_params, n_bins).
 
@@ -70,7 +70,7 @@ class OnlineDynia:
     n : int, default 10
         Half window: the window at step t holds the 2n+1 steps t-2n .. t.
     percentage, bins, conf_level, flavour
-        As :func:`dynia.analysis.moving_window`.
+        As :func:`dynia.engine.moving_window`.
     dt : float, default 1.0
         Sample time of the log.
     rng : numpy.random.Generator or int, optional

@@ -13,12 +13,12 @@ from .engine.kernels import CompiledErrors
 from .engine.noise import RESIDUAL_CHUNK
 from .engine.windows import ArrayErrors, analyse_stream, default_chunk_steps
 from .errors import ModelError, SettingsError
-from .frames import unpack
+from .io.arrays import result_arrays
+from .io.frames import unpack
 from .models import LinearModel, Model, StateSpaceModel
 from .models.custom import StateErrors
 from .sampling import sample
 from .settings import ADAPTIVE_SAMPLERS, MAX_PARAMETER, AnalysisSettings, parameter_box
-from .storage import result_arrays
 from .verdicts import WEAK_BELOW, assess
 
 __all__ = [
@@ -84,7 +84,7 @@ def run(
 
     Draws ``n_samples`` parameter sets from the box ``bounds``, simulates the
     model for each and runs the moving-window analysis of
-    :func:`dynia.analysis.moving_window` on all parameters at once. The
+    :func:`dynia.engine.moving_window` on all parameters at once. The
     simulation is streamed into the analysis in time chunks, so memory does
     not grow with n_samples x n_steps.
 
@@ -102,7 +102,7 @@ def run(
         pandas objects must share one index. With a time index (uniformly
         spaced dates, durations, or a numeric index of seconds) ``dt`` is its
         spacing, and dates become ``result.timestamps``
-        (:func:`dynia.frames.unpack`).
+        (:func:`dynia.io.frames.unpack`).
     model : dynia.models.Model
         For example ``dynia.models.FirstOrder()``.
     bounds : mapping of str to (low, high)
@@ -119,7 +119,7 @@ def run(
         weight them back to the uniform prior (they hold every simulation
         in memory, so keep n_samples x n_steps moderate).
     n, percentage, bins, conf_level, flavour
-        As :func:`dynia.analysis.moving_window`.
+        As :func:`dynia.engine.moving_window`.
     x0 : {"zero", "steady"}
         Initial state of every simulation.
     rng : numpy.random.Generator or int, optional
@@ -132,7 +132,7 @@ def run(
         The window at step t holds t-n .. t+n, or t-2n .. t (ending at t,
         as :class:`dynia.online.OnlineDynia` sees it).
     engine : {"auto", "numba", "numpy"}, default "auto"
-        As :func:`dynia.analysis.moving_window`; the compiled engine also
+        As :func:`dynia.engine.moving_window`; the compiled engine also
         simulates the model in compiled code. Results are bit-identical.
     workers : int, optional
         Threads (default: every core). Results do not depend on it.
@@ -163,7 +163,7 @@ def run(
         for records whose gradient does not fit in memory: the file is
         complete (verdicts included) and renamed into place when ``run``
         returns, never left half-written, and the result reads it lazily
-        (:mod:`dynia.storage`; ``dynia.load`` reads it too).
+        (:mod:`dynia.io.arrays`; ``dynia.load`` reads it too).
     settings : dynia.settings.AnalysisSettings, optional
         All of the above in one checked object.
 
@@ -226,7 +226,7 @@ def run(
         return result if timestamps is None else _assessed(_dated(result, timestamps))
     generator = _checks.generator(rng)
     samples = sample(settings.sampler, settings.n_samples, box, generator)
-    # The arrays in memory, or in settings.store as they are produced, committed with the verdicts (dynia.storage).
+    # The arrays in memory, or in settings.store as they are produced, committed with the verdicts (dynia.io.arrays).
     with result_arrays(settings.store, settings.dtype) as output:
         if settings.target_se is None:
             result = _analyse_samples(u, y, model, names, box, samples, settings, progress, output)
@@ -315,7 +315,7 @@ def _analyse_samples(u, y, model, names, box, samples, settings, progress, outpu
 
 
 def _simulations(u, model, params, sims, settings):
-    """``simulations(indices)`` of :func:`dynia.analysis.analyse_stream`: those samples simulated once more."""
+    """``simulations(indices)`` of :func:`dynia.engine.analyse_stream`: those samples simulated once more."""
 
     def simulations(rows):
         if sims is not None:

@@ -10,7 +10,7 @@ findings fall inside the informative segments of a result
 (:func:`informative_segments`), and :meth:`QualityReport.exclude` removes the
 flagged samples before a new run.
 
-Shapes follow the package convention (see :mod:`dynia.analysis`): ``time``,
+Shapes follow the package convention (see :mod:`dynia.engine`): ``time``,
 ``u`` and ``y`` are (n_steps,). NaN marks a missing sample: it is never
 flagged, and every test runs on the samples present, so the neighbours of a
 sample are the nearest samples present.

@@ -1,6 +1,6 @@
 """The result of a DYNIA run: arrays, tables and the thesis's two figure types.
 
-Shapes follow the package convention (see :mod:`dynia.analysis`):
+Shapes follow the package convention (see :mod:`dynia.engine`):
 ``ic`` (n_params, n_steps), ``ci`` (n_params, n_steps, 2) as [lower, upper],
 ``median`` (n_params, n_steps),
 ``gradient`` (n_params, n_bins, n_steps), ``bin_centres`` (n_params, n_bins),
@@ -13,9 +13,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .decimation import decimated_columns, envelope
 from .engine.cld import binned_mass
 from .errors import SettingsError
-from .plotting import decimated_columns, envelope
 
 __all__ = ["DyniaResult"]
 
@@ -54,7 +54,7 @@ class DyniaResult:
     timestamps : ndarray of datetime64[ns] or None
         The time axis as datetimes, one per step (``time`` stays seconds):
         :func:`dynia.run` sets it from a pandas DatetimeIndex (in UTC when
-        the index had a time zone), see :func:`dynia.frames.unpack`. When
+        the index had a time zone), see :func:`dynia.io.frames.unpack`. When
         present, :meth:`to_dataframe` and :meth:`to_xarray` carry it and the
         plots draw against it. None otherwise.
     ic_se : ndarray (n_params, n_steps) or None
@@ -348,7 +348,7 @@ class DyniaResult:
         legend names it and the veil): where the shading crosses a
         threshold, more samples could change the verdict. Windows below the noise floor (:attr:`informative` False)
         are veiled in grey. Returns the matplotlib Axes. A long record is
-        drawn through :func:`dynia.plotting.envelope`, so its memory does not
+        drawn through :func:`dynia.decimation.envelope`, so its memory does not
         grow with it.
         """
         import matplotlib.pyplot as plt
@@ -425,7 +425,7 @@ class DyniaResult:
         ``true_value`` draws a dashed line. Windows below the noise floor
         (:attr:`informative` False) are veiled in grey: their band and
         gradient rank noise. Returns the matplotlib Axes. A long
-        record is drawn through :mod:`dynia.plotting` (each time bucket's
+        record is drawn through :mod:`dynia.decimation` (each time bucket's
         largest gradient and the envelope of the limits), so its memory does
         not grow with it.
 
@@ -506,7 +506,7 @@ class DyniaResult:
     def _plot_axis(self, ax):
         """The x values of the plots: ``time``, or with timestamps matplotlib's date numbers on a date axis.
 
-        Date numbers are floats, so the decimation of :mod:`dynia.plotting` works on them as on seconds.
+        Date numbers are floats, so the decimation of :mod:`dynia.decimation` works on them as on seconds.
         """
         if self.timestamps is None:
             return self.time
@@ -516,7 +516,7 @@ class DyniaResult:
         return dates.date2num(self.timestamps)
 
     def to_xarray(self):
-        """The result as an :class:`xarray.Dataset`: dimensions, coordinates and attributes as :mod:`dynia.store` says.
+        """The result as an :class:`xarray.Dataset`, laid out as :mod:`dynia.io.netcdf` describes.
 
         Examples
         --------
@@ -528,15 +528,15 @@ class DyniaResult:
         >>> dict(ds.sizes), ds.ci.dims, ds.parameter.values.tolist()
         ({'parameter': 2, 'time': 3, 'side': 2, 'bin': 4, 'sample': 5}, ('parameter', 'time', 'side'), ['K', 'T'])
         """
-        from .store import to_xarray
+        from .io.netcdf import to_xarray
 
         return to_xarray(self)
 
     def save(self, path):
         """Write the result to the netCDF-4 file ``path``; ``dynia.load(path)`` gives it back exactly.
 
-        See :func:`dynia.store.save` for what is written and what it raises.
+        See :func:`dynia.io.netcdf.save` for what is written and what it raises.
         """
-        from .store import save
+        from .io.netcdf import save
 
         save(self, path)

@@ -1,7 +1,7 @@
 """Parameter sampling over a box of bounds: uniform Monte Carlo, Latin hypercube, Sobol.
 
 Every sampler returns (n_samples, n_params) with the columns in the order of
-``bounds`` rows (the package's shape convention, see :mod:`dynia.analysis`),
+``bounds`` rows (the package's shape convention, see :mod:`dynia.engine`),
 and draws all its randomness from ``rng`` (a :class:`numpy.random.Generator`
 or a seed; the same seed gives bit-identical samples).
 """

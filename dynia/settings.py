@@ -170,11 +170,11 @@ class AnalysisSettings:
         Type of the result's time-dependent arrays (IC, limits, median, gradient and
         their errors). The engine computes in float64 either way; float32
         keeps each value rounded to the nearest float32, at half the memory
-        (see :mod:`dynia.storage`).
+        (see :mod:`dynia.io.arrays`).
     store : str or os.PathLike or None, default None
         A netCDF file that the time-dependent arrays are written to as they
         are produced, so that they never lie whole in memory; the result
-        reads them from it (see :mod:`dynia.storage`). Kept as a str.
+        reads them from it (see :mod:`dynia.io.arrays`). Kept as a str.
     """
 
     n_samples: int = 2000
@@ -262,7 +262,7 @@ class AnalysisSettings:
                 "target_se" if self.max_samples is None else "max_samples",
             )
         if self.ic_error:
-            from .engine.flavours import ic_batches  # the engine imports this module: imported at call time
+            from .engine.flavours import ic_batches
 
             ic_batches(self.n_samples, self.percentage)  # enough behavioural sets for two batches, or a clear error
         if self.ic_error and self.flavour == "mcat":

@@ -9,7 +9,7 @@ the parameter really describes something time-varying. Its case study
 a change of operating mode late in the record. :func:`structure_warnings`
 makes that check for every parameter of a :class:`~dynia.result.DyniaResult`.
 
-Shapes follow the package convention (see :mod:`dynia.analysis`): ``ic``
+Shapes follow the package convention (see :mod:`dynia.engine`): ``ic``
 (n_params, n_steps), ``ci`` (n_params, n_steps, 2), ``gradient`` (n_params,
 n_bins, n_steps), ``bin_centres`` (n_params, n_bins).
 

@@ -277,7 +277,7 @@ def cooling_water_loop(
     one scan before and after. This is a deliberate choice, made so that the
     glitch looks on a 1-minute grid starting at 0 the way the thesis
     describes it: because ``t_g`` is a whole minute and a scan is shorter
-    than a minute, :func:`dynia.data.resample_events` with ``dt=1`` gives
+    than a minute, :func:`dynia.io.csv.resample_events` with ``dt=1`` gives
     exactly one zero input sample, at ``t_g``, and exactly one zero output
     sample, at ``t_g + 1`` for the default lag of 1 minute. Independently
     logged tags do see one fault at slightly different times; a lag of one

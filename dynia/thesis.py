@@ -1,4 +1,10 @@
-"""Old home of the thesis port, kept so existing imports work: see :mod:`dynia.reference.thesis`."""
+"""``dynia.thesis``: the same module object as :mod:`dynia.reference.thesis`, under its short name.
 
-from .reference.thesis import *  # noqa: F403
-from .reference.thesis import __all__  # noqa: F401
+``import dynia.thesis`` and ``from dynia import thesis`` give :mod:`dynia.reference.thesis` itself, not a copy.
+"""
+
+import sys
+
+from .reference import thesis
+
+sys.modules[__name__] = thesis

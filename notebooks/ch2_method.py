@@ -164,19 +164,19 @@ sse = ((sims - flow) ** 2).sum(axis=1)
 count = int(n_samples * percentage / 100)
 behavioural = np.argsort(sse, kind="stable")[:count]
 threshold = sse[behavioural].max()
-likelihood_mcat = dynia.cld.likelihood(sse[behavioural] / sse.max())  # scaled by the worst sample
-weights = dynia.cld.likelihood(sse[behavioural] / threshold)  # scaled by the worst behavioural set: used below
+likelihood_mcat = dynia.engine.cld.likelihood(sse[behavioural] / sse.max())  # scaled by the worst sample
+weights = dynia.engine.cld.likelihood(sse[behavioural] / threshold)  # scaled by the worst behavioural set: used below
 print(f"behavioural sets: {count} of {n_samples}")
 print("best/worst behavioural likelihood, SSE scaled by the worst sample:",
       round(float(likelihood_mcat.max() / likelihood_mcat.min()), 2))
 print("SSE scaled by the worst behavioural set: that set gets likelihood", float(weights.min()))
 print("same weights as the thesis's 1 - SSE (shifted, normalised) on the raw SSE:",
-      bool(np.allclose(dynia.cld.likelihood(sse[behavioural]), weights)))
+      bool(np.allclose(dynia.engine.cld.likelihood(sse[behavioural]), weights)))
 
 # %% [markdown]
 # **Likelihood (Section 2.2.2).** The likelihood is the thesis's (MCAT's)
 # 1 − objective, shifted up when negative and normalised to sum to 1
-# (`dynia.cld.likelihood`). The SSE has to be scaled somehow. MCAT's moving
+# (`dynia.engine.cld.likelihood`). The SSE has to be scaled somehow. MCAT's moving
 # window divides by the largest cost of the whole population. Over the whole
 # record that makes the weighting almost meaningless: the behavioural SSEs are
 # all small next to the worst sample's, so the best and the worst behavioural
@@ -193,7 +193,7 @@ print("same weights as the thesis's 1 - SSE (shifted, normalised) on the raw SSE
 # ## Figure 2.1: GLUE output uncertainty limits
 
 # %%
-lower, upper = dynia.cld.weighted_quantiles(sims[behavioural], weights,
+lower, upper = dynia.engine.cld.weighted_quantiles(sims[behavioural], weights,
                                             ((100 - conf_level) / 200, (100 + conf_level) / 200))
 width = upper - lower
 
@@ -221,7 +221,7 @@ print(f"mean width where the flow rises or recedes: {width[changing].mean():.2f}
 # %% [markdown]
 # Figure 2.1 shows the GLUE output band. At every step, the outputs of the
 # behavioural sets form a likelihood-weighted distribution, and the band runs
-# from its 5 % to its 95 % point (`dynia.cld.weighted_quantiles`). The bottom
+# from its 5 % to its 95 % point (`dynia.engine.cld.weighted_quantiles`). The bottom
 # panel gives the band's width, which makes the uncertain stretches easy to
 # find, as the thesis says of its Figure 2.1. The thesis's Figure 2.1 is taken
 # "from [33]", the MCAT toolbox: observed values with upper and lower limits,
@@ -299,7 +299,7 @@ print("best sample: gain", round(float(samples[best, 0]), 3), "rt", round(float(
 # ## Figures 2.5 and 2.6: cumulative likelihood and uncertainty band
 
 # %%
-whole_limits = {name: dynia.cld.weighted_limits(samples[behavioural, p], weights, conf_level)
+whole_limits = {name: dynia.engine.cld.weighted_limits(samples[behavioural, p], weights, conf_level)
                 for p, name in enumerate(names)}
 whole_ic = {name: 1 - np.diff(whole_limits[name])[0] / np.diff(box[p])[0] for p, name in enumerate(names)}
 
@@ -307,7 +307,7 @@ whole_ic = {name: 1 - np.diff(whole_limits[name])[0] / np.diff(box[p])[0] for p,
 def plot_cld(ax, name, title):
     """The CLD of one parameter over the whole sampled range, with its uncertainty band."""
     p = names.index(name)
-    ordered, cumulative = dynia.cld.cumulative(samples[behavioural, p], weights)
+    ordered, cumulative = dynia.engine.cld.cumulative(samples[behavioural, p], weights)
     low, high = whole_limits[name]
     ax.axvspan(low, high, color="tab:blue", alpha=0.2, label=f"{conf_level:g} % uncertainty band")
     ax.step(np.r_[box[p, 0], ordered, box[p, 1]], np.r_[0, cumulative, 1], where="post", color="k",
@@ -351,9 +351,9 @@ wide_box = np.array([wide_gain_range, rt_range], dtype=float)
 wide_samples = dynia.sampling.uniform(n_samples, wide_box, rng=np.random.default_rng(seed))
 wide_sse = ((model.simulate(wide_samples, rain, dt=dt) - flow) ** 2).sum(axis=1)
 wide_behavioural = np.argsort(wide_sse, kind="stable")[:count]
-wide_weights = dynia.cld.likelihood(wide_sse[wide_behavioural] / wide_sse[wide_behavioural].max())
+wide_weights = dynia.engine.cld.likelihood(wide_sse[wide_behavioural] / wide_sse[wide_behavioural].max())
 for p, name in enumerate(names):
-    low, high = dynia.cld.weighted_limits(wide_samples[wide_behavioural, p], wide_weights, conf_level)
+    low, high = dynia.engine.cld.weighted_limits(wide_samples[wide_behavioural, p], wide_weights, conf_level)
     print(f"gain sampled from {wide_gain_range}: {name} limits {np.round([low, high], 2)}, "
           f"IC {1 - (high - low) / np.diff(wide_box[p])[0]:.2f}")
 
@@ -370,8 +370,8 @@ for p, name in enumerate(names):
 # %%
 rt_behavioural = rt_values[behavioural]
 edges = np.linspace(rt_behavioural.min(), rt_behavioural.max(), cld_bins + 1)
-mass = dynia.cld.binned_mass(rt_behavioural, weights, edges[0], edges[-1], cld_bins)
-ordered, cumulative = dynia.cld.cumulative(rt_behavioural, weights)
+mass = dynia.engine.cld.binned_mass(rt_behavioural, weights, edges[0], edges[-1], cld_bins)
+ordered, cumulative = dynia.engine.cld.cumulative(rt_behavioural, weights)
 
 fig, ax = plt.subplots(figsize=(6.5, 4.2), constrained_layout=True)
 ax.bar(edges[:-1], mass, width=np.diff(edges), align="edge", color="0.8", edgecolor="0.45",
@@ -393,7 +393,7 @@ print(f"steepest range: rt {edges[steepest]:.2f} to {edges[steepest + 1]:.2f} da
 # Figure 2.7 divides the parameter range into equal ranges (eight, as in the
 # thesis's figure) and takes the gradient of the CLD in each. Here that
 # gradient is the likelihood mass in the range, i.e. the rise of the CLD
-# across it (`dynia.cld.binned_mass`). The bars therefore share the CLD's
+# across it (`dynia.engine.cld.binned_mass`). The bars therefore share the CLD's
 # axis: each bar's height is the step the CLD takes over its base. The thesis
 # reads the range with the largest gradient as the one where the parameter is
 # best identified. Here that range (printed above) lies close to the true
@@ -558,7 +558,7 @@ print(f"of the flagged steps with IC(rt) > 0.5, share whose band misses the true
 # definition, `dynia.synthetic.thesis_example(1, ...)`: K = 2, T = 3, noise
 # 0.5, K and T sampled on [0, 7], `example1_samples` samples, n = 10, 10 %
 # behavioural) under all four combinations, on the same samples. The
-# confidence limits are the code's unweighted ones (`dynia.cld.limits`), so
+# confidence limits are the code's unweighted ones (`dynia.engine.cld.limits`), so
 # the likelihood, and with it the cost's value, does not enter the IC: the
 # cost matters only through which sets are behavioural.
 
@@ -592,12 +592,12 @@ def example1_variants(noise_rng, sample_rng):
     costs = {"code: squared MAE": (window_sums(np.abs(errors)) / points_in_window) ** 2,
              "text: SSE": window_sums(errors ** 2)}
     count = int(example1_samples * percentage / 100)
-    chosen = {label: dynia.analysis.lowest_stable(cost.T, count) for label, cost in costs.items()}
+    chosen = {label: dynia.engine.selection.lowest_stable(cost.T, count) for label, cost in costs.items()}
     width = np.diff(box, axis=1)[:, 0]
     variants = {}
     for label, rows in chosen.items():
         values = samples[rows].transpose(2, 0, 1)  # (n_params, n_steps, count)
-        band = np.diff(dynia.cld.limits(values, conf_level), axis=-1)[..., 0]
+        band = np.diff(dynia.engine.cld.limits(values, conf_level), axis=-1)[..., 0]
         variants[label, "sampling range"] = 1 - band / width[:, None]
         variants[label, "behavioural range"] = 1 - band / np.ptp(values, axis=-1)
     return example, box, samples, chosen, variants

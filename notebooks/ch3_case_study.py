@@ -78,7 +78,7 @@ import numpy as np
 import scipy.optimize
 
 import dynia
-from dynia.data import resample_events
+from dynia.io.csv import resample_events
 from dynia.synthetic import cooling_water_loop
 
 dynia.thesis.check_code_path(code_path)

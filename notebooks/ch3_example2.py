@@ -327,7 +327,7 @@ for j in range(1, hi_w - lo_w):  # left to right, as the thesis and the engine s
 cost = (total / (hi_w - lo_w)) ** 2  # the thesis's cost: mean absolute error, squared
 kept = np.argsort(cost, kind="stable")[: int(n_samples * percentage / 100)]
 rejected = np.setdiff1d(np.arange(n_samples), kept)
-same_band = np.array_equal(dynia.cld.limits(np.sort(res1.samples[kept, p_t1]), conf_level),
+same_band = np.array_equal(dynia.engine.cld.limits(np.sort(res1.samples[kept, p_t1]), conf_level),
                            res1.ci[p_t1, k_spike])
 typical = np.max(np.abs(sims_window), axis=1)
 print(f"T1's IC in the zero state peaks at {res1.ic[p_t1, k_spike]:.2f} at step {k_spike}, "

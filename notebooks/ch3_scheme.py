@@ -41,10 +41,10 @@ STEPS = [
                     "every draw through rng -> samples (n_samples x n_params)"),
     ("Simulate once", "model.simulate_chunks: exact zero-order-hold discretisation per sample,\n"
                       "all samples together, streamed in blocks of time steps"),
-    ("Every window t  (dynia.analysis)", "cost of each sample: MAE^2 over steps t-n .. t+n present\n"
+    ("Every window t  (dynia.engine)", "cost of each sample: MAE^2 over steps t-n .. t+n present\n"
                                          "behavioural set: the lowest percentage %, ties by sample index\n"
                                          "selected once per window, shared by every parameter"),
-    ("Every parameter  (dynia.cld)", "likelihood 1 - cost, normalised; sorted values -> CLD\n"
+    ("Every parameter  (dynia.engine.cld)", "likelihood 1 - cost, normalised; sorted values -> CLD\n"
                                      "limits -> IC(t) = 1 - (upper - lower)/(high - low)\n"
                                      "gradient: likelihood mass per bin of the range"),
     ("DyniaResult", ".ic, .ci, .gradient, .to_dataframe()\n"

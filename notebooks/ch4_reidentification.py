@@ -97,8 +97,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import dynia
-from dynia.data import resample_events
-from dynia.identify import identify
+from dynia.identification import identify
+from dynia.io.csv import resample_events
 from dynia.quality import check_quality
 from dynia.refine import narrowed_bounds
 from dynia.segments import holdout_split, intersect_segments, random_segments, segments_from_ic, segments_to_mask
@@ -316,7 +316,7 @@ def plot_estimates(found, randoms, u_clean, y_clean, *, title, path, truth=None)
 # %% [markdown]
 # ## 1. The DaISy heating system
 #
-# The record is read with `dynia.data.load_csv` and turned into deviation
+# The record is read with `dynia.io.csv.load_csv` and turned into deviation
 # variables around the operating point, as `dynia analyse --input-offset 6
 # --offset first --x0 zero` does: the plant starts in steady state at 6 V
 # and the first measured temperature. Model: first order, K in [0, 40] degC/V,
@@ -324,7 +324,7 @@ def plot_estimates(found, randoms, u_clean, y_clean, *, title, path, truth=None)
 # held out.
 
 # %%
-data = dynia.data.load_csv(data_file, time="time", input="u", output="y")
+data = dynia.io.csv.load_csv(data_file, time="time", input="u", output="y")
 heating_u = data.u - 6.0
 heating_y = data.y - data.y[~np.isnan(data.y)][0]
 heating_bounds = {"K": (0.0, 40.0), "T": (0.0, 200.0)}
@@ -410,7 +410,7 @@ for label, draws in heating_random.items():
 # 1 h), one erroneous reading where input and output read 0 (the output one
 # minute after the input), and, late in the record, a change of operating
 # mode in which the gain falls to 1.8. Both logs are resampled onto a
-# 1-minute grid (`dynia.data.resample_events`), as in chapter 3.
+# 1-minute grid (`dynia.io.csv.resample_events`), as in chapter 3.
 #
 # A comparison of selections needs a record that one constant model
 # describes, so this section uses the part **before the change of mode**
@@ -893,7 +893,7 @@ fig.savefig(f"{figure_dir}/reid_structure.png", dpi=120, bbox_inches="tight")
 # Where it does not, or loses:
 #
 # - Selecting the steps where the IC of *any* parameter reaches the threshold, the one-run
-#   default of `dynia.identify`, gives nearly the whole record whenever the
+#   default of `dynia.identification`, gives nearly the whole record whenever the
 #   gain is identified in every steady stretch (the stand-in, the known-truth
 #   records). It then is the whole record, no better and no worse.
 # - Fewer points give larger standard errors. On data the model structure

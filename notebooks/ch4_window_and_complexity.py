@@ -420,7 +420,7 @@ for n_samples in timing_samples:
     cost = timing_rng.random((100, n_samples))
     count = n_samples * percentage // 100
     timings["select"]["partition"].append(best_of(
-        lambda: dynia.analysis.lowest_stable(cost, count), timing_repeats))
+        lambda: dynia.engine.selection.lowest_stable(cost, count), timing_repeats))
     timings["select"]["sort"].append(best_of(
         lambda: np.argsort(cost, axis=1, kind="stable")[:, :count], timing_repeats))
 
@@ -542,7 +542,7 @@ fig.savefig(f"{figure_dir}/fig4_04.png", dpi=110)
 #   cache and the window sums, plain additions and linear by construction,
 #   become memory-bound (this also depends on the machine). The step eq. 4.4
 #   is about, picking each window's behavioural set, grows about linearly
-#   when timed alone (`numpy.argpartition` in `dynia.analysis.lowest_stable`,
+#   when timed alone (`numpy.argpartition` in `dynia.engine.selection.lowest_stable`,
 #   fitted slope printed above, well below 2); the
 #   stable sort the thesis uses instead grows like S log S, and costs many
 #   times more at every S (both printed above). The thesis's own algorithm,

@@ -21,16 +21,16 @@
 # the package finds the same, on data generated from known parameters, so that
 # every finding can be held against the truth:
 #
-# 1. **HYMOD** (`dynia.conceptual.hymod`), five parameters: `cmax` and `b`
+# 1. **HYMOD** (`dynia.models.conceptual.hymod`), five parameters: `cmax` and `b`
 #    (the largest storage capacity of the soil and the shape of its Pareto
 #    distribution), `alpha` (the share of excess rain routed as quick flow),
 #    `kq` and `ks` (the outflow share per day of the three quick reservoirs
 #    and of the slow one; 1/k is the residence time in days). Two inputs, rain
 #    and potential evaporation; the output is the discharge.
-#    The record (`dynia.conceptual.hymod_record`) has storms and dry spells over
+#    The record (`dynia.models.conceptual.hymod_record`) has storms and dry spells over
 #    `hymod_days` days, starting in late summer on a dry catchment, and
 #    discharge errors of `hymod_noise` relative standard deviation.
-# 2. **A tank with square-root outflow** (`dynia.conceptual.tank`),
+# 2. **A tank with square-root outflow** (`dynia.models.conceptual.tank`),
 #    `A dh/dt = q_in - c sqrt(h)`: the steady level `(q/c)^2` depends on the
 #    outflow coefficient `c` alone, the speed of the transients on the area
 #    `A` too. The inflow steps every 60 to 150 samples.
@@ -70,7 +70,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import dynia
-from dynia.conceptual import hymod, hymod_fluxes, hymod_record, tank, tank_record
+from dynia.models.conceptual import hymod, hymod_fluxes, hymod_record, tank, tank_record
 from dynia.segments import mask_to_segments
 from dynia.structure import clear_of_bounds
 

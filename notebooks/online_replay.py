@@ -59,7 +59,7 @@ from dynia.online import OnlineDynia
 
 os.makedirs(figure_dir, exist_ok=True)
 
-data = dynia.data.load_csv(data_file, time="time", input="u", output="y")
+data = dynia.io.csv.load_csv(data_file, time="time", input="u", output="y")
 output_offset = float(data.y[~np.isnan(data.y)][0])
 u = data.u - input_offset
 y = data.y - output_offset

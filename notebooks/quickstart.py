@@ -112,14 +112,14 @@ print("verdicts:", {name: line["verdict"] for name, line in res.summary().items(
 print("share of informative windows:", round(float(res.informative.mean()), 2))
 
 # %% [markdown]
-# ## Settings for your own record: `dynia.suggest`
+# ## Settings for your own record: `dynia.suggestion`
 #
 # The thesis's settings suit example 1, whose time constant is three steps:
 # a window of 21 steps sees a whole response. Logged plant data are rarely
 # like that. Take a heater step test as a TCLab kit records it: one sample a
 # second for two hours, four steps of the heater power, a first-order response
 # with gain 0.6 degC per % and a time constant of 170 s, noise 0.15 degC.
-# `dynia.suggest.suggest` proposes settings from the record itself, and says
+# `dynia.suggestion` proposes settings from the record itself, and says
 # why (the same as `dynia suggest DATA.csv ...` on the command line; the
 # README's "Settings for your record" explains each rule):
 #
@@ -138,7 +138,7 @@ print("share of informative windows:", round(float(res.informative.mean()), 2))
 # * the **ranges** are checked against a least-squares fit of the model.
 
 # %%
-from dynia.suggest import suggest
+from dynia.suggestion import suggest
 
 heater = dynia.models.FirstOrder()
 heater_truth = {"K": 0.6, "T": 170.0}

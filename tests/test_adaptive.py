@@ -41,8 +41,8 @@ def test_equal_weights_select_the_same_set_and_limits_one_position_apart_at_most
     # quantile positions equal the thesis's floor(c (k-1)) = 19 and 379, up to
     # the rounding of a cumulative sum of 1/400s, which can move a limit by
     # one position in the sorted behavioural values.
-    costs = dynia.analysis.window_costs(y, sims, 10, 0, 500)
-    selected = dynia.analysis.lowest_stable(costs, 400)
+    costs = dynia.engine.windows.window_costs(y, sims, 10, 0, 500)
+    selected = dynia.engine.selection.lowest_stable(costs, 400)
     for p in range(2):
         ordered = np.sort(params[:, p][selected], axis=1)
         for side, position in ((0, 19), (1, 379)):

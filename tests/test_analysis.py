@@ -7,7 +7,8 @@ import pytest
 from conftest import example_firstorder_input, first_order_response
 
 from dynia import mcat, thesis
-from dynia.analysis import lowest_stable, moving_window, stable_rank_mask
+from dynia.engine.selection import lowest_stable, stable_rank_mask
+from dynia.engine.windows import moving_window
 
 
 def _small_example(seed, steps=120, samples=300, zero_start=20):

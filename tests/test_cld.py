@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from dynia import cld
+from dynia.engine import cld
 
 
 def test_likelihood_is_shifted_only_when_negative_and_sums_to_one():

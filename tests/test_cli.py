@@ -12,7 +12,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from dynia import __version__, load
-from dynia.cli import UsageError, _bounds, main
+from dynia.cli.main import UsageError, _bounds, main
 from dynia.models import FirstOrder
 
 HEATING_ARGS = (
@@ -201,13 +201,13 @@ def test_an_existing_output_directory_is_kept_and_overwrite_replaces_only_dynias
 
 
 def test_an_interrupted_run_leaves_nothing_behind(tmp_path, capsys, monkeypatch):
-    import dynia.report
+    import dynia.cli.report
 
     def interrupted(*args, **kwargs):
         (args[0] / "ic.csv").write_text("half")
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(dynia.report, "_write_figures", interrupted)
+    monkeypatch.setattr(dynia.cli.report, "write_figures", interrupted)
     data = _write(tmp_path / "data.csv", GOOD)
     status, err = _analyse(capsys, data, *BASE, "--out", tmp_path / "out")
     assert status == 130 and "nothing was written" in err

@@ -36,9 +36,9 @@ from skips import skip_if_signal_ignored
 
 import dynia
 import dynia.cli
-import dynia.report
+import dynia.cli.report
+from dynia.io.outdir import MARKER, OutputDirectory
 from dynia.models import FOPDT, TransferFunction
-from dynia.outdir import MARKER, OutputDirectory
 from dynia.pipeline import DroppedSamplesWarning
 from dynia.verdicts import VERDICTS
 
@@ -82,7 +82,7 @@ def never_analysed(monkeypatch):
         raise AssertionError("the analysis started although the command should have stopped before")
 
     for name in ("run", "load_csv", "identify"):
-        monkeypatch.setattr(dynia.cli, name, refuse)
+        monkeypatch.setattr(dynia.cli.main, name, refuse)
 
 
 # ------------------------------------------------------------------ output directory: never destroy anything
@@ -125,7 +125,7 @@ def test_out_current_directory_or_its_parent_is_refused(tmp_path, capsys, monkey
     def refuse(*args, **kwargs):
         raise AssertionError("the analysis started")
 
-    monkeypatch.setattr(dynia.cli, "run", refuse)
+    monkeypatch.setattr(dynia.cli.main, "run", refuse)
     cli_one_error(*cli_analyse(capsys, data, *BASE, "--out", out, "--overwrite"), "--out")
     cli_one_error(*cli_analyse(capsys, data, *BASE, "--out", out), "--out")
     assert tree_state(tmp_path) == before
@@ -227,7 +227,7 @@ def test_a_second_run_on_the_same_out_fails_fast_with_a_lock_message(tmp_path, c
 
 def test_out_appearing_during_the_run_is_left_alone_and_the_results_kept_beside_it(tmp_path, capsys, good, monkeypatch):
     out = tmp_path / "results"
-    original = dynia.report.write_analysis
+    original = dynia.cli.report.write_analysis
 
     def racing_writer(directory, *args, **kwargs):
         # Another program (or the user) creates --out while dynia is busy.
@@ -235,7 +235,7 @@ def test_out_appearing_during_the_run_is_left_alone_and_the_results_kept_beside_
         write_text_file(out / "theirs.txt", "written by someone else\n")
         return original(directory, *args, **kwargs)
 
-    monkeypatch.setattr(dynia.report, "write_analysis", racing_writer)
+    monkeypatch.setattr(dynia.cli.report, "write_analysis", racing_writer)
     status, stdout, err = cli_analyse(capsys, good, *BASE, "--out", out)
     line = cli_one_error(status, stdout, err, "--out")
     assert sorted(item.name for item in out.iterdir()) == ["theirs.txt"]

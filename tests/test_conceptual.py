@@ -1,11 +1,12 @@
-"""Tests of dynia.conceptual: HYMOD's water balance and hand-worked steps, the tank's levels, both code paths."""
+"""Tests of dynia.models.conceptual: HYMOD's water balance and hand-worked steps, the tank's levels, both code paths."""
 
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
 import dynia
-from dynia.conceptual import (
+from dynia.errors import ModelError, SettingsError
+from dynia.models.conceptual import (
     HYMOD_NAMES,
     hymod,
     hymod_fluxes,
@@ -13,7 +14,6 @@ from dynia.conceptual import (
     tank,
     tank_record,
 )
-from dynia.errors import ModelError, SettingsError
 from dynia.pipeline import DroppedSamplesWarning
 
 RNG = np.random.default_rng(20240612)

@@ -1,4 +1,4 @@
-"""dynia.data: resample_events on event logs, load_csv on the files engineers export.
+"""dynia.io.csv: resample_events on event logs, load_csv on the files engineers export.
 
 resample_events: exact on piecewise-linear signals, the grid it promises, one
 clear error per mistake. load_csv: every layout and kind of time, missing
@@ -15,8 +15,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from dynia.data import DataError, ProcessData, load_csv, resample_events
 from dynia.errors import SettingsError
+from dynia.io.csv import DataError, ProcessData, load_csv, resample_events
 
 HEATING_SYSTEM = pathlib.Path("/work/shared/data/heating_system/heating_system.dat")
 

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 import dynia
-from dynia.analysis import moving_window
 from dynia.engine import cld
+from dynia.engine.windows import moving_window
 from dynia.models import FirstOrder, SecondOrderDelay
 
 BOUNDS = {"K": (0, 7), "T": (0, 7)}
@@ -57,7 +57,7 @@ def test_the_median_is_that_of_the_window_behavioural_set():
     params = rng.uniform(0, 7, (400, 2))
     sims = FirstOrder().simulate(params, u)
     y = FirstOrder().simulate([[2.0, 3.0]], u)[0] + rng.normal(0, 0.05, u.size)
-    costs = dynia.analysis.window_costs(y, sims, 4, 30, 31)[0]
+    costs = dynia.engine.windows.window_costs(y, sims, 4, 30, 31)[0]
     kept = np.argsort(costs, kind="stable")[:40]
     weights = cld.likelihood(costs[kept])
     for flavour, expected in (

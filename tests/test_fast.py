@@ -10,8 +10,8 @@ import pytest
 from conftest import example_firstorder_input
 
 import dynia
-from dynia.analysis import moving_window
 from dynia.engine import kernels
+from dynia.engine.windows import moving_window
 from dynia.models import FOPDT, FirstOrder, SecondOrderDelay, TransferFunction
 
 pytestmark = pytest.mark.skipif(not kernels.AVAILABLE, reason="numba is not installed")

@@ -8,7 +8,7 @@ from scipy.signal import lfilter
 
 from dynia.cli import main
 from dynia.fit import fit_segments
-from dynia.identify import identify
+from dynia.identification import identify
 from dynia.models import FirstOrder
 
 TRUTH = {"K": 2.0, "T": 20.0}

@@ -1,4 +1,4 @@
-"""dynia.frames.unpack: pandas Series and DataFrames in, arrays, dt and UTC timestamps out."""
+"""dynia.io.frames.unpack: pandas Series and DataFrames in, arrays, dt and UTC timestamps out."""
 
 import subprocess
 import sys
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from dynia.errors import DataError, SettingsError
-from dynia.frames import unpack
+from dynia.io.frames import unpack
 
 pd = pytest.importorskip("pandas")
 
@@ -109,7 +109,7 @@ def test_a_non_uniform_index_is_named_where():
     assert str(caught.value) == (
         "the index of u and y is not uniformly spaced: from position 2 (2024-05-01T12:00:20.000000000) to 3 "
         "(2024-05-01T12:00:35.000000000) is 15 s, but from 0 to 1 10 s; "
-        "dynia.data.resample_events or dynia.data.load_csv make a uniform grid"
+        "dynia.io.csv.resample_events or dynia.io.csv.load_csv make a uniform grid"
     )
 
 
@@ -193,7 +193,7 @@ def test_numpy_input_needs_no_pandas():
         "            raise ImportError('pandas is not installed')\n"
         "sys.meta_path.insert(0, NoPandas())\n"
         "import numpy as np\n"
-        "from dynia.frames import unpack\n"
+        "from dynia.io.frames import unpack\n"
         "out = unpack(np.ones(3), [1.0, 2.0, 3.0], 1.0)\n"
         "print('pandas' in sys.modules, out[1], out[2], out[3])\n"
     )

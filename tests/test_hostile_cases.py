@@ -23,11 +23,11 @@ from cli_cases import (
 
 import dynia
 import dynia.cli
-from dynia.data import load_csv
 from dynia.errors import DataError, SettingsError
-from dynia.frames import unpack
+from dynia.io.csv import load_csv
+from dynia.io.frames import unpack
+from dynia.io.outdir import MARKER
 from dynia.models import FirstOrder
-from dynia.outdir import MARKER
 from dynia.settings import AnalysisSettings
 
 # The data and model options of BASE, without the method options that dynia suggest does not take.
@@ -47,7 +47,7 @@ def never_analysed(monkeypatch):
         raise AssertionError("the command went on although it should have stopped before")
 
     for name in ("run", "load_csv", "identify", "suggest"):
-        monkeypatch.setattr(dynia.cli, name, refuse)
+        monkeypatch.setattr(dynia.cli.main, name, refuse)
 
 
 def _model_file(path, side_effect=None):

@@ -8,9 +8,8 @@ import numpy as np
 import pytest
 
 import dynia
-from dynia.analysis import moving_window
 from dynia.cli import main
-from dynia.engine.windows import OverflowedWindowsWarning
+from dynia.engine.windows import OverflowedWindowsWarning, moving_window
 from dynia.errors import DataError, ModelError, SettingsError
 from dynia.models import FirstOrder, FunctionModel, StateSpaceModel
 from dynia.online import OnlineDynia

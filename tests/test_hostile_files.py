@@ -4,7 +4,7 @@ Each test is one case of the review and failed before the fix. ``dynia.load`` mu
 naming the file and the part at fault, whatever no analysis writes; a write that fails (a full disk, a file size
 limit) must end in one OutputError (one ``dynia: error:`` line naming --out on the command line), with the partial
 file, the staging directory and the lock removed and nothing printed by h5py. The disk is never filled: the
-failure is injected where the result file is written (``dynia.storage._pwrite``) or comes from a file size
+failure is injected where the result file is written (``dynia.io.arrays._pwrite``) or comes from a file size
 limit (RLIMIT_FSIZE) in a subprocess.
 """
 
@@ -33,11 +33,11 @@ from cli_cases import (
 )
 
 import dynia
-import dynia.report
-import dynia.storage
+import dynia.cli.report
+import dynia.io.arrays
 from dynia.errors import DataError, OutputError
+from dynia.io.netcdf import StoredVerdictsWarning
 from dynia.models import FirstOrder
-from dynia.store import StoredVerdictsWarning
 
 ROOT = Path(__file__).resolve().parent.parent
 BOUNDS = {"K": (0, 7), "T": (0, 7)}
@@ -275,7 +275,7 @@ def test_a_file_written_today_loads_bit_for_bit_eager_and_lazy(tmp_path, dtype):
 
 def test_a_lazy_load_checks_only_the_blocks_it_reads(tmp_path, monkeypatch):
     """A forged gradient in a late block: loading and reading early steps pass, reading the block refuses it."""
-    monkeypatch.setattr(dynia.storage, "_CHUNK_BYTES", 40 * 4 * 16)  # blocks of 16 steps
+    monkeypatch.setattr(dynia.io.arrays, "_CHUNK_BYTES", 40 * 4 * 16)  # blocks of 16 steps
     path = tmp_path / "disk.nc"
     dynia.run(*_record(), FirstOrder(), BOUNDS, n=6, n_samples=400, rng=1, dtype="float32", store=path)
     _forge(path, "gradient", (0, 3, 100), -1.0)
@@ -291,7 +291,7 @@ def test_a_lazy_load_checks_only_the_blocks_it_reads(tmp_path, monkeypatch):
 def _full_disk(monkeypatch, at):
     """Let the result file's writes fail with ENOSPC from the ``at``-th on; returns the list of attempts."""
     attempts = []
-    write = dynia.storage._pwrite
+    write = dynia.io.arrays._pwrite
 
     def pwrite(descriptor, data, offset):
         attempts.append(len(data))
@@ -299,7 +299,7 @@ def _full_disk(monkeypatch, at):
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
         return write(descriptor, data, offset)
 
-    monkeypatch.setattr(dynia.storage, "_pwrite", pwrite)
+    monkeypatch.setattr(dynia.io.arrays, "_pwrite", pwrite)
     return attempts
 
 
@@ -316,7 +316,7 @@ def test_a_full_disk_in_the_store_is_one_output_error_and_no_file(tmp_path, monk
     path.parent.mkdir()
 
     def run():
-        monkeypatch.setattr(dynia.storage, "_CHUNK_BYTES", 40 * 4 * 16)  # several blocks, as a long record has
+        monkeypatch.setattr(dynia.io.arrays, "_CHUNK_BYTES", 40 * 4 * 16)  # several blocks, as a long record has
         return dynia.run(*_record(), FirstOrder(), BOUNDS, n=6, n_samples=400, rng=1, dtype="float32", store=path)
 
     total = _count_writes(monkeypatch, run)
@@ -345,13 +345,13 @@ def test_a_full_disk_in_save_keeps_the_old_file(result, tmp_path, monkeypatch, c
 
 def test_a_full_disk_writing_a_table_is_one_error_naming_out(tmp_path, monkeypatch, capsys):
     data = write_text_file(tmp_path / "data.csv", GOOD)
-    write_analysis = dynia.report.write_analysis
+    write_analysis = dynia.cli.report.write_analysis
 
     def full(directory, *args, **kwargs):
         write_analysis(directory, *args, **kwargs)
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
 
-    monkeypatch.setattr(dynia.report, "write_analysis", full)
+    monkeypatch.setattr(dynia.cli.report, "write_analysis", full)
     out = tmp_path / "out"
     line = cli_one_error(*cli_analyse(capsys, data, *BASE, "--out", out), f"--out {out}", "No space left on device")
     assert "Traceback" not in line and sorted(os.listdir(tmp_path)) == ["data.csv"]
@@ -359,10 +359,10 @@ def test_a_full_disk_writing_a_table_is_one_error_naming_out(tmp_path, monkeypat
 
 SITE = """
 import errno, os
-import dynia.storage
+import dynia.io.arrays
 
 _calls = []
-_original_pwrite = dynia.storage._pwrite
+_original_pwrite = dynia.io.arrays._pwrite
 
 
 def _pwrite(descriptor, data, offset):
@@ -372,7 +372,7 @@ def _pwrite(descriptor, data, offset):
     return _original_pwrite(descriptor, data, offset)
 
 
-dynia.storage._pwrite = _pwrite
+dynia.io.arrays._pwrite = _pwrite
 """
 
 

@@ -8,8 +8,8 @@ import pytest
 import dynia
 import dynia.distributed
 from benchmarks.honesty import ic_error_honesty
-from dynia.analysis import moving_window
 from dynia.engine.flavours import ic_batches, monte_carlo_errors
+from dynia.engine.windows import moving_window
 from dynia.errors import SettingsError
 from dynia.pipeline import TargetNotReachedWarning, ic_se_that_matters
 

@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from dynia.identify import identify
+from dynia.identification import identify
 from dynia.models import FirstOrder, SecondOrderDelay
 from dynia.segments import random_segments
 

@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 
 import dynia
-from dynia import plotting
-from dynia.analysis import analyse_stream, moving_window
+from dynia import decimation
+from dynia.engine.windows import analyse_stream, moving_window
 from dynia.errors import DataError, OutputError, SettingsError
+from dynia.io.arrays import TIME_VARIABLES, DiskArray, ResultFile
 from dynia.models import FirstOrder
 from dynia.settings import AnalysisSettings
-from dynia.storage import TIME_VARIABLES, DiskArray, ResultFile
 from dynia.verdicts import assess
 
 matplotlib.use("Agg")
@@ -234,10 +234,10 @@ def test_a_lazy_load_refuses_dimensions_in_another_order(stored, folder):
 
 def test_plots_of_a_stored_result_read_its_gradient_by_blocks(stored, in_memory, monkeypatch):
     # Blocks of a few buckets, so that the thinning of a short record goes through several reads.
-    monkeypatch.setattr(plotting, "_BLOCK_VALUES", 50)
+    monkeypatch.setattr(decimation, "_BLOCK_VALUES", 50)
     axis = stored.time
-    by_blocks = plotting.decimated_columns(axis, stored.gradient[1], max_columns=60)
-    whole = plotting.decimated_columns(axis, in_memory.gradient[1], max_columns=60)
+    by_blocks = decimation.decimated_columns(axis, stored.gradient[1], max_columns=60)
+    whole = decimation.decimated_columns(axis, in_memory.gradient[1], max_columns=60)
     assert _same(by_blocks[0], whole[0]) and _same(by_blocks[1], whole[1])
     for per_sample in (False, True):
         drawn = [

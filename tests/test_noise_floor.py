@@ -9,7 +9,7 @@ import pytest
 from numpy.testing import assert_array_equal
 
 import dynia
-from dynia.analysis import moving_window
+from dynia.cli.report import noise_floor_line, noise_floor_summary
 from dynia.engine import kernels
 from dynia.engine.noise import (
     add_record_errors,
@@ -22,13 +22,13 @@ from dynia.engine.noise import (
     size_factor,
     window_points,
 )
+from dynia.engine.windows import moving_window
 from dynia.errors import SettingsError
+from dynia.io.netcdf import StoredVerdictsWarning
 from dynia.models import FirstOrder
 from dynia.online import OnlineDynia
-from dynia.report import noise_floor_line, noise_floor_summary
 from dynia.result import DyniaResult
 from dynia.segments import segments_from_ic
-from dynia.store import StoredVerdictsWarning
 from dynia.synthetic import thesis_example
 from dynia.verdicts import assess
 
@@ -481,7 +481,7 @@ def test_segments_and_identify_never_select_windows_below_the_floor():
     assert segments_from_ic(result, min_length=1, merge_gap=0) == [(0, 25), (40, 60)]
     # dynia identify on example 1: the noise after the response is never fitted on, though T's IC is high there.
     found = thesis_example(1, np.random.default_rng(0))
-    chosen = dynia.identify.identify(
+    chosen = dynia.identify(
         found.u, found.y, found.model, found.bounds, method="dynia", held_out=0.05, rng=1, n_samples=2000
     )
     assert chosen.segments and all(stop <= 440 for _, stop in chosen.segments)

@@ -8,7 +8,7 @@ import pytest
 from numpy.testing import assert_array_equal
 
 import dynia
-from dynia.analysis import moving_window
+from dynia.engine.windows import moving_window
 from dynia.models import FOPDT, FirstOrder, SecondOrderDelay, TransferFunction
 from dynia.online import OnlineDynia
 

@@ -1,4 +1,4 @@
-"""dynia.outdir: results are written whole or not at all, and never in place of the user's own files."""
+"""dynia.io.outdir: results are written whole or not at all, and never in place of the user's own files."""
 
 import datetime
 import json
@@ -16,7 +16,7 @@ from skips import skip_if_signal_ignored
 
 import dynia
 from dynia.errors import OutputError
-from dynia.outdir import MARKER, OutputDirectory
+from dynia.io.outdir import MARKER, OutputDirectory
 
 
 @pytest.fixture(autouse=True)
@@ -295,7 +295,7 @@ def test_second_run_on_the_same_out_fails_fast_and_loses_nothing(place):
 
 HOLDER = """
 import sys
-from dynia.outdir import OutputDirectory
+from dynia.io.outdir import OutputDirectory
 with OutputDirectory("results") as staging:
     (staging / "ic.csv").write_text("child")
     print("ready", flush=True)
@@ -398,7 +398,7 @@ def test_kept_results_never_take_an_existing_name(place):
 INTERRUPTED = """
 import os, signal, sys, time
 from dynia.errors import Interrupted
-from dynia.outdir import OutputDirectory
+from dynia.io.outdir import OutputDirectory
 number = getattr(signal, sys.argv[1])
 before = signal.getsignal(number)
 try:
@@ -437,7 +437,7 @@ def test_signal_in_the_block_cleans_up_and_restores_handlers(place, name, status
 
 IGNORED = """
 import os, signal
-from dynia.outdir import OutputDirectory
+from dynia.io.outdir import OutputDirectory
 signal.signal(signal.SIGHUP, signal.SIG_IGN)
 with OutputDirectory("results") as staging:
     os.kill(os.getpid(), signal.SIGHUP)
@@ -455,7 +455,7 @@ def test_an_ignored_signal_stays_ignored(place):
 LATE_SIGNAL = """
 import os, signal, sys
 from dynia.errors import Interrupted
-from dynia.outdir import OutputDirectory
+from dynia.io.outdir import OutputDirectory
 real_replace = os.replace
 def replace(source, target):
     real_replace(source, target)
@@ -480,7 +480,7 @@ def test_signal_during_the_final_move_waits_until_out_is_complete(place):
 
 FORKED = """
 import os, signal, sys, time
-from dynia.outdir import OutputDirectory
+from dynia.io.outdir import OutputDirectory
 with OutputDirectory("results") as staging:
     (staging / "ic.csv").write_text("parent")
     pid = os.fork()

@@ -9,8 +9,9 @@ import matplotlib.pyplot as plt  # noqa: E402  (after choosing the backend)
 from matplotlib.collections import QuadMesh  # noqa: E402
 
 from dynia import DyniaResult  # noqa: E402
+from dynia.cli.figures import plot_data
+from dynia.decimation import decimated_columns, envelope  # noqa: E402
 from dynia.errors import DataError, SettingsError  # noqa: E402
-from dynia.plotting import decimated_columns, envelope, plot_data  # noqa: E402
 
 # An all-NaN bucket must not trip numpy's "All-NaN slice" warnings, nor a plot any other.
 pytestmark = pytest.mark.filterwarnings("error")

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import dynia
-from dynia.data import resample_events
 from dynia.errors import SettingsError
+from dynia.io.csv import resample_events
 from dynia.models import FirstOrder
 from dynia.quality import Finding, QualityReport, check_quality, informative_segments
 from dynia.result import DyniaResult

@@ -1,4 +1,4 @@
-"""dynia.store: DyniaResult to xarray and netCDF and back, exact to the bit; timestamps in tables and plots."""
+"""dynia.io.netcdf: DyniaResult to xarray and netCDF and back, exact to the bit; timestamps in tables and plots."""
 
 import dataclasses
 import json
@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 
 import dynia
-from dynia.data import ProcessData
+from dynia.cli.report import write_analysis
 from dynia.errors import DataError, OutputError, SettingsError
-from dynia.frames import unpack
+from dynia.io.csv import ProcessData
+from dynia.io.frames import unpack
 from dynia.models import FirstOrder
-from dynia.report import write_analysis
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -169,7 +169,7 @@ def test_to_xarray_labels_every_axis(thesis_result):
     settings = json.loads(dataset.attrs["settings"])
     assert settings["bounds"]["K"] == {"__tuple__": [0.0, 7.0]} and settings["n"] == 6
     assert json.loads(dataset.attrs["verdicts"]) == thesis_result.verdicts
-    assert dataset.attrs["dynia_result"] == dynia.store.FORMAT_VERSION
+    assert dataset.attrs["dynia_result"] == dynia.io.netcdf.FORMAT_VERSION
     assert "timestamp" not in thesis_result.to_xarray().variables
 
 
@@ -227,7 +227,7 @@ def test_load_names_what_it_cannot_read(thesis_result, tmp_path):
     foreign.to_netcdf(tmp_path / "foreign.nc", engine="h5netcdf")
     with pytest.raises(DataError, match=r"foreign\.nc: no dynia_result attribute; expected a result"):
         dynia.load(tmp_path / "foreign.nc")
-    foreign.attrs["dynia_result"] = dynia.store.FORMAT_VERSION + 1
+    foreign.attrs["dynia_result"] = dynia.io.netcdf.FORMAT_VERSION + 1
     foreign.to_netcdf(tmp_path / "newer.nc", engine="h5netcdf")
     with pytest.raises(DataError, match=r"newer\.nc: format version 2; expected"):
         dynia.load(tmp_path / "newer.nc")

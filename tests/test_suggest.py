@@ -7,11 +7,11 @@ import pytest
 
 import dynia
 from dynia.cli import main
-from dynia.conceptual import hymod, hymod_record
 from dynia.errors import DataError, SettingsError, SuggestionError
 from dynia.fit import fit_segments
 from dynia.models import FirstOrder, FunctionModel
-from dynia.suggest import dominant_time_constant, parse_duration, parse_size, run_memory, suggest, window_half_width
+from dynia.models.conceptual import hymod, hymod_record
+from dynia.suggestion import dominant_time_constant, parse_duration, parse_size, run_memory, suggest, window_half_width
 
 # A TCLab-like heater step test: 1 s sampling, about two hours, heater steps in %, a time constant of
 # 170 s, a gain of 0.6 degC/%, ambient 21 degC, sensor noise of 0.15 degC.

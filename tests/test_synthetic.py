@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from dynia.data import resample_events
+from dynia.io.csv import resample_events
 from dynia.synthetic import _exception_log, cooling_water_loop
 
 

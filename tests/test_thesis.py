@@ -5,7 +5,7 @@ import pytest
 
 import dynia
 from dynia import thesis
-from dynia.analysis import window_costs
+from dynia.engine.windows import window_costs
 
 
 def test_conf_limits_use_floor_of_c_times_count_minus_one():

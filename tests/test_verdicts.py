@@ -228,7 +228,7 @@ def test_gain_on_a_long_clean_step_is_identified():
 
 
 def test_heating_time_constant_is_reported_in_a_transient_not_at_its_tied_peak():
-    data = dynia.data.load_csv(HEATING, time="time", input="u", output="y")
+    data = dynia.io.csv.load_csv(HEATING, time="time", input="u", output="y")
     u, y = data.u - 6.0, data.y - data.y[0]
     model = dynia.models.FirstOrder()
     result = dynia.run(u, y, model, {"K": (0, 40), "T": (0, 200)}, dt=data.dt, n=10, n_samples=2000, x0="zero", rng=1)

@@ -9,19 +9,28 @@ and :mod:`~dynia.engine.noise` the noise floor: which windows tell parameter
 sets apart beyond what measurement noise alone does.
 """
 
-from . import cld, flavours, kernels, noise, selection, windows
-from .flavours import ENGINES, FLAVOURS
-from .windows import WINDOWS, moving_window
+import importlib
 
-__all__ = [
-    "moving_window",
-    "FLAVOURS",
-    "WINDOWS",
-    "ENGINES",
-    "cld",
-    "flavours",
-    "kernels",
-    "noise",
-    "selection",
-    "windows",
-]
+# Loaded on first use, so that importing one engine module (the CLD arithmetic,
+# say) does not import the whole engine.
+_NAMES = {
+    "moving_window": "windows",
+    "WINDOWS": "windows",
+    "FLAVOURS": "flavours",
+    "ENGINES": "flavours",
+}
+_SUBMODULES = frozenset({"cld", "flavours", "kernels", "noise", "selection", "windows"})
+
+__all__ = ["moving_window", "FLAVOURS", "WINDOWS", "ENGINES"]
+
+
+def __getattr__(name):
+    if name in _NAMES:
+        return getattr(importlib.import_module(f"{__name__}.{_NAMES[name]}"), name)
+    if name in _SUBMODULES:
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__) | _SUBMODULES)

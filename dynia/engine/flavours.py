@@ -21,12 +21,7 @@ from .. import _checks
 from ..errors import SettingsError
 from . import cld, kernels
 from .noise import quantile_position
-from .selection import (
-    lowest_stable,
-    lowest_weighted,
-    selected_columns,
-    stable_rank_mask,
-)
+from .selection import lowest_stable, lowest_weighted, selected_columns, stable_rank_mask
 
 __all__ = [
     "FLAVOURS",

@@ -14,7 +14,7 @@ order, so the results are bit-identical (tests compare with tolerance 0):
 products and sums of the recursion term by term (LLVM does not fuse them
 into FMAs without fast-math, which stays off), window sums left to right,
 the behavioural set as the first ``count`` of a stable sort, the likelihood
-total summed in index order (as :func:`dynia.cld.likelihood` does with
+total summed in index order (as :func:`dynia.engine.cld.likelihood` does with
 ``cumsum``) and the gradient accumulated in index order (as ``bincount``).
 Only the order statistics are found differently (selection instead of
 sorting), which cannot change their value.
@@ -693,7 +693,7 @@ def analyse_windows(
     gradient,
     extreme_costs,
 ):
-    """Analyse the m windows of a block; see :mod:`dynia.analysis` for the method.
+    """Analyse the m windows of a block; see :mod:`dynia.engine` for the method.
 
     ``errors`` (m + slots - 1, n_samples) and ``measured`` (m + slots - 1,)
     come from the window inputs (row j + t belongs to slot j of window t).
@@ -737,7 +737,7 @@ def analyse_windows(
 class CompiledErrors:
     """Absolute errors of a model's simulations, computed block by block by :func:`simulate_errors`.
 
-    A source for :func:`dynia.analysis.analyse_stream`: ``rows(start,
+    A source for :func:`dynia.engine.analyse_stream`: ``rows(start,
     stop)`` returns the time-major errors (stop - start, n_samples);
     requests must move forward in time, and the rows before a request are
     dropped, so memory stays at one block. The simulation of each block is

@@ -107,9 +107,9 @@ import numpy as np
 
 from .. import _checks
 from ..errors import DataError, SettingsError
+from ..io.arrays import ResultArrays, result_arrays
 from ..result import DyniaResult
 from ..settings import AnalysisSettings
-from ..storage import ResultArrays, result_arrays
 from .flavours import FLAVOURS, compiled_engine, flavour_analysis, monte_carlo_errors
 from .noise import add_record_errors, floor_fields, floor_settings, record_noise_floor, record_residuals, window_points
 
@@ -228,13 +228,13 @@ def moving_window(
         for ``"mcat"``.
     dtype : {"float64", "float32"}, default "float64"
         Type of the time-dependent result arrays; float32 values are the
-        float64 results rounded (see :mod:`dynia.storage`).
+        float64 results rounded (see :mod:`dynia.io.arrays`).
     store : str or os.PathLike, optional
         Write those arrays to this netCDF file as they are produced (complete
         and renamed into place when the analysis ends) and return a result
         that reads them from it; memory then does not grow with them (see
-        :mod:`dynia.storage`). A :class:`dynia.storage.ResultArrays` or
-        :class:`~dynia.storage.ResultFile` may be given instead, whose owner
+        :mod:`dynia.io.arrays`). A :class:`dynia.io.arrays.ResultArrays` or
+        :class:`~dynia.io.arrays.ResultFile` may be given instead, whose owner
         commits it.
 
     Returns
@@ -250,7 +250,7 @@ def moving_window(
     Examples
     --------
     >>> import numpy as np
-    >>> from dynia.analysis import moving_window
+    >>> from dynia.engine import moving_window
     >>> rng = np.random.default_rng(1)
     >>> gain = rng.uniform(0, 4, 500)
     >>> u = np.r_[np.zeros(20), np.ones(40)]
@@ -454,7 +454,7 @@ def _analyse(
     scale = error_scale(y)
     if scale != 1.0:
         errors = ScaledErrors(errors, scale)
-    # In memory or, with a store, in a file written as the chunks come (dynia.storage).
+    # In memory or, with a store, in a file written as the chunks come (dynia.io.arrays).
     output = result_arrays(store, checked.dtype)
     shapes = dict(
         ic=(n_params, n_steps),

@@ -3,7 +3,7 @@
 ``id_time.m`` (Thorsten Wagener, Penn State, October 2004) is a GUI routine;
 this module ports its numerical core, for the centred ("medium", running
 mean) window and one parameter, with its loops, so that the ``"mcat"`` flavour
-of :func:`dynia.analysis.moving_window` can be tested against it. Time and
+of :func:`dynia.engine.moving_window` can be tested against it. Time and
 sample indices are 0-based here.
 
 Shape convention: as MCAT, ``mct`` is (n_steps, n_samples), one column per

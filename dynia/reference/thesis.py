@@ -5,7 +5,7 @@ This module ports ``movingWindowCalcs.m``, ``runDynia.m``, ``calcLikelihood.m``,
 the 2009 thesis, plus ``selectBestParameters.m``, which the thesis uses but does
 not print. The functions take the same arguments in the same order and run the
 same loops, so that a reader can hold the MATLAB beside the Python line by line.
-It is deliberately slow and plain: the fast engine (:mod:`dynia.analysis`) is
+It is deliberately slow and plain: the fast engine (:mod:`dynia.engine`) is
 tested against it.
 
 Time and sample indices are 0-based here where the MATLAB is 1-based; every
@@ -405,7 +405,7 @@ def moving_window_from_costs(wCost, par, lb, ub, ns, bins, percentage, *, conf_l
 
     The cost loop of :func:`moving_window_calcs` runs in Python over every sample of every window, which
     is slow for long records. Given each window's costs ``wMAE.^2`` (for instance from
-    :func:`dynia.analysis.window_costs`, which computes them as the MATLAB does, bit for bit), this runs
+    :func:`dynia.engine.window_costs`, which computes them as the MATLAB does, bit for bit), this runs
     the rest of the loop body: ``selectBestParameters``, ``runDynia`` and the information content. It
     skips only ``cumulLikelihood``'s ``lhood_c_all``, which nothing reads. For the same costs it returns
     what :func:`moving_window_calcs` returns.
@@ -426,7 +426,7 @@ def moving_window_from_costs(wCost, par, lb, ub, ns, bins, percentage, *, conf_l
     Examples
     --------
     >>> import numpy as np
-    >>> from dynia.analysis import window_costs
+    >>> from dynia.engine import window_costs
     >>> rng = np.random.default_rng(0)
     >>> par = rng.uniform(0, 1, 50)
     >>> mct = par[:, None] * np.ones((50, 30))
@@ -609,7 +609,7 @@ def plot_parameter_estimation(time, CI_t, gradient_data, lb, ub, bins, *, ax=Non
 def thesis_code_result(y, sims, samples, bounds, names, *, n, percentage, bins, time=None, conf_level=90):
     """DYNIA as the thesis's code computes it, on given simulations, as a :class:`dynia.DyniaResult`.
 
-    The costs of every window are those of ``movingWindowCalcs`` (:func:`dynia.analysis.window_costs`,
+    The costs of every window are those of ``movingWindowCalcs`` (:func:`dynia.engine.window_costs`,
     bit for bit), and each parameter goes through :func:`moving_window_from_costs`: the information
     content and limits are the engine's ``"thesis"`` flavour's, the gradient is ``cld_gradient``'s, with
     its quirks. Row b of the gradient holds the behavioural values in ``[lb + b w, lb + (b+1) w)`` with
@@ -698,7 +698,7 @@ def thesis_code_result(y, sims, samples, bounds, names, *, n, percentage, bins, 
 def _matlab_window_costs(y, sims, n, start, stop):
     """``wMAE.^2`` of the windows at steps [start, stop), with MATLAB's inf and NaN where a simulation diverged.
 
-    :func:`dynia.analysis.window_costs` refuses non-finite simulations; the thesis's Euler loop makes them
+    :func:`dynia.engine.window_costs` refuses non-finite simulations; the thesis's Euler loop makes them
     (T < 0.5). In MATLAB a window holding an inf costs inf and one holding a NaN costs NaN, and its sort
     puts both after every finite cost, inf before NaN, as numpy's does.
     """

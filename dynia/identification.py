@@ -43,12 +43,12 @@ input that stopped changing just before the held-out part still tests the
 model through the response that follows, and a model whose output is flat
 everywhere is a bad fit, not a quiet held-out part.
 
-Shapes follow :mod:`dynia.analysis`: ``u`` and ``y`` are (n_steps,).
+Shapes follow :mod:`dynia.engine`: ``u`` and ``y`` are (n_steps,).
 
 Examples
 --------
 >>> import numpy as np
->>> from dynia.identify import identify
+>>> from dynia.identification import identify
 >>> from dynia.models import FirstOrder
 >>> u = np.repeat([0.0, 1.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0], 30)
 >>> y = FirstOrder().simulate([[2.0, 5.0]], u)[0]

@@ -64,7 +64,7 @@ import warnings
 
 import numpy as np
 
-from .errors import DataError, SettingsError
+from ..errors import DataError, SettingsError
 
 __all__ = [
     "to_xarray",
@@ -92,7 +92,7 @@ _ARRAYS = {
     "bounds": ("parameter", "side"),
 }
 # The noise floor along time (see dynia.engine.noise), written when the result has it. Part of the
-# metadata, so that a result written block by block (dynia.storage) gets it too; the mask is int8 in a
+# metadata, so that a result written block by block (dynia.io.arrays) gets it too; the mask is int8 in a
 # file, since netCDF has no booleans, and bool again when loaded.
 _NOISE_FLOOR = ("informative", "discrimination", "noise_floor", "behavioural_spread", "behavioural_floor")
 # Written when the result has them (not None), read back when the file has them.
@@ -145,7 +145,7 @@ def to_xarray(result):
 
 def _variable(values, dims):
     """An array of a result as a Dataset variable: an array on disk stays there (read lazily by xarray)."""
-    from .storage import DiskArray
+    from .arrays import DiskArray
 
     if not isinstance(values, DiskArray):
         return dims, values
@@ -201,7 +201,7 @@ def save(result, path):
 
     Every array is written as it is, without a fill value, so NaN stays NaN
     bit for bit; timestamps as int64 nanoseconds since 1970-01-01. A result
-    whose arrays are on disk (``store``, see :mod:`dynia.storage`) is copied
+    whose arrays are on disk (``store``, see :mod:`dynia.io.arrays`) is copied
     one time block at a time, never loaded whole.
 
     Raises
@@ -216,7 +216,7 @@ def save(result, path):
         disk); the file is written under a temporary name beside ``path``
         and renamed when complete, so ``path`` is then left as it was.
     """
-    from .storage import DiskArray, write_netcdf, write_result
+    from .arrays import DiskArray, write_netcdf, write_result
 
     if isinstance(result.ic, DiskArray):
         write_result(result, path)
@@ -241,8 +241,8 @@ def load(path, *, lazy=False):
     as.
 
     With ``lazy=True`` the arrays along time (IC, limits, median, gradient
-    and their errors) stay in the file as :class:`dynia.storage.DiskArray` objects,
-    read where indexed: for results larger than memory (:mod:`dynia.storage`).
+    and their errors) stay in the file as :class:`dynia.io.arrays.DiskArray` objects,
+    read where indexed: for results larger than memory (:mod:`dynia.io.arrays`).
 
     Nothing in the file is trusted. The arrays carry Fletcher-32 checksums
     (files written before them load unchecked); every array is checked
@@ -269,7 +269,7 @@ def load(path, *, lazy=False):
 
     Examples
     --------
-    See :mod:`dynia.store`.
+    See :mod:`dynia.io.netcdf`.
     """
     import xarray as xr
 
@@ -290,7 +290,7 @@ def load(path, *, lazy=False):
 
 def _result(name, dataset, lazy):
     """The checked result of the open ``dataset`` of file ``name`` (see :func:`load`)."""
-    from .result import DyniaResult  # result imports this module for its methods
+    from ..result import DyniaResult
 
     version = dataset.attrs.get("dynia_result")
     if not isinstance(version, numbers.Integral) or not 1 <= version <= FORMAT_VERSION:
@@ -518,7 +518,7 @@ def _lazy(name, dataset, names, bounds, spans):
     """The arrays along time as DiskArrays that check each block on its first read."""
     import functools
 
-    from .storage import TIME_VARIABLES, disk_arrays
+    from .arrays import TIME_VARIABLES, disk_arrays
 
     keys = [key for key in _TIME_ARRAYS if key in dataset]
     for key in keys:
@@ -533,7 +533,7 @@ def _lazy(name, dataset, names, bounds, spans):
 
 def _check_stored_block(name, names, bounds, spans, key, file, start, stop):
     """:func:`check_time_block` for steps [start, stop) of variable ``key`` of the open h5py ``file``."""
-    from .storage import read_block
+    from .arrays import read_block
 
     companions = {other: read_block(file, other, start, stop) for other in _companions(key) if other in file}
     check_time_block(name, names, bounds, spans, key, read_block(file, key, start, stop), companions)
@@ -546,7 +546,7 @@ def _checked_verdicts(name, result, stored):
     (the texts may write times as the data file did); a stored ``noise_only`` of a result without the floor is
     taken on trust, as it came from the data and the model.
     """
-    from .verdicts import VERDICTS, assess
+    from ..verdicts import VERDICTS, assess
 
     if list(stored) != list(result.names):
         raise DataError(f"{name}: verdicts name {list(stored)}; expected the parameters {list(result.names)}")

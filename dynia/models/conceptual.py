@@ -14,7 +14,7 @@ HYMOD simulation, for water balances.
 Examples
 --------
 >>> import numpy as np
->>> from dynia.conceptual import tank
+>>> from dynia.models.conceptual import tank
 >>> model = tank()
 >>> model.names
 ('A', 'c')
@@ -30,8 +30,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import ModelError, SettingsError
-from .models import StateSpaceModel
+from ..errors import ModelError, SettingsError
+from . import StateSpaceModel
 
 try:
     import numba
@@ -282,7 +282,7 @@ def hymod(*, x0=None, compiled=None) -> StateSpaceModel:
     Examples
     --------
     >>> import numpy as np
-    >>> from dynia.conceptual import hymod
+    >>> from dynia.models.conceptual import hymod
     >>> u = np.zeros((6, 2))
     >>> u[1, 0] = 50.0      # one storm of 50 mm on a dry soil: 37.5 mm stored, 12.5 mm excess
     >>> hymod().simulate([[100.0, 1.0, 0.5, 0.5, 0.1]], u).round(3)
@@ -320,7 +320,7 @@ def hymod_fluxes(params, u, *, x0=None) -> dict:
     Examples
     --------
     >>> import numpy as np
-    >>> from dynia.conceptual import hymod_fluxes
+    >>> from dynia.models.conceptual import hymod_fluxes
     >>> u = np.column_stack([np.r_[0.0, 50.0, np.zeros(8)], np.full(10, 2.0)])
     >>> flux = hymod_fluxes([100.0, 1.0, 0.5, 0.5, 0.1], u)
     >>> change = flux["states"][-1].sum() - flux["states"][0].sum()
@@ -385,7 +385,7 @@ def tank(*, h0=0.0, substeps=10, compiled=None) -> StateSpaceModel:
     Examples
     --------
     >>> import numpy as np
-    >>> from dynia.conceptual import tank
+    >>> from dynia.models.conceptual import tank
     >>> level = tank().simulate([[1.0, 0.5], [4.0, 0.5]], np.full(5, 0.5))
     >>> level.round(3)          # the larger tank fills more slowly towards h* = 1
     array([[0.   , 0.296, 0.479, 0.608, 0.701],

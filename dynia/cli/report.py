@@ -4,7 +4,7 @@
 :func:`write_identification` one of ``dynia identify``; :func:`verdict_table`
 is the short table ``dynia analyse`` prints on success. Times are written as
 the data file wrote them (:func:`file_times`). Figures are decimated
-(:mod:`dynia.plotting`) so that their memory does not grow with the record.
+(:mod:`dynia.decimation`) so that their memory does not grow with the record.
 """
 
 import csv
@@ -15,9 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
-from . import segments
-from .plotting import envelope, plot_data, plot_inputs
-from .serial import json_ready
+from .. import segments
+from ..serial import json_ready
+from .figures import write_figures, write_fit_figure
 
 __all__ = [
     "write_analysis",
@@ -91,7 +91,7 @@ def write_analysis(directory, result, data, summary, *, offset=0.0, plots=True, 
     if not saved:
         result.save(directory / "result.nc")
     if plots:
-        _write_figures(directory, result, data, offset)
+        write_figures(directory, result, data, offset)
 
 
 def write_identification(directory, found, data, u, y, summary, *, offset=0.0, plots=True):
@@ -99,7 +99,7 @@ def write_identification(directory, found, data, u, y, summary, *, offset=0.0, p
     directory = Path(directory)
     write_json(directory / "identified.json", summary)
     if plots:
-        _write_fit_figure(directory / "fit.png", found, data, u, y, offset)
+        write_fit_figure(directory / "fit.png", found, data, u, y, offset)
 
 
 def noise_floor_summary(result, data):
@@ -215,56 +215,3 @@ def _write_csv(path, header, rows, times=None):
             if times is not None:
                 cells = [[time, *row] for time, row in zip(times[first : first + _CSV_BLOCK], cells)]
             writer.writerows(cells)
-
-
-def _figure_module():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def _write_figures(directory, result, data, offset):
-    plt = _figure_module()
-    grid_time = data.time - data.time[0]  # the clock of the result's plots
-    fig = plot_data(grid_time, data.u, data.y, offset=offset, xlabel="time (s from the first grid point)")
-    fig.savefig(directory / "data.png", dpi=110, bbox_inches="tight")
-    plt.close(fig)
-    for name in result.names:
-        for kind, plot in (("ic", result.plot_information_content), ("identifiability", result.plot_identifiability)):
-            fig, ax = plt.subplots(figsize=(9, 3.5))
-            plot(name, ax=ax)
-            ax.set_xlabel("time (s from the first grid point)")
-            fig.savefig(directory / f"{kind}_{name}.png", dpi=110, bbox_inches="tight")
-            plt.close(fig)
-
-
-def _write_fit_figure(path, found, data, u, y, offset):
-    plt = _figure_module()
-    grid_time = data.time - data.time[0]
-    fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(9, 5))
-    plot_inputs(top, grid_time, data.u)
-    bottom.plot(*envelope(grid_time, y), color="tab:orange", label="measured")
-    bottom.plot(*envelope(grid_time, found.fit.simulate(u)), color="k", linewidth=1, label="fitted model")
-    for number, (start, stop) in enumerate(found.segments):
-        for ax in (top, bottom):
-            ax.axvspan(
-                grid_time[start],
-                grid_time[stop - 1],
-                color="tab:green",
-                alpha=0.15,
-                label="fitted on" if number == 0 and ax is bottom else None,
-            )
-    start, _ = found.validation[0]
-    bottom.axvspan(grid_time[start], grid_time[-1], color="0.5", alpha=0.15, label="held out")
-    # The robust errors: residuals of process data are rarely independent.
-    robust = getattr(found.fit, "std_errors_hac", None) or found.std_errors
-    estimates = ", ".join(f"{name} = {value:.4g} \u00b1 {robust[name]:.2g}" for name, value in found.parameters.items())
-    top.set_title(f"{found.method}: {estimates}; validation RMSE {found.validation_error:.3g}")
-    bottom.set_ylabel("output" + (f" (minus {offset:g})" if offset else ""))
-    bottom.set_xlabel("time (s from the first grid point)")
-    bottom.legend(loc="best", fontsize=8)
-    fig.savefig(path, dpi=110, bbox_inches="tight")
-    plt.close(fig)

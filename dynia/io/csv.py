@@ -1,7 +1,7 @@
 """Process data: logged plant data onto the uniform grid DYNIA needs.
 
 The models of :mod:`dynia.models` and the moving window of
-:mod:`dynia.analysis` need one input and one output value per step of a
+:mod:`dynia.engine` need one input and one output value per step of a
 uniform grid. :func:`load_csv` makes them from what an engineer exports: a
 CSV file with one row per sample, two event logs in two files, or a
 historian's long table of (time, tag, value) rows. It returns a
@@ -22,7 +22,7 @@ to values the file never held, and a note names each such gap.
 
 Examples
 --------
->>> from dynia.data import resample_events
+>>> from dynia.io.csv import resample_events
 >>> grid, u, y = resample_events([0, 2.5, 4], [1, 1, 3], [0.5, 4.5], [2, 6], dt=1)
 >>> grid
 array([0.5, 1.5, 2.5, 3.5])
@@ -43,8 +43,8 @@ import re
 
 import numpy as np
 
-from . import _checks
-from .errors import DataError, SettingsError
+from .. import _checks
+from ..errors import DataError, SettingsError
 
 __all__ = ["DataError", "ProcessData", "load_csv", "resample_events"]
 
@@ -121,7 +121,7 @@ class ProcessData:
     Examples
     --------
     >>> import numpy as np
-    >>> from dynia.data import ProcessData
+    >>> from dynia.io.csv import ProcessData
     >>> data = ProcessData(time=np.array([0.0, 2.0, 4.0]), u=np.array([1.0, 1.0, 2.0]),
     ...                    y=np.array([0.0, np.nan, 0.8]), dt=2.0, start=0.0,
     ...                    notes=("1 output value missing, left as NaN in y",))
@@ -288,7 +288,7 @@ def load_csv(
 
     >>> import pathlib, tempfile
     >>> import numpy as np
-    >>> from dynia.data import load_csv
+    >>> from dynia.io.csv import load_csv
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     csv_path = pathlib.Path(folder, "loop.csv")
     ...     _ = csv_path.write_text("time,u,y\\n0,1,0.0\\n2,1,0.5\\n4,2,\\n6,2,1.4\\n")
@@ -447,7 +447,7 @@ def resample_events(times_u, u, times_y, y, dt=None, start=None, stop=None):
     Two logs of one ramp, stored at different times, land on the ramp:
 
     >>> import numpy as np
-    >>> from dynia.data import resample_events
+    >>> from dynia.io.csv import resample_events
     >>> grid, u, y = resample_events([0, 3, 10], [0, 3, 10], [1, 4, 9, 12], [2, 8, 18, 24], dt=2)
     >>> grid
     array([1., 3., 5., 7., 9.])

@@ -31,7 +31,7 @@ when the caller finishes without an exception. The rules:
 Examples
 --------
 >>> import pathlib, shutil, tempfile
->>> from dynia.outdir import OutputDirectory
+>>> from dynia.io.outdir import OutputDirectory
 >>> out = pathlib.Path(tempfile.mkdtemp()) / "results"
 >>> with OutputDirectory(out, command="analyse") as staging:
 ...     _ = (staging / "ic.csv").write_text("time,k\\n")
@@ -51,7 +51,7 @@ import tempfile
 import threading
 from pathlib import Path
 
-from .errors import Interrupted, OutputError
+from ..errors import Interrupted, OutputError
 
 __all__ = ["OutputDirectory", "MARKER"]
 
@@ -296,7 +296,7 @@ class OutputDirectory:
 
     def _write_marker(self, contents=None):
         """The marker file; ``contents`` (from :func:`_contents`) records what dynia wrote, when finished."""
-        from . import __version__  # here, not at import: dynia/__init__.py may import this module first
+        from .. import __version__
 
         record = dict(
             created_by="dynia",

@@ -1,16 +1,16 @@
 """The ``dynia`` command line: DYNIA on an engineer's own logged data, without Python.
 
 ``dynia analyse DATA.csv --time COL --input COL --output COL --model MODEL
---param NAME=LOW:HIGH ... --out DIR`` loads the data (:mod:`dynia.data`),
+--param NAME=LOW:HIGH ... --out DIR`` loads the data (:mod:`dynia.io.csv`),
 runs :func:`dynia.run` and writes tables, a JSON summary and figures to DIR.
 ``dynia analyse --config run.toml`` takes the same settings from a file.
 ``dynia identify DATA.csv`` with the same data and model options, and
 ``--method {dynia,baseline,whole}``, fits the model by least squares on the
 data the method selects and validates it on the held-out end of the record
-(:mod:`dynia.identify`), writing ``identified.json`` and ``fit.png``.
+(:mod:`dynia.identification`), writing ``identified.json`` and ``fit.png``.
 ``dynia suggest DATA.csv`` with the same data and model options proposes a
 window, a behavioural share and a number of samples for ``analyse`` and says
-why (:mod:`dynia.suggest`); ``--json`` prints it for machines. ``--window
+why (:mod:`dynia.suggestion`); ``--json`` prints it for machines. ``--window
 60s`` (or ``2min``, ``1h``) gives the window in time units instead of ``--n``.
 Bad input ends the command with one line on stderr and exit status 2.
 """
@@ -36,19 +36,20 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__, models, report
-from .data import load_csv
-from .engine.windows import OverflowedWindowsWarning
-from .errors import DyniaError, Interrupted, ModelError, OutputError, SettingsError
-from .identify import identify
-from .models.base import user_code_failed
-from .outdir import OutputDirectory
-from .pipeline import DroppedSamplesWarning, TargetNotReachedWarning, run
-from .quality import check_quality
-from .refine import narrowed_bounds
-from .settings import FLAVOURS, MAX_PARAMETER, SAMPLERS, AnalysisSettings
-from .suggest import MAX_SAMPLES, parse_duration, parse_size, suggest, window_half_width
-from .verdicts import assess
+from .. import __version__, models
+from ..engine.windows import OverflowedWindowsWarning
+from ..errors import DyniaError, Interrupted, ModelError, OutputError, SettingsError
+from ..identification import identify
+from ..io.csv import load_csv
+from ..io.outdir import OutputDirectory
+from ..models.base import user_code_failed
+from ..pipeline import DroppedSamplesWarning, TargetNotReachedWarning, run
+from ..quality import check_quality
+from ..refine import narrowed_bounds
+from ..settings import FLAVOURS, MAX_PARAMETER, SAMPLERS, AnalysisSettings
+from ..suggestion import MAX_SAMPLES, parse_duration, parse_size, suggest, window_half_width
+from ..verdicts import assess
+from . import report
 
 __all__ = ["main"]
 
@@ -1340,6 +1341,3 @@ def _done(options):
 # fill value (1e308, 9.9e37). Reported on every run; --quality lists them.
 _ABSURD = 1e12
 
-
-if __name__ == "__main__":
-    sys.exit(main())

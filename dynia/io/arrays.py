@@ -13,7 +13,7 @@ settings of :class:`dynia.settings.AnalysisSettings` bound that:
 ``store=PATH``
     Those arrays go to the netCDF-4 file ``PATH`` as they are produced, in
     time blocks (:class:`ResultFile`), never whole in memory. The file has
-    the layout :func:`dynia.store.save` writes, chunked over time, so
+    the layout :func:`dynia.io.netcdf.save` writes, chunked over time, so
     :func:`dynia.load` reads it, and the returned result reads it lazily:
     its time-dependent arrays are :class:`DiskArray` objects, which index
     like numpy arrays (``res.ic[p]`` reads one parameter's row) and turn into
@@ -30,7 +30,7 @@ is read one time block at a time for plots and one column for estimates.
 Examples
 --------
 >>> import numpy as np, tempfile, pathlib, dynia
->>> from dynia.analysis import moving_window
+>>> from dynia.engine import moving_window
 >>> gain = np.random.default_rng(1).uniform(0, 4, (500, 1))
 >>> u = np.r_[np.zeros(20), np.ones(40)]
 >>> with tempfile.TemporaryDirectory() as folder:
@@ -53,7 +53,7 @@ import tempfile
 import numpy as np
 from numpy.lib.mixins import NDArrayOperatorsMixin
 
-from .errors import DataError, OutputError
+from ..errors import DataError, OutputError
 
 __all__ = [
     "TIME_VARIABLES",
@@ -68,7 +68,7 @@ __all__ = [
     "PartialFile",
 ]
 
-# The result arrays that lie along time, with the file's dimensions (as dynia.store lays them out).
+# The result arrays that lie along time, with the file's dimensions (as dynia.io.netcdf lays them out).
 TIME_VARIABLES = {
     "ic": ("parameter", "time"),
     "ci": ("parameter", "time", "side"),
@@ -150,7 +150,7 @@ class ResultFile(ResultArrays):
     """Result arrays written to a netCDF-4 file as they are produced, then renamed into place.
 
     :meth:`allocate` creates ``.PATH.XXXX.partial`` beside ``PATH`` with
-    every variable laid out as :func:`dynia.store.save` writes it, the
+    every variable laid out as :func:`dynia.io.netcdf.save` writes it, the
     time-dependent ones chunked over time; :meth:`write` fills them block by
     block (a time block is buffered until its on-disk chunks are complete, so
     each chunk is written once); :meth:`commit` adds the settings, verdicts and
@@ -177,7 +177,7 @@ class ResultFile(ResultArrays):
     Made by hand, the file waits for its owner's commit, here after the verdicts:
 
     >>> import dataclasses, tempfile, pathlib, numpy as np, dynia
-    >>> from dynia.analysis import moving_window
+    >>> from dynia.engine import moving_window
     >>> gain = np.random.default_rng(1).uniform(0, 4, (500, 1))
     >>> u = np.r_[np.zeros(20), np.ones(40)]
     >>> with tempfile.TemporaryDirectory() as folder, ResultFile(pathlib.Path(folder, "r.nc")) as output:
@@ -317,7 +317,7 @@ class ResultFile(ResultArrays):
 
         ``result`` is the finished result whose arrays this file holds.
         """
-        from .store import metadata
+        from .netcdf import metadata
 
         attrs, variables = metadata(
             result,
@@ -343,7 +343,7 @@ class ResultFile(ResultArrays):
 
     def _describe(self, file, result, attrs, variables):
         """Write the settings' array variables, the timestamps and the attributes through the h5netcdf ``file``."""
-        from .store import TIMESTAMP_ATTRIBUTES
+        from .netcdf import TIMESTAMP_ATTRIBUTES
 
         for name, (dims, values) in variables.items():
             for axis, dim in enumerate(dims):
@@ -564,7 +564,7 @@ def _remove(path):
 def write_result(result, path, dtype=None):
     """Write ``result`` to ``path`` through a :class:`ResultFile`, one time block at a time.
 
-    How :func:`dynia.store.save` writes a result whose arrays are on disk
+    How :func:`dynia.io.netcdf.save` writes a result whose arrays are on disk
     (:class:`DiskArray`), so that saving it elsewhere never loads them whole.
     ``dtype`` defaults to that of ``result.ic``.
     """

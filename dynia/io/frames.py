@@ -9,7 +9,7 @@ caller has already done so, since a pandas object cannot exist before.
 Examples
 --------
 >>> import pandas as pd
->>> from dynia.frames import unpack
+>>> from dynia.io.frames import unpack
 >>> index = pd.date_range("2024-05-01 12:00", periods=4, freq="30s")
 >>> u, y, dt, stamps = unpack(pd.Series([0.0, 1, 1, 1], index), pd.Series([0.0, 0.2, 0.5, 0.7], index))
 >>> u, dt
@@ -24,12 +24,12 @@ import sys
 
 import numpy as np
 
-from .errors import DataError, SettingsError
+from ..errors import DataError, SettingsError
 
 __all__ = ["unpack"]
 
 # Index spacings count as uniform within this share of their mean, as in
-# dynia.data.load_csv: a DatetimeIndex built with pd.date_range(start, end,
+# dynia.io.csv.load_csv: a DatetimeIndex built with pd.date_range(start, end,
 # periods=...) rounds each step to the nanosecond.
 _UNIFORM = 1e-6
 
@@ -93,8 +93,8 @@ def unpack(u, y, dt=None):
     rounds each step to it), a numeric one when every spacing is within
     1e-6 of their mean, relative; ``dt`` is then the mean spacing, and
     ``dt`` given agrees when it is within 1e-6 of that, relative.
-    Irregular logs go through :func:`dynia.data.resample_events` or
-    :func:`dynia.data.load_csv` first, which make a uniform grid.
+    Irregular logs go through :func:`dynia.io.csv.resample_events` or
+    :func:`dynia.io.csv.load_csv` first, which make a uniform grid.
 
     Examples
     --------
@@ -189,7 +189,7 @@ def _numeric_spacing(seconds, name):
         raise DataError(
             f"{name} ({how}) is not uniformly spaced: from position {at} ({seconds[at]:g}) to {at + 1} "
             f"({seconds[at + 1]:g}) is {steps[at]:g} s, against {spacing:g} s on average; "
-            "dynia.data.resample_events makes a uniform grid"
+            "dynia.io.csv.resample_events makes a uniform grid"
         )
     return float(spacing)
 
@@ -251,7 +251,7 @@ def _spacing(timestamps, quantum, name):
         raise DataError(
             f"{name} is not uniformly spaced: from position {at} ({timestamps[at]}) to {at + 1} "
             f"({timestamps[at + 1]}) is {steps[at] / 1e9:g} s, but from 0 to 1 {steps[0] / 1e9:g} s; "
-            "dynia.data.resample_events or dynia.data.load_csv make a uniform grid"
+            "dynia.io.csv.resample_events or dynia.io.csv.load_csv make a uniform grid"
         )
     return int(timestamps[-1].astype(np.int64) - timestamps[0].astype(np.int64)) / (timestamps.size - 1) / 1e9
 

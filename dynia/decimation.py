@@ -10,7 +10,6 @@ through these helpers:
   bucket, so peaks, dips and the global extremes stay visible;
 * :func:`decimated_columns` thins an image over time to the maximum of each
   bucket, so a short stretch of dark (concentrated) CLD gradient stays dark;
-* :func:`plot_data` draws a record's input and output through :func:`envelope`.
 
 Below their thresholds the helpers return their input unchanged, so short
 records look exactly as when drawn in full. Buckets are runs of consecutive
@@ -24,7 +23,7 @@ import numpy as np
 from ._checks import whole_number
 from .errors import DataError
 
-__all__ = ["envelope", "decimated_columns", "plot_data", "plot_inputs"]
+__all__ = ["envelope", "decimated_columns"]
 
 # Values of an image read per block by decimated_columns (32 MB of float64).
 _BLOCK_VALUES = 2**22
@@ -100,7 +99,7 @@ def decimated_columns(time, image, max_columns=2000):
         Time of each column, increasing.
     image : array_like, shape (n_rows, n_steps)
         One column per time step; NaN marks a missing value. Anything with
-        ``shape`` and numpy slicing, such as a :class:`dynia.storage.DiskArray`,
+        ``shape`` and numpy slicing, such as a :class:`dynia.io.arrays.DiskArray`,
         is read a block of columns at a time.
     max_columns : int, default 2000
         Most columns returned, at least 1.
@@ -138,7 +137,7 @@ def decimated_columns(time, image, max_columns=2000):
         return time, np.asarray(image, dtype=float)
     width = _bucket_width(n_steps, max_columns)
     whole = n_steps // width * width
-    # Whole buckets a block at a time, so that an image on disk (dynia.storage) is never read whole; splitting
+    # Whole buckets a block at a time, so that an image on disk (dynia.io.arrays) is never read whole; splitting
     # the last axis of a row-major block is a view, so an image in memory is not copied either.
     block = width * max(1, _BLOCK_VALUES // (width * max(image.shape[0], 1)))
     columns = np.concatenate(
@@ -156,44 +155,6 @@ def decimated_columns(time, image, max_columns=2000):
     if whole < n_steps:
         columns = np.column_stack([columns, np.fmax.reduce(np.asarray(image[:, whole:], dtype=float), axis=1)])
     return (time[starts] + time[ends]) / 2, columns
-
-
-def plot_data(time, u, y, *, offset=0.0, xlabel="time"):
-    """The record's input (top) and output (bottom) over time, thinned by :func:`envelope`.
-
-    Parameters
-    ----------
-    time, u, y : array_like, shape (n_steps,)
-        Time, input and output; NaN in ``y`` marks a missing measurement.
-    offset : float, default 0.0
-        The output offset the analysis removed; when not 0 the output's
-        axis label says so.
-    xlabel : str, default "time"
-        Label of the shared time axis.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        A pyplot figure of two axes sharing the time axis; close it with
-        ``matplotlib.pyplot.close(fig)`` when written.
-
-    Examples
-    --------
-    >>> import numpy as np, matplotlib
-    >>> matplotlib.use("Agg")
-    >>> fig = plot_data(np.arange(10_000.0), np.ones(10_000), np.arange(10_000.0))
-    >>> [ax.lines[0].get_xdata().size for ax in fig.axes]
-    [4000, 4000]
-    """
-    import matplotlib.pyplot as plt
-
-    fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(9, 5))
-    plot_inputs(top, time, u)
-    bottom.plot(*envelope(time, y), color="tab:orange")
-    bottom.set_ylabel("output" + (f" (offset {offset:g} removed in the analysis)" if offset else ""))
-    bottom.set_xlabel(xlabel)
-    top.set_title("Data analysed")
-    return fig
 
 
 def _series(values, name):
@@ -223,15 +184,3 @@ def _bucket_extreme(values, width, extreme):
         found.append(best)
         start += block.size
     return np.concatenate(found), np.concatenate(steps)
-
-
-def plot_inputs(ax, time, u):
-    """Draw the input, (n_steps,) or one line per column of (n_steps, n_inputs), thinned by :func:`envelope`."""
-    u = np.asarray(u, dtype=float)
-    columns = u.reshape(u.shape[0], -1).T
-    for number, column in enumerate(columns):
-        label = f"input {number + 1}" if len(columns) > 1 else None
-        ax.plot(*envelope(time, column), color=None if len(columns) > 1 else "tab:blue", label=label)
-    ax.set_ylabel("input" if len(columns) == 1 else "inputs")
-    if len(columns) > 1:
-        ax.legend(loc="best", fontsize=8)

@@ -1,0 +1,7 @@
+"""``python -m dynia.cli``: the ``dynia`` command without its console script."""
+
+import sys
+
+from .main import main
+
+sys.exit(main())
