@@ -1340,4 +1340,3 @@ def _done(options):
 # Values beyond this are no measurement of a process: a logger's overflow or
 # fill value (1e308, 9.9e37). Reported on every run; --quality lists them.
 _ABSURD = 1e12
-
