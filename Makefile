@@ -31,7 +31,7 @@ $(shell mkdir -p reports && echo '$(PARAMS_ID)' | cmp -s - reports/.params || ec
 # NBVAL_CHECK_OUTPUT and checks that their code matches notebooks/.
 REFERENCES := $(patsubst notebooks/%.py,tests/notebooks/%.ipynb,$(NOTEBOOKS))
 
-.PHONY: install test check-wheel bench figures references clean
+.PHONY: install test check-wheel docs bench figures references clean
 
 install: $(INSTALLED)
 
@@ -45,11 +45,18 @@ test: $(INSTALLED)
 	$(PY) -m ruff check dynia tests notebooks benchmarks
 	$(PY) -m ruff format --check dynia tests benchmarks
 	$(PY) -m pytest
+	$(MAKE) docs
 	$(MAKE) check-wheel
 
 # The wheel a user installs, used from outside the checkout (see .ci/check-wheel).
 check-wheel: $(INSTALLED)
 	.ci/check-wheel $(PY)
+
+# The API reference from the docstrings, into docs/_build/html. Nitpicky (-n) with warnings as errors (-W):
+# a reference to a module or function that no longer exists fails it. -E reads every page afresh, so that a
+# second run reports the warnings of pages Sphinx would otherwise not reread.
+docs: $(INSTALLED)
+	$(PY) -m sphinx -E -n -W --keep-going -b html docs docs/_build/html
 
 bench: $(INSTALLED)
 	$(PY) -m benchmarks.bench

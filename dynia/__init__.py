@@ -5,10 +5,10 @@ The verbs are at the top level, each loading its module on first use, so
 
 * :func:`dynia.run` samples parameter sets, simulates them and runs the
   moving-window analysis, returning a :class:`~dynia.result.DyniaResult`;
-* :func:`dynia.suggestion` proposes a window, a behavioural share and a number of
+* :func:`dynia.suggest` proposes a window, a behavioural share and a number of
   samples for a record, with the reasons;
 * :func:`dynia.second_run` narrows what is identified and re-analyses the rest;
-* :func:`dynia.identification` fits a model by least squares on the data DYNIA (or a
+* :func:`dynia.identify` fits a model by least squares on the data DYNIA (or a
   baseline) selects and validates it on held-out data;
 * :func:`dynia.load` reads a saved result back; :func:`dynia.load_csv` reads
   logged plant data onto a uniform grid.
@@ -27,7 +27,7 @@ models and warnings. :mod:`dynia.online` (:class:`~dynia.online.OnlineDynia`),
 :mod:`dynia.adaptive` and :mod:`dynia.distributed` are the other front-ends
 over the same engine; :mod:`dynia.cli` is the ``dynia`` command.
 :mod:`dynia.reference` holds plain ports of the thesis's MATLAB
-(:mod:`dynia.thesis` is the same module) and of MCAT's ``id_time.m``, the
+(``dynia.thesis`` is the same module) and of MCAT's ``id_time.m``, the
 oracles the fast engine is tested against.
 
 Examples

@@ -13,12 +13,12 @@ The samples are drawn on the client exactly as :func:`dynia.run` draws them
 consecutive samples, and time into chunks of ``time_chunks`` steps.
 
 0. One task per sample chunk asks the model which of its samples simulate to
-   finite output (:meth:`dynia.models.Model.finite_samples`); the others are
+   finite output (:meth:`dynia.models.base.Model.finite_samples`); the others are
    dropped, as :func:`dynia.run` drops them.
 1. The samples kept are simulated chunk by chunk of time as well: one task
    per (sample chunk, time chunk) resumes the simulation of its samples
    from the state the task of the previous time chunk left
-   (:meth:`dynia.models.Model.simulate_span`, bit for bit one uninterrupted
+   (:meth:`dynia.models.base.Model.simulate_span`, bit for bit one uninterrupted
    simulation), simulates the steps the time chunk's windows reach that no
    earlier task simulated, and cuts, with the engine's own code, the time
    chunk's window inputs: the absolute errors over the chunk and its halo

@@ -70,13 +70,13 @@ class Interrupted(Exception):
 
 
 class SuggestionError(DyniaError):
-    """No settings can be proposed from this record (:func:`dynia.suggestion`): the message says why."""
+    """No settings can be proposed from this record (:func:`dynia.suggest`): the message says why."""
 
 
 class NothingSelected(DyniaError):
     """A selection of data came out empty: no informative window, segment or interval to fit on.
 
     Raised by the functions that select data (:func:`dynia.segments.segments_from_ic`,
-    :func:`dynia.identification`, ...) instead of returning nothing; the message says which
+    :func:`dynia.identify`, ...) instead of returning nothing; the message says which
     rule selected nothing and what to change.
     """

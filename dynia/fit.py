@@ -406,7 +406,7 @@ def fit_segments(
     model : dynia.models.Model
         For example ``dynia.models.FOPDT()``.
     segments : list of (start, stop)
-        The data to fit (see :func:`check_segments`); at least one measured
+        The data to fit (see :func:`~dynia.segments.check_segments`); at least one measured
         point each.
     bounds : mapping of str to (low, high), optional
         Range of each fitted parameter (infinite ends allowed). Required for
@@ -781,7 +781,7 @@ def validation_error(u, y, model, parameters, segments, *, dt=1.0, x0="steady", 
     parameters : mapping of str to float
         A value for every model parameter, e.g. ``fit.parameters``.
     segments : list of (start, stop), or boolean mask of shape (n_steps,)
-        The held-out data, e.g. from :func:`holdout_split`.
+        The held-out data, e.g. from :func:`~dynia.segments.holdout_split`.
     dt, x0, warmup, offset
         As :func:`fit_segments`.
 

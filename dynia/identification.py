@@ -2,7 +2,7 @@
 
 The thesis's closing loop (sections 4.3-4.4): hold out the end of the
 record for validation, choose the data to fit on, fit the model there by
-least squares (:func:`dynia.segments.fit_segments`) and score it on the
+least squares (:func:`dynia.fit.fit_segments`) and score it on the
 held-out part. :func:`identify` does this for one selection method, so that
 the methods can be compared on equal terms:
 

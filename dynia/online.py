@@ -16,7 +16,7 @@ gives one time step of it: ``ic`` (n_params,), ``ci`` (n_params, 2) as
 
 How an update works
 -------------------
-1. Every parameter set's model advances one step (:meth:`dynia.models.Model.stepper`,
+1. Every parameter set's model advances one step (:meth:`dynia.models.base.Model.stepper`,
    the same arithmetic as the batch simulation).
 2. Their absolute errors against the new measurement go into a ring buffer
    of the window's 2n+1 steps (a missing measurement, NaN, is a row of
@@ -116,7 +116,7 @@ class OnlineDynia:
     with fewer finite sets than the behavioural set needs have NaN results.
     ``.n_diverged`` counts them. With ``x0="steady"``, a dead time longer
     than the whole record can differ from the batch run in the last bits
-    (see :meth:`dynia.models.Model.stepper`).
+    (see :meth:`dynia.models.base.Model.stepper`).
 
     Examples
     --------

@@ -315,7 +315,7 @@ def _analyse_samples(u, y, model, names, box, samples, settings, progress, outpu
 
 
 def _simulations(u, model, params, sims, settings):
-    """``simulations(indices)`` of :func:`dynia.engine.analyse_stream`: those samples simulated once more."""
+    """``simulations(indices)`` of :func:`dynia.engine.windows.analyse_stream`: those samples simulated once more."""
 
     def simulations(rows):
         if sims is not None:

@@ -459,7 +459,7 @@ def informative_segments(result, *, threshold=0.75, parameter=None):
     """The stretches of data behind the windows whose IC reaches ``threshold``.
 
     An informative window makes every sample it used informative
-    (:meth:`DyniaResult.window_cover`: ``t-n .. t+n`` for a centred window,
+    (:meth:`~dynia.result.DyniaResult.window_cover`: ``t-n .. t+n`` for a centred window,
     ``t-2n .. t`` for a trailing one); overlapping or touching stretches are
     merged.
 

@@ -29,7 +29,7 @@ compare; the complement of the fitted segments would differ per method and
 be empty for the whole record. A block at the end predicts forward in time,
 as the model will be used, and keeps correlated neighbouring noise out of
 the fit. The held-out output must not inform the selection either: blank it
-(NaN) in the data given to :func:`dynia.run` and to :func:`fit_segments`.
+(NaN) in the data given to :func:`dynia.run` and to :func:`~dynia.fit.fit_segments`.
 
 Workflow (what ``dynia identify`` does)
 ---------------------------------------
@@ -43,6 +43,7 @@ Workflow (what ``dynia identify`` does)
     # random comparison: random_segments([b - a for a, b in segments], u.size, rng, exclude=held_out)
     fit = fit_segments(u, y_fit, model, segments, bounds=bounds, dt=dt)
     error = fit.validation_error(u, y, held_out)
+
 Examples
 --------
 >>> holdout_split(100)

@@ -104,7 +104,7 @@ def _choice(value, name, choices):
 
 
 def check_dt(dt):
-    """Return the sample time as a float > 0, or raise :class:`SettingsError` naming ``dt``."""
+    """Return the sample time as a float > 0, or raise :class:`~dynia.errors.SettingsError` naming ``dt``."""
     if isinstance(dt, (bool, str)) or np.ndim(dt) != 0:
         raise SettingsError(f"dt must be a finite number > 0; got {dt!r}", "dt")
     try:

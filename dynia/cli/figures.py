@@ -13,7 +13,7 @@ __all__ = ["plot_data", "plot_inputs", "write_figures", "write_fit_figure"]
 
 
 def plot_data(time, u, y, *, offset=0.0, xlabel="time"):
-    """The record's input (top) and output (bottom) over time, thinned by :func:`envelope`.
+    """The record's input (top) and output (bottom) over time, thinned by :func:`~dynia.decimation.envelope`.
 
     Parameters
     ----------
@@ -51,7 +51,10 @@ def plot_data(time, u, y, *, offset=0.0, xlabel="time"):
 
 
 def plot_inputs(ax, time, u):
-    """Draw the input, (n_steps,) or one line per column of (n_steps, n_inputs), thinned by :func:`envelope`."""
+    """Draw the input, (n_steps,) or one line per column of (n_steps, n_inputs), thinned.
+
+    Each line is thinned by :func:`~dynia.decimation.envelope`.
+    """
     u = np.asarray(u, dtype=float)
     columns = u.reshape(u.shape[0], -1).T
     for number, column in enumerate(columns):

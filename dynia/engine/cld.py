@@ -53,7 +53,7 @@ def likelihood(cost):
     lowest = value.min(axis=-1, keepdims=True)
     value = np.where(lowest < 0, value - lowest, value)
     # Summed in index order (not numpy's pairwise order), the order the
-    # compiled engine (dynia._fast) uses, so both give the same bits.
+    # compiled engine (dynia.engine.kernels) uses, so both give the same bits.
     total = np.cumsum(value, axis=-1)[..., -1:]
     degenerate = total[..., 0] == 0
     value[degenerate] = 1.0
@@ -158,7 +158,7 @@ def binned_mass(values, weights, low, high, bins):
     """Likelihood mass of the values in each of ``bins`` equal bins of [low, high].
 
     The CLD's increase across each bin: the thesis's CLD gradient, without the
-    quirks of its ``cld_gradient`` (see :mod:`dynia.thesis`). A value equal to
+    quirks of its ``cld_gradient`` (see :mod:`dynia.reference.thesis`). A value equal to
     ``high`` counts in the last bin.
 
     Returns

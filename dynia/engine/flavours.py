@@ -310,10 +310,10 @@ class WeightedFlavour(ThesisFlavour):
 
 
 class CompiledFlavour:
-    """The thesis and weighted flavours on the compiled kernel :func:`dynia.kernels.analyse_windows`.
+    """The thesis and weighted flavours on the compiled kernel :func:`dynia.engine.kernels.analyse_windows`.
 
     With ``batches`` > 0 (see :func:`ic_batches`) on
-    :func:`dynia.kernels.analyse_windows_batched`, which also reads IC and
+    :func:`dynia.engine.kernels.analyse_windows_batched`, which also reads IC and
     limits off each batch of samples, from the same window costs.
     """
 
@@ -477,7 +477,7 @@ class BatchedFlavour:
 
 
 class McatFlavour:
-    """MCAT 5.1 ``id_time.m``; the plain reference is :func:`dynia.mcat.id_time`."""
+    """MCAT 5.1 ``id_time.m``; the plain reference is :func:`dynia.reference.mcat.id_time`."""
 
     def __init__(self, params, bounds, percentage, bins, conf_level):
         n_samples = params.shape[0]

@@ -737,7 +737,7 @@ def analyse_windows(
 class CompiledErrors:
     """Absolute errors of a model's simulations, computed block by block by :func:`simulate_errors`.
 
-    A source for :func:`dynia.engine.analyse_stream`: ``rows(start,
+    A source for :func:`dynia.engine.windows.analyse_stream`: ``rows(start,
     stop)`` returns the time-major errors (stop - start, n_samples);
     requests must move forward in time, and the rows before a request are
     dropped, so memory stays at one block. The simulation of each block is

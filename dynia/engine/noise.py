@@ -127,6 +127,7 @@ From these residuals:
   negative estimate never lowers it. f is computed for the full window of
   2n+1 steps; truncated windows and windows with missing points, whose f
   is smaller, get a floor a little too high;
+
 The level sigma stays the windows' estimate above, not the record fit's
 residual level: where the model cannot fit a stretch, the record fit's
 residuals hold the misfit, and a floor raised by it would call the very

@@ -39,7 +39,7 @@ Flavours
     normalised; unweighted limits at sorted positions
     ``floor(c*(count-1))`` with ``c = (1-conf_level/100)/2`` and ``1-c``;
     ``IC = 1 - (upper-lower)/(high-low)``. IC and limits equal
-    :func:`dynia.thesis.moving_window_calcs`. The gradient is what the
+    :func:`dynia.reference.thesis.moving_window_calcs`. The gradient is what the
     thesis's ``cld_gradient`` sets out to compute, without its quirks: the
     likelihood mass of the behavioural values in each of ``bins`` equal bins
     of [low, high] (the CLD increase across the bin). Where every behavioural
@@ -47,7 +47,7 @@ Flavours
     then weights the behavioural sets equally.
 ``"mcat"``
     The DYNIA of Wagener's MCAT toolbox 5.1 (``id_time.m``, centred window):
-    see :mod:`dynia.mcat` for the plain reference and every detail. The
+    see :mod:`dynia.reference.mcat` for the plain reference and every detail. The
     gradient has ``bins + 1`` rows, at equally spaced points from the sample
     minimum to the sample maximum, and IC is normalised by the sample range.
 ``"weighted"``
@@ -218,7 +218,7 @@ def moving_window(
         trailing result at t equals the centred one at t-n wherever the
         centred window is not truncated by the end of the record.
     engine : {"auto", "numba", "numpy"}, default "auto"
-        The compiled kernels of :mod:`dynia._fast` or plain numpy; both give
+        The compiled kernels of :mod:`dynia.engine.kernels` or plain numpy; both give
         bit-identical results. "auto" takes numba when it is installed and
         the flavour is "thesis" or "weighted" without ``weights`` (the
         other cases always run on numpy).
@@ -336,7 +336,7 @@ def analyse_stream(
     ``sim_chunks`` yields (n_samples, m) arrays in time order that together
     cover ``y``; otherwise as :func:`moving_window`, which wraps this.
     ``sim_chunks`` may instead be a source of absolute errors with a
-    ``rows(start, stop)`` method, such as :class:`dynia.kernels.CompiledErrors`.
+    ``rows(start, stop)`` method, such as ``dynia.engine.kernels.CompiledErrors``.
     ``simulations(indices)`` yields the simulated output of the samples
     ``indices`` again, (len(indices), m) arrays in time order covering
     ``y``: the noise floor estimates the noise's autocorrelation from the
@@ -571,7 +571,7 @@ def _parameter_names(names, n_params):
 
 
 class StreamedErrors:
-    """Absolute errors |y - sim| over a sliding range of time, pulled from simulation chunks.
+    """Absolute errors ``|y - sim|`` over a sliding range of time, pulled from simulation chunks.
 
     Missing measurements (NaN in y) give an error of 0. Requests must move
     forward in time; columns before a request are dropped.
@@ -754,7 +754,7 @@ def window_mean(window_errors, measured, m, slots):
 
     Returns ``mae`` (m, n_samples) and the number of measured points per
     window (m,). Sums run left to right over each window, the order of
-    :func:`dynia.thesis.moving_window_calcs`, so the result depends on the
+    :func:`dynia.reference.thesis.moving_window_calcs`, so the result depends on the
     window's own errors only and equals the port's bit for bit.
     """
     total = window_errors[:, 0:m].copy()

@@ -396,10 +396,10 @@ class PartialFile:
     HDF5 writes from its caches whenever it closes an object, and after a
     write error (a full disk) every such write fails again: h5py prints each
     failure, and the library can crash at exit while it still holds the
-    file. Here the first failing write is kept in :attr:`error` and the file
+    file. Here the first failing write is kept in ``error`` and the file
     abandoned: that write and every later one succeed for HDF5 without
     touching the disk, so HDF5 goes on and lets go of the file quietly, and
-    the writer raises :attr:`error` at its next check (:meth:`check`). A
+    the writer raises ``error`` at its next check (:meth:`check`). A
     file about to be deleted is abandoned too (:meth:`abandon`).
     """
 

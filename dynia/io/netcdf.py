@@ -1,7 +1,7 @@
 """Results out: a :class:`~dynia.result.DyniaResult` as an xarray Dataset and a netCDF file, and back.
 
-:func:`to_xarray` (also :meth:`DyniaResult.to_xarray`) labels every array of
-a result with its dimensions; :func:`save` (:meth:`DyniaResult.save`) writes
+:func:`to_xarray` (also :meth:`~dynia.result.DyniaResult.to_xarray`) labels every array of
+a result with its dimensions; :func:`save` (:meth:`~dynia.result.DyniaResult.save`) writes
 that Dataset to netCDF-4 and :func:`load` (``dynia.load``) reads it back into
 the result it came from, every array bit for bit.
 

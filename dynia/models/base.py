@@ -444,9 +444,9 @@ class Model:
 
 
 def user_code_failed(what, error):
-    """The :class:`ModelError` for ``error``, raised by user code (``what`` names the call), or ``error`` re-raised.
+    """The ModelError for ``error``, raised by user code (``what`` names the call), or ``error`` re-raised.
 
-    Anything user code raises becomes a ModelError, ``SystemExit`` too: a
+    Anything user code raises becomes a :class:`~dynia.errors.ModelError`, ``SystemExit`` too: a
     model that exits would end the run without a word (or with status 0
     and nothing written). dynia's own errors, its signal interruptions,
     Ctrl-C and a generator's close pass unchanged. Use as ``except BaseException as error: raise
@@ -467,7 +467,7 @@ def user_code_failed(what, error):
 
 
 def check_names(names) -> tuple[str, ...]:
-    """Parameter names as a tuple of unique strings, or a :class:`ModelError`."""
+    """Parameter names as a tuple of unique strings, or a :class:`~dynia.errors.ModelError`."""
     if isinstance(names, str) or not all(isinstance(name, str) for name in names):
         raise ModelError(f"names must be a sequence of strings; got {names!r}")
     names = tuple(names)

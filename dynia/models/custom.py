@@ -466,7 +466,7 @@ class StateErrors:
     """Absolute errors of a compiled StateSpaceModel, time-major, one block of steps at a time.
 
     A source for the engine's compiled windows (like
-    :class:`dynia.engine.kernels.CompiledErrors` for the linear models):
+    ``dynia.engine.kernels.CompiledErrors`` for the linear models):
     ``rows(start, stop)`` gives (stop - start, n_samples) errors, requests
     moving forward in time. The samples are split over ``workers`` threads,
     each advancing its own slice of the state. Instead of simulating once

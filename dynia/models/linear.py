@@ -205,7 +205,7 @@ class LinearModel(Model):
                 raise ModelError(f"{name} must be >= 0; sample {sample} has {name} = {column[sample]}")
 
     def discretise(self, params: np.ndarray, dt: float, n_steps: int, steady: bool) -> _DiscreteSystem:
-        """The exact discretisation of every sample (see :class:`_DiscreteSystem`)."""
+        """The exact discretisation of every sample (see ``_DiscreteSystem``)."""
         raise NotImplementedError(f"{type(self).__name__} must implement discretise(params, dt, n_steps, steady)")
 
 
@@ -459,7 +459,7 @@ class TransferFunction(LinearModel):
     n_inputs : int, default 1
         Number of inputs, i.e. columns of ``u``, which is then
         ``(n_steps, n_inputs)``. Every system the factory returns must have
-        this many inputs (a :class:`ModelError` says so otherwise).
+        this many inputs (a :class:`~dynia.errors.ModelError` says so otherwise).
 
     Notes
     -----

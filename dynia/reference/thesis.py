@@ -18,99 +18,103 @@ output per row; ``par`` is (ns,), the samples of the one parameter analysed;
 
 Quirks kept and deviations made
 -------------------------------
-=====================================  =============================================
-MATLAB behaviour                       What this port does
-=====================================  =============================================
-``movingWindowCalcs`` reads ``yn``,    Uses the argument ``y`` (the only sensible
-which it never receives (it only       reading; the example script passes the
-exists in the example script).         noise-free ``y``, this port uses whatever is
-                                       passed).
-The waitbar (and its ``partitle``,     Dropped: no progress display.
-also never received).
-MATLAB's ``sum`` adds in an order of    Sums run left to right (``numpy.cumsum``),
-its own choosing.                      the order of a plain loop, so the costs
-                                       can be reproduced exactly.
-Some long lines are cut off in the     Read as the mean over the points present
-printed code: the MAE of the full      (divided by ``2n+1`` and ``TIME-tStep+n+1``),
-and final windows, and the argument    and as the arguments the callee bodies use:
-lists of ``movingWindowCalcs``,        ``runDynia(ns, par, best_mat, lb, ub,
-``runDynia`` and ``cumulLikelihood``.  bins)``, ``cumulLikelihood(ns,
-                                       all_par_sorted, par_sorted,
-                                       par_sorted_indices, lhood)``.
-``best = zeros(TIME, ns*(percentage    Not stored (nothing reads it), but the port
-/100), 2)`` fails when                 raises ``ValueError`` in the same cases.
-``ns*percentage/100`` is not an
-integer.
-Windows ``1:tStep+n`` and              Same windows, so the series must hold at
-``tStep-n:TIME`` index outside the     least ``2n`` steps; shorter series raise
-data when ``TIME < 2n``.               ``ValueError`` instead of an index error.
-``calcLikelihood`` uses                Kept: with ``count_max == 1`` the MATLAB
-``length(best_mat)``, the larger       reads a second row that does not exist; the
-dimension of the (count_max, 2)        port raises ``ValueError`` (fewer than two
-matrix.                                behavioural sets).
-Likelihood ``1 - cost``, shifted by    Kept, including the 0/0 = NaN weights when
-``-min`` only when negative, then      every behavioural cost is equal and >= 1.
-normalised.
-``cumulLikelihood``'s second           Read as ``all_par_sorted(it) <
-``while`` condition is cut off in      par_sorted(size)``. ``lhood_c_all`` is
-the printed code.                      computed (grown with zero fill as MATLAB
-                                       does) and returned, though nothing uses it.
-``cld_gradient`` bin width             Kept: the width is added repeatedly, so the
-``(ub-lb)/(bins-1)``, built by         last edges drift by rounding and ``bins``
-repeated addition from ``lb + w``.     bins of that width overrun ``ub``.
-A bin's value is the CLD at its last   Kept: the first sample's weight in each bin
-sample minus the CLD at its first.     is dropped; an empty bin gets minus the next
-                                       sample's weight.
-The bin holding the largest            Kept (they come out 0).
-behavioural value and the last bin.
-``end_index = 0`` when the first       MATLAB stops with an index error; the port
-behavioural value lies exactly on an   raises ``ValueError``.
-edge (``lhood_cumulated(0)``).
-``confLimits``: unweighted limits at   Kept, with the same floating-point
-1-based index ``floor(c*(count_max-     arithmetic (``c1 = (1-conf_level/100)/2``,
-1))+1``.                               ``c2 = 1-c1``).
-``runDynia`` hard-codes                Kept as the default; ``conf_level`` is also
-``conf_level = 90``.                   a keyword-only extra argument of
-                                       ``run_dynia`` and ``moving_window_calcs`` so
-                                       that other levels can be checked.
-``ub == lb`` gives Inf/NaN IC and      Raises ``ValueError`` (``lb < ub`` needed).
-``bins == 1`` an infinite width.       Raises ``ValueError`` (``bins >= 2``).
-=====================================  =============================================
+::
+
+    =====================================  =============================================
+    MATLAB behaviour                       What this port does
+    =====================================  =============================================
+    ``movingWindowCalcs`` reads ``yn``,    Uses the argument ``y`` (the only sensible
+    which it never receives (it only       reading; the example script passes the
+    exists in the example script).         noise-free ``y``, this port uses whatever is
+                                           passed).
+    The waitbar (and its ``partitle``,     Dropped: no progress display.
+    also never received).
+    MATLAB's ``sum`` adds in an order of    Sums run left to right (``numpy.cumsum``),
+    its own choosing.                      the order of a plain loop, so the costs
+                                           can be reproduced exactly.
+    Some long lines are cut off in the     Read as the mean over the points present
+    printed code: the MAE of the full      (divided by ``2n+1`` and ``TIME-tStep+n+1``),
+    and final windows, and the argument    and as the arguments the callee bodies use:
+    lists of ``movingWindowCalcs``,        ``runDynia(ns, par, best_mat, lb, ub,
+    ``runDynia`` and ``cumulLikelihood``.  bins)``, ``cumulLikelihood(ns,
+                                           all_par_sorted, par_sorted,
+                                           par_sorted_indices, lhood)``.
+    ``best = zeros(TIME, ns*(percentage    Not stored (nothing reads it), but the port
+    /100), 2)`` fails when                 raises ``ValueError`` in the same cases.
+    ``ns*percentage/100`` is not an
+    integer.
+    Windows ``1:tStep+n`` and              Same windows, so the series must hold at
+    ``tStep-n:TIME`` index outside the     least ``2n`` steps; shorter series raise
+    data when ``TIME < 2n``.               ``ValueError`` instead of an index error.
+    ``calcLikelihood`` uses                Kept: with ``count_max == 1`` the MATLAB
+    ``length(best_mat)``, the larger       reads a second row that does not exist; the
+    dimension of the (count_max, 2)        port raises ``ValueError`` (fewer than two
+    matrix.                                behavioural sets).
+    Likelihood ``1 - cost``, shifted by    Kept, including the 0/0 = NaN weights when
+    ``-min`` only when negative, then      every behavioural cost is equal and >= 1.
+    normalised.
+    ``cumulLikelihood``'s second           Read as ``all_par_sorted(it) <
+    ``while`` condition is cut off in      par_sorted(size)``. ``lhood_c_all`` is
+    the printed code.                      computed (grown with zero fill as MATLAB
+                                           does) and returned, though nothing uses it.
+    ``cld_gradient`` bin width             Kept: the width is added repeatedly, so the
+    ``(ub-lb)/(bins-1)``, built by         last edges drift by rounding and ``bins``
+    repeated addition from ``lb + w``.     bins of that width overrun ``ub``.
+    A bin's value is the CLD at its last   Kept: the first sample's weight in each bin
+    sample minus the CLD at its first.     is dropped; an empty bin gets minus the next
+                                           sample's weight.
+    The bin holding the largest            Kept (they come out 0).
+    behavioural value and the last bin.
+    ``end_index = 0`` when the first       MATLAB stops with an index error; the port
+    behavioural value lies exactly on an   raises ``ValueError``.
+    edge (``lhood_cumulated(0)``).
+    ``confLimits``: unweighted limits at   Kept, with the same floating-point
+    1-based index ``floor(c*(count_max-     arithmetic (``c1 = (1-conf_level/100)/2``,
+    1))+1``.                               ``c2 = 1-c1``).
+    ``runDynia`` hard-codes                Kept as the default; ``conf_level`` is also
+    ``conf_level = 90``.                   a keyword-only extra argument of
+                                           ``run_dynia`` and ``moving_window_calcs`` so
+                                           that other levels can be checked.
+    ``ub == lb`` gives Inf/NaN IC and      Raises ``ValueError`` (``lb < ub`` needed).
+    ``bins == 1`` an infinite width.       Raises ``ValueError`` (``bins >= 2``).
+    =====================================  =============================================
 
 The text and its code disagree
 ------------------------------
-=====================================  =============================================
-The thesis's text says                 Its code does (and this port with it)
-=====================================  =============================================
-The cost of a window is the summed     ``wCost = wMAE.^2``: the squared *mean
-squared error, SSE (sections 2.2.2,    absolute* error over the window (commented
-3 and 4.2).                            "SSE value for the window"). It ranks the
-                                       samples by the L1 norm of their errors, and
-                                       the likelihood ``1 - cost`` weights them by
-                                       it. Kept.
-Eq. 2.3 normalises the band by "the    ``IC = 1 - (CI(2) - CI(1))/(ub - lb)``: by
-maximum and minimum acceptable values  the *sampling* range. Kept. Over the
-of the parameters in the behavioural   behavioural set's own range the IC would
-set".                                  measure the shape of the behavioural values,
-                                       not their width: on example 1 a set a tenth
-                                       of the range wide and one spanning all of it
-                                       read about the same low IC (0.15 and 0.07;
-                                       notebooks/ch2_method.py draws both).
-The uncertainty limits are read off    ``confLimits`` takes unweighted sorted
-the cumulative likelihood distribution positions ``floor(c (count-1))`` of the
-(sections 2.2.2, 2.2.3.1).             behavioural values: the likelihood never
-                                       enters the limits, so neither the band nor
-                                       the IC depends on it. Kept (the engine's
-                                       ``"weighted"`` flavour reads the CLD).
-The simulations use ``lsim`` (section  ``example_firstorder.m`` simulates the Monte
-3).                                    Carlo sets with forward Euler, time step 1,
-                                       from a state of 70 (``lsim`` is commented out
-                                       as the "alternative simulation method"):
-                                       ported as :func:`euler_simulation`. Its
-                                       measured output comes from ``lsim`` from
-                                       ``y0 = 0``: data and sets come from two
-                                       different simulators.
-=====================================  =============================================
+::
+
+    =====================================  =============================================
+    The thesis's text says                 Its code does (and this port with it)
+    =====================================  =============================================
+    The cost of a window is the summed     ``wCost = wMAE.^2``: the squared *mean
+    squared error, SSE (sections 2.2.2,    absolute* error over the window (commented
+    3 and 4.2).                            "SSE value for the window"). It ranks the
+                                           samples by the L1 norm of their errors, and
+                                           the likelihood ``1 - cost`` weights them by
+                                           it. Kept.
+    Eq. 2.3 normalises the band by "the    ``IC = 1 - (CI(2) - CI(1))/(ub - lb)``: by
+    maximum and minimum acceptable values  the *sampling* range. Kept. Over the
+    of the parameters in the behavioural   behavioural set's own range the IC would
+    set".                                  measure the shape of the behavioural values,
+                                           not their width: on example 1 a set a tenth
+                                           of the range wide and one spanning all of it
+                                           read about the same low IC (0.15 and 0.07;
+                                           notebooks/ch2_method.py draws both).
+    The uncertainty limits are read off    ``confLimits`` takes unweighted sorted
+    the cumulative likelihood distribution positions ``floor(c (count-1))`` of the
+    (sections 2.2.2, 2.2.3.1).             behavioural values: the likelihood never
+                                           enters the limits, so neither the band nor
+                                           the IC depends on it. Kept (the engine's
+                                           ``"weighted"`` flavour reads the CLD).
+    The simulations use ``lsim`` (section  ``example_firstorder.m`` simulates the Monte
+    3).                                    Carlo sets with forward Euler, time step 1,
+                                           from a state of 70 (``lsim`` is commented out
+                                           as the "alternative simulation method"):
+                                           ported as :func:`euler_simulation`. Its
+                                           measured output comes from ``lsim`` from
+                                           ``y0 = 0``: data and sets come from two
+                                           different simulators.
+    =====================================  =============================================
 
 The example script, beyond the DYNIA files: :func:`euler_simulation` is its
 Monte Carlo simulation loop, :func:`plot_parameter_estimation` its
@@ -405,7 +409,7 @@ def moving_window_from_costs(wCost, par, lb, ub, ns, bins, percentage, *, conf_l
 
     The cost loop of :func:`moving_window_calcs` runs in Python over every sample of every window, which
     is slow for long records. Given each window's costs ``wMAE.^2`` (for instance from
-    :func:`dynia.engine.window_costs`, which computes them as the MATLAB does, bit for bit), this runs
+    :func:`dynia.engine.windows.window_costs`, which computes them as the MATLAB does, bit for bit), this runs
     the rest of the loop body: ``selectBestParameters``, ``runDynia`` and the information content. It
     skips only ``cumulLikelihood``'s ``lhood_c_all``, which nothing reads. For the same costs it returns
     what :func:`moving_window_calcs` returns.
@@ -426,7 +430,7 @@ def moving_window_from_costs(wCost, par, lb, ub, ns, bins, percentage, *, conf_l
     Examples
     --------
     >>> import numpy as np
-    >>> from dynia.engine import window_costs
+    >>> from dynia.engine.windows import window_costs
     >>> rng = np.random.default_rng(0)
     >>> par = rng.uniform(0, 1, 50)
     >>> mct = par[:, None] * np.ones((50, 30))
@@ -609,7 +613,7 @@ def plot_parameter_estimation(time, CI_t, gradient_data, lb, ub, bins, *, ax=Non
 def thesis_code_result(y, sims, samples, bounds, names, *, n, percentage, bins, time=None, conf_level=90):
     """DYNIA as the thesis's code computes it, on given simulations, as a :class:`dynia.DyniaResult`.
 
-    The costs of every window are those of ``movingWindowCalcs`` (:func:`dynia.engine.window_costs`,
+    The costs of every window are those of ``movingWindowCalcs`` (:func:`dynia.engine.windows.window_costs`,
     bit for bit), and each parameter goes through :func:`moving_window_from_costs`: the information
     content and limits are the engine's ``"thesis"`` flavour's, the gradient is ``cld_gradient``'s, with
     its quirks. Row b of the gradient holds the behavioural values in ``[lb + b w, lb + (b+1) w)`` with
@@ -698,7 +702,7 @@ def thesis_code_result(y, sims, samples, bounds, names, *, n, percentage, bins, 
 def _matlab_window_costs(y, sims, n, start, stop):
     """``wMAE.^2`` of the windows at steps [start, stop), with MATLAB's inf and NaN where a simulation diverged.
 
-    :func:`dynia.engine.window_costs` refuses non-finite simulations; the thesis's Euler loop makes them
+    :func:`dynia.engine.windows.window_costs` refuses non-finite simulations; the thesis's Euler loop makes them
     (T < 0.5). In MATLAB a window holding an inf costs inf and one holding a NaN costs NaN, and its sort
     puts both after every finite cost, inf before NaN, as numpy's does.
     """
