@@ -12,7 +12,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from dynia import __version__, load
-from dynia.cli.main import UsageError, _bounds, main
+from dynia.cli.commands import UsageError, _bounds, main
 from dynia.models import FirstOrder
 
 HEATING_ARGS = (

@@ -82,7 +82,7 @@ def never_analysed(monkeypatch):
         raise AssertionError("the analysis started although the command should have stopped before")
 
     for name in ("run", "load_csv", "identify"):
-        monkeypatch.setattr(dynia.cli.main, name, refuse)
+        monkeypatch.setattr(dynia.cli.commands, name, refuse)
 
 
 # ------------------------------------------------------------------ output directory: never destroy anything
@@ -125,7 +125,7 @@ def test_out_current_directory_or_its_parent_is_refused(tmp_path, capsys, monkey
     def refuse(*args, **kwargs):
         raise AssertionError("the analysis started")
 
-    monkeypatch.setattr(dynia.cli.main, "run", refuse)
+    monkeypatch.setattr(dynia.cli.commands, "run", refuse)
     cli_one_error(*cli_analyse(capsys, data, *BASE, "--out", out, "--overwrite"), "--out")
     cli_one_error(*cli_analyse(capsys, data, *BASE, "--out", out), "--out")
     assert tree_state(tmp_path) == before

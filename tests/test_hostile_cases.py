@@ -47,7 +47,7 @@ def never_analysed(monkeypatch):
         raise AssertionError("the command went on although it should have stopped before")
 
     for name in ("run", "load_csv", "identify", "suggest"):
-        monkeypatch.setattr(dynia.cli.main, name, refuse)
+        monkeypatch.setattr(dynia.cli.commands, name, refuse)
 
 
 def _model_file(path, side_effect=None):
