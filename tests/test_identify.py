@@ -5,6 +5,7 @@ import json
 import numpy as np
 import pytest
 
+from dynia.errors import NothingSelected
 from dynia.identification import identify
 from dynia.models import FirstOrder, SecondOrderDelay
 from dynia.segments import random_segments
@@ -76,7 +77,6 @@ def test_to_dict_has_the_checked_keys():
         (dict(segments=[(0, 10)]), "segments are given exactly when"),
         (dict(bounds={"K": (0, 7)}), r"missing: \['T'\]"),
         (dict(model=SecondOrderDelay()), "unknown"),
-        (dict(ic_threshold=1.0, n_samples=200), "selected no data"),
     ],
 )
 def test_bad_requests_get_clear_errors(options, message):
@@ -85,6 +85,14 @@ def test_bad_requests_get_clear_errors(options, message):
     arguments.update({key: options.pop(key) for key in ("model", "bounds") if key in options})
     with pytest.raises(ValueError, match=message):
         identify(u, y, arguments["model"], arguments["bounds"], **options)
+
+
+def test_a_selection_of_nothing_raises_nothing_selected():
+    u, y = _record(steps=200)
+    with pytest.raises(NothingSelected, match="segments_from_ic selected nothing"):
+        identify(u, y, FirstOrder(), BOUNDS, ic_threshold=1.0, n_samples=200)
+    with pytest.raises(NothingSelected, match="no given segment reaches into the fitting part"):
+        identify(u, y, FirstOrder(), BOUNDS, method="given", segments=[(150, 200)], held_out=0.3)
 
 
 def _busy_record(seed=0):

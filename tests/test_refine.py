@@ -35,14 +35,14 @@ def test_the_gain_is_narrowed_around_its_band_and_the_time_constant_sharpens(exa
 
 def test_nothing_identified_nothing_narrowed(example1_twice):
     first = example1_twice[0]
-    new, narrowed = narrowed_bounds(first, {"K": (0, 7), "T": (0, 7)}, threshold=0.99)
+    new, narrowed = narrowed_bounds(first, {"K": (0, 7), "T": (0, 7)}, ic_threshold=0.99)
     assert narrowed == [] and new == {"K": (0.0, 7.0), "T": (0.0, 7.0)}
 
 
 @pytest.mark.parametrize(
     "kwargs, message",
     [
-        (dict(threshold=1.5), "threshold must lie strictly between"),
+        (dict(ic_threshold=1.5), r"ic_threshold must be a number in \[0, 1\]"),
         (dict(margin=-1), "margin must be >= 0"),
     ],
 )

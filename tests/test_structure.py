@@ -203,8 +203,9 @@ def test_one_odd_block_is_not_enough_and_many_blocks_need_a_fifth_to_agree():
 def test_only_informative_windows_count():
     peaks = two_regimes(6, 13)
     result = hand_built(peaks)
-    result.ic[0, 50:] = 0.5
-    assert structure_warnings(result) == []
+    result.ic[0, 50:] = 0.45
+    assert structure_warnings(result) == []  # below the default IC_THRESHOLD 0.5
+    assert len(structure_warnings(result, ic_threshold=0.45)) == 1
     result.ic[0, 50:] = np.nan  # windows with too few points
     assert structure_warnings(result) == []
     assert len(structure_warnings(result, ic_threshold=0.4)) == 0
@@ -269,7 +270,7 @@ def test_every_parameter_is_checked_separately():
 @pytest.mark.parametrize(
     "kwargs, error, message",
     [
-        (dict(ic_threshold=1.0), ValueError, "ic_threshold must lie strictly between 0 and 1"),
+        (dict(ic_threshold=1.5), ValueError, r"ic_threshold must be a number in \[0, 1\]"),
         (dict(min_windows=0), ValueError, "min_windows must be at least 1"),
         (dict(drift_tolerance=0), ValueError, "drift_tolerance must lie strictly between"),
         (dict(ignore=np.zeros(99, dtype=bool)), ValueError, r"ignore must be a boolean array of shape \(100,\)"),
