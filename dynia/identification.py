@@ -9,9 +9,10 @@ the methods can be compared on equal terms:
 ``"dynia"``
     :func:`dynia.run` on the fitting part (the held-out output blanked),
     then :func:`dynia.segments.segments_from_ic`: the stretches where the
-    information content of a parameter (``mode="any"``) or of all
-    (``"joint"``) reaches ``ic_threshold`` in windows above the noise floor
-    (``DyniaResult.informative``: never a window that only ranks noise).
+    windows are informative about a parameter (``mode="any"``) or about all
+    (``"joint"``) at ``ic_threshold``
+    (:meth:`dynia.result.DyniaResult.informative_windows`: never a window
+    that only ranks noise).
     Also reports the model-structure
     warnings of :func:`dynia.structure.structure_warnings` and the
     analysis's ``windows_disagree`` verdict reasons (:mod:`dynia.verdicts`).
@@ -66,7 +67,7 @@ import numpy as np
 
 from . import _checks
 from .baseline import find_intervals
-from .errors import SettingsError
+from .errors import NothingSelected, SettingsError
 from .fit import fit_segments
 from .pipeline import run
 from .quality import check_quality
@@ -79,7 +80,7 @@ from .segments import (
     segments_to_times,
 )
 from .serial import json_number
-from .settings import AnalysisSettings, parameter_box
+from .settings import IC_THRESHOLD, AnalysisSettings, parameter_box
 from .structure import structure_warnings
 
 __all__ = ["Identification", "identify", "METHODS", "SELECTED_ALL_SHARE"]
@@ -192,7 +193,7 @@ def identify(
     n=None,
     percentage=None,
     flavour=None,
-    ic_threshold=0.5,
+    ic_threshold=IC_THRESHOLD,
     mode="any",
     min_length=None,
     merge_gap=None,
@@ -307,7 +308,7 @@ def identify(
         dynia_result = run(u, y_fit, model, bounds, settings=analysis, rng=rng)
         chosen = intersect_segments(
             segments_from_ic(
-                dynia_result, threshold=ic_threshold, mode=mode, min_length=min_length, merge_gap=merge_gap
+                dynia_result, ic_threshold=ic_threshold, mode=mode, min_length=min_length, merge_gap=merge_gap
             ),
             fit_part,
         )
@@ -328,14 +329,7 @@ def identify(
     else:
         chosen = intersect_segments(check_segments(segments, y.size), fit_part)
     if not chosen:
-        raise SettingsError(
-            f"method {method!r} selected no data to fit on"
-            + (
-                f" (no window above the noise floor reached IC {ic_threshold}; lower ic_threshold)"
-                if method == "dynia"
-                else ""
-            )
-        )
+        raise NothingSelected(f"method {method!r} selected no data to fit on: {_NOTHING_SELECTED[method]}")
     if report is not None:
         inside = sum(len(found) for found in report.findings_in(chosen).values())
         if inside:
@@ -392,6 +386,13 @@ def identify(
         selected_share=selected_share,
     )
 
+
+# Why a method selected nothing in the fitting part, and what to change (DYNIA's own rule raises before this).
+_NOTHING_SELECTED = {
+    "dynia": "its informative segments all lie in the held-out part; hold out another part (held_out)",
+    "baseline": "the interval search accepted no interval in the fitting part; loosen baseline_options",
+    "given": "no given segment reaches into the fitting part; give segments outside held_out",
+}
 
 # A held-out part too quiet to validate anything (module docs): its input's
 # standard deviation below this share of the fitted data's ...

@@ -18,8 +18,8 @@ from .io.frames import unpack
 from .models import LinearModel, Model, StateSpaceModel
 from .models.custom import StateErrors
 from .sampling import sample
-from .settings import ADAPTIVE_SAMPLERS, MAX_PARAMETER, AnalysisSettings, parameter_box
-from .verdicts import WEAK_BELOW, assess
+from .settings import ADAPTIVE_SAMPLERS, IC_THRESHOLD, MAX_PARAMETER, AnalysisSettings, parameter_box
+from .verdicts import assess
 
 __all__ = [
     "run",
@@ -359,7 +359,7 @@ def _analyse_to_target(u, y, model, names, box, samples, settings, generator, pr
     return result
 
 
-def ic_se_that_matters(result, threshold=WEAK_BELOW):
+def ic_se_that_matters(result, threshold=IC_THRESHOLD):
     """The largest Monte Carlo standard error of IC over the steps where it can change a conclusion.
 
     Those are, for every parameter, the steps whose IC is within two
@@ -376,7 +376,7 @@ def ic_se_that_matters(result, threshold=WEAK_BELOW):
         With ``ic_se`` (``ic_error=True``).
     threshold : float, default 0.5
         The IC from which a parameter counts as identified
-        (:func:`dynia.verdicts.assess`'s ``weak_below``).
+        (:func:`dynia.verdicts.assess`'s ``ic_threshold``).
 
     Returns
     -------

@@ -7,7 +7,7 @@ sample and then returned to their steady values; the thesis concludes that
 high-IC segments must be checked for erroneous data. :func:`check_quality`
 does that check on the record, :meth:`QualityReport.findings_in` says which
 findings fall inside the informative segments of a result
-(:func:`informative_segments`), and :meth:`QualityReport.exclude` removes the
+(:func:`dynia.segments.segments_from_ic`), and :meth:`QualityReport.exclude` removes the
 flagged samples before a new run.
 
 Shapes follow the package convention (see :mod:`dynia.engine`): ``time``,
@@ -129,7 +129,7 @@ from . import _checks
 from .errors import DataError, SettingsError
 from .segments import mask_to_segments
 
-__all__ = ["Finding", "QualityReport", "check_quality", "informative_segments", "KINDS", "SIGNALS"]
+__all__ = ["Finding", "QualityReport", "check_quality", "KINDS", "SIGNALS"]
 
 KINDS = ("magnitude", "glitch", "outlier", "stuck")
 SIGNALS = ("u", "y")
@@ -288,7 +288,7 @@ class QualityReport:
         ----------
         segments : sequence of (start, stop)
             Sample index ranges ``[start, stop)``, for example from
-            :func:`informative_segments`.
+            :func:`dynia.segments.segments_from_ic`.
 
         Returns
         -------
@@ -453,41 +453,6 @@ def check_quality(
     return QualityReport(
         findings=tuple(findings), time=time, missing={"u": np.isnan(u), "y": np.isnan(y)}, settings=settings
     )
-
-
-def informative_segments(result, *, threshold=0.75, parameter=None):
-    """The stretches of data behind the windows whose IC reaches ``threshold``.
-
-    An informative window makes every sample it used informative
-    (:meth:`~dynia.result.DyniaResult.window_cover`: ``t-n .. t+n`` for a centred window,
-    ``t-2n .. t`` for a trailing one); overlapping or touching stretches are
-    merged.
-
-    Parameters
-    ----------
-    result : DyniaResult
-    threshold : float in (0, 1), default 0.75
-        IC from which a window counts as informative.
-    parameter : str, optional
-        Only this parameter's IC (default: any parameter's).
-
-    Returns
-    -------
-    list of (int, int)
-        Sample index ranges ``[start, stop)`` in time order.
-
-    Examples
-    --------
-    >>> import numpy as np, dynia
-    >>> u = np.r_[np.zeros(20), np.ones(40)]
-    >>> y = dynia.models.FirstOrder().simulate([[2.0, 3.0]], u)[0]
-    >>> res = dynia.run(u, y, dynia.models.FirstOrder(), {"K": (0, 7), "T": (0, 7)}, n=2, rng=1)
-    >>> informative_segments(res, parameter="K")[0][0] > 15
-    True
-    """
-    threshold = _checks.open_interval(threshold, "threshold", 0, 1)
-    informative = result.ic_at_least(threshold, parameter)
-    return mask_to_segments(result.window_cover(informative))
 
 
 def _signal_findings(signal, values, time, settings):

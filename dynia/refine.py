@@ -6,8 +6,10 @@ a second run, with the same number of samples, sees the other parameters
 far more sharply. :func:`narrowed_bounds` makes that choice from the first
 result and :func:`second_run` does both runs.
 
-The rule: a window is informative about a parameter when its IC reaches
-``threshold``, its band keeps clear of the range's bounds
+The rule: a window counts for a parameter when it is informative about it
+(:meth:`dynia.result.DyniaResult.informative_windows`: IC at least
+``ic_threshold``, above the noise floor, behavioural set not tied within
+noise), its band keeps clear of the range's bounds
 (:func:`dynia.structure.clear_of_bounds`) and it belongs to a run of at
 least ``min_windows`` such windows in a row. A parameter is identified when
 it has informative windows and all their bands overlap, i.e. they agree on
@@ -28,12 +30,13 @@ from . import _checks
 from .errors import SettingsError
 from .pipeline import run
 from .segments import mask_to_segments
+from .settings import IC_THRESHOLD
 from .structure import clear_of_bounds
 
 __all__ = ["narrowed_bounds", "second_run"]
 
 
-def narrowed_bounds(result, bounds, *, threshold=0.75, margin=0.5, min_windows=3):
+def narrowed_bounds(result, bounds, *, ic_threshold=IC_THRESHOLD, margin=0.5, min_windows=3):
     """New ranges from a first run: the agreed band of each identified parameter.
 
     Parameters
@@ -42,11 +45,11 @@ def narrowed_bounds(result, bounds, *, threshold=0.75, margin=0.5, min_windows=3
         The first run.
     bounds : mapping of str to (low, high)
         Its ranges.
-    threshold : float in (0, 1)
-        IC from which a window counts as informative about a parameter.
-        Windows below the noise floor, or whose behavioural set ties within
-        noise (:mod:`dynia.engine.noise`), never count: their band ranks
-        noise.
+    ic_threshold : float in [0, 1], default :data:`dynia.settings.IC_THRESHOLD` (0.5)
+        IC from which a window is informative about a parameter
+        (:meth:`~dynia.result.DyniaResult.informative_windows`: windows
+        below the noise floor, or whose behavioural set ties within noise,
+        never are: their band ranks noise).
     margin : float >= 0
         Share of the width of the bands' common part added on each side.
     min_windows : int >= 1
@@ -66,12 +69,13 @@ def narrowed_bounds(result, bounds, *, threshold=0.75, margin=0.5, min_windows=3
     >>> y = dynia.models.FirstOrder().simulate([[2.0, 3.0]], u)[0]
     >>> first = dynia.run(u, y, dynia.models.FirstOrder(), {"K": (0, 7), "T": (0, 7)}, rng=1)
     >>> new, narrowed = narrowed_bounds(first, {"K": (0, 7), "T": (0, 7)})
-    >>> narrowed  # T reaches IC 0.75 only in the decay's tail, where the best sets tie: no narrowing
-    ['K']
-    >>> bool(new["K"][0] < 2 < new["K"][1] and new["T"] == (0.0, 7.0))
+    >>> narrowed
+    ['K', 'T']
+    >>> bool(new["K"][0] < 2 < new["K"][1] and new["T"][0] < 3 < new["T"][1])
     True
+    >>> narrowed_bounds(first, {"K": (0, 7), "T": (0, 7)}, ic_threshold=0.75)[1]  # T's windows at 0.75 disagree
+    ['K']
     """
-    threshold = _checks.open_interval(threshold, "threshold", 0, 1)
     min_windows = _checks.whole_number(min_windows, "min_windows", minimum=1)
     if not margin >= 0:
         raise SettingsError(f"margin must be >= 0; got {margin!r}")
@@ -80,10 +84,9 @@ def narrowed_bounds(result, bounds, *, threshold=0.75, margin=0.5, min_windows=3
     new_bounds, narrowed = {}, []
     for name, (low, high) in bounds.items():
         p = result.index(name)
-        with np.errstate(invalid="ignore"):  # NaN compares False
-            informative = _in_long_runs(
-                (result.ic[p] >= threshold) & clear_of_bounds(result, p) & _bands_from_data(result), min_windows
-            )
+        informative = _in_long_runs(
+            result.informative_windows(ic_threshold, name)[0] & clear_of_bounds(result, p), min_windows
+        )
         lowers, uppers = result.ci[p, informative, 0], result.ci[p, informative, 1]
         if not informative.any() or lowers.max() > uppers.min():
             new_bounds[name] = (float(low), float(high))
@@ -99,23 +102,6 @@ def narrowed_bounds(result, bounds, *, threshold=0.75, margin=0.5, min_windows=3
     return new_bounds, narrowed
 
 
-def _bands_from_data(result):
-    """Windows whose band the data decide, (n_steps,) bool: above the noise floor, behavioural set not tied.
-
-    Below the floor (``result.informative``) a window tells no parameter
-    values apart; with its behavioural set tied within noise
-    (``behavioural_spread`` at most ``behavioural_floor``) the band is a
-    ranking of noise. Neither may narrow a range. All True for a result
-    without the floor.
-    """
-    decided = np.ones(result.time.shape, dtype=bool)
-    if result.informative is not None:
-        decided &= np.asarray(result.informative, dtype=bool)
-    if result.behavioural_spread is not None:
-        decided &= np.asarray(result.behavioural_spread) > np.asarray(result.behavioural_floor)
-    return decided
-
-
 def _in_long_runs(flags, min_length):
     """``flags`` without the runs of True shorter than ``min_length``."""
     kept = np.zeros_like(flags)
@@ -125,7 +111,7 @@ def _in_long_runs(flags, min_length):
     return kept
 
 
-def second_run(u, y, model, bounds, *, threshold=0.75, margin=0.5, **options):
+def second_run(u, y, model, bounds, *, ic_threshold=IC_THRESHOLD, margin=0.5, **options):
     """Run DYNIA, narrow the well-identified parameters, run again.
 
     ``options`` go to both :func:`dynia.run` calls (``rng`` too: give a
@@ -137,15 +123,16 @@ def second_run(u, y, model, bounds, *, threshold=0.75, margin=0.5, **options):
     first, second : DyniaResult
     narrowed : list of str
         The parameters whose range the second run narrowed; empty when none
-        reached ``threshold`` (the second run then repeats the first's ranges).
+        had informative windows at ``ic_threshold`` that agree (the second
+        run then repeats the first's ranges).
     """
     first = run(u, y, model, bounds, **options)
-    new_bounds, narrowed = narrowed_bounds(first, bounds, threshold=threshold, margin=margin)
+    new_bounds, narrowed = narrowed_bounds(first, bounds, ic_threshold=ic_threshold, margin=margin)
     second = run(u, y, model, new_bounds, **options)
     second.settings.update(
         first_run_bounds={name: tuple(map(float, pair)) for name, pair in bounds.items()},
         narrowed=narrowed,
-        narrowing_threshold=threshold,
+        narrowing_threshold=ic_threshold,
         narrowing_margin=margin,
     )
     return first, second, narrowed

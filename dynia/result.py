@@ -9,6 +9,7 @@ Monte Carlo errors ``ic_se`` (n_params, n_steps) and ``ci_se`` (n_params,
 n_steps, 2).
 """
 
+import numbers
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -16,6 +17,7 @@ import numpy as np
 from .decimation import decimated_columns, envelope
 from .engine.cld import binned_mass
 from .errors import SettingsError
+from .settings import IC_THRESHOLD
 
 __all__ = ["DyniaResult"]
 
@@ -176,6 +178,72 @@ class DyniaResult:
             reached = rows >= threshold
         return reached.any(axis=0) if mode == "any" else reached.all(axis=0)
 
+    def informative_windows(self, ic_threshold=IC_THRESHOLD, parameters=None):
+        """Which windows are informative about each parameter, (n_params, n_steps) bool: the package's one rule.
+
+        A window is informative about a parameter when its IC reaches
+        ``ic_threshold`` and that IC is the data's, not the noise's: the
+        window lies above the noise floor (:attr:`informative`: it tells
+        parameter sets apart beyond what measurement noise alone does) and
+        its behavioural set is not tied within noise (:attr:`behavioural_spread`
+        above :attr:`behavioural_floor`; when it ties, which sets are kept,
+        and so the band whose width the IC is, is decided by the noise
+        realisation). A window with no IC (NaN: too few measured points) never
+        is. Windows truncated by the record's ends count: the floor judges
+        each window with its own measured points, so a truncated window above
+        it is informative about the data it holds. With ``ic_threshold=0``
+        the mask is every window whose IC says something about the data.
+
+        Every rule that judges windows starts from this mask and may only
+        narrow it: the segments of :func:`dynia.segments.segments_from_ic`
+        (and so ``dynia identify``), the verdicts' evidence
+        (:func:`dynia.verdicts.high_ic_windows`), the second run's narrowing
+        (:func:`dynia.refine.narrowed_bounds`), the structure warnings
+        (:func:`dynia.structure.structure_warnings`) and the grey veil of the
+        plots. The verdicts and the structure warnings also need whole
+        windows (``full_windows``), so that the windows they compare hold
+        equally many points; the second run and the structure warnings need
+        bands clear of the range's bounds and runs of several windows.
+
+        A result without the noise floor (``informative`` None: the
+        reference ports :mod:`dynia.reference`, results built by hand, files
+        saved before the floor existed) has only the IC test; one with the
+        floor but without the behavioural spread skips the tie test.
+
+        Parameters
+        ----------
+        ic_threshold : float in [0, 1], default :data:`dynia.settings.IC_THRESHOLD` (0.5)
+            IC from which a window can be informative.
+        parameters : str or sequence of str, optional
+            The parameters, one row each in this order (default: all of
+            :attr:`names`); a single name gives one row.
+
+        Returns
+        -------
+        ndarray of bool, shape (len(parameters), n_steps)
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> res = DyniaResult(names=("K",), samples=np.zeros((2, 1)), bounds=np.array([[0.0, 1.0]]),
+        ...                   time=np.arange(4.0), ic=np.array([[0.9, 0.9, 0.9, np.nan]]), ci=np.zeros((1, 4, 2)),
+        ...                   gradient=np.zeros((1, 1, 4)), bin_centres=np.zeros((1, 1)),
+        ...                   informative=np.array([True, False, True, True]))
+        >>> res.informative_windows().tolist()  # step 1 below the floor, step 3 without IC
+        [[True, False, True, False]]
+        """
+        if isinstance(ic_threshold, bool) or not isinstance(ic_threshold, numbers.Real) or not 0 <= ic_threshold <= 1:
+            raise SettingsError(f"ic_threshold must be a number in [0, 1] (IC lies there); got {ic_threshold!r}")
+        names = self.names if parameters is None else ((parameters,) if isinstance(parameters, str) else parameters)
+        rows = np.asarray(self.ic)[[self.index(name) for name in names]]
+        with np.errstate(invalid="ignore"):  # NaN compares False
+            informative = rows >= ic_threshold
+            if self.informative is not None:
+                informative &= np.asarray(self.informative, dtype=bool)
+            if self.behavioural_spread is not None:
+                informative &= ~(np.asarray(self.behavioural_spread) <= np.asarray(self.behavioural_floor))
+        return informative
+
     def window_cover(self, steps):
         """Which samples the windows at the marked ``steps`` used, as a boolean mask (n_steps,).
 
@@ -239,8 +307,8 @@ class DyniaResult:
         """Per parameter: the reported window's IC, when it occurs, the band and the estimate there, and a verdict.
 
         The reported window (``max_ic``, ``time_of_max_ic``) is the one of
-        highest IC among the windows that can be evidence (whole, above the
-        noise floor, behavioural set untied) when one reaches 0.5, else the
+        highest IC among the windows that are evidence (informative,
+        :meth:`informative_windows`, and whole) when there is one, else the
         one of highest IC of all (:func:`dynia.verdicts.reported_step`);
         ``highest_ic`` and ``time_of_highest_ic`` are the record's highest
         IC wherever it lies. The estimate is the CLD median (:attr:`median`)
@@ -251,9 +319,10 @@ class DyniaResult:
         :mod:`dynia.verdicts`). Parameters whose IC is missing everywhere get
         None for the numbers.
 
-        ``high_ic_windows`` counts the windows whose IC reaches the verdicts'
-        0.5 above the noise floor (:func:`dynia.verdicts.high_ic_windows`),
-        the evidence whose agreement the verdict checks, and
+        ``high_ic_windows`` counts the windows informative about the
+        parameter at the verdicts' threshold (:meth:`informative_windows`,
+        :func:`dynia.verdicts.high_ic_windows`), the evidence whose agreement
+        the verdict checks, and
         ``high_ic_span`` gives the time of the first and of the last of
         them ([None, None] when there is none).
 
@@ -346,8 +415,9 @@ class DyniaResult:
 
         With :attr:`ic_se`, IC +- 2 standard errors is shaded blue (and a
         legend names it and the veil): where the shading crosses a
-        threshold, more samples could change the verdict. Windows below the noise floor (:attr:`informative` False)
-        are veiled in grey. Returns the matplotlib Axes. A long record is
+        threshold, more samples could change the verdict. Windows whose IC ranks noise (below the noise floor or
+        with the behavioural set tied, never informative: :meth:`informative_windows`) are veiled in grey.
+        Returns the matplotlib Axes. A long record is
         drawn through :func:`dynia.decimation.envelope`, so its memory does not
         grow with it.
         """
@@ -370,7 +440,7 @@ class DyniaResult:
                 label="IC +- 2 standard errors",
             )
         ax.plot(*envelope(axis, self.ic[p]), color="k", linewidth=1)
-        self._veil_uninformative(ax, axis)
+        self._veil_uninformative(ax, axis, p)
         if self.ic_se is not None:
             ax.legend(loc="best", fontsize="small")
         ax.set_ylim(0, 1)
@@ -422,9 +492,10 @@ class DyniaResult:
         """Confidence band over time with the CLD gradient in grey (darker = larger).
 
         The thesis's parameter identifiability plot (Figures 2.9, 3.4, ...).
-        ``true_value`` draws a dashed line. Windows below the noise floor
-        (:attr:`informative` False) are veiled in grey: their band and
-        gradient rank noise. Returns the matplotlib Axes. A long
+        ``true_value`` draws a dashed line. Windows whose IC ranks noise
+        (below the noise floor or with the behavioural set tied, never
+        informative: :meth:`informative_windows`) are veiled in grey: their
+        band and gradient rank noise. Returns the matplotlib Axes. A long
         record is drawn through :mod:`dynia.decimation` (each time bucket's
         largest gradient and the envelope of the limits), so its memory does
         not grow with it.
@@ -468,7 +539,7 @@ class DyniaResult:
         ax.plot(*envelope(axis, self.ci[p, :, 1]), color="tab:red", linewidth=1, label="upper limit")
         if true_value is not None:
             ax.axhline(true_value, color="k", linestyle="--", linewidth=1, label="true value")
-        self._veil_uninformative(ax, axis)
+        self._veil_uninformative(ax, axis, p)
         low, high = self.bounds[p]
         ax.set_ylim(min(low, self.bin_centres[p].min()), max(high, self.bin_centres[p].max()))
         ax.set_xlim(axis[0], axis[-1])
@@ -479,14 +550,19 @@ class DyniaResult:
         ax.legend(loc="upper right", fontsize="small")
         return ax
 
-    def _veil_uninformative(self, ax, axis):
-        """A translucent grey band over each run of windows below the noise floor, from edge to edge of its steps.
+    def _veil_uninformative(self, ax, axis, p):
+        """A translucent grey band over each run of windows whose IC of parameter ``p`` ranks noise.
 
-        One collection however many runs, so a long record's plot stays small.
+        Those are the windows with an IC that :meth:`informative_windows` never
+        calls informative, whatever the threshold: below the noise floor, or
+        with the behavioural set tied within noise. One collection however
+        many runs, so a long record's plot stays small.
         """
-        if self.informative is None or np.all(self.informative):
+        with np.errstate(invalid="ignore"):
+            noise = ~self.informative_windows(0.0, self.names[p])[0] & ~np.isnan(self.ic[p])
+        if not noise.any():
             return
-        below = np.concatenate(([False], ~np.asarray(self.informative, dtype=bool), [False]))
+        below = np.concatenate(([False], noise, [False]))
         starts = np.flatnonzero(below[1:] & ~below[:-1])
         stops = np.flatnonzero(~below[1:] & below[:-1])
         # A step reaches halfway to its neighbours; the record's first and last steps end at themselves.
@@ -500,7 +576,7 @@ class DyniaResult:
             alpha=0.5,
             linewidth=0,
             zorder=1.5,
-            label="below the noise floor",
+            label="IC ranks noise (below the noise floor or tied)",
         )
 
     def _plot_axis(self, ax):

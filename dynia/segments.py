@@ -4,9 +4,10 @@ The thesis (sections 4.3 and 4.4) proposes DYNIA as the first step of system
 identification: select the data segments of high information content, then
 estimate the parameters on those segments with least squares (its section
 1.2.3.1) and check the model on other data. This module does the selection:
-:func:`segments_from_ic` turns IC curves into segments, through the one rule
-that maps informative windows to the samples they used
-(:meth:`dynia.result.DyniaResult.window_cover`); :mod:`dynia.fit` fits the
+:func:`segments_from_ic` turns IC curves into segments: the informative
+windows (:meth:`dynia.result.DyniaResult.informative_windows`, the package's
+one rule) at the steps their IC is plotted at, the windows' centres
+(:meth:`dynia.result.DyniaResult.window_centres`); :mod:`dynia.fit` fits the
 model on them and scores it on held-out data. Shapes follow
 :mod:`dynia.engine.windows`.
 
@@ -57,8 +58,9 @@ from collections.abc import Mapping
 import numpy as np
 
 from . import _checks
-from .errors import DataError, SettingsError
+from .errors import DataError, NothingSelected, SettingsError
 from .result import DyniaResult
+from .settings import IC_THRESHOLD
 
 __all__ = [
     "check_segments",
@@ -199,26 +201,29 @@ def intersect_segments(segments, allowed):
     return common
 
 
-def segments_from_ic(result, *, threshold=0.5, min_length=None, merge_gap=None, parameters=None, mode="any"):
-    """Segments where the information content reaches a threshold.
+def segments_from_ic(
+    result, *, ic_threshold=IC_THRESHOLD, min_length=None, merge_gap=None, parameters=None, mode="any"
+):
+    """Segments where the windows are informative: the data selection of ``dynia identify``.
 
-    Steps are informative where the IC of the chosen parameters is at least
-    ``threshold`` (NaN, a window with too few measured points, never is)
-    and, when the result has its noise floor (``result.informative``), the
-    window tells parameter sets apart beyond noise: a high IC below the
-    floor is a ranking of noise and never selected. Gaps shorter than ``merge_gap`` steps between informative runs are
-    closed, then runs shorter than ``min_length`` steps are dropped. The IC
-    of a window belongs to the step at its centre: for a run with
-    ``window="trailing"`` (read from ``result.settings``) the IC at ``t``
-    counts for step ``t - n``.
+    A step is selected where the window whose IC belongs to it is
+    informative (:meth:`~dynia.result.DyniaResult.informative_windows`: IC
+    at least ``ic_threshold``, above the noise floor, behavioural set not
+    tied within noise). The IC of a window belongs to the step at its
+    centre, where the plots draw it: for a run with ``window="trailing"``
+    (read from ``result.settings``) the IC at ``t`` counts for step
+    ``t - n``. Gaps shorter than ``merge_gap`` steps between informative
+    runs are closed, then runs shorter than ``min_length`` steps are dropped.
+    This is the package's one map from informative windows to data: the data
+    quality checks locate their findings in these segments too.
 
     Parameters
     ----------
     result : DyniaResult
         A DYNIA run; its ``ic`` is (n_params, n_steps).
-    threshold : float or mapping of str to float, default 0.5
-        IC from which a step counts as informative, in [0, 1]; a mapping
-        gives one per parameter (every chosen parameter needs one).
+    ic_threshold : float or mapping of str to float, default :data:`dynia.settings.IC_THRESHOLD` (0.5)
+        IC from which a window is informative, in [0, 1]; a mapping gives
+        one per parameter (every chosen parameter needs one).
     min_length : int, optional
         Shortest run kept. Default: one window, ``2n+1`` steps, with ``n``
         from ``result.settings`` (1 when unknown). Neighbouring windows share
@@ -228,17 +233,23 @@ def segments_from_ic(result, *, threshold=0.5, min_length=None, merge_gap=None, 
         Gaps shorter than this are closed. Default: ``n`` steps from
         ``result.settings`` (0 when unknown): a dip shorter than half a
         window separates windows that still share most of their data.
-    parameters : sequence of str, optional
+    parameters : str or sequence of str, optional
         The parameters considered (default: all of ``result.names``).
     mode : {"any", "joint", "per_parameter"}, default "any"
-        ``"any"``: a step is informative when at least one parameter's IC
-        reaches its threshold; the union of what each parameter needs, the
-        data to fit all parameters together. ``"joint"``: every parameter's
-        IC must. ``"per_parameter"``: the segments of each parameter.
+        ``"any"``: a step is selected when at least one parameter's window
+        is informative; the union of what each parameter needs, the data to
+        fit all parameters together. ``"joint"``: every parameter's must be.
+        ``"per_parameter"``: the segments of each parameter (a parameter
+        may have none, as long as one has some).
 
     Returns
     -------
     list of (start, stop), or dict of str to such lists for ``"per_parameter"``
+
+    Raises
+    ------
+    NothingSelected
+        When no segment is left: lower ``ic_threshold`` or ``min_length``.
 
     Examples
     --------
@@ -265,20 +276,43 @@ def segments_from_ic(result, *, threshold=0.5, min_length=None, merge_gap=None, 
     if mode not in MODES:
         raise SettingsError(f"mode must be one of {MODES}; got {mode!r}")
     chosen = _chosen_parameters(parameters, result.names)
-    limits = _thresholds(threshold, chosen)
+    limits = _thresholds(ic_threshold, chosen)
     half_window = result.settings.get("n")
     window_length = None if half_window is None else 2 * half_window + 1
     min_length = _default_length(min_length, "min_length", 1, 1 if window_length is None else window_length)
     merge_gap = _default_length(merge_gap, "merge_gap", 0, 0 if half_window is None else half_window)
-    informative = np.array([result.ic_at_least(limit, name) for name, limit in zip(chosen, limits)])
-    if result.informative is not None:
-        informative &= np.asarray(result.informative, dtype=bool)
+    informative = np.array([result.informative_windows(limit, name)[0] for name, limit in zip(chosen, limits)])
     if half_window is not None:
         informative = np.array([result.window_centres(row) for row in informative])
     if mode == "per_parameter":
-        return {name: _clean_runs(row, merge_gap, min_length) for name, row in zip(chosen, informative)}
-    combined = informative.all(axis=0) if mode == "joint" else informative.any(axis=0)
-    return _clean_runs(combined, merge_gap, min_length)
+        found = {name: _clean_runs(row, merge_gap, min_length) for name, row in zip(chosen, informative)}
+        selected = any(found.values())
+    else:
+        combined = informative.all(axis=0) if mode == "joint" else informative.any(axis=0)
+        found = _clean_runs(combined, merge_gap, min_length)
+        selected = bool(found)
+    if not selected:
+        raise NothingSelected(
+            f"segments_from_ic selected nothing: no run of at least min_length={min_length} steps of windows "
+            f"informative about {_which(chosen, mode)} (IC >= {_limits_text(chosen, limits)}, above the noise floor, "
+            "behavioural set untied); lower ic_threshold or min_length"
+            + ("" if mode != "joint" or len(chosen) == 1 else ", or use mode 'any'")
+        )
+    return found
+
+
+def _which(chosen, mode):
+    """The parameters a selection looked at, in words."""
+    if len(chosen) == 1:
+        return chosen[0]
+    return ("all of " if mode == "joint" else "any of ") + ", ".join(chosen)
+
+
+def _limits_text(chosen, limits):
+    """The thresholds in words: one number, or one per parameter."""
+    if len(set(limits.tolist())) == 1:
+        return f"{limits[0]:g}"
+    return ", ".join(f"{limit:g} for {name}" for name, limit in zip(chosen, limits))
 
 
 def _chosen_parameters(parameters, names):
@@ -298,19 +332,19 @@ def _chosen_parameters(parameters, names):
     return chosen
 
 
-def _thresholds(threshold, chosen):
-    if isinstance(threshold, Mapping):
-        missing = [name for name in chosen if name not in threshold]
-        unknown = [name for name in threshold if name not in chosen]
+def _thresholds(ic_threshold, chosen):
+    if isinstance(ic_threshold, Mapping):
+        missing = [name for name in chosen if name not in ic_threshold]
+        unknown = [name for name in ic_threshold if name not in chosen]
         if missing or unknown:
             raise SettingsError(
-                f"threshold must give a value for each parameter {list(chosen)}"
+                f"ic_threshold must give a value for each parameter {list(chosen)}"
                 + (f"; missing: {missing}" if missing else "")
                 + (f"; not among them: {unknown}" if unknown else "")
             )
-        values = [threshold[name] for name in chosen]
+        values = [ic_threshold[name] for name in chosen]
     else:
-        values = [threshold] * len(chosen)
+        values = [ic_threshold] * len(chosen)
     for name, value in zip(chosen, values):
         if (
             isinstance(value, bool)
@@ -318,7 +352,7 @@ def _thresholds(threshold, chosen):
             or not math.isfinite(value)
             or not 0 <= value <= 1
         ):
-            raise SettingsError(f"threshold of {name} must be a number in [0, 1] (IC lies there); got {value!r}")
+            raise SettingsError(f"ic_threshold of {name} must be a number in [0, 1] (IC lies there); got {value!r}")
     return np.array(values, dtype=float)
 
 

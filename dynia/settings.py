@@ -49,6 +49,7 @@ __all__ = [
     "MAX_SAMPLES",
     "MAX_HALF_WINDOW",
     "MAX_WORKERS",
+    "IC_THRESHOLD",
     "check_dt",
     "check_x0",
     "parameter_box",
@@ -73,6 +74,10 @@ MAX_PARAMETER = 1e150
 MAX_SAMPLES = 100_000_000
 MAX_HALF_WINDOW = 100_000_000
 MAX_WORKERS = 1024
+# The information content from which a window is informative (DyniaResult.informative_windows): the one default of
+# every rule that judges windows (verdicts, segments, second run, structure warnings). At 0.5 a window's band spans at
+# most half of the parameter's sampling range.
+IC_THRESHOLD = 0.5
 _SAMPLES_WHY = " (DYNIA needs thousands; beyond this the samples alone fill the memory)"
 
 

@@ -15,9 +15,12 @@ n_bins, n_steps), ``bin_centres`` (n_params, n_bins).
 
 The rule
 --------
-1. Informative windows: IC at least ``ic_threshold``, leaving out
+1. Informative windows (:meth:`~dynia.result.DyniaResult.informative_windows`:
+   IC at least ``ic_threshold``, above the noise floor, behavioural set not
+   tied within noise), leaving out
 
-   - the first and last ``n`` windows, which are truncated (thesis 4.1);
+   - the first and last ``n`` windows, which are truncated (thesis 4.1), so
+     that every block compared is read off windows of equal length;
    - windows that use a sample marked in ``ignore`` (for instance the
      glitches found by :func:`dynia.quality.check_quality`: the thesis's
      highest IC of the time constant sat on one erroneous reading);
@@ -85,6 +88,7 @@ from . import _checks
 from .errors import SettingsError
 from .result import DyniaResult
 from .segments import mask_to_segments
+from .settings import IC_THRESHOLD
 
 __all__ = [
     "StructureWarning",
@@ -154,7 +158,7 @@ class StructureWarning:
         return self.message
 
 
-def structure_warnings(result, *, ic_threshold=0.75, min_windows=3, drift_tolerance=0.1, ignore=None):
+def structure_warnings(result, *, ic_threshold=IC_THRESHOLD, min_windows=3, drift_tolerance=0.1, ignore=None):
     """Warn about every parameter whose CLD-gradient maximum drifts over time.
 
     See the module documentation for the rule and what it cannot tell apart.
@@ -164,9 +168,9 @@ def structure_warnings(result, *, ic_threshold=0.75, min_windows=3, drift_tolera
     result : DyniaResult
         With the half window ``n`` in ``result.settings`` (as every run of
         :func:`dynia.run` and :func:`dynia.moving_window` records it).
-    ic_threshold : float in (0, 1), default 0.75
-        IC from which a window counts as informative (the default of
-        :func:`dynia.refine.narrowed_bounds`).
+    ic_threshold : float in [0, 1], default :data:`dynia.settings.IC_THRESHOLD` (0.5)
+        IC from which a window is informative
+        (:meth:`~dynia.result.DyniaResult.informative_windows`).
     min_windows : int, default 3
         Fewest consecutive informative windows that make a block; shorter
         runs are single windows that happened to rank well and are ignored.
@@ -202,7 +206,6 @@ def structure_warnings(result, *, ic_threshold=0.75, min_windows=3, drift_tolera
     """
     if not isinstance(result, DyniaResult):
         raise TypeError(f"result must be a DyniaResult; got {type(result).__name__}")
-    ic_threshold = _checks.open_interval(ic_threshold, "ic_threshold", 0, 1)
     min_windows = _checks.whole_number(min_windows, "min_windows", minimum=1)
     drift_tolerance = _checks.open_interval(drift_tolerance, "drift_tolerance", 0, 1)
     usable = result.full_windows & ~_ignored_windows(result, ignore)  # raises if the geometry is unknown
@@ -248,8 +251,7 @@ def clear_of_bounds(result, p):
 
 def _informative_blocks(result, p, ic_threshold, usable, min_windows, block):
     """Blocks of informative windows of parameter ``p``: a list of step index arrays."""
-    with np.errstate(invalid="ignore"):
-        informative = usable & (result.ic[p] >= ic_threshold) & clear_of_bounds(result, p)
+    informative = usable & result.informative_windows(ic_threshold, result.names[p])[0] & clear_of_bounds(result, p)
     return window_stretches(informative, block, min_windows=min_windows)
 
 

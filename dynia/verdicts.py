@@ -7,25 +7,26 @@ alone is not an estimate: :func:`assess` gives each parameter one of
 
 Which window is reported
 ------------------------
-A window can be evidence (:func:`evidence_windows`) when it holds all 2n+1
-steps (not cut by the record's ends), lies above the noise floor, and its
-behavioural set does not tie within noise. The reported window
-(:func:`reported_step`) is the one of highest IC among those; when none of
-them reaches ``weak_below``, it is the one of highest IC of all, and the
-rules below say why it is no estimate. A user who looked only at the
+A window is evidence for a parameter (:func:`evidence_windows`) when it is
+informative about it (:meth:`dynia.result.DyniaResult.informative_windows`:
+IC at least ``ic_threshold``, above the noise floor, behavioural set not tied
+within noise) and holds all 2n+1 steps (not cut by the record's ends). The
+reported window (:func:`reported_step`) is the one of highest IC among those;
+when there is none, it is the one of highest IC of all, and the rules below
+say why it is no estimate. A user who looked only at the
 highest IC of the record would be shown the window of a noise ranking or of
 the record's edge first, and on a record with one input step that is often
 where the highest IC lies: the windows that see only the first seconds of
 the response, or the truncated ones at the start.
 
 ``"identified"``
-    The highest IC reaches ``weak_below`` and no rule below raises suspicion.
+    The highest IC reaches ``ic_threshold`` and no rule below raises suspicion.
 ``"weak"``
-    The highest IC stays below ``weak_below`` (reason ``"low_ic"``), or IC
+    The highest IC stays below ``ic_threshold`` (reason ``"low_ic"``), or IC
     is missing everywhere (reason ``"no_ic"``). Any suspicion found is
     listed after it.
 ``"suspect"``
-    The highest IC reaches ``weak_below`` but at least one rule applies:
+    The highest IC reaches ``ic_threshold`` but at least one rule applies:
 
     ``"band_at_bound"``
         The band at max IC lies within 1 % of the range of a sampling bound:
@@ -58,7 +59,7 @@ the response, or the truncated ones at the start.
         compared with noise (see :func:`noise_only`).
     ``"monte_carlo_error"``
         The result has the Monte Carlo standard error of IC (``ic_error``)
-        and the max IC reaches ``weak_below`` by less than two of them:
+        and the max IC reaches ``ic_threshold`` by less than two of them:
         another sample of the same size could call the parameter weak.
     ``"isolated_evidence"``
         The reported window is evidence, but fewer windows than a quarter
@@ -76,11 +77,11 @@ the response, or the truncated ones at the start.
 
 Whether the windows agree
 -------------------------
-The evidence is the windows whose IC reaches ``weak_below`` and that lie
-above the noise floor (:func:`high_ic_windows`; the summary counts them and
-gives their span), less those whose behavioural set ties within noise
-(``noise_ranked``: their band is a ranking of noise, not evidence).
-:func:`dynia.structure.band_disagreement`, the mechanism of the structure
+The windows compared are those informative about the parameter
+(:func:`high_ic_windows`, the package's one rule; the summary counts them and
+gives their span): windows below the noise floor or whose behavioural set
+ties within noise (``noise_ranked``) have bands that rank noise, not
+evidence. :func:`dynia.structure.band_disagreement`, the mechanism of the structure
 warnings, groups them into stretches: runs joined across gaps shorter than
 one window (2n+1 steps), whose windows share samples, and cut into
 stretches of one window length, so that a record identifying the parameter
@@ -106,11 +107,11 @@ import math
 import numpy as np
 
 from .errors import ModelError, SettingsError
+from .settings import IC_THRESHOLD
 from .structure import band_disagreement
 
 __all__ = [
     "VERDICTS",
-    "WEAK_BELOW",
     "assess",
     "evidence_needed",
     "evidence_windows",
@@ -122,8 +123,6 @@ __all__ = [
 
 VERDICTS = ("identified", "weak", "suspect")
 
-# The highest IC from which a parameter counts as identified (assess's weak_below).
-WEAK_BELOW = 0.5
 # A band edge this close to a bound, as a fraction of the range, touches it.
 BOUND_TOLERANCE = 0.01
 # MAE spreads up to this many sampling standard deviations of a noise-only MAE count as noise.
@@ -198,7 +197,7 @@ def _judge(mae, m, sigma, multiple):
 
 
 def assess(
-    result, *, u=None, y=None, model=None, dt=None, x0=None, weak_below=WEAK_BELOW, simulations=None, clock=None
+    result, *, u=None, y=None, model=None, dt=None, x0=None, ic_threshold=IC_THRESHOLD, simulations=None, clock=None
 ):
     """Verdict and reasons for every parameter of a DYNIA result.
 
@@ -218,8 +217,10 @@ def assess(
     dt, x0 : optional
         Simulation settings; default ``result.settings["dt"]`` and
         ``result.settings["x0"]``, else the model's defaults.
-    weak_below : float, default 0.5
-        Highest IC under which a parameter is ``"weak"``.
+    ic_threshold : float in [0, 1], default :data:`dynia.settings.IC_THRESHOLD` (0.5)
+        IC from which a window is informative
+        (:meth:`~dynia.result.DyniaResult.informative_windows`); a highest
+        IC below it makes a parameter ``"weak"``.
     simulations : ndarray (n_samples, n_steps), optional
         The model's output for ``result.samples``, when already at hand (a
         model that simulates the whole record at once); spares simulating
@@ -247,7 +248,7 @@ def assess(
     """
     if (u is None, y is None, model is None).count(True) not in (0, 3):
         raise SettingsError("assess needs u, y and model together for the noise_only rule, or none of them")
-    reported = {p: reported_step(result, p, weak_below) for p in range(len(result.names))}
+    reported = {p: reported_step(result, p, ic_threshold) for p in range(len(result.names))}
     best = {p: step for p, step in reported.items() if step is not None}
     windows = {step: result.window_range(step) for step in set(best.values())}
     if model is not None:
@@ -265,16 +266,16 @@ def assess(
             continue
         step = best[p]
         reasons = _bound_reasons(result, p, step) + _edge_reasons(result, step, windows[step], when)
-        reasons += _monte_carlo_reasons(result, p, step, weak_below)
+        reasons += _monte_carlo_reasons(result, p, step, ic_threshold)
         if noise.get(step):
             code, text = noise[step]
             reasons.append(_reason(code, f"the window at max IC (time {when(step)}) " + text))
-        reasons += _isolation_reasons(result, p, step, weak_below)
-        reasons += _agreement_reasons(result, p, weak_below, when)
+        reasons += _isolation_reasons(result, p, step, ic_threshold)
+        reasons += _agreement_reasons(result, p, ic_threshold, when)
         ic = float(result.ic[p, step])
-        if ic < weak_below:
+        if ic < ic_threshold:
             verdicts[name] = dict(
-                verdict="weak", reasons=[_reason("low_ic", f"max IC {ic:.3g} is below {weak_below:g}")] + reasons
+                verdict="weak", reasons=[_reason("low_ic", f"max IC {ic:.3g} is below {ic_threshold:g}")] + reasons
             )
         else:
             verdicts[name] = dict(verdict="suspect" if reasons else "identified", reasons=reasons)
@@ -285,20 +286,15 @@ def _reason(code, text):
     return {"code": code, "text": text}
 
 
-def evidence_windows(result):
-    """Windows that can be evidence for a parameter, (n_steps,) bool: see "Which window is reported".
+def evidence_windows(result, p, ic_threshold=IC_THRESHOLD):
+    """Windows that are evidence for parameter ``p``, (n_steps,) bool: see "Which window is reported".
 
-    Whole (:attr:`~dynia.result.DyniaResult.full_windows`), above the noise
-    floor, and with the behavioural set not tied within noise; a result
-    without the floor has only the first test.
+    The windows informative about it (:func:`high_ic_windows`) that are
+    whole (:attr:`~dynia.result.DyniaResult.full_windows`): a truncated
+    window may be informative, but its IC is read off fewer points than any
+    whole window's and cannot be the estimate (reason ``record_edge``).
     """
-    usable = result.full_windows.copy()
-    if result.informative is not None:
-        usable &= np.asarray(result.informative, dtype=bool)
-    if result.behavioural_spread is not None:
-        with np.errstate(invalid="ignore"):
-            usable &= ~(np.asarray(result.behavioural_spread) <= np.asarray(result.behavioural_floor))
-    return usable
+    return high_ic_windows(result, p, ic_threshold) & result.full_windows
 
 
 def evidence_needed(result):
@@ -322,31 +318,30 @@ def evidence_needed(result):
     return max(2, math.ceil((before + after + 1) / 4))
 
 
-def _isolation_reasons(result, p, step, weak_below):
+def _isolation_reasons(result, p, step, ic_threshold):
     """``isolated_evidence`` when the reported window is evidence but too few windows are."""
-    usable = evidence_windows(result)
-    if not (usable[step] and result.ic[p, step] >= weak_below):
+    evidence = evidence_windows(result, p, ic_threshold)
+    if not evidence[step]:
         return []
-    with np.errstate(invalid="ignore"):
-        count = int(np.count_nonzero(usable & (np.asarray(result.ic[p]) >= weak_below)))
+    count = int(np.count_nonzero(evidence))
     needed = evidence_needed(result)
     if count >= needed:
         return []
     return [
         _reason(
             "isolated_evidence",
-            f"only {count} window(s) can be evidence (IC >= {weak_below:g}, whole, above the noise floor, behavioural "
-            f"set untied), fewer than {needed}, a quarter of a window: the band holds for one alignment of the "
-            "window with the data, and nothing checks it",
+            f"only {count} window(s) can be evidence (IC >= {ic_threshold:g}, whole, above the noise floor, "
+            f"behavioural set untied), fewer than {needed}, a quarter of a window: the band holds for one "
+            "alignment of the window with the data, and nothing checks it",
         )
     ]
 
 
-def reported_step(result, p, weak_below=WEAK_BELOW):
+def reported_step(result, p, ic_threshold=IC_THRESHOLD):
     """The step whose window the verdict of parameter ``p`` judges and the summary reports; None without IC.
 
-    The highest IC among :func:`evidence_windows` when it reaches
-    ``weak_below``, else the highest IC of all.
+    The highest IC among the :func:`evidence_windows` when there are any,
+    else the highest IC of all.
 
     Examples
     --------
@@ -355,29 +350,26 @@ def reported_step(result, p, weak_below=WEAK_BELOW):
     >>> y = dynia.models.FirstOrder().simulate([[2.0, 3.0]], u)[0]
     >>> res = dynia.run(u, y, dynia.models.FirstOrder(), {"K": (0, 5), "T": (0, 10)}, n=5, rng=1)
     >>> step = reported_step(res, 0)
-    >>> bool(evidence_windows(res)[step]), bool(res.ic[0, step] >= 0.5)
+    >>> bool(evidence_windows(res, 0)[step]), bool(res.ic[0, step] >= 0.5)
     (True, True)
     """
     ic = np.asarray(result.ic[p], dtype=float)
     if np.isnan(ic).all():
         return None
-    with np.errstate(invalid="ignore"):
-        candidates = np.where(evidence_windows(result) & (ic >= weak_below), ic, np.nan)
+    candidates = np.where(evidence_windows(result, p, ic_threshold), ic, np.nan)
     if not np.isnan(candidates).all():
         return int(np.nanargmax(candidates))
     return int(np.nanargmax(ic))
 
 
-def high_ic_windows(result, p, weak_below=WEAK_BELOW):
-    """Windows whose IC of parameter ``p`` reaches ``weak_below`` above the noise floor, (n_steps,) bool.
+def high_ic_windows(result, p, ic_threshold=IC_THRESHOLD):
+    """Windows informative about parameter ``p``, (n_steps,) bool: the windows that can identify it.
 
-    The windows that can identify the parameter: ``result.informative``
-    True (every window for a result without the floor) and IC at least
-    ``weak_below`` (NaN never is).
+    :meth:`dynia.result.DyniaResult.informative_windows` of ``p`` (IC at
+    least ``ic_threshold``, above the noise floor, behavioural set not tied
+    within noise; the IC test alone for a result without the floor).
     """
-    with np.errstate(invalid="ignore"):
-        reached = np.asarray(result.ic[p]) >= weak_below
-    return reached if result.informative is None else reached & np.asarray(result.informative, dtype=bool)
+    return result.informative_windows(ic_threshold, result.names[p])[0]
 
 
 def _clock(result, clock):
@@ -395,13 +387,9 @@ def _clock(result, clock):
     return when
 
 
-def _agreement_reasons(result, p, weak_below, when):
+def _agreement_reasons(result, p, ic_threshold, when):
     """``windows_disagree`` when the stretches of windows that identify parameter ``p`` rule each other out."""
-    windows = high_ic_windows(result, p, weak_below)
-    if result.behavioural_spread is not None:
-        with np.errstate(invalid="ignore"):
-            windows &= ~(np.asarray(result.behavioural_spread) <= np.asarray(result.behavioural_floor))
-    found = band_disagreement(result, p, windows)
+    found = band_disagreement(result, p, high_ic_windows(result, p, ic_threshold))
     if found is None:
         return []
 
@@ -415,7 +403,7 @@ def _agreement_reasons(result, p, weak_below, when):
     return [
         _reason(
             "windows_disagree",
-            f"the windows with IC >= {weak_below:g} disagree: the median band {stretch(first)} and "
+            f"the windows with IC >= {ic_threshold:g} disagree: the median band {stretch(first)} and "
             f"{stretch(last)} are {found.gap:.3g} apart (tolerance {found.tolerance:.3g}), no value lies "
             f"in both ({len(found.stretches)} stretches compared); the parameter moves between periods or the "
             "model structure is wrong (thesis 4.4)",
@@ -423,17 +411,17 @@ def _agreement_reasons(result, p, weak_below, when):
     ]
 
 
-def _monte_carlo_reasons(result, p, step, weak_below):
-    """``monte_carlo_error`` when the max IC reaches ``weak_below`` but not by two of its standard errors."""
+def _monte_carlo_reasons(result, p, step, ic_threshold):
+    """``monte_carlo_error`` when the max IC reaches ``ic_threshold`` but not by two of its standard errors."""
     if result.ic_se is None:
         return []
     ic, se = float(result.ic[p, step]), float(result.ic_se[p, step])
-    if not ic >= weak_below > ic - 2 * se:
+    if not ic >= ic_threshold > ic - 2 * se:
         return []
     return [
         _reason(
             "monte_carlo_error",
-            f"max IC {ic:.3g} +- {se:.2g} (one standard error) is within two standard errors of {weak_below:g}: "
+            f"max IC {ic:.3g} +- {se:.2g} (one standard error) is within two standard errors of {ic_threshold:g}: "
             "another Monte Carlo sample of this size could call it weak; raise the samples (or target_se)",
         )
     ]

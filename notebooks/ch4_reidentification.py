@@ -97,6 +97,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import dynia
+from dynia.errors import NothingSelected
 from dynia.identification import identify
 from dynia.io.csv import resample_events
 from dynia.quality import check_quality
@@ -137,14 +138,15 @@ def compare(u, y, model, bounds, validation, *, dt, x0, half_window, rng, exclud
     narrowed_gain = narrowed_bounds(first, bounds)[0]["K"]
     second = dynia.run(u_used, y_fit, model, {**bounds, "K": narrowed_gain}, rng=rng, **analysis)
     dynamic = [name for name in model.names if name != "K"]
-    chosen = intersect_segments(segments_from_ic(second, threshold=ic_threshold, parameters=dynamic), fit_part)
+    try:
+        chosen = intersect_segments(segments_from_ic(second, ic_threshold=ic_threshold, parameters=dynamic), fit_part)
+    except NothingSelected:
+        chosen = []
     found["DYNIA 2nd run"] = (identify(u, y, model, bounds, method="given", segments=chosen, **common)
                               if chosen else None)
     try:
         found["baseline"] = identify(u, y, model, bounds, method="baseline", **common)
-    except ValueError as error:
-        if "selected no data" not in str(error):
-            raise
+    except NothingSelected:
         found["baseline"] = None
     found["whole"] = identify(u, y, model, bounds, method="whole", **common)
 

@@ -11,8 +11,8 @@ import dynia
 from dynia.errors import SettingsError
 from dynia.io.csv import resample_events
 from dynia.models import FirstOrder
-from dynia.quality import Finding, QualityReport, check_quality, informative_segments
-from dynia.result import DyniaResult
+from dynia.quality import Finding, QualityReport, check_quality
+from dynia.segments import segments_from_ic
 
 
 def noisy_steps(rng, steps=2000, noise=0.3):
@@ -58,7 +58,7 @@ def test_the_highest_ic_of_the_time_constant_sits_on_the_glitch_until_it_is_excl
     grid, u, y, result = case_study["grid"], case_study["u"], case_study["y"], case_study["result"]
     report = check_quality(grid, u, y)
     best = float(np.nanmax(result.ic[1]))
-    segments = informative_segments(result, parameter="T", threshold=0.95 * best)
+    segments = segments_from_ic(result, parameters="T", ic_threshold=0.95 * best, min_length=1)
     hits = {segment: found for segment, found in report.findings_in(segments).items() if found}
     assert len(hits) == 1
     assert {(f.signal, f.kind) for f in next(iter(hits.values()))} == {
@@ -438,35 +438,6 @@ def test_to_dataframe_and_summary(glitchy):
     assert "5 findings" in text and "u: 0 magnitude, 1 glitch, 1 outlier, 0 stuck; 1 flagged sample\n" in text
     assert "y: 0 magnitude, 1 glitch, 1 outlier, 1 stuck; 41 flagged samples" in text
     assert "40 consecutive readings" in text
-
-
-# --- informative segments of a result ---------------------------------------------------------
-
-
-def test_informative_segments_cover_the_samples_of_the_informative_windows():
-    ic = np.full((2, 30), 0.1)
-    ic[0, [5, 6, 20]] = 0.9
-    ic[1, [9, 28]] = 0.8
-    ic[1, 0] = np.nan
-    result = DyniaResult(
-        names=("K", "T"),
-        samples=np.zeros((1, 2)),
-        bounds=np.array([[0, 1], [0, 1.0]]),
-        time=np.arange(30.0),
-        ic=ic,
-        ci=np.zeros((2, 30, 2)),
-        gradient=np.zeros((2, 1, 30)),
-        bin_centres=np.zeros((2, 1)),
-        settings={"n": 2},
-    )
-    assert informative_segments(result) == [(3, 12), (18, 23), (26, 30)]
-    assert informative_segments(result, parameter="K") == [(3, 9), (18, 23)]
-    assert informative_segments(result, parameter="T", threshold=0.85) == []
-    with pytest.raises(ValueError, match="unknown parameter 'x'"):
-        informative_segments(result, parameter="x")
-    result.settings.clear()
-    with pytest.raises(ValueError, match="no half window 'n'"):
-        informative_segments(result)
 
 
 # --- bad input --------------------------------------------------------------------------------

@@ -1,10 +1,13 @@
 """Segments from IC curves, least squares on segments, validation on held-out data."""
 
+import dataclasses
 import json
 
 import numpy as np
 import pytest
 
+from dynia import verdicts
+from dynia.errors import NothingSelected
 from dynia.models import FOPDT, FirstOrder
 from dynia.result import DyniaResult
 from dynia.segments import (
@@ -77,9 +80,9 @@ def test_joint_any_and_per_parameter_with_a_missing_window():
     assert segments_from_ic(result, mode="any") == [(0, 8)]
     assert segments_from_ic(result, mode="per_parameter") == {"K": [(0, 2), (3, 5), (6, 8)], "T": [(1, 4), (5, 7)]}
     # NaN is never informative, whatever the threshold
-    assert segments_from_ic(result, parameters=["K"], threshold=0.0) == [(0, 5), (6, 8)]
-    assert segments_from_ic(result, threshold=0.85, mode="any") == [(0, 2), (3, 5)]
-    assert segments_from_ic(result, threshold={"K": 0.95, "T": 0.75}, mode="any") == [(1, 4)]
+    assert segments_from_ic(result, parameters=["K"], ic_threshold=0.0) == [(0, 5), (6, 8)]
+    assert segments_from_ic(result, ic_threshold=0.85, mode="any") == [(0, 2), (3, 5)]
+    assert segments_from_ic(result, ic_threshold={"K": 0.95, "T": 0.75}, mode="any") == [(1, 4)]
 
 
 def test_merging_comes_before_the_minimum_length():
@@ -90,7 +93,8 @@ def test_merging_comes_before_the_minimum_length():
     assert segments_from_ic(result, merge_gap=3, min_length=1) == [(0, 5), (8, 11)]
     assert segments_from_ic(result, merge_gap=3, min_length=4) == [(0, 5)]
     assert segments_from_ic(result, merge_gap=0, min_length=3) == [(8, 11)]
-    assert segments_from_ic(result, merge_gap=4, min_length=12) == []
+    with pytest.raises(NothingSelected):
+        segments_from_ic(result, merge_gap=4, min_length=12)
 
 
 @pytest.mark.parametrize("seed", range(30))
@@ -103,9 +107,97 @@ def test_the_selection_matches_a_step_by_step_reference(seed):
     informative = ic >= 0.4
     for mode, combined in (("joint", informative.all(0)), ("any", informative.any(0))):
         expected = mask_to_segments(np.array(reference_clean(combined, merge_gap, min_length)))
-        assert (
-            segments_from_ic(result, threshold=0.4, merge_gap=merge_gap, min_length=min_length, mode=mode) == expected
-        )
+        options = dict(ic_threshold=0.4, merge_gap=merge_gap, min_length=min_length, mode=mode)
+        if expected:
+            assert segments_from_ic(result, **options) == expected
+        else:
+            with pytest.raises(NothingSelected):
+                segments_from_ic(result, **options)
+
+
+def floored(ic, informative, behavioural_spread=None, **settings):
+    """``hand_built`` with a noise floor: ``informative`` per step, the behavioural floor 1 at every step."""
+    result = hand_built(ic, **settings)
+    steps = result.time.size
+    spread = np.full(steps, 2.0) if behavioural_spread is None else np.asarray(behavioural_spread, dtype=float)
+    return dataclasses.replace(
+        result,
+        informative=np.asarray(informative, dtype=bool),
+        discrimination=np.ones(steps),
+        noise_floor=np.full(steps, 0.5),
+        behavioural_spread=spread,
+        behavioural_floor=np.ones(steps),
+    )
+
+
+def test_the_same_ic_gives_the_same_windows_and_segments_through_every_path():
+    # The review's case: windows 40-59 informative, n = 5. One rule, one map: the windows' centres.
+    ic = np.full((1, 100), 0.2)
+    ic[0, 40:60] = 0.9
+    result = hand_built(ic, names=("K",), n=5)
+    mask = result.informative_windows()[0]
+    assert mask_to_segments(mask) == [(40, 60)]
+    assert segments_from_ic(result) == [(40, 60)] == segments_from_ic(result, parameters="K", mode="per_parameter")["K"]
+    assert segments_from_ic(result, mode="joint") == [(40, 60)]
+    assert (verdicts.high_ic_windows(result, 0) == mask).all()
+    assert (verdicts.evidence_windows(result, 0) == (mask & result.full_windows)).all()
+    # The threshold is the one default everywhere: IC 0.5 is informative, 0.49 is not.
+    ic[0, 40:60] = 0.5
+    assert segments_from_ic(hand_built(ic, names=("K",), n=5)) == [(40, 60)]
+    ic[0, 40:60] = 0.49
+    with pytest.raises(NothingSelected):
+        segments_from_ic(hand_built(ic, names=("K",), n=5))
+
+
+def test_a_window_below_the_noise_floor_or_tied_is_never_informative():
+    informative = np.ones(60, dtype=bool)
+    informative[20:30] = False  # below the floor
+    spread = np.full(60, 2.0)
+    spread[40:45] = 0.5  # behavioural set tied within noise (floor 1)
+    result = floored(np.full((2, 60), 0.9), informative, spread)
+    expected = np.ones(60, dtype=bool)
+    expected[20:30] = expected[40:45] = False
+    assert (result.informative_windows() == expected).all()
+    assert (result.informative_windows(0.0) == expected).all()  # whatever the threshold
+    assert segments_from_ic(result, min_length=1, merge_gap=0) == [(0, 20), (30, 40), (45, 60)]
+    assert segments_from_ic(result, min_length=1, merge_gap=0, mode="per_parameter")["T"] == [
+        (0, 20),
+        (30, 40),
+        (45, 60),
+    ]
+    for p in range(2):
+        assert not verdicts.high_ic_windows(result, p)[20:30].any()
+        assert not verdicts.high_ic_windows(result, p)[40:45].any()
+    # Without the floor (reference ports, old files) the IC test is all there is.
+    bare = hand_built(np.full((2, 60), 0.9))
+    assert bare.informative_windows().all() and segments_from_ic(bare) == [(0, 60)]
+
+
+def test_the_plots_veil_the_windows_whose_ic_ranks_noise():
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    informative = np.ones(60, dtype=bool)
+    informative[20:30] = False
+    spread = np.full(60, 2.0)
+    spread[40:45] = 0.5
+    result = floored(np.full((2, 60), 0.9), informative, spread)
+    ax = result.plot_information_content("K")
+    veil = [c for c in ax.collections if "noise" in str(c.get_label())]
+    assert len(veil) == 1
+    # steps are 2 s apart: a step reaches 1 s to either side
+    starts = sorted(round(float(path.vertices[:, 0].min()), 6) for path in veil[0].get_paths())
+    assert starts == [39.0, 79.0]
+
+
+def test_nothing_selected_is_its_own_error():
+    result = floored(np.full((1, 30), 0.9), np.zeros(30, dtype=bool), names=("K",))
+    with pytest.raises(NothingSelected) as caught:
+        segments_from_ic(result)
+    assert isinstance(caught.value, ValueError)  # a DyniaError, as every error of the package
+    with pytest.raises(NothingSelected):
+        segments_from_ic(hand_built([[0.9, 0.2, 0.9]], names=("K",)), ic_threshold=0.95)
+    with pytest.raises(NothingSelected):
+        segments_from_ic(hand_built([[0.9, 0.2], [0.1, 0.9]]), mode="joint")
 
 
 def test_defaults_follow_the_window_of_the_run():
@@ -127,8 +219,8 @@ def test_defaults_follow_the_window_of_the_run():
     "kwargs, error, message",
     [
         (dict(parameters=["K", "gain"]), ValueError, r"unknown: \['gain'\]"),
-        (dict(threshold=1.5), ValueError, r"threshold of K must be a number in \[0, 1\]"),
-        (dict(threshold={"K": 0.5}), ValueError, r"missing: \['T'\]"),
+        (dict(ic_threshold=1.5), ValueError, r"ic_threshold of K must be a number in \[0, 1\]"),
+        (dict(ic_threshold={"K": 0.5}), ValueError, r"missing: \['T'\]"),
         (dict(mode="all"), ValueError, "mode must be one of"),
         (dict(min_length=0), ValueError, "min_length must be at least 1"),
         (dict(merge_gap=1.5), ValueError, "merge_gap must be a whole number"),

@@ -137,7 +137,7 @@ def test_low_ic_is_weak_and_keeps_its_suspicions():
     assert verdict["verdict"] == "weak"
     assert codes(verdict) == ["low_ic", "band_at_bound"]
     assert verdict["reasons"][0]["text"] == "max IC 0.45 is below 0.5"
-    assert assess(handmade(ic, np.full(30, 4.0), np.full(30, 5.0)), weak_below=0.4)["a"]["verdict"] == "identified"
+    assert assess(handmade(ic, np.full(30, 4.0), np.full(30, 5.0)), ic_threshold=0.4)["a"]["verdict"] == "identified"
 
 
 def test_one_window_of_evidence_is_isolated():

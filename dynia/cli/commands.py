@@ -46,7 +46,7 @@ from ..models.base import user_code_failed
 from ..pipeline import DroppedSamplesWarning, TargetNotReachedWarning, run
 from ..quality import check_quality
 from ..refine import narrowed_bounds
-from ..settings import FLAVOURS, MAX_PARAMETER, SAMPLERS, AnalysisSettings
+from ..settings import FLAVOURS, IC_THRESHOLD, MAX_PARAMETER, SAMPLERS, AnalysisSettings
 from ..suggestion import MAX_SAMPLES, parse_duration, parse_size, suggest, window_half_width
 from ..verdicts import assess
 from . import report
@@ -175,7 +175,7 @@ def _parser():
         "--narrow-threshold",
         type=float,
         metavar="IC",
-        help="highest IC from which a parameter counts as identified (default 0.75)",
+        help=f"IC from which a window is informative, for the narrowing (default {IC_THRESHOLD:g})",
     )
     method.add_argument(
         "--narrow-margin",
@@ -208,7 +208,10 @@ def _parser():
         "the whole record before the held-out part",
     )
     selection.add_argument(
-        "--ic-threshold", type=float, metavar="IC", help="dynia: IC from which a step is informative (default 0.5)"
+        "--ic-threshold",
+        type=float,
+        metavar="IC",
+        help=f"dynia: IC from which a window is informative (default {IC_THRESHOLD:g})",
     )
     selection.add_argument(
         "--mode",
@@ -432,10 +435,10 @@ OPTIONS = {
     "dtype": ("text", "float64", _ANALYSE),
     "on_disk": ("flag", False, _ANALYSE),
     "second_run": ("flag", False, _ANALYSE),
-    "narrow_threshold": ("number", 0.75, _ANALYSE),
+    "narrow_threshold": ("number", IC_THRESHOLD, _ANALYSE),
     "narrow_margin": ("number", 0.5, _ANALYSE),
     "method": ("text", "dynia", _IDENTIFY),
-    "ic_threshold": ("number", 0.5, _IDENTIFY),
+    "ic_threshold": ("number", IC_THRESHOLD, _IDENTIFY),
     "mode": ("text", "any", _IDENTIFY),
     "held_out": ("number", 0.3, _IDENTIFY),
     "exclude_flagged": ("flag", False, _IDENTIFY),
@@ -1138,7 +1141,7 @@ def _analyse(options, command_line, caught):
         tables = [table]
         if options["second_run"]:
             bounds, narrowed = narrowed_bounds(
-                result, options["bounds"], threshold=options["narrow_threshold"], margin=options["narrow_margin"]
+                result, options["bounds"], ic_threshold=options["narrow_threshold"], margin=options["narrow_margin"]
             )
             (staging / "second_run").mkdir()
             _, _, second = analyse(bounds, staging / "second_run", narrowed=narrowed)
