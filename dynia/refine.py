@@ -22,6 +22,8 @@ drifts between informative windows points to a model-structure problem
 (thesis 4.4). None of them should narrow a range.
 """
 
+import dataclasses
+
 import numpy as np
 
 from . import _checks
@@ -142,10 +144,14 @@ def second_run(u, y, model, bounds, *, threshold=0.75, margin=0.5, **options):
     first = run(u, y, model, bounds, **options)
     new_bounds, narrowed = narrowed_bounds(first, bounds, threshold=threshold, margin=margin)
     second = run(u, y, model, new_bounds, **options)
-    second.settings.update(
-        first_run_bounds={name: tuple(map(float, pair)) for name, pair in bounds.items()},
-        narrowed=narrowed,
-        narrowing_threshold=threshold,
-        narrowing_margin=margin,
+    second = dataclasses.replace(
+        second,
+        run=dataclasses.replace(
+            second.run,
+            first_run_bounds={name: tuple(map(float, pair)) for name, pair in bounds.items()},
+            narrowed=narrowed,
+            narrowing_threshold=threshold,
+            narrowing_margin=margin,
+        ),
     )
     return first, second, narrowed

@@ -21,16 +21,17 @@ def test_the_gain_is_narrowed_around_its_band_and_the_time_constant_sharpens(exa
     # fit only noise; their bands disagree, so T keeps its range.
     assert first.ic[1].max() > 0.75
     assert narrowed == ["K"]
-    low, high = second.settings["bounds"]["K"]
+    low, high = second.bounds[second.index("K")]
     informative = first.ic[0] >= 0.75
     lower, upper = first.ci[0, informative, 0].max(), first.ci[0, informative, 1].min()
     assert low == pytest.approx(max(lower - 0.5 * (upper - lower), 0))
     assert high == pytest.approx(min(upper + 0.5 * (upper - lower), 7))
     assert low < 2 < high and high - low < 1.5
-    assert second.settings["bounds"]["T"] == (0.0, 7.0)
+    assert second.bounds[second.index("T")].tolist() == [0.0, 7.0]
+    assert dict(second.run.first_run_bounds) == {"K": (0.0, 7.0), "T": (0.0, 7.0)}
     dips = np.r_[139:175, 329:345]  # the thesis's spikes of T (Figures 3.5 and 3.7)
     assert second.ic[1, dips].mean() > first.ic[1, dips].mean() + 0.2
-    assert second.settings["narrowed"] == ["K"]
+    assert second.run.narrowed == ("K",)
 
 
 def test_nothing_identified_nothing_narrowed(example1_twice):
