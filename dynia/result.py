@@ -51,8 +51,9 @@ class DyniaResult:
         ``engine`` is the one that ran ("auto" resolved). The constructor
         also takes a mapping of :class:`~dynia.settings.AnalysisSettings`
         fields (the others at their defaults), e.g. ``dict(n=5,
-        window="trailing")``, and converts it. None for a result built
-        without settings (then which samples a window used is unknown).
+        window="trailing")``, and converts it; an empty mapping is None.
+        None for a result built without settings (then which samples a
+        window used is unknown).
     run : dynia.settings.RunRecord
         What the run found out and did beside its settings: the model, the
         samples drawn and dropped, the noise floor's values, the Monte Carlo
@@ -134,7 +135,8 @@ class DyniaResult:
 
     def __post_init__(self):
         if isinstance(self.settings, Mapping):
-            object.__setattr__(self, "settings", AnalysisSettings().replace(**self.settings))
+            # An empty mapping is what results built by hand passed for "no settings known".
+            object.__setattr__(self, "settings", AnalysisSettings().replace(**self.settings) if self.settings else None)
         elif self.settings is not None and not isinstance(self.settings, AnalysisSettings):
             raise SettingsError(
                 f"settings must be a dynia.settings.AnalysisSettings, a mapping of its fields or None; "

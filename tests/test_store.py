@@ -201,6 +201,7 @@ def test_a_hand_built_result_takes_a_mapping_of_settings_and_of_the_record(thesi
     built = dataclasses.replace(thesis_result, settings=dict(n=5, window="trailing"), run=dict(n_sampled=3))
     assert built.settings == AnalysisSettings(n=5, window="trailing") and built.run == RunRecord(n_sampled=3)
     assert dataclasses.replace(thesis_result, settings=None).settings is None
+    assert dataclasses.replace(thesis_result, settings={}).settings is None
     with pytest.raises(SettingsError, match="unknown setting"):
         dataclasses.replace(thesis_result, settings={"noise_sigma": 0.5})
     with pytest.raises(SettingsError, match="settings must be a dynia.settings.AnalysisSettings"):
