@@ -187,8 +187,9 @@ def adaptive_run(
     Returns
     -------
     DyniaResult
-        With ``settings["weights"]`` holding the importance weights of
-        ``.samples`` and ``settings["n_evaluations"]`` the evaluations spent.
+        With ``run.weights`` holding the importance weights of
+        ``.samples``, ``run.n_evaluations`` the evaluations spent and
+        ``run.n_blocks`` the blocks of windows.
     """
     if settings is None:
         settings = AnalysisSettings(n_samples=10_000, percentage=1, sampler=scheme or "iis")
@@ -278,10 +279,20 @@ def adaptive_run(
         progress=progress,
         ic_error=settings.ic_error,
     )
-    analysed = dict(result.settings)
-    result.settings.clear()
-    result.settings.update(settings.record(model, names, prior, n_sampled=spent, n_dropped=0))
-    result.settings.update(analysed, sampler=scheme, n_evaluations=spent, weights=weights, n_blocks=n_blocks)
+    # What the engine analysed (the samples kept, the engine that ran) wins over what was asked, as in dynia.run.
+    result = dataclasses.replace(
+        result,
+        settings=settings.replace(n_samples=result.settings.n_samples, engine=result.settings.engine),
+        run=dataclasses.replace(
+            result.run,
+            model=type(model).__name__,
+            n_sampled=spent,
+            n_dropped=0,
+            n_evaluations=spent,
+            weights=weights,
+            n_blocks=n_blocks,
+        ),
+    )
     # moving_window gives the noise floor, so the verdicts need neither data nor simulation.
     return dataclasses.replace(result, verdicts=assess(result))
 

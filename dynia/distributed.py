@@ -81,6 +81,7 @@ guard its entry point with ``if __name__ == "__main__":``.
 """
 
 import copy
+import dataclasses
 import itertools
 import math
 import operator
@@ -116,7 +117,7 @@ from .errors import DataError, DyniaError, ModelError, SettingsError
 from .pipeline import warn_dropped
 from .result import DyniaResult
 from .sampling import sample
-from .settings import SAMPLERS, AnalysisSettings, parameter_box
+from .settings import SAMPLERS, AnalysisSettings, RunRecord, parameter_box
 
 __all__ = ["run"]
 
@@ -365,15 +366,12 @@ def run(
         residuals,
     )
     # The same record as dynia.run's: the settings asked for, then what the analysis did.
-    recorded = settings.record(model, names, box, n_sampled=n_samples, n_dropped=n_samples - samples.shape[0])
-    recorded.update(
-        n_samples=samples.shape[0],
+    recorded = dataclasses.replace(
+        RunRecord.of(model, n_sampled=n_samples, n_dropped=n_samples - samples.shape[0]),
         n_behavioural=flavour_impl.count,
-        engine="numba" if compiled else "numpy",
+        ic_batches=flavour_impl.batches if settings.ic_error else None,
         **floor_settings(floor),
     )
-    if settings.ic_error:
-        recorded.update(ic_batches=flavour_impl.batches)
     return DyniaResult(
         names=tuple(names),
         samples=samples,
@@ -384,7 +382,8 @@ def run(
         median=median,
         gradient=gradient,
         bin_centres=flavour_impl.bin_centres,
-        settings=recorded,
+        settings=settings.replace(n_samples=samples.shape[0], engine="numba" if compiled else "numpy"),
+        run=recorded,
         ic_se=ic_se,
         ci_se=ci_se,
         **floor_fields(floor),

@@ -32,6 +32,7 @@ grows with the number of steps.
 """
 
 import copy
+import dataclasses
 import numbers
 
 import numpy as np
@@ -50,7 +51,7 @@ from .errors import DataError, ModelError
 from .models import Model
 from .result import DyniaResult
 from .sampling import sample
-from .settings import SAMPLERS, AnalysisSettings, parameter_box
+from .settings import SAMPLERS, AnalysisSettings, RunRecord, parameter_box
 
 __all__ = ["OnlineDynia"]
 
@@ -106,7 +107,7 @@ class OnlineDynia:
     -----
     Equality with ``dynia.run(u, y, model, bounds, window="trailing", ...)``
     (same seed, sampler, n_samples and settings) holds whenever that run drops
-    no sample (``settings["n_dropped"] == 0``), which is always the case for
+    no sample (``run.n_dropped == 0``), which is always the case for
     the lag models. The batch run leaves out every parameter set whose
     simulation overflows anywhere in the record; online, the future is
     unknown, so a set whose simulated output becomes non-finite is marked
@@ -210,10 +211,9 @@ class OnlineDynia:
         self._stepper = model.stepper(self._model_params, dt=dt, x0=x0)  # checks dt and x0
         self._dt = float(dt)
         self.bin_centres = self._flavour.bin_centres
-        self._settings = dict(
-            settings.record(model, names, box, n_sampled=n_samples, n_dropped=0),
-            n_behavioural=self._flavour.count,
-            engine="numpy",
+        self._settings = settings.replace(engine="numpy")
+        self._run = dataclasses.replace(
+            RunRecord.of(model, n_sampled=n_samples, n_dropped=0), n_behavioural=self._flavour.count
         )
 
         width = 2 * self._n + 1
@@ -238,7 +238,7 @@ class OnlineDynia:
 
     def reset(self):
         """Start again at step 0 with the same samples, as a new object would."""
-        self._flavour = FLAVOUR_CLASSES[self._settings["flavour"]](*self._flavour_args)
+        self._flavour = FLAVOUR_CLASSES[self._settings.flavour](*self._flavour_args)
         self._stepper = self._model.stepper(self._model_params, dt=self._dt, x0=self._x0)
         self._errors.fill(0.0)
         self._measured.fill(False)
@@ -356,7 +356,7 @@ class OnlineDynia:
             self.samples.shape[0],
             residuals=record_residuals(y, self.samples, self.bounds, totals, self._simulations(u, start)),
         )
-        settings = dict(self._settings, n_diverged=self.n_diverged, **floor_settings(floor))
+        run = dataclasses.replace(self._run, n_diverged=self.n_diverged, **floor_settings(floor))
         return DyniaResult(
             names=self.names,
             samples=np.array(self.samples),
@@ -367,7 +367,8 @@ class OnlineDynia:
             median=median,
             gradient=gradient,
             bin_centres=self.bin_centres,
-            settings=settings,
+            settings=self._settings,
+            run=run,
             **floor_fields(floor),
         )
 

@@ -18,7 +18,7 @@ from .io.frames import unpack
 from .models import LinearModel, Model, StateSpaceModel
 from .models.custom import StateErrors
 from .sampling import sample
-from .settings import ADAPTIVE_SAMPLERS, IC_THRESHOLD, MAX_PARAMETER, AnalysisSettings, parameter_box
+from .settings import ADAPTIVE_SAMPLERS, IC_THRESHOLD, MAX_PARAMETER, AnalysisSettings, RunRecord, parameter_box
 from .verdicts import assess
 
 __all__ = [
@@ -149,7 +149,7 @@ def run(
         samples are those one run with the final count would draw); each
         round simulates them all again, so memory stays bounded and the
         cost is about twice that of one run at the final count.
-        ``result.settings`` records ``target_se_reached`` (the error
+        ``result.run`` records ``target_se_reached`` (the error
         reached), ``target_se_met`` and ``target_se_rounds`` (samples and
         error of each round); a :class:`TargetNotReachedWarning` says when
         the budget ran out first. Implies ``ic_error``.
@@ -172,7 +172,7 @@ def run(
     DyniaResult
         Parameter sets whose simulation is not finite over the record
         (an unstable model overflowing) are left out of the analysis, never
-        ranked; ``settings["n_dropped"]`` counts them and ``.samples`` holds
+        ranked; ``run.n_dropped`` counts them and ``.samples`` holds
         the sets analysed. When more than 1 % are dropped a
         :class:`DroppedSamplesWarning` says so: the analysis then covers less
         than the box it was given.
@@ -278,7 +278,7 @@ def _analyse_samples(u, y, model, names, box, samples, settings, progress, outpu
                 analysed[:, model_order], u, dt=settings.dt, x0=settings.x0, chunk_steps=chunk_steps
             )
         n_dropped = int(n_sampled - analysed.shape[0])
-        recorded = settings.record(model, names, box, n_sampled=n_sampled, n_dropped=n_dropped)
+        recorded = RunRecord.of(model, n_sampled=n_sampled, n_dropped=n_dropped)
         try:
             result = analyse_stream(
                 y,
@@ -295,7 +295,8 @@ def _analyse_samples(u, y, model, names, box, samples, settings, progress, outpu
                 chunk_steps=chunk_steps,
                 progress=progress,
                 min_points=settings.min_points,
-                settings=recorded,
+                settings=settings,
+                run=recorded,
                 window=settings.window,
                 engine=settings.engine,
                 workers=workers,
@@ -347,7 +348,8 @@ def _analyse_to_target(u, y, model, names, box, samples, settings, generator, pr
         count = min(settings.max_samples, max(wanted, math.ceil(samples.shape[0] * TARGET_MIN_GROWTH)))
         samples = np.r_[samples, sample("uniform", count - samples.shape[0], box, generator)]
     met = math.isnan(reached) or reached <= settings.target_se
-    result.settings.update(target_se_reached=reached, target_se_met=met, target_se_rounds=rounds)
+    run = dataclasses.replace(result.run, target_se_reached=reached, target_se_met=met, target_se_rounds=rounds)
+    result = dataclasses.replace(result, run=run)
     if not met:
         warnings.warn(
             f"the largest Monte Carlo standard error of IC where it matters is {reached:.3g} with "

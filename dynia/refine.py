@@ -24,6 +24,8 @@ drifts between informative windows points to a model-structure problem
 (thesis 4.4). None of them should narrow a range.
 """
 
+import dataclasses
+
 import numpy as np
 
 from . import _checks
@@ -129,10 +131,14 @@ def second_run(u, y, model, bounds, *, ic_threshold=IC_THRESHOLD, margin=0.5, **
     first = run(u, y, model, bounds, **options)
     new_bounds, narrowed = narrowed_bounds(first, bounds, ic_threshold=ic_threshold, margin=margin)
     second = run(u, y, model, new_bounds, **options)
-    second.settings.update(
-        first_run_bounds={name: tuple(map(float, pair)) for name, pair in bounds.items()},
-        narrowed=narrowed,
-        narrowing_threshold=ic_threshold,
-        narrowing_margin=margin,
+    second = dataclasses.replace(
+        second,
+        run=dataclasses.replace(
+            second.run,
+            first_run_bounds={name: tuple(map(float, pair)) for name, pair in bounds.items()},
+            narrowed=narrowed,
+            narrowing_threshold=ic_threshold,
+            narrowing_margin=margin,
+        ),
     )
     return first, second, narrowed

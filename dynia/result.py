@@ -10,6 +10,7 @@ n_steps, 2).
 """
 
 import numbers
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -17,7 +18,7 @@ import numpy as np
 from .decimation import decimated_columns, envelope
 from .engine.cld import binned_mass
 from .errors import SettingsError
-from .settings import IC_THRESHOLD
+from .settings import IC_THRESHOLD, AnalysisSettings, RunRecord
 
 __all__ = ["DyniaResult"]
 
@@ -45,8 +46,21 @@ class DyniaResult:
         CLD gradient (likelihood mass per bin for "thesis" and "weighted").
     bin_centres : ndarray (n_params, n_bins)
         Parameter value of each gradient row.
-    settings : dict
-        Every option of the run.
+    settings : dynia.settings.AnalysisSettings or None
+        The settings of the run, frozen, as the analysis used them: ``n_samples``
+        counts the parameter sets analysed (after any were dropped) and
+        ``engine`` is the one that ran ("auto" resolved). The constructor
+        also takes a mapping of :class:`~dynia.settings.AnalysisSettings`
+        fields (the others at their defaults), e.g. ``dict(n=5,
+        window="trailing")``, and converts it; an empty mapping is None.
+        None for a result built without settings (then which samples a
+        window used is unknown).
+    run : dynia.settings.RunRecord
+        What the run found out and did beside its settings: the model, the
+        samples drawn and dropped, the noise floor's values, the Monte Carlo
+        error's batches and rounds, the adaptive samplers' weights, ...
+        (frozen; a mapping of its fields is converted). An empty record
+        (every field None) by default.
     verdicts : dict or None
         Per parameter ``{"verdict", "reasons"}`` from
         :func:`dynia.verdicts.assess` with the data and the model, as
@@ -77,17 +91,17 @@ class DyniaResult:
         saved before the discrimination was the statistic).
     discrimination : ndarray (n_steps,) or None
         The mask's statistic: the MAE at population quantile 0.9
-        (``settings["noise_floor_quantile"]``) minus the best MAE.
+        (``run.noise_floor_quantile``) minus the best MAE.
     noise_floor : ndarray (n_steps,) or None
         What noise alone keeps the discrimination below
-        (``settings["noise_multiple"]`` sampling standard deviations of the
-        MAE of the window's points of noise ``settings["noise_sigma"]``).
+        (``run.noise_multiple`` sampling standard deviations of the
+        MAE of the window's points of noise ``run.noise_sigma``).
     behavioural_spread : ndarray (n_steps,) or None
         The behavioural set's largest MAE minus the best: whether the band
         itself is a ranking of noise (verdict reason ``noise_ranked``).
     behavioural_floor : ndarray (n_steps,) or None
         What noise alone keeps the behavioural spread below
-        (``settings["behavioural_multiple"]`` of the same standard deviations).
+        (``run.behavioural_multiple`` of the same standard deviations).
     median : ndarray (n_params, n_steps) or None
         CLD median of each window's behavioural values, read off as the
         limits are, so it lies in the band: the first sorted value whose
@@ -107,7 +121,8 @@ class DyniaResult:
     ci: np.ndarray
     gradient: np.ndarray
     bin_centres: np.ndarray
-    settings: dict = field(default_factory=dict)
+    settings: AnalysisSettings | None = None
+    run: RunRecord = field(default_factory=RunRecord)
     verdicts: dict | None = None
     timestamps: np.ndarray | None = None
     ic_se: np.ndarray | None = None
@@ -118,6 +133,21 @@ class DyniaResult:
     behavioural_spread: np.ndarray | None = None
     behavioural_floor: np.ndarray | None = None
     median: np.ndarray | None = None
+
+    def __post_init__(self):
+        if isinstance(self.settings, Mapping):
+            # An empty mapping is what results built by hand passed for "no settings known".
+            object.__setattr__(self, "settings", AnalysisSettings().replace(**self.settings) if self.settings else None)
+        elif self.settings is not None and not isinstance(self.settings, AnalysisSettings):
+            raise SettingsError(
+                f"settings must be a dynia.settings.AnalysisSettings, a mapping of its fields or None; "
+                f"got {type(self.settings).__name__}",
+                "settings",
+            )
+        if isinstance(self.run, Mapping):
+            object.__setattr__(self, "run", RunRecord(**self.run))
+        elif not isinstance(self.run, RunRecord):
+            raise SettingsError(f"run must be a dynia.settings.RunRecord; got {type(self.run).__name__}", "run")
 
     def index(self, name):
         """Position of parameter ``name`` on the parameter axis."""
@@ -130,18 +160,15 @@ class DyniaResult:
     def window_halos(self):
         """Steps (before, after) the window at step t reaches: (n, n) centred, (2n, 0) trailing.
 
-        Read from ``settings["n"]`` and ``settings["window"]`` (default
-        "centred"); a result built without them has no known geometry.
+        Read from ``settings.n`` and ``settings.window``; a result built
+        without settings has no known geometry.
         """
-        if "n" not in self.settings:
+        if self.settings is None:
             raise SettingsError(
-                "this result's settings have no half window 'n', so which samples each window used is unknown"
+                "this result has no settings, so no half window 'n': which samples each window used is unknown"
             )
-        n = int(self.settings["n"])
-        window = self.settings.get("window", "centred")
-        if window not in ("centred", "trailing"):
-            raise SettingsError(f"result.settings['window'] must be 'centred' or 'trailing'; got {window!r}")
-        return (n, n) if window == "centred" else (2 * n, 0)
+        n = self.settings.n
+        return (n, n) if self.settings.window == "centred" else (2 * n, 0)
 
     def window_range(self, step):
         """Sample range ``[start, stop)`` the window at ``step`` used, clipped to the record.
@@ -481,7 +508,8 @@ class DyniaResult:
         """
         n_bins = self.bin_centres.shape[1]
         columns = np.asarray(self.samples, dtype=float).T
-        if self.settings.get("flavour", "thesis") not in ("thesis", "weighted"):
+        flavour = "thesis" if self.settings is None else self.settings.flavour
+        if self.run.thesis_code or flavour not in ("thesis", "weighted"):
             between = (self.bin_centres[:, :-1] + self.bin_centres[:, 1:]) / 2
             which = [np.searchsorted(edges, values) for edges, values in zip(between, columns)]
             return np.array([np.bincount(rows, minlength=n_bins) for rows in which])

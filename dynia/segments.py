@@ -277,7 +277,7 @@ def segments_from_ic(
         raise SettingsError(f"mode must be one of {MODES}; got {mode!r}")
     chosen = _chosen_parameters(parameters, result.names)
     limits = _thresholds(ic_threshold, chosen)
-    half_window = result.settings.get("n")
+    half_window = None if result.settings is None else result.settings.n
     window_length = None if half_window is None else 2 * half_window + 1
     min_length = _default_length(min_length, "min_length", 1, 1 if window_length is None else window_length)
     merge_gap = _default_length(merge_gap, "merge_gap", 0, 0 if half_window is None else half_window)

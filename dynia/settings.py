@@ -37,6 +37,7 @@ from .errors import SettingsError
 
 __all__ = [
     "AnalysisSettings",
+    "RunRecord",
     "SAMPLERS",
     "ADAPTIVE_SAMPLERS",
     "FLAVOURS",
@@ -392,18 +393,184 @@ class AnalysisSettings:
         return self
 
     def to_dict(self):
-        """The settings as a plain dict (for result.settings and summary.json)."""
+        """The settings as a plain dict, every field by name (for summary.json and the saved result)."""
         return dataclasses.asdict(self)
 
-    def record(self, model, names, box, *, n_sampled, n_dropped):
-        """``result.settings`` of a run: these settings, the model, the ranges and the samples drawn and dropped."""
-        return dict(
-            self.to_dict(),
-            model=type(model).__name__,
-            bounds={name: tuple(map(float, row)) for name, row in zip(names, box)},
-            n_sampled=int(n_sampled),
-            n_dropped=int(n_dropped),
-        )
+
+def _optional(kind, value, name):
+    """``value`` as ``kind`` (int, float or bool), None kept; a SettingsError naming ``name`` for another type."""
+    if value is None:
+        return None
+    if kind is bool:
+        if isinstance(value, (bool, np.bool_)):
+            return bool(value)
+    elif kind is int:
+        if isinstance(value, numbers.Integral) and not isinstance(value, (bool, np.bool_)):
+            return int(value)
+    elif isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_)):
+        return float(value)
+    raise SettingsError(f"{name} must be {kind.__name__} or None; got {value!r} ({type(value).__name__})", name)
+
+
+def _same(a, b):
+    """Equal values, NaN equal to NaN and arrays compared element by element (for :meth:`RunRecord.__eq__`)."""
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        if not (isinstance(a, np.ndarray) and isinstance(b, np.ndarray)):
+            return False
+        return a.dtype == b.dtype and np.array_equal(a, b, equal_nan=a.dtype.kind in "fc")
+    if isinstance(a, float) and isinstance(b, float) and math.isnan(a) and math.isnan(b):
+        return True
+    if isinstance(a, tuple) and isinstance(b, tuple):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b))
+    return type(a) is type(b) and a == b
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class RunRecord:
+    """What a run of DYNIA found out and did beside its :class:`AnalysisSettings` (``result.run``).
+
+    Every field is None (``thesis_code`` False) where the front-end that
+    made the result does not know it or it does not apply. Values are
+    converted to the types below when the record is made (numpy scalars to
+    Python numbers, lists to tuples); another type is a
+    :class:`~dynia.errors.SettingsError` naming the field. Two records are
+    equal when every field is, NaN equal to NaN and arrays element by element.
+
+    Attributes
+    ----------
+    thesis_code : bool, default False
+        True for a result of the port of the thesis's MATLAB code
+        (:func:`dynia.reference.thesis.thesis_code_result`), not of the engine.
+    model : str or None
+        Class name of the model simulated (e.g. "FirstOrder").
+    n_sampled : int or None
+        Parameter sets drawn (``settings.n_samples`` holds those analysed).
+    n_dropped : int or None
+        Sets dropped because their simulation was not finite.
+    n_behavioural : int or None
+        Behavioural sets per window, as the flavour counts them.
+    n_diverged : int or None
+        :class:`~dynia.online.OnlineDynia`: sets whose simulation became non-finite.
+    ic_batches : int or None
+        Batches of the Monte Carlo error (``settings.ic_error``).
+    target_se_reached : float or None
+        ``settings.target_se``: the largest IC standard error where it matters, at the end (NaN: nowhere).
+    target_se_met : bool or None
+        Whether that is at most ``settings.target_se``.
+    target_se_rounds : tuple of (int, float) or None
+        (samples, error reached) of every round.
+    n_evaluations : int or None
+        Adaptive samplers: model evaluations spent.
+    n_blocks : int or None
+        Adaptive samplers: blocks of windows the record was split into.
+    weights : ndarray (n_samples,) or None
+        Adaptive samplers: importance weight of each row of ``result.samples``; read-only.
+    noise_sigma : float or None
+        Noise floor (:mod:`dynia.engine.noise`): standard deviation of the measurement noise fitted.
+    noise_multiple : float or None
+        Sampling standard deviations of the MAE that the discrimination must pass.
+    noise_floor_quantile : float or None
+        Population quantile of the discrimination.
+    behavioural_multiple : float or None
+        The same multiple for the behavioural spread.
+    noise_autocorrelation : float or None
+        Lag-1 autocorrelation of the residuals (NaN: not estimated).
+    noise_size_factor : float or None
+        Factor on the noise's effective sample size that the autocorrelation gives (1: white noise).
+    first_run_bounds : tuple of (str, (float, float)) or None
+        :func:`dynia.refine.second_run`: the first run's ranges, ``dict(...)`` of it maps name to (low, high).
+    narrowed : tuple of str or None
+        The parameters whose range the second run narrowed.
+    narrowing_threshold : float or None
+    narrowing_margin : float or None
+        The ``threshold`` and ``margin`` the ranges were narrowed with.
+    """
+
+    thesis_code: bool = False
+    model: str | None = None
+    n_sampled: int | None = None
+    n_dropped: int | None = None
+    n_behavioural: int | None = None
+    n_diverged: int | None = None
+    ic_batches: int | None = None
+    target_se_reached: float | None = None
+    target_se_met: bool | None = None
+    target_se_rounds: tuple | None = None
+    n_evaluations: int | None = None
+    n_blocks: int | None = None
+    weights: np.ndarray | None = None
+    noise_sigma: float | None = None
+    noise_multiple: float | None = None
+    noise_floor_quantile: float | None = None
+    behavioural_multiple: float | None = None
+    noise_autocorrelation: float | None = None
+    noise_size_factor: float | None = None
+    first_run_bounds: tuple | None = None
+    narrowed: tuple | None = None
+    narrowing_threshold: float | None = None
+    narrowing_margin: float | None = None
+
+    def __post_init__(self):
+        for item in dataclasses.fields(self):
+            kind = {bool | None: bool, int | None: int, float | None: float}.get(item.type)
+            if kind is not None:
+                object.__setattr__(self, item.name, _optional(kind, getattr(self, item.name), item.name))
+        object.__setattr__(self, "thesis_code", _optional(bool, self.thesis_code, "thesis_code"))
+        if self.model is not None and not isinstance(self.model, str):
+            raise SettingsError(f"model must be the model's class name (str); got {self.model!r}", "model")
+        if self.target_se_rounds is not None:
+            try:
+                rounds = tuple(
+                    (_optional(int, count, "target_se_rounds"), _optional(float, reached, "target_se_rounds"))
+                    for count, reached in self.target_se_rounds
+                )
+            except (TypeError, ValueError):
+                raise SettingsError(
+                    f"target_se_rounds must be (samples, error) pairs; got {self.target_se_rounds!r}",
+                    "target_se_rounds",
+                ) from None
+            object.__setattr__(self, "target_se_rounds", rounds)
+        if self.first_run_bounds is not None:
+            rows = self.first_run_bounds
+            rows = rows.items() if isinstance(rows, Mapping) else rows
+            try:
+                rows = tuple((str(name), (float(low), float(high))) for name, (low, high) in rows)
+            except (TypeError, ValueError):
+                raise SettingsError(
+                    f"first_run_bounds must pair each name with (low, high); got {self.first_run_bounds!r}",
+                    "first_run_bounds",
+                ) from None
+            object.__setattr__(self, "first_run_bounds", rows)
+        if self.narrowed is not None:
+            if isinstance(self.narrowed, str) or not all(isinstance(name, str) for name in self.narrowed):
+                raise SettingsError(f"narrowed must be parameter names (str); got {self.narrowed!r}", "narrowed")
+            object.__setattr__(self, "narrowed", tuple(self.narrowed))
+        if self.weights is not None:
+            weights = np.array(self.weights, dtype=float)
+            if weights.ndim != 1:
+                raise SettingsError(f"weights must be one per sample (1-d); got shape {weights.shape}", "weights")
+            weights.flags.writeable = False
+            object.__setattr__(self, "weights", weights)
+
+    def __eq__(self, other):
+        if not isinstance(other, RunRecord):
+            return NotImplemented
+        return all(_same(getattr(self, item.name), getattr(other, item.name)) for item in dataclasses.fields(self))
+
+    __hash__ = None  # the weights are an array
+
+    @classmethod
+    def of(cls, model, *, n_sampled, n_dropped):
+        """The record a front-end starts from: the model's class name and the samples drawn and dropped."""
+        return cls(model=type(model).__name__, n_sampled=int(n_sampled), n_dropped=int(n_dropped))
+
+    def to_dict(self):
+        """The fields that are set (not None, ``thesis_code`` only when True), by name; values as held."""
+        return {
+            item.name: getattr(self, item.name)
+            for item in dataclasses.fields(self)
+            if getattr(self, item.name) is not None and not (item.name == "thesis_code" and not self.thesis_code)
+        }
 
 
 def parameter_box(bounds, model_names, model_label="the model"):

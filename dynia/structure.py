@@ -209,7 +209,7 @@ def structure_warnings(result, *, ic_threshold=IC_THRESHOLD, min_windows=3, drif
     min_windows = _checks.whole_number(min_windows, "min_windows", minimum=1)
     drift_tolerance = _checks.open_interval(drift_tolerance, "drift_tolerance", 0, 1)
     usable = result.full_windows & ~_ignored_windows(result, ignore)  # raises if the geometry is unknown
-    n = _checks.whole_number(result.settings["n"], "result.settings['n']", minimum=0)
+    n = result.settings.n
     block = max(2 * n + 1, min_windows)
     warnings = []
     for p in range(len(result.names)):

@@ -215,8 +215,8 @@ def assess(
         give the ``"noise_only"`` rule, which simulates the samples again;
         without them it is skipped.
     dt, x0 : optional
-        Simulation settings; default ``result.settings["dt"]`` and
-        ``result.settings["x0"]``, else the model's defaults.
+        Simulation settings; default ``result.settings.dt`` and
+        ``result.settings.x0``, else 1 and "zero".
     ic_threshold : float in [0, 1], default :data:`dynia.settings.IC_THRESHOLD` (0.5)
         IC from which a window is informative
         (:meth:`~dynia.result.DyniaResult.informative_windows`); a highest
@@ -457,15 +457,15 @@ def _edge_reasons(result, step, window, when):
 
 def _floor_reason(result, step):
     """``(code, text)`` of the noise floor's reason for the window at ``step``, or None when neither applies."""
-    sigma = result.settings.get("noise_sigma", math.nan)
+    sigma = _or_nan(result.run.noise_sigma)
     if not result.informative[step]:
         discrimination, floor = float(result.discrimination[step]), float(result.noise_floor[step])
         if np.isnan(floor):
             return "below_noise_floor", (
                 f"has too few measured points to tell parameter sets from noise (discrimination {discrimination:.3g})"
             )
-        multiple = result.settings.get("noise_multiple", math.nan)
-        quantile = result.settings.get("noise_floor_quantile", math.nan)
+        multiple = _or_nan(result.run.noise_multiple)
+        quantile = _or_nan(result.run.noise_floor_quantile)
         return "below_noise_floor", (
             f"is below the noise floor: the MAE at population quantile {quantile:g} exceeds the best by "
             f"{discrimination:.3g}, at most {floor:.3g}, {multiple:.3g} standard deviations of the MAE of noise "
@@ -476,11 +476,16 @@ def _floor_reason(result, step):
     spread, floor = float(result.behavioural_spread[step]), float(result.behavioural_floor[step])
     if not spread <= floor:  # NaN: no floor to compare with
         return None
-    multiple = result.settings.get("behavioural_multiple", math.nan)
+    multiple = _or_nan(result.run.behavioural_multiple)
     return "noise_ranked", (
         f"has its behavioural set tied within noise: its MAE spread {spread:.3g} is at most {floor:.3g}, "
         f"{multiple:.3g} standard deviations of the MAE of noise sigma {sigma:.3g}; the band is a ranking of noise"
     )
+
+
+def _or_nan(value):
+    """A value of ``result.run``, NaN where the record has none (a result built without the noise floor's values)."""
+    return math.nan if value is None else value
 
 
 def _checked_data(result, u, y, model):
@@ -502,8 +507,8 @@ def _noise_windows(result, u, y, model, dt, x0, windows, simulations):
     """
     params = result.samples[:, [result.names.index(name) for name in model.names]]
     options = dict(
-        dt=result.settings.get("dt", 1.0) if dt is None else dt,
-        x0=result.settings.get("x0", "zero") if x0 is None else x0,
+        dt=(1.0 if result.settings is None else result.settings.dt) if dt is None else dt,
+        x0=("zero" if result.settings is None else result.settings.x0) if x0 is None else x0,
     )
     points = {step: int((~np.isnan(y[start:stop])).sum()) for step, (start, stop) in windows.items()}
     windows = {step: window for step, window in windows.items() if points[step]}

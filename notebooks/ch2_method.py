@@ -771,8 +771,8 @@ for phi in coloured_phis:
     response_runs = [coloured_run(phi, record_seed, True) for record_seed in record_seeds]
     false_share[phi] = np.mean([run.informative.any() for run in noise_runs])
     power[phi] = np.mean([run.informative.mean() for run in response_runs])
-    estimated = np.median([run.settings["noise_autocorrelation"] for run in noise_runs])
-    factor = np.median([run.settings["noise_size_factor"] for run in noise_runs])
+    estimated = np.median([result.run.noise_autocorrelation for result in noise_runs])
+    factor = np.median([result.run.noise_size_factor for result in noise_runs])
     print(f"{phi:5.2f}  {false_share[phi]:27.2f}  {power[phi]:5.2f}  {estimated:15.2f}  {factor:11.1f}")
 
 # %% [markdown]

@@ -262,13 +262,13 @@ def thesis_code(result, name):
     sims = model.simulate(result.samples, u, dt=dt, x0="steady")
     p = result.index(name)
     return dynia.thesis.thesis_code_result(y, sims, result.samples[:, [p]], result.bounds[[p]], [name],
-                                           n=result.settings["n"], percentage=percentage, bins=bins,
+                                           n=result.settings.n, percentage=percentage, bins=bins,
                                            time=result.time)
 
 
 def draw_identifiability(result, name, ax, true_value=None):
     """The engine's plot per sample, or the thesis script's pcolor plot for a thesis-code result."""
-    if result.settings["flavour"] == "thesis-code":
+    if result.run.thesis_code:
         return dynia.thesis.plot_thesis_code_result(result, name, ax=ax, true_value=true_value)
     return result.plot_identifiability(name, ax=ax, true_value=true_value, per_sample=True)
 

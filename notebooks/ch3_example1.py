@@ -102,7 +102,7 @@ print(f"code path: {code_path}; Euler outputs that diverge: {diverged.sum()} of 
 
 def draw_identifiability(result, name, ax):
     """The engine's plot, or the thesis script's pcolor plot for a thesis-code result."""
-    if result.settings["flavour"] == "thesis-code":
+    if result.run.thesis_code:
         return dynia.thesis.plot_thesis_code_result(result, name, ax=ax, true_value=TRUE[name])
     return result.plot_identifiability(name, ax=ax, true_value=TRUE[name])
 

@@ -208,7 +208,7 @@ def thesis_code(res, names):
 
 def draw_identifiability(res, name, ax):
     """The engine's plot, or the thesis script's pcolor plot for a thesis-code result."""
-    if res.settings["flavour"] == "thesis-code":
+    if res.run.thesis_code:
         dynia.thesis.plot_thesis_code_result(res, name, ax=ax, true_value=TRUE[name])
     else:
         res.plot_identifiability(name, ax=ax, true_value=TRUE[name])

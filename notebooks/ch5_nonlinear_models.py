@@ -194,7 +194,7 @@ def floor_line(result, clean, unit):
              f"to {stretches[-1][1] - 1}, average a "
              f"true output of {clean[~informative].mean():.3g}{unit}, these {clean[informative].mean():.3g}"
              if stretches else "")
-    print(f"noise floor: sigma {result.settings['noise_sigma']:.3g}{unit}, "
+    print(f"noise floor: sigma {result.run.noise_sigma:.3g}{unit}, "
           f"{informative.mean():.0%} of the windows informative" + below)
 
 
@@ -210,7 +210,7 @@ def floor_verdicts(result, clean, true_values, error_sd, unit):
         low, high = line["band"]
         print(f"{name} ({', '.join(codes)}): window {window.start}-{window.stop - 1}, mean true output "
               f"{clean[window].mean():.3g}{unit}, errors of standard deviation {error_sd(clean[window]):.3g} against "
-              f"the floor's sigma {result.settings['noise_sigma']:.3g}; band [{low:.3g}, {high:.3g}] holds the true "
+              f"the floor's sigma {result.run.noise_sigma:.3g}; band [{low:.3g}, {high:.3g}] holds the true "
               f"{true_values[name]:g}: {low <= true_values[name] <= high}")
 
 
@@ -218,7 +218,7 @@ def narrowing_line(first, second):
     """The first run's windows that may narrow a range, per parameter: IC at the second run's narrowing threshold
     and the band clear of the bounds; in brackets how many of them lie below the noise floor or have a behavioural
     set tied within noise, which dynia.refine leaves out. Then the parameters the second run narrowed."""
-    threshold = second.settings["narrowing_threshold"]
+    threshold = second.run.narrowing_threshold
     noise = ~first.informative | (first.behavioural_spread <= first.behavioural_floor)
     counts = []
     for p, name in enumerate(first.names):
@@ -226,7 +226,7 @@ def narrowing_line(first, second):
         counts.append(f"{name} {int(candidates.sum())}" + (f" ({int((candidates & noise).sum())})"
                                                            if candidates.any() else ""))
     print(f"first-run windows with IC >= {threshold:g} and the band clear of the bounds (of these below the noise "
-          f"floor or tied): {', '.join(counts)}; narrowed: {second.settings['narrowed']}")
+          f"floor or tied): {', '.join(counts)}; narrowed: {second.run.narrowed}")
 
 
 print("first run, ranges", HYMOD_BOUNDS)

@@ -214,7 +214,7 @@ for p, name in enumerate(online.names):
 # %%
 online.reset()
 replayed = online.replay(u, y)
-print(f"noise sigma estimated from the best fits: {replayed.settings['noise_sigma']:.3g} degC; "
+print(f"noise sigma estimated from the best fits: {replayed.run.noise_sigma:.3g} degC; "
       f"{replayed.informative.mean():.1%} of the windows informative, the others at "
       f"{', '.join(f'{t:g}' for t in seconds[~replayed.informative])} s")
 for name, line in replayed.summary().items():

@@ -83,9 +83,9 @@ def test_adaptive_runs_spend_exactly_their_budget_and_repeat_with_the_seed(examp
         )
         for _ in range(2)
     ]
-    assert runs[0].settings["n_evaluations"] == 3000
+    assert runs[0].run.n_evaluations == 3000
     np.testing.assert_array_equal(runs[0].ic, runs[1].ic)
-    assert runs[0].samples.shape[0] == runs[0].settings["weights"].size <= 3000
+    assert runs[0].samples.shape[0] == runs[0].run.weights.size <= 3000
 
 
 def test_iterated_importance_sampling_beats_uniform_at_the_same_budget(example1):

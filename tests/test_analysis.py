@@ -105,7 +105,7 @@ def test_trailing_window_equals_a_loop_reference():
     np.testing.assert_array_equal(
         res.ic, _weighted_reference(y, sims, params, [[0, 7], [0, 7]], 4, 10, 80, window="trailing")
     )
-    assert res.settings["window"] == "trailing"
+    assert res.settings.window == "trailing"
 
 
 @pytest.mark.parametrize("flavour", ["thesis", "weighted", "mcat"])

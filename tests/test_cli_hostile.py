@@ -419,7 +419,7 @@ def test_dropping_more_than_one_percent_of_the_samples_warns_in_the_api():
     y = model.simulate([[1.0, -0.5]], u)[0]
     with pytest.warns(DroppedSamplesWarning, match="dropped"):
         result = dynia.run(u, y, model, {"K": (0.5, 2.0), "a": (-1.0, 20.0)}, n_samples=200, n=3, rng=1)
-    dropped = result.settings["n_dropped"]
+    dropped = result.run.n_dropped
     assert dropped > 0.5 * 200 and result.samples.shape[0] == 200 - dropped
     # e^(a t) over the 90 steps after the input step overflows from a = 709.8 / 90 = 7.9 on.
     assert 7 < result.samples[:, 1].max() < 8.1 and np.isfinite(result.ic).any()
@@ -427,7 +427,7 @@ def test_dropping_more_than_one_percent_of_the_samples_warns_in_the_api():
     with warnings.catch_warnings():
         warnings.simplefilter("error", DroppedSamplesWarning)  # a stable box drops nothing and stays quiet
         stable = dynia.run(u, y, model, {"K": (0.5, 2.0), "a": (-1.0, -0.1)}, n_samples=200, n=3, rng=1)
-    assert stable.settings["n_dropped"] == 0
+    assert stable.run.n_dropped == 0
 
 
 def test_a_parameter_range_where_the_arithmetic_overflows_is_refused(tmp_path, capsys, good, never_analysed):

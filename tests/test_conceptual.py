@@ -144,7 +144,7 @@ def test_dynia_drops_invalid_sets_with_a_warning(catchment, engine):
         result = dynia.run(
             catchment.u[:100], catchment.y[:100], hymod(), bounds, n_samples=300, n=3, rng=1, engine=engine
         )
-    assert result.settings["n_dropped"] == int((result.settings["n_sampled"] - result.samples.shape[0]))
+    assert result.run.n_dropped == int((result.run.n_sampled - result.samples.shape[0]))
     assert (result.samples[:, result.index("kq")] <= 1).all()
     with pytest.warns(DroppedSamplesWarning):
         other = dynia.run(

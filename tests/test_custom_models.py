@@ -275,6 +275,6 @@ def test_unstable_sets_of_a_compiled_state_space_model_are_dropped_as_on_the_pla
         fast = dynia.run(u, y, compiled, bounds, n_samples=400, n=3, rng=1)
     with pytest.warns(dynia.pipeline.DroppedSamplesWarning):
         slow = dynia.run(u, y, plain, bounds, n_samples=400, n=3, rng=1, engine="numpy")
-    assert 0 < fast.settings["n_dropped"] == slow.settings["n_dropped"] < 400
+    assert 0 < fast.run.n_dropped == slow.run.n_dropped < 400
     assert np.array_equal(fast.samples, slow.samples)
     assert np.array_equal(fast.ic, slow.ic, equal_nan=True)

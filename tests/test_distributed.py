@@ -135,7 +135,7 @@ def test_unstable_samples_are_dropped_as_dynia_run_drops_them(client):
         finite = np.isfinite(unstable_model().simulate(drawn, u)).all(axis=1)
     assert 0 < (~finite).sum() < 150  # some, not all, overflow
     assert_array_equal(result.samples, drawn[finite])
-    assert result.settings["n_dropped"] == (~finite).sum()
+    assert result.run.n_dropped == (~finite).sum()
     assert_same(result, reference)
 
 

@@ -59,7 +59,7 @@ def test_windows_equal_the_numpy_path(flavour, window, n, percentage, conf_level
     numpy_result = moving_window(y, sims, params, [[0, 7], [0, 7]], engine="numpy", **options)
     compiled = moving_window(y, sims, params, [[0, 7], [0, 7]], engine="numba", chunk_steps=37, **options)
     _assert_same(numpy_result, compiled)
-    assert compiled.settings["engine"] == "numba" and numpy_result.settings["engine"] == "numpy"
+    assert compiled.settings.engine == "numba" and numpy_result.settings.engine == "numpy"
 
 
 def test_every_cost_tied_selects_the_lowest_indices():
@@ -126,4 +126,4 @@ def test_engine_choice_is_checked():
     with pytest.raises(ValueError, match="engine 'numba' covers the 'thesis' and 'weighted'"):
         dynia.run(u, y, FirstOrder(), bounds, n_samples=100, percentage=10, flavour="mcat", engine="numba")
     auto = dynia.run(u, y, FirstOrder(), bounds, n_samples=100, percentage=10, flavour="mcat")
-    assert auto.settings["engine"] == "numpy"
+    assert auto.settings.engine == "numpy"

@@ -180,7 +180,7 @@ def test_the_result_feeds_dynia_run():
     y = dynia.models.FirstOrder().simulate([[2.0, 3.0]], u, dt=60.0)[0]
     u, y, dt, stamps = unpack(pd.DataFrame({"u": u}, index), pd.Series(y, index))
     result = dynia.run(u, y, dynia.models.FirstOrder(), {"K": (0, 5), "T": (0, 500)}, dt=dt, n=4, n_samples=100, rng=1)
-    assert result.settings["dt"] == 60.0 and result.time[-1] == 59 * 60.0 and stamps.size == result.time.size
+    assert result.settings.dt == 60.0 and result.time[-1] == 59 * 60.0 and stamps.size == result.time.size
 
 
 def test_numpy_input_needs_no_pandas():

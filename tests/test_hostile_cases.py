@@ -219,7 +219,7 @@ def test_a_timedelta_or_seconds_index_gives_dt(index):
     result = dynia.run(
         pd.Series(u, index), pd.Series(y, index), FirstOrder(), {"K": (0, 7), "T": (0, 7)}, n=5, n_samples=200, rng=1
     )
-    assert result.settings["dt"] == 0.5
+    assert result.settings.dt == 0.5
 
 
 def test_a_numeric_index_disagreeing_with_dt_says_how_to_give_it():

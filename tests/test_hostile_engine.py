@@ -118,7 +118,7 @@ def test_a_record_scaled_by_a_power_of_two_gives_the_unscaled_analysis(unscaled,
     np.testing.assert_array_equal(scaled.ic, unscaled.ic)
     np.testing.assert_array_equal(scaled.ci, unscaled.ci)
     np.testing.assert_array_equal(scaled.informative, unscaled.informative)
-    assert scaled.settings["noise_sigma"] == unscaled.settings["noise_sigma"] * scale
+    assert scaled.run.noise_sigma == unscaled.run.noise_sigma * scale
 
 
 @pytest.mark.parametrize("engine", ["numba", "numpy"])
@@ -132,7 +132,7 @@ def test_tiny_values_no_longer_underflow_into_ties(unscaled, engine):
     assert {name: v["verdict"] for name, v in tiny.verdicts.items()} == {
         name: v["verdict"] for name, v in unscaled.verdicts.items()
     }
-    assert tiny.settings["noise_sigma"] == pytest.approx(unscaled.settings["noise_sigma"] * 1e-170, rel=0.02)
+    assert tiny.run.noise_sigma == pytest.approx(unscaled.run.noise_sigma * 1e-170, rel=0.02)
 
 
 def test_huge_data_against_unscaled_model_output_raises_no_numpy_warning():
@@ -140,7 +140,7 @@ def test_huge_data_against_unscaled_model_output_raises_no_numpy_warning():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         huge = dynia.run(U, Y * 1e200, FirstOrder(), BOUNDS, rng=1, **SETTINGS)
-    assert not huge.informative.any() and np.isfinite(huge.settings["noise_sigma"])
+    assert not huge.informative.any() and np.isfinite(huge.run.noise_sigma)
 
 
 def test_model_output_beyond_the_data_by_1e54_is_refused_with_the_reason():
@@ -217,13 +217,13 @@ def test_a_record_shorter_than_one_window_is_refused(steps):
 
 def test_percentage_100_runs_and_has_no_behavioural_spread_test(tmp_path):
     result = dynia.run(U, Y, FirstOrder(), BOUNDS, rng=1, percentage=100, store=tmp_path / "r.nc", **SETTINGS)
-    assert np.isnan(result.settings["behavioural_multiple"]) and np.isnan(result.behavioural_floor).all()
+    assert np.isnan(result.run.behavioural_multiple) and np.isnan(result.behavioural_floor).all()
     assert all(
         reason["code"] != "noise_ranked" for verdict in result.verdicts.values() for reason in verdict["reasons"]
     )
-    assert np.isnan(dynia.load(tmp_path / "r.nc").settings["behavioural_multiple"])
+    assert np.isnan(dynia.load(tmp_path / "r.nc").run.behavioural_multiple)
     online = OnlineDynia(FirstOrder(), BOUNDS, n_samples=300, n=5, percentage=100, rng=1).replay(U, Y)
-    assert np.isnan(online.settings["behavioural_multiple"])
+    assert np.isnan(online.run.behavioural_multiple)
 
 
 @pytest.mark.parametrize("engine", ["numba", "numpy"])

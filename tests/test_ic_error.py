@@ -40,7 +40,7 @@ def test_both_engines_give_the_same_errors_and_leave_the_estimates_alone(example
             np.testing.assert_array_equal(getattr(result, name), getattr(plain, name))
     np.testing.assert_array_equal(compiled.ic_se, numpy_path.ic_se)
     np.testing.assert_array_equal(compiled.ci_se, numpy_path.ci_se)
-    assert compiled.settings["ic_batches"] == 10
+    assert compiled.run.ic_batches == 10
     assert np.isfinite(compiled.ic_se).all() and (compiled.ic_se >= 0).all()
 
 
@@ -49,7 +49,7 @@ def test_every_batch_is_its_samples_analysed_alone(example1, engine):
     """The standard error is computed from exactly these batch estimates (tolerance 0)."""
     y, sims, params, bounds = example1["y"], example1["sims"], example1["params"], example1["bounds"]
     result = moving_window(y, sims, params, bounds, engine=engine, ic_error=True)
-    batches = result.settings["ic_batches"]
+    batches = result.run.ic_batches
     alone = [moving_window(y, sims[b::batches], params[b::batches], bounds, engine=engine) for b in range(batches)]
     ic_se, ci_se = monte_carlo_errors(np.stack([r.ic for r in alone]), np.stack([r.ci for r in alone]))
     np.testing.assert_array_equal(result.ic_se, ic_se)
@@ -106,11 +106,11 @@ def test_target_se_keeps_every_earlier_sample_and_stops_at_the_target():
     u, y, model, bounds = _example()
     target = 0.03
     reached = dynia.run(u, y, model, bounds, n_samples=500, target_se=target, max_samples=20_000, rng=7)
-    rounds = reached.settings["target_se_rounds"]
+    rounds = reached.run.target_se_rounds
     assert len(rounds) >= 2 and rounds[0][0] == 500
     assert [count for count, _ in rounds] == sorted(count for count, _ in rounds)
-    assert reached.settings["target_se_met"] and reached.settings["target_se_reached"] <= target
-    assert ic_se_that_matters(reached) == reached.settings["target_se_reached"]
+    assert reached.run.target_se_met and reached.run.target_se_reached <= target
+    assert ic_se_that_matters(reached) == reached.run.target_se_reached
     # The samples are those a single run of the final count draws: the same analysis, bit for bit.
     single = dynia.run(u, y, model, bounds, n_samples=reached.samples.shape[0], ic_error=True, rng=7)
     np.testing.assert_array_equal(single.samples, reached.samples)
@@ -121,9 +121,9 @@ def test_target_se_says_when_the_budget_runs_out():
     u, y, model, bounds = _example()
     with pytest.warns(TargetNotReachedWarning, match="raise max_samples"):
         result = dynia.run(u, y, model, bounds, n_samples=300, target_se=0.001, max_samples=600, rng=7)
-    assert not result.settings["target_se_met"]
+    assert not result.run.target_se_met
     assert result.samples.shape[0] == 600
-    assert result.settings["target_se_reached"] > 0.001
+    assert result.run.target_se_reached > 0.001
 
 
 @pytest.mark.parametrize(
@@ -181,7 +181,7 @@ def test_the_cluster_gives_the_errors_of_dynia_run():
     alone = dynia.run(u, y, model, bounds, ic_error=True, rng=5)
     np.testing.assert_array_equal(on_cluster.ic_se, alone.ic_se)
     np.testing.assert_array_equal(on_cluster.ci_se, alone.ci_se)
-    assert on_cluster.settings["ic_batches"] == alone.settings["ic_batches"]
+    assert on_cluster.run.ic_batches == alone.run.ic_batches
 
 
 def test_an_ic_within_two_standard_errors_of_the_threshold_is_not_identified():

@@ -29,6 +29,7 @@ from dynia.models import FirstOrder
 from dynia.online import OnlineDynia
 from dynia.result import DyniaResult
 from dynia.segments import segments_from_ic
+from dynia.settings import RunRecord
 from dynia.synthetic import thesis_example
 from dynia.verdicts import assess
 
@@ -54,7 +55,7 @@ def assert_same_floor(result, reference):
     for field in FLOOR_FIELDS:
         assert_array_equal(getattr(result, field), getattr(reference, field), err_msg=field)
     for setting in FLOOR_SETTINGS:
-        assert result.settings[setting] == reference.settings[setting], setting
+        assert getattr(result.run, setting) == getattr(reference.run, setting), setting
 
 
 # ---- the acceptance check of issue 13: thesis example 1 --------------------------------------------------------
@@ -95,9 +96,9 @@ def test_example1_time_constant_is_reported_in_the_untied_decay_not_at_its_peak_
 def test_example1_noise_level_comes_from_the_best_fits():
     for seed in range(4):
         found, result = example(1, seed)
-        assert result.settings["noise_sigma"] == pytest.approx(found.noise, rel=0.15)
-        assert result.settings["noise_multiple"] == critical_multiple(0.9, 2000, math.ceil(500 / 21))
-        assert result.settings["behavioural_multiple"] == critical_multiple(0.1, 2000, math.ceil(500 / 21))
+        assert result.run.noise_sigma == pytest.approx(found.noise, rel=0.15)
+        assert result.run.noise_multiple == critical_multiple(0.9, 2000, math.ceil(500 / 21))
+        assert result.run.behavioural_multiple == critical_multiple(0.1, 2000, math.ceil(500 / 21))
 
 
 def test_example2_is_informative_where_some_dead_time_would_move_the_output_and_untied_where_it_does():
@@ -111,7 +112,7 @@ def test_example2_is_informative_where_some_dead_time_would_move_the_output_and_
     untied = result.behavioural_spread > result.behavioural_floor
     assert untied[198:218].all() and untied[448:468].all()
     assert not untied[:180].any() and not untied[235:430].any() and not untied[490:].any()
-    assert result.settings["noise_sigma"] == pytest.approx(found.noise, rel=0.15)
+    assert result.run.noise_sigma == pytest.approx(found.noise, rel=0.15)
 
 
 # ---- records without information, and one full of it --------------------------------------------------------
@@ -124,7 +125,7 @@ def test_a_pure_noise_record_is_uninformative():
     y = rng.normal(0, 1.0, u.size)
     result = dynia.run(u, y, FirstOrder(), {"K": (0, 7), "T": (0, 7)}, rng=1, **THESIS)
     assert result.informative.mean() <= 0.01
-    assert result.settings["noise_sigma"] == pytest.approx(1.0, rel=0.15)
+    assert result.run.noise_sigma == pytest.approx(1.0, rel=0.15)
 
 
 def test_independent_noise_residuals_pass_the_floor_rarely():
@@ -191,7 +192,7 @@ def test_pure_coloured_noise_records_are_uninformative(phi):
     # The issue's report: with the white-noise floor 16 of 20 such records at phi 0.9 had informative windows.
     results = [coloured_record(phi, seed, response=False) for seed in range(20)]
     assert sum(bool(result.informative.any()) for result in results) <= 2
-    assert all(result.settings["noise_size_factor"] > 5 for result in results)
+    assert all(result.run.noise_size_factor > 5 for result in results)
 
 
 def test_a_real_response_under_coloured_noise_keeps_most_windows_informative():
@@ -205,8 +206,8 @@ def test_white_residuals_keep_the_white_noise_floor():
     # projected off its residuals: thesis example 1's white noise is seen as white.
     for seed in range(4):
         found, result = example(1, seed)
-        assert result.settings["noise_size_factor"] == 1.0
-        assert abs(result.settings["noise_autocorrelation"]) < 0.15
+        assert result.run.noise_size_factor == 1.0
+        assert abs(result.run.noise_autocorrelation) < 0.15
 
 
 def test_the_autocorrelation_is_cut_at_the_first_lag_within_white_noise():
@@ -274,7 +275,7 @@ def test_the_estimate_is_recorded_and_reported():
     assert white["size_factor"] == 1.0
     assert f"white: lag-1 autocorrelation {white['autocorrelation']:.2f};" in noise_floor_line(white)
     # A result saved before the estimate: white noise was assumed.
-    older = dataclasses.replace(example(1, 1, n_samples=300)[1], settings={**white_settings(), "noise_sigma": 0.5})
+    older = dataclasses.replace(example(1, 1, n_samples=300)[1], run=RunRecord(**white_settings(), noise_sigma=0.5))
     assert "white noise assumed" in noise_floor_line(noise_floor_summary(older, data))
 
 
@@ -347,7 +348,7 @@ def test_compiled_and_numpy_engines_give_the_same_floor_bit_for_bit(flavour, ic_
     options = dict(rng=4, flavour=flavour, ic_error=ic_error, **{**THESIS, "percentage": percentage})
     compiled = dynia.run(found.u, found.y, found.model, found.bounds, engine="numba", **options)
     plain = dynia.run(found.u, found.y, found.model, found.bounds, engine="numpy", **options)
-    assert compiled.settings["engine"] == "numba" and plain.settings["engine"] == "numpy"
+    assert compiled.settings.engine == "numba" and plain.settings.engine == "numpy"
     assert_same_floor(compiled, plain)
     if ic_error:
         assert_array_equal(compiled.ic_se, plain.ic_se)
@@ -382,7 +383,7 @@ def test_an_online_replay_after_live_updates_simulates_the_record_best_set_from_
     replayed = continued.replay(found.u, found.y)
     # The same errors over the replayed steps, so the same record-best set and residuals.
     for setting in ("noise_autocorrelation", "noise_size_factor"):
-        assert replayed.settings[setting] == fresh.settings[setting]
+        assert getattr(replayed.run, setting) == getattr(fresh.run, setting)
 
 
 def test_distributed_run_gives_the_floor_of_dynia_run():
@@ -438,7 +439,8 @@ def handmade(informative, behavioural_spread=0.4):
         ci=np.tile([4.0, 5.0], (1, steps, 1)),
         gradient=np.zeros((1, 1, steps)),
         bin_centres=np.zeros((1, 1)),
-        settings=dict(n=2, noise_sigma=0.5, noise_multiple=6.0, noise_floor_quantile=0.9, behavioural_multiple=3.5),
+        settings=dict(n=2),
+        run=RunRecord(noise_sigma=0.5, noise_multiple=6.0, noise_floor_quantile=0.9, behavioural_multiple=3.5),
         informative=informative,
         discrimination=np.full(steps, 0.1),
         noise_floor=np.full(steps, 0.4),

@@ -105,7 +105,7 @@ def test_equals_the_batch_trailing_engine_bit_for_bit(model, bounds, truth, flav
     settings = dict(n_samples=800, n=5, percentage=10, bins=25, conf_level=80, flavour=flavour, rng=11)
     online = OnlineDynia(model, bounds, **settings).replay(u, y)
     batch = dynia.run(u, y, model, bounds, window="trailing", **settings)
-    assert batch.settings["n_dropped"] == 0
+    assert batch.run.n_dropped == 0
     assert_array_equal(online.samples, batch.samples)
     assert_array_equal(online.ic, batch.ic)
     assert_array_equal(online.ci, batch.ci)

@@ -45,7 +45,8 @@ def test_result_axes_follow_the_bounds_order():
     assert forward.names == ("K", "T") and backward.names == ("T", "K")
     # the same draws land in the bounds order, so both runs see the same samples
     np.testing.assert_array_equal(forward.samples, backward.samples)
-    assert forward.settings["bounds"] == {"K": (0.0, 7.0), "T": (0.0, 7.0)}
+    assert forward.bounds.tolist() == backward.bounds.tolist() == [[0.0, 7.0], [0.0, 7.0]]
+    assert forward.run.model == "FirstOrder" and forward.run.n_sampled == 200
 
 
 def test_same_seed_same_result_bit_for_bit():
@@ -127,8 +128,8 @@ def test_parameter_sets_that_overflow_are_dropped_and_counted():
     # a > ~12 overflows within 60 steps; about a third of [-1, 30] does
     with pytest.warns(dynia.pipeline.DroppedSamplesWarning, match=r"were dropped .* not finite"):
         res = dynia.run(u, y, lag, {"K": (0, 2), "a": (-1, 30)}, n_samples=300, n=3, rng=3)
-    assert 0 < res.settings["n_dropped"] < 300
-    assert res.samples.shape[0] == 300 - res.settings["n_dropped"]
+    assert 0 < res.run.n_dropped < 300
+    assert res.samples.shape[0] == 300 - res.run.n_dropped
     assert np.isfinite(res.ic).all()
     assert (res.samples[:, 1] < 15).all()
 

@@ -21,15 +21,15 @@ def test_the_gain_is_narrowed_around_its_band_and_the_time_constant_sharpens(exa
     first, second, narrowed = example1_twice
     # At the default IC_THRESHOLD 0.5 the windows informative about T agree on a band around its true 3.
     assert narrowed == ["K", "T"]
-    assert second.settings["bounds"]["K"] == pytest.approx((1.416, 2.576), abs=1e-3)
-    assert second.settings["bounds"]["T"] == pytest.approx((0.818, 5.657), abs=1e-3)
+    assert tuple(second.bounds[second.index("K")]) == pytest.approx((1.416, 2.576), abs=1e-3)
+    assert tuple(second.bounds[second.index("T")]) == pytest.approx((0.818, 5.657), abs=1e-3)
     # At 0.75, T's highest IC (0.92 at step 424, band near 0) comes from windows that fit only noise; the
     # informative ones disagree, so T keeps its range.
     assert first.ic[1].max() > 0.75
     assert narrowed_bounds(first, {"K": (0, 7), "T": (0, 7)}, ic_threshold=0.75)[1] == ["K"]
     dips = np.r_[139:175, 329:345]  # the thesis's spikes of T (Figures 3.5 and 3.7)
     assert second.ic[1, dips].mean() > first.ic[1, dips].mean() + 0.2
-    assert second.settings["narrowed"] == ["K", "T"]
+    assert second.run.narrowed == ("K", "T")
 
 
 def test_nothing_identified_nothing_narrowed(example1_twice):

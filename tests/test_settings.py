@@ -73,7 +73,7 @@ def test_the_old_silently_dropped_keywords_now_reach_the_adaptive_run_or_are_ref
     with pytest.raises(SettingsError, match="compiled engine"):
         dynia.run(U, Y, FirstOrder(), BOUNDS, sampler="iis", min_points=11, engine="numba")
     res = dynia.run(U, Y, FirstOrder(), BOUNDS, sampler="iis", n_samples=400, n=5, min_points=11, rng=1)
-    assert res.settings["min_points"] == 11 and res.settings["sampler"] == "iis"
+    assert res.settings.min_points == 11 and res.settings.sampler == "iis"
     # min_points 11 of a window of 11: the truncated windows at both ends report nothing.
     assert np.isnan(res.ic[:, :5]).all() and np.isnan(res.ic[:, -5:]).all() and not np.isnan(res.ic[:, 5:-5]).any()
 
@@ -84,7 +84,7 @@ def test_a_settings_object_and_keywords_give_the_same_run():
     by_keywords = dynia.run(U, Y, FirstOrder(), BOUNDS, n_samples=300, n=4, percentage=20, conf_level=80, rng=3)
     assert np.array_equal(by_object.ic, by_keywords.ic) and np.array_equal(by_object.ci, by_keywords.ci)
     assert by_object.settings == by_keywords.settings
-    assert by_object.settings["conf_level"] == 80 and by_object.settings["n_sampled"] == 300
+    assert by_object.settings.conf_level == 80 and by_object.run.n_sampled == 300
 
 
 @pytest.mark.parametrize(
@@ -112,6 +112,6 @@ def test_a_lag_model_whose_pole_underflows_runs_on_both_engines():
     # T far below dt: exp(-dt/T) is 0 for every sample, so the model has no state term.
     compiled = dynia.run(U, Y, FirstOrder(), {"K": (0, 7), "T": (0, 0.001)}, n_samples=200, n=3, rng=1, engine="numba")
     plain = dynia.run(U, Y, FirstOrder(), {"K": (0, 7), "T": (0, 0.001)}, n_samples=200, n=3, rng=1, engine="numpy")
-    assert compiled.settings["engine"] == "numba"
+    assert compiled.settings.engine == "numba"
     assert np.array_equal(compiled.ic, plain.ic, equal_nan=True)
     assert np.array_equal(compiled.ci, plain.ci, equal_nan=True)

@@ -3,6 +3,7 @@
 import dataclasses
 import json
 
+import h5py
 import matplotlib
 import numpy as np
 import pytest
@@ -13,6 +14,7 @@ from dynia.errors import DataError, OutputError, SettingsError
 from dynia.io.csv import ProcessData
 from dynia.io.frames import unpack
 from dynia.models import FirstOrder
+from dynia.settings import AnalysisSettings, RunRecord
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -70,37 +72,25 @@ def _assert_identical(back, result):
 
 
 def _same_settings(back, result):
-    """Equal, and every nested value of the same type (a tuple stays a tuple, an int an int)."""
-
-    def walk(a, b, where):
-        assert type(a) is type(b), where
-        if isinstance(a, dict):
-            assert list(a) == list(b), where
-            for key in a:
-                walk(a[key], b[key], f"{where}[{key!r}]")
-        elif isinstance(a, (list, tuple)):
-            assert len(a) == len(b), where
-            for index, (x, y) in enumerate(zip(a, b)):
-                walk(x, y, f"{where}[{index}]")
-        elif isinstance(a, np.ndarray):
-            assert a.dtype == b.dtype and a.tobytes() == b.tobytes(), where
-        else:
-            assert a == b or (a != a and b != b), where
-
-    walk(back.settings, result.settings, "settings")
+    """The same settings and run record, each field of the same type (an int stays an int, a tuple a tuple)."""
+    assert isinstance(back.settings, AnalysisSettings) and isinstance(back.run, RunRecord)
+    assert back.settings == result.settings and back.run == result.run
+    for before, after in ((result.settings, back.settings), (result.run, back.run)):
+        for field in dataclasses.fields(before):
+            assert type(getattr(after, field.name)) is type(getattr(before, field.name)), field.name
 
 
 def test_a_thesis_run_comes_back_bit_for_bit(thesis_result, tmp_path):
     back = _round_trip(thesis_result, tmp_path)
     _assert_identical(back, thesis_result)
     _same_settings(back, thesis_result)
-    assert type(back.settings["bounds"]["K"]) is tuple and back.settings["flavour"] == "thesis"
+    assert back.settings.flavour == "thesis" and back.run.model == "FirstOrder" and back.run.n_sampled == 400
     assert back.timestamps is None
     assert back.summary() == thesis_result.summary()
 
 
 def test_an_adaptive_run_keeps_its_weights_as_a_variable(adaptive_result, tmp_path):
-    weights = adaptive_result.settings["weights"]
+    weights = adaptive_result.run.weights
     assert isinstance(weights, np.ndarray) and weights.size == adaptive_result.samples.shape[0]
     dataset = adaptive_result.to_xarray()
     assert dataset["weights"].dims == ("sample",)
@@ -108,7 +98,7 @@ def test_an_adaptive_run_keeps_its_weights_as_a_variable(adaptive_result, tmp_pa
     back = _round_trip(adaptive_result, tmp_path)
     _assert_identical(back, adaptive_result)
     _same_settings(back, adaptive_result)
-    assert back.settings["weights"].tobytes() == weights.tobytes()
+    assert back.run.weights.tobytes() == weights.tobytes()
 
 
 def test_missing_ic_stays_nan(nan_result, tmp_path):
@@ -137,7 +127,7 @@ def test_a_run_fed_from_pandas_keeps_its_timestamps(tmp_path):
     result = dynia.run(u, y, FirstOrder(), BOUNDS, n=4, n_samples=200, dt=dt, rng=5)
     result = dataclasses.replace(result, timestamps=stamps)
     back = _round_trip(result, tmp_path)
-    assert back.settings["dt"] == 60.0
+    assert back.settings.dt == 60.0
     assert str(back.timestamps[0]) == "2024-10-26T22:30:00.000000000"
     assert np.array_equal(back.timestamps, index.tz_convert("UTC").tz_localize(None).to_numpy())
 
@@ -167,53 +157,108 @@ def test_to_xarray_labels_every_axis(thesis_result):
     assert np.array_equal(upper_t, thesis_result.ci[1, :, 1], equal_nan=True)
     assert dataset["bounds"].sel(parameter="K").values.tolist() == [0.0, 7.0]
     settings = json.loads(dataset.attrs["settings"])
-    assert settings["bounds"]["K"] == {"__tuple__": [0.0, 7.0]} and settings["n"] == 6
+    assert settings["n"] == 6 and settings["model"] == "FirstOrder" and "bounds" not in settings
     assert json.loads(dataset.attrs["verdicts"]) == thesis_result.verdicts
     assert dataset.attrs["dynia_result"] == dynia.io.netcdf.FORMAT_VERSION
     assert "timestamp" not in thesis_result.to_xarray().variables
 
 
-def test_settings_keep_tuples_lists_and_scalar_types(thesis_result, tmp_path):
-    settings = {
-        "nested": {"pairs": [(1, 2.5), [3, None]], "flag": True, "empty": (), "nan": float("nan")},
-        "count": np.int64(7),
-        "share": np.float64(0.25),
-        "grid": np.arange(6, dtype=np.int32).reshape(2, 3),
-        "label": "Kühler",
-    }
-    result = dataclasses.replace(thesis_result, settings=settings, verdicts=None)
+def test_the_run_record_keeps_its_types_through_a_file(thesis_result, tmp_path):
+    run = RunRecord(
+        model="FirstOrder",
+        n_sampled=np.int64(7),
+        noise_sigma=np.float64(0.25),
+        noise_autocorrelation=float("nan"),
+        target_se_met=np.bool_(False),
+        target_se_rounds=[[400, 0.03], (800, float("nan"))],
+        first_run_bounds={"K": (0, 7), "T": (1, 2.5)},
+        narrowed=["K"],
+    )
+    assert run.n_sampled == 7 and type(run.n_sampled) is int and type(run.noise_sigma) is float
+    assert run.target_se_met is False and run.target_se_rounds[0] == (400, 0.03) and run.narrowed == ("K",)
+    assert dict(run.first_run_bounds) == {"K": (0.0, 7.0), "T": (1.0, 2.5)}
+    result = dataclasses.replace(thesis_result, run=run, verdicts=None)
     back = _round_trip(result, tmp_path)
     assert back.verdicts is None
-    nested = back.settings["nested"]
-    assert nested["pairs"] == [(1, 2.5), [3, None]] and type(nested["pairs"][0]) is tuple
-    assert type(nested["pairs"][1]) is list and nested["empty"] == () and nested["flag"] is True
-    assert np.isnan(nested["nan"])
-    assert back.settings["count"] == 7 and type(back.settings["count"]) is int
-    assert back.settings["share"] == 0.25 and type(back.settings["share"]) is float
-    assert back.settings["grid"].dtype == np.int32 and back.settings["grid"].tolist() == [[0, 1, 2], [3, 4, 5]]
-    assert back.settings["label"] == "Kühler"
-    assert result.to_xarray()["grid"].dims == ("grid_dim_0", "grid_dim_1")
+    _same_settings(back, result)
+    assert type(back.run.target_se_rounds[1]) is tuple and np.isnan(back.run.target_se_rounds[1][1])
+
+
+def test_settings_are_the_frozen_analysis_settings_and_the_record_is_frozen(thesis_result, adaptive_result):
+    assert type(thesis_result.settings) is AnalysisSettings and type(thesis_result.run) is RunRecord
+    assert thesis_result.settings.n_samples == 400 and thesis_result.settings.engine in ("numba", "numpy")
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        thesis_result.settings.n = 3
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        thesis_result.run.n_dropped = 3
+    with pytest.raises(ValueError, match="read-only"):
+        adaptive_result.run.weights[0] = 1.0
+    with pytest.raises(TypeError, match="unhashable"):
+        hash(adaptive_result.run)
+
+
+def test_a_hand_built_result_takes_a_mapping_of_settings_and_of_the_record(thesis_result):
+    built = dataclasses.replace(thesis_result, settings=dict(n=5, window="trailing"), run=dict(n_sampled=3))
+    assert built.settings == AnalysisSettings(n=5, window="trailing") and built.run == RunRecord(n_sampled=3)
+    assert dataclasses.replace(thesis_result, settings=None).settings is None
+    assert dataclasses.replace(thesis_result, settings={}).settings is None
+    with pytest.raises(SettingsError, match="unknown setting"):
+        dataclasses.replace(thesis_result, settings={"noise_sigma": 0.5})
+    with pytest.raises(SettingsError, match="settings must be a dynia.settings.AnalysisSettings"):
+        dataclasses.replace(thesis_result, settings=[("n", 5)])
+    with pytest.raises(SettingsError, match="n_sampled must be int or None; got '3'") as caught:
+        RunRecord(n_sampled="3")
+    assert caught.value.setting == "n_sampled"
+
+
+def _rewrite_settings(path, change):
+    """Replace the settings attribute of the file ``path`` by ``change`` of its decoded JSON."""
+    with h5py.File(path, "r+") as file:
+        file.attrs["settings"] = json.dumps(change(json.loads(file.attrs["settings"])))
+
+
+def test_a_file_of_the_layout_before_the_run_record_loads(thesis_result, tmp_path):
+    path = tmp_path / "result.nc"
+    thesis_result.save(path)
+
+    def old(settings):
+        # As dynia wrote a run before the record: the bounds in the settings, every key in one flat object.
+        return dict(settings, bounds={"K": {"__tuple__": [0.0, 7.0]}, "T": {"__tuple__": [0.0, 7.0]}})
+
+    _rewrite_settings(path, old)
+    back = dynia.load(path)
+    _same_settings(back, thesis_result)
+    _rewrite_settings(
+        path, lambda settings: dict(settings, flavour="thesis-code", note="mine", target_se_rounds=[[1, 0.5]])
+    )
+    with pytest.warns(dynia.io.netcdf.StoredSettingsWarning, match="'note' are neither"):
+        back = dynia.load(path)
+    assert back.run.thesis_code and back.settings.flavour == "thesis" and back.run.target_se_rounds == ((1, 0.5),)
+    _rewrite_settings(path, lambda settings: {"n": 1})  # a hand-built result's few settings
+    assert dynia.load(path).settings == AnalysisSettings(n=1) and dynia.load(path).run == RunRecord()
 
 
 @pytest.mark.parametrize(
-    "settings, setting, message",
+    "settings, needle",
     [
-        ({"when": object()}, "when", r"result\.settings\['when'\] holds a value of type object, which cannot be saved"),
-        ({"deep": {"x": [1, {2}]}}, "deep", r"result\.settings\['deep'\]\['x'\]\[1\] holds a value of type set"),
-        ({"map": {1: "a"}}, "map", r"result\.settings\['map'\] has the key 1; only str keys"),
-        (
-            {"ic": np.zeros(3)},
-            "ic",
-            r"result\.settings\['ic'\] is an array, .* but the result has a variable 'ic' of its own",
-        ),
+        ({"n_sampled": "many"}, "n_sampled must be int or None"),
+        ({"flavour": "best"}, "flavour must be one of"),
+        ({"n": 1, "percentage": 0.01}, "percentage 0.01 of n_samples 2000 keeps 0"),
     ],
 )
-def test_settings_that_cannot_be_saved_are_named(thesis_result, tmp_path, settings, setting, message):
-    result = dataclasses.replace(thesis_result, settings=settings)
-    with pytest.raises(SettingsError, match=message) as caught:
+def test_settings_in_a_file_that_no_run_gives_are_a_data_error(thesis_result, tmp_path, settings, needle):
+    path = tmp_path / "result.nc"
+    thesis_result.save(path)
+    _rewrite_settings(path, lambda _: settings)
+    with pytest.raises(DataError, match="attribute 'settings'") as caught:
+        dynia.load(path)
+    assert needle in str(caught.value) and str(path) in str(caught.value)
+
+
+def test_verdicts_that_cannot_be_saved_are_named(thesis_result, tmp_path):
+    result = dataclasses.replace(thesis_result, verdicts={"K": {"when": object()}})
+    with pytest.raises(SettingsError, match=r"result\.verdicts\['K'\]\['when'\] holds a value of type object"):
         result.save(tmp_path / "result.nc")
-    assert caught.value.setting == setting
-    assert not (tmp_path / "result.nc").exists()
 
 
 def test_load_names_what_it_cannot_read(thesis_result, tmp_path):

@@ -297,7 +297,7 @@ def test_bad_options_are_named(kwargs, error, message):
 
 def test_a_result_without_its_half_window_or_not_a_result_is_refused():
     result = hand_built(np.full(100, 6))
-    result.settings.clear()
+    result = dataclasses.replace(result, settings=None)
     with pytest.raises(ValueError, match="no half window 'n'"):
         structure_warnings(result)
     with pytest.raises(TypeError, match="result must be a DyniaResult; got dict"):

@@ -1095,20 +1095,21 @@ def _analyse(options, command_line, caught):
                     entry["time_of_max_ic"] = report.file_times(data, [data.time[0] + entry["time_of_max_ic"]])[0]
                 if entry["high_ic_span"][0] is not None:
                     entry["high_ic_span"] = report.file_times(data, data.time[0] + np.array(entry["high_ic_span"]))
-            settings = _recorded(options, analysis, offset, input_offset)
-            settings["bounds"] = {name: list(pair) for name, pair in bounds.items()}
-            if narrowed is not None:
-                settings["narrowed"] = narrowed
+            settings = dict(
+                _recorded(options, analysis, offset, input_offset),
+                bounds={name: list(pair) for name, pair in bounds.items()},
+                **({} if narrowed is None else {"narrowed": narrowed}),
+            )
             summary = dict(
                 parameters=parameters,
                 settings=settings,
                 version=__version__,
                 run=dict(
-                    n_sampled=result.settings["n_sampled"],
-                    n_dropped=result.settings["n_dropped"],
-                    n_behavioural=result.settings["n_behavioural"],
-                    engine=result.settings["engine"],
-                    **_monte_carlo_record(result.settings),
+                    n_sampled=result.run.n_sampled,
+                    n_dropped=result.run.n_dropped,
+                    n_behavioural=result.run.n_behavioural,
+                    engine=result.settings.engine,
+                    **_monte_carlo_record(result),
                 ),
                 noise_floor=report.noise_floor_summary(result, data),
                 warnings=notices + dropped,
@@ -1176,17 +1177,17 @@ def _written_into(out, staging):
         raise OutputError(f"--out {out}: cannot write the results: {where}{error.strerror or error}") from None
 
 
-def _monte_carlo_record(settings):
+def _monte_carlo_record(result):
     """What summary.json's ``run`` says of the Monte Carlo error: batches, and the target's rounds."""
-    if not settings.get("ic_error"):
+    if not result.settings.ic_error:
         return {}
-    record = dict(ic_batches=settings["ic_batches"])
-    if settings.get("target_se") is not None:
+    record = dict(ic_batches=result.run.ic_batches)
+    if result.settings.target_se is not None:
         record.update(
-            target_se=settings["target_se"],
-            target_se_reached=settings["target_se_reached"],
-            target_se_met=settings["target_se_met"],
-            target_se_rounds=settings["target_se_rounds"],
+            target_se=result.settings.target_se,
+            target_se_reached=result.run.target_se_reached,
+            target_se_met=result.run.target_se_met,
+            target_se_rounds=[list(pair) for pair in result.run.target_se_rounds],
         )
     return record
 

@@ -116,15 +116,15 @@ def noise_floor_summary(result, data):
     if result.informative is None:
         return None
     mask = np.asarray(result.informative, dtype=bool)
-    settings = result.settings
-    autocorrelation = settings.get("noise_autocorrelation")
+    run = result.run
+    autocorrelation = run.noise_autocorrelation
     return dict(
-        sigma=settings["noise_sigma"],
+        sigma=run.noise_sigma,
         autocorrelation=None if autocorrelation is None or np.isnan(autocorrelation) else autocorrelation,
-        size_factor=settings.get("noise_size_factor", 1.0),
-        quantile=settings["noise_floor_quantile"],
-        multiple=settings["noise_multiple"],
-        behavioural_multiple=settings["behavioural_multiple"],
+        size_factor=1.0 if run.noise_size_factor is None else run.noise_size_factor,
+        quantile=run.noise_floor_quantile,
+        multiple=run.noise_multiple,
+        behavioural_multiple=run.behavioural_multiple,
         informative_share=float(mask.mean()),
         informative=[
             file_times(data, [data.time[start], data.time[stop - 1]]) for start, stop in segments.mask_to_segments(mask)

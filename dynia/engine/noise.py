@@ -594,7 +594,7 @@ def record_noise_floor(best, upper, threshold, points, slots, n_params, percenta
 
 
 def floor_settings(floor):
-    """What an analysis records of its ``floor`` in ``result.settings``."""
+    """What an analysis records of its ``floor`` in ``result.run`` (:class:`~dynia.settings.RunRecord` fields)."""
     return dict(
         noise_sigma=floor.sigma,
         noise_multiple=floor.multiple,

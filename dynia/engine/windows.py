@@ -98,6 +98,7 @@ of the whole one, at sorted positions whose spread does not shrink exactly
 as 1/n; no correction factor is applied.
 """
 
+import dataclasses
 import math
 import warnings
 from collections import deque
@@ -109,7 +110,7 @@ from .. import _checks
 from ..errors import DataError, SettingsError
 from ..io.arrays import ResultArrays, result_arrays
 from ..result import DyniaResult
-from ..settings import AnalysisSettings
+from ..settings import AnalysisSettings, RunRecord
 from .flavours import FLAVOURS, compiled_engine, flavour_analysis, monte_carlo_errors
 from .noise import add_record_errors, floor_fields, floor_settings, record_noise_floor, record_residuals, window_points
 
@@ -245,7 +246,7 @@ def moving_window(
         n_steps), ``.bin_centres``
         (n_params, n_bins) and the settings; with ``ic_error`` also
         ``.ic_se`` (n_params, n_steps) and ``.ci_se`` (n_params, n_steps,
-        2), and ``settings["ic_batches"]``, the number of batches.
+        2), and ``run.ic_batches``, the number of batches.
 
     Examples
     --------
@@ -323,6 +324,7 @@ def analyse_stream(
     workers=None,
     progress=False,
     settings=None,
+    run=None,
     weights=None,
     window="centred",
     engine="auto",
@@ -342,7 +344,10 @@ def analyse_stream(
     ``y``: the noise floor estimates the noise's autocorrelation from the
     residuals of the record-best sample and its neighbours
     (:func:`dynia.engine.noise.record_residuals`); without it the floor
-    assumes white noise.
+    assumes white noise. ``settings`` (an
+    :class:`~dynia.settings.AnalysisSettings`) and ``run`` (a
+    :class:`~dynia.settings.RunRecord`) are what the caller knows of the run;
+    the result's are these with what the analysis did put in.
     """
     y = _checks.as_1d_float(y, "y", allow_nan=True)
     params = _checks.as_2d_float(params, "params")
@@ -364,6 +369,7 @@ def analyse_stream(
         workers=workers,
         progress=progress,
         settings=settings,
+        run=run,
         weights=weights,
         window=window,
         engine=engine,
@@ -399,6 +405,7 @@ def _analyse(
     progress,
     workers=None,
     settings=None,
+    run=None,
     weights=None,
     window="centred",
     engine="auto",
@@ -522,8 +529,7 @@ def _analyse(
     floor = record_noise_floor(best, upper, threshold, points, slots, n_params, percentage, n_samples, residuals)
     # What the engine did wins over what the caller asked: the samples analysed
     # (after any were dropped) and the engine that ran ("auto" resolved).
-    recorded = dict(settings or {})
-    recorded.update(
+    recorded = (checked if settings is None else settings).replace(
         n=n,
         window=window,
         percentage=percentage,
@@ -532,13 +538,15 @@ def _analyse(
         flavour=flavour,
         min_points=min_points,
         n_samples=n_samples,
-        n_behavioural=flavour_impl.count,
         engine="numba" if compiled else "numpy",
         ic_error=ic_error,
+    )
+    run = dataclasses.replace(
+        run or RunRecord(),
+        n_behavioural=flavour_impl.count,
+        ic_batches=flavour_impl.batches if ic_error else None,
         **floor_settings(floor),
     )
-    if ic_error:
-        recorded.update(ic_batches=flavour_impl.batches)
     arrays = output.arrays()
     result = DyniaResult(
         names=names,
@@ -551,6 +559,7 @@ def _analyse(
         gradient=arrays["gradient"],
         bin_centres=flavour_impl.bin_centres,
         settings=recorded,
+        run=run,
         ic_se=arrays.get("ic_se"),
         ci_se=arrays.get("ci_se"),
         **floor_fields(floor),

@@ -25,13 +25,22 @@ is the lower limit, and for ``bounds`` the low end of the range) and, when
 the result has timestamps, ``timestamp`` (datetime64[ns], along ``time``).
 
 Settings and verdicts are the JSON attributes ``settings`` and ``verdicts``
-(``"null"`` for a result without verdicts). The JSON is plain but for
-one tag: a tuple is written as ``{"__tuple__": [...]}``, so that it comes
-back a tuple while a list comes back a list. A setting that holds an
-ndarray (the adaptive samplers' ``weights``) is written as a variable of its
-own name instead, with ``{"__variable__": name}`` in its place in the JSON:
-``weights`` lies along ``sample``, any other array along its own dimensions
-``<name>_dim_0``, ... Attribute ``dynia_result`` holds the format version.
+(``"null"`` for a result without verdicts). ``settings`` is one object:
+every field of the result's :class:`~dynia.settings.AnalysisSettings` (none
+for a result without settings) and the fields of its
+:class:`~dynia.settings.RunRecord` that are set (not None; ``thesis_code``
+only when True), each by its name; :func:`load` rebuilds both from it. The
+JSON is plain but for one tag: a tuple is written as ``{"__tuple__":
+[...]}``, so that it comes back a tuple while a list comes back a list. The
+adaptive samplers' ``weights`` (an ndarray) is written as a variable of its
+own name along ``sample`` instead, with ``{"__variable__": "weights"}`` in
+its place in the JSON. Attribute ``dynia_result`` holds the format version.
+
+Files written before the record existed hold the same object with a few
+more keys: ``bounds`` (the ``bounds`` variable holds them, and it is not
+read), flavour ``"thesis-code"`` (read as flavour "thesis" with
+``thesis_code``), and whatever a user had put into the settings dict (left
+out, with a :class:`StoredSettingsWarning` naming it).
 
 Why netCDF-4 through h5netcdf: netCDF-3 (scipy's writer, the one without
 extra dependencies) has no 64-bit integers, so it could not hold the
@@ -46,14 +55,14 @@ Examples
 >>> res = dynia.DyniaResult(names=("K",), samples=np.zeros((3, 1)), bounds=np.array([[0.0, 1.0]]),
 ...                         time=np.arange(4.0), ic=1 - (limits[..., 1] - limits[..., 0]),
 ...                         ci=limits, gradient=gradient, bin_centres=np.array([[0.25, 0.75]]),
-...                         settings={"n": 1, "bounds": {"K": (0.0, 1.0)}})
+...                         settings=dict(n=1, n_samples=3, percentage=100))
 >>> res.to_xarray().ic.dims
 ('parameter', 'time')
 >>> with tempfile.TemporaryDirectory() as folder:
 ...     res.save(pathlib.Path(folder, "result.nc"))
 ...     back = dynia.load(pathlib.Path(folder, "result.nc"))
->>> back.settings, back.ic.round(2)
-({'n': 1, 'bounds': {'K': (0.0, 1.0)}}, array([[nan, 0.2, 0.5, 0.1]]))
+>>> back.settings == res.settings, back.settings.n, back.ic.round(2)
+(True, 1, array([[nan, 0.2, 0.5, 0.1]]))
 """
 
 import dataclasses
@@ -75,6 +84,7 @@ __all__ = [
     "TIMESTAMP_ATTRIBUTES",
     "check_time_block",
     "StoredVerdictsWarning",
+    "StoredSettingsWarning",
 ]
 
 # Written as the attribute "dynia_result"; a later layout raises it, and load refuses what it cannot read.
@@ -158,8 +168,8 @@ def _variable(values, dims):
 def metadata(result, reserved):
     """The file attributes of ``result`` (format, settings and verdicts as JSON) and its array settings.
 
-    Returns ``(attrs, variables)``: a setting that is an ndarray becomes a
-    variable of its name, ``(dims, values)``, which must not be one of the
+    Returns ``(attrs, variables)``: a field of the run record that is an
+    ndarray (``weights``) becomes a variable of its name, ``(dims, values)``, which must not be one of the
     names ``reserved`` for the result's own variables; so does the noise
     floor (``informative`` as int8, then ``discrimination``, ``noise_floor``,
     ``behavioural_spread``, ``behavioural_floor``), when the result has it.
@@ -175,19 +185,20 @@ def metadata(result, reserved):
         if getattr(result, name) is not None
     }
     settings = {}
-    for key, value in result.settings.items():
+    recorded = dict({} if result.settings is None else result.settings.to_dict(), **result.run.to_dict())
+    for key, value in recorded.items():
         if isinstance(value, np.ndarray):
             if key in reserved or key in _NOISE_FLOOR:
                 raise SettingsError(
-                    f"result.settings[{key!r}] is an array, saved as a variable of its name, but the result "
-                    f"has a variable {key!r} of its own; rename the setting",
+                    f"result.run.{key} is an array, saved as a variable of its name, but the result "
+                    f"has a variable {key!r} of its own",
                     key,
                 )
             dims = ("sample",) if key in _PER_SAMPLE else tuple(f"{key}_dim_{axis}" for axis in range(value.ndim))
             variables[key] = (dims, value)
             settings[key] = {_VARIABLE: key}
         else:
-            settings[key] = _encoded(value, f"result.settings[{key!r}]", key)
+            settings[key] = _encoded(value, f"result.run.{key}", key)
     attrs = {
         "dynia_result": FORMAT_VERSION,
         "settings": json.dumps(settings),
@@ -207,10 +218,9 @@ def save(result, path):
     Raises
     ------
     SettingsError
-        A setting, or a part of the verdicts, that is not a str, number, bool,
-        None, list, tuple or dict with str keys (nested) or, at the top level
-        of the settings, an ndarray; numpy scalars are written as Python
-        numbers. The message names the setting.
+        A part of the verdicts that is not a str, number, bool, None, list,
+        tuple or dict with str keys (nested); numpy scalars are written as
+        Python numbers. The message names the part.
     OutputError
         ``path`` cannot be written (a missing folder, no permission, a full
         disk); the file is written under a temporary name beside ``path``
@@ -235,10 +245,11 @@ def load(path, *, lazy=False):
     """The :class:`~dynia.result.DyniaResult` that :func:`save` wrote to ``path``, checked.
 
     Every array comes back bit-identical (NaN where NaN), with the names, the
-    timestamps, and the settings and verdicts equal to those saved: a tuple
-    comes back a tuple and a list a list, an ndarray setting an ndarray of
-    its dtype; a numpy scalar comes back as the Python number it was written
-    as.
+    timestamps, the settings (:class:`~dynia.settings.AnalysisSettings`), the
+    run record (:class:`~dynia.settings.RunRecord`) and the verdicts equal
+    to those saved: in the verdicts a tuple comes back a tuple and a list a
+    list, a numpy scalar as the Python number it was written as. Files of
+    the layout before the record load too (see the module documentation).
 
     With ``lazy=True`` the arrays along time (IC, limits, median, gradient
     and their errors) stay in the file as :class:`dynia.io.arrays.DiskArray` objects,
@@ -306,7 +317,7 @@ def _result(name, dataset, lazy):
     if dataset.sizes.get("side") != 2:
         raise DataError(f"{name}: dimension 'side' has {dataset.sizes.get('side')} entries; expected lower, upper")
     names = tuple(str(label) for label in _values(name, dataset, "parameter", ("parameter",)))
-    settings = _settings(name, dataset)
+    settings, run = _typed_settings(name, _settings(name, dataset))
     stored_verdicts = _attribute(name, dataset, "verdicts", (dict, type(None)), "an object or null")
     eager = {key: dims for key, dims in _ARRAYS.items() if not (lazy and key in _TIME_ARRAYS)}
     eager.update(
@@ -337,7 +348,7 @@ def _result(name, dataset, lazy):
         if timestamps.dtype.kind not in "iu":
             raise DataError(f"{name}: timestamp holds {timestamps.dtype}; expected int64 nanoseconds")
         timestamps = timestamps.astype(np.int64).view("datetime64[ns]")
-    result = DyniaResult(names=names, time=time, settings=settings, timestamps=timestamps, **arrays)
+    result = DyniaResult(names=names, time=time, settings=settings, run=run, timestamps=timestamps, **arrays)
     if stored_verdicts is None:
         return result
     return dataclasses.replace(result, verdicts=_checked_verdicts(name, result, stored_verdicts))
@@ -396,6 +407,33 @@ def _settings(name, dataset):
             value = _values(name, dataset, variable, dataset[variable].dims)
         settings[key] = value
     return settings
+
+
+def _typed_settings(name, stored):
+    """The :class:`~dynia.settings.AnalysisSettings` (None when the file has none) and the record of ``stored``."""
+    from ..settings import AnalysisSettings, RunRecord
+
+    stored = dict(stored)
+    stored.pop("bounds", None)  # written before the record: the same ranges as the bounds variable
+    if stored.get("flavour") == "thesis-code":  # written before the record had thesis_code
+        stored.update(flavour="thesis", thesis_code=True)
+    setting_names = [field.name for field in dataclasses.fields(AnalysisSettings)]
+    record_names = [field.name for field in dataclasses.fields(RunRecord)]
+    unknown = [key for key in stored if key not in setting_names and key not in record_names]
+    if unknown:
+        warnings.warn(
+            f"{name}: settings {', '.join(map(repr, unknown))} are neither analysis settings nor part of a run's "
+            "record; loaded without them (a result saved by an older dynia with settings of its own)",
+            StoredSettingsWarning,
+            stacklevel=4,
+        )
+    try:
+        given = {key: stored[key] for key in setting_names if key in stored}
+        settings = AnalysisSettings(**given) if given else None
+        run = RunRecord(**{key: stored[key] for key in record_names if key in stored})
+    except SettingsError as error:
+        raise DataError(f"{name}: attribute 'settings': {error}; {_DAMAGED}") from None
+    return settings, run
 
 
 def _check_fixed(name, names, time, arrays):
@@ -593,6 +631,10 @@ def _checked_verdicts(name, result, stored):
 
 class StoredVerdictsWarning(UserWarning):
     """A file's stored verdict differs from the one its arrays give; :func:`load` returns the latter."""
+
+
+class StoredSettingsWarning(UserWarning):
+    """A file holds settings that are not fields of the settings or the run record; :func:`load` leaves them out."""
 
 
 def _encoded(value, where, setting):

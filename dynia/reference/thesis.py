@@ -641,7 +641,10 @@ def thesis_code_result(y, sims, samples, bounds, names, *, n, percentage, bins, 
     Returns
     -------
     dynia.DyniaResult
-        With ``settings["flavour"] == "thesis-code"``.
+        With ``run.thesis_code`` True (it is the port's, not the engine's) and
+        settings of the ``"thesis"`` flavour with ``n_samples`` ns, ``n``,
+        ``percentage``, ``bins`` and ``conf_level`` as given (checked by
+        :class:`dynia.settings.AnalysisSettings`).
 
     Examples
     --------
@@ -655,6 +658,7 @@ def thesis_code_result(y, sims, samples, bounds, names, *, n, percentage, bins, 
     (True, True, [0.125, 0.375, 0.625, 0.875, 1.125])
     """
     from ..result import DyniaResult
+    from ..settings import AnalysisSettings, RunRecord
 
     y = np.asarray(y, dtype=float)
     sims = np.asarray(sims, dtype=float)
@@ -669,6 +673,7 @@ def thesis_code_result(y, sims, samples, bounds, names, *, n, percentage, bins, 
         )
     if sims.shape != (ns, y.size) or y.ndim != 1:
         raise SettingsError(f"sims must be (ns, TIME) for y of shape (TIME,); got {sims.shape} and {y.shape}")
+    settings = AnalysisSettings(n_samples=ns, n=n, percentage=percentage, bins=bins, conf_level=conf_level)
     steps = y.size
     ic = np.empty((len(names), steps))
     ci = np.empty((len(names), steps, 2))
@@ -685,7 +690,6 @@ def thesis_code_result(y, sims, samples, bounds, names, *, n, percentage, bins, 
             ic[p, start:stop], ci[p, start:stop], gradient[p, :, start:stop] = IC, CI_t, grad
     width = (bounds[:, 1] - bounds[:, 0]) / (bins - 1)
     bin_centres = bounds[:, :1] + (np.arange(bins) + 0.5) * width[:, None]
-    settings = {"flavour": "thesis-code", "n": n, "percentage": percentage, "bins": bins, "conf_level": conf_level}
     return DyniaResult(
         names=names,
         samples=samples,
@@ -696,6 +700,7 @@ def thesis_code_result(y, sims, samples, bounds, names, *, n, percentage, bins, 
         gradient=gradient,
         bin_centres=bin_centres,
         settings=settings,
+        run=RunRecord(thesis_code=True),
     )
 
 
@@ -770,12 +775,12 @@ def plot_thesis_code_result(result, name, *, ax=None, true_value=None):
     >>> plot_thesis_code_result(res, "a", true_value=0.5).get_ylabel()
     'a'
     """
-    if result.settings.get("flavour") != "thesis-code":
+    if not result.run.thesis_code:
         raise SettingsError("plot_thesis_code_result draws results of thesis_code_result only", "result")
     p = result.index(name)
     low, high = result.bounds[p]
     ax = plot_parameter_estimation(
-        result.time, result.ci[p], result.gradient[p], low, high, result.settings["bins"], ax=ax
+        result.time, result.ci[p], result.gradient[p], low, high, result.settings.bins, ax=ax
     )
     if true_value is not None:
         ax.axhline(true_value, color="k", linestyle="--", linewidth=1, label="true value")
