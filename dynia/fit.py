@@ -80,7 +80,7 @@ from scipy.optimize import least_squares
 from . import _checks
 from .errors import DataError, ModelError, SettingsError
 from .models import Model
-from .segments import check_segments, mask_to_segments
+from .segment_lists import check_segments, mask_to_segments
 from .serial import json_number, json_ready
 
 __all__ = ["FitResult", "fit_segments", "validation_error", "OFFSETS", "X0_CHOICES"]
@@ -120,9 +120,6 @@ _AT_BOUND_RTOL = 1e-6
 # Gauss-Newton iterations are few (convergence is fast near the minimum) and
 # buy estimates whose error is the data's, not the solver's.
 _LSQ_TOLERANCE = 1e-12
-
-# random_segments restarts the placement this often before giving up.
-_PLACEMENT_ATTEMPTS = 1000
 
 # The HAC prewhitening's VAR(1) singular values and the bandwidth rule's
 # autocorrelation are capped here: (I - A)^-1 and the lag count grow without

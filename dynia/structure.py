@@ -83,7 +83,6 @@ import scipy.stats
 
 from . import _checks
 from .errors import SettingsError
-from .result import DyniaResult
 from .segments import mask_to_segments
 
 __all__ = [
@@ -200,8 +199,7 @@ def structure_warnings(result, *, ic_threshold=0.75, min_windows=3, drift_tolera
     >>> structure_warnings(res)
     []
     """
-    if not isinstance(result, DyniaResult):
-        raise TypeError(f"result must be a DyniaResult; got {type(result).__name__}")
+    _checks.analysis_result(result)
     ic_threshold = _checks.open_interval(ic_threshold, "ic_threshold", 0, 1)
     min_windows = _checks.whole_number(min_windows, "min_windows", minimum=1)
     drift_tolerance = _checks.open_interval(drift_tolerance, "drift_tolerance", 0, 1)
