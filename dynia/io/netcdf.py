@@ -57,6 +57,7 @@ Examples
 """
 
 import dataclasses
+import functools
 import json
 import numbers
 import os
@@ -315,61 +316,79 @@ def check_time_block(name, names, bounds, spans, key, values, companions):
     ``name`` (the file) and ``names`` (the parameters) are for the message;
     ``bounds`` is (n_params, 2), ``spans`` the samples' max - min per parameter.
     """
-
-    def refuse(bad, what):
-        where = np.argwhere(bad)[0]
-        step = f"parameter {names[where[0]]!r}" if bad.ndim > 1 else "a step"
-        raise DataError(f"{name}: {key} {what} (first at {step}); {_DAMAGED}")
-
     values = np.asarray(values)
     if values.dtype.kind != "f":
         raise DataError(f"{name}: {key} holds {values.dtype}; expected floating point numbers")
     if key in ("ic", "median") and "ci" in companions:
         # The limits first, so that a forged limit is named as such rather than as the IC or median it disowns.
         check_time_block(name, names, bounds, spans, "ci", companions["ci"], {})
+    refuse = functools.partial(_refuse, name, names, key)
     with np.errstate(invalid="ignore", divide="ignore"):  # NaN compares False; a span of 0 never agrees
         if key == "ic":
-            outside = (values < 0) | (values > 1)
-            if outside.any():
-                refuse(outside, "lies outside [0, 1]")
-            if "ci" in companions:
-                limits = companions["ci"]
-                mismatch = np.isnan(values) != np.isnan(limits[..., 0])
-                if mismatch.any():
-                    refuse(mismatch, "is NaN where the limits are not, or not NaN where they are")
-                # Rounding to the dtype moves IC by half an ulp and each limit by half of its own.
-                width, size = limits[..., 1] - limits[..., 0], np.abs(limits).sum(axis=-1, dtype=float)
-                agrees = np.isnan(values)
-                for extent in (bounds[:, 1] - bounds[:, 0], spans):
-                    extent = np.asarray(extent, dtype=float)[:, None]
-                    tolerance = 4 * np.finfo(values.dtype).eps * (1 + size / extent)
-                    agrees |= np.abs(values - (1 - width.astype(float) / extent)) <= tolerance
-                if not agrees.all():
-                    refuse(~agrees, "is not 1 - (upper - lower) / range for its limits")
+            _check_ic(values, companions, bounds, spans, refuse)
         elif key == "ci":
-            low, high = (bounds[:, side].astype(values.dtype)[:, None] for side in (0, 1))
-            lower, upper = values[..., 0], values[..., 1]
-            bad = (lower < low) | (upper > high) | (lower > upper) | np.isinf(values).any(-1)
-            if bad.any():
-                refuse(bad, "has limits outside the bounds, or a lower limit above the upper")
-            if (np.isnan(lower) != np.isnan(upper)).any():
-                refuse(np.isnan(lower) != np.isnan(upper), "has one limit NaN and the other not")
+            _check_limits(values, bounds, refuse)
         elif key == "median":
             limits = companions["ci"]
             bad = (values < limits[..., 0]) | (values > limits[..., 1]) | (np.isnan(values) != np.isnan(limits[..., 0]))
             if bad.any():
                 refuse(bad, "lies outside the limits, or is NaN where they are not")
         elif key == "gradient":
-            tolerance = 4 * np.finfo(values.dtype).eps  # a bin's mass is a sum of weights summing to 1
-            bad = (values < 0) | (values > 1 + tolerance) | np.isinf(values)
-            if "ic" in companions:
-                bad |= np.isnan(values) != np.isnan(companions["ic"])[:, None, :]
-            if bad.any():
-                refuse(bad, "lies outside [0, 1], or is NaN where IC is not")
+            _check_gradient(values, companions, refuse)
         else:
             bad = (values < 0) | np.isinf(values)
             if bad.any():
                 refuse(bad, "is negative or infinite")
+
+
+def _refuse(name, names, key, bad, what):
+    """The DataError for array ``key`` of file ``name`` where ``bad``, naming the first parameter (or step)."""
+    where = np.argwhere(bad)[0]
+    step = f"parameter {names[where[0]]!r}" if bad.ndim > 1 else "a step"
+    raise DataError(f"{name}: {key} {what} (first at {step}); {_DAMAGED}")
+
+
+def _check_ic(values, companions, bounds, spans, refuse):
+    """IC in [0, 1], NaN exactly where the limits are, and 1 - (upper - lower) / range for its limits."""
+    outside = (values < 0) | (values > 1)
+    if outside.any():
+        refuse(outside, "lies outside [0, 1]")
+    if "ci" not in companions:
+        return
+    limits = companions["ci"]
+    mismatch = np.isnan(values) != np.isnan(limits[..., 0])
+    if mismatch.any():
+        refuse(mismatch, "is NaN where the limits are not, or not NaN where they are")
+    # Rounding to the dtype moves IC by half an ulp and each limit by half of its own.
+    width, size = limits[..., 1] - limits[..., 0], np.abs(limits).sum(axis=-1, dtype=float)
+    agrees = np.isnan(values)
+    for extent in (bounds[:, 1] - bounds[:, 0], spans):
+        extent = np.asarray(extent, dtype=float)[:, None]
+        tolerance = 4 * np.finfo(values.dtype).eps * (1 + size / extent)
+        agrees |= np.abs(values - (1 - width.astype(float) / extent)) <= tolerance
+    if not agrees.all():
+        refuse(~agrees, "is not 1 - (upper - lower) / range for its limits")
+
+
+def _check_limits(values, bounds, refuse):
+    """Each limit within the bounds (rounded to the dtype), lower at most upper, both NaN or neither."""
+    low, high = (bounds[:, side].astype(values.dtype)[:, None] for side in (0, 1))
+    lower, upper = values[..., 0], values[..., 1]
+    bad = (lower < low) | (upper > high) | (lower > upper) | np.isinf(values).any(-1)
+    if bad.any():
+        refuse(bad, "has limits outside the bounds, or a lower limit above the upper")
+    if (np.isnan(lower) != np.isnan(upper)).any():
+        refuse(np.isnan(lower) != np.isnan(upper), "has one limit NaN and the other not")
+
+
+def _check_gradient(values, companions, refuse):
+    """The likelihood mass per bin in [0, 1], NaN exactly where IC is."""
+    tolerance = 4 * np.finfo(values.dtype).eps  # a bin's mass is a sum of weights summing to 1
+    bad = (values < 0) | (values > 1 + tolerance) | np.isinf(values)
+    if "ic" in companions:
+        bad |= np.isnan(values) != np.isnan(companions["ic"])[:, None, :]
+    if bad.any():
+        refuse(bad, "lies outside [0, 1], or is NaN where IC is not")
 
 
 def _companions(key):
@@ -378,8 +397,6 @@ def _companions(key):
 
 def _lazy(name, dataset, names, bounds, spans):
     """The arrays along time as DiskArrays that check each block on its first read."""
-    import functools
-
     keys = [key for key in _TIME_ARRAYS if key in dataset]
     for key in keys:
         if dataset[key].dims != TIME_VARIABLES[key]:
