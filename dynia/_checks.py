@@ -134,3 +134,19 @@ def generator(rng, name="rng"):
             f"or a numpy Generator; got {rng!r}",
             name,
         ) from None
+
+
+# What the readers of a result use of it: its arrays, its settings and its window geometry.
+_RESULT_ATTRIBUTES = ("names", "time", "ic", "ci", "settings", "informative", "window_cover")
+
+
+def analysis_result(value, name="result"):
+    """``value``, or a TypeError unless it is a :class:`~dynia.result.DyniaResult` (or has everything one has).
+
+    Checked by what a result offers rather than by its class, so that the
+    modules that read results (:mod:`dynia.segments`, :mod:`dynia.structure`)
+    need not import :mod:`dynia.result`, whose methods use them.
+    """
+    if not all(hasattr(value, attribute) for attribute in _RESULT_ATTRIBUTES):
+        raise TypeError(f"{name} must be a DyniaResult; got {type(value).__name__}")
+    return value

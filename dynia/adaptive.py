@@ -61,12 +61,11 @@ from . import _checks
 from .engine.selection import lowest_weighted
 from .engine.windows import moving_window, window_costs
 from .errors import SettingsError
+from .settings import ADAPTIVE_SAMPLERS as SCHEMES
 from .settings import AnalysisSettings, parameter_box
 from .verdicts import assess
 
 __all__ = ["BoxMixture", "adaptive_run", "SCHEMES"]
-
-SCHEMES = ("iis", "de")
 
 
 class BoxMixture:

@@ -192,7 +192,7 @@ import scipy.stats
 
 from . import _checks
 from .errors import DataError, SettingsError
-from .segments import mask_to_segments
+from .segment_lists import mask_to_segments
 
 __all__ = ["find_intervals", "BaselineResult", "CandidateInterval", "REASONS"]
 
@@ -440,14 +440,7 @@ def find_intervals(
     >>> result.accepted.shape, result.candidates[0].reason
     ((0, 2), 'no causal relation')
     """
-    u = _checks.as_1d_float(u, "u", allow_nan=True)
-    y = _checks.as_1d_float(y, "y", allow_nan=True)
-    if u.size != y.size:
-        raise DataError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
-    if setpoint is not None:
-        setpoint = _checks.as_1d_float(setpoint, "setpoint", allow_nan=True)
-        if setpoint.size != u.size:
-            raise SettingsError(f"setpoint has {setpoint.size} samples but u has {u.size}; they must match")
+    u, y, setpoint = _checked_record(u, y, setpoint)
     dt = _positive(dt, "dt")
     mean_forgetting = _checks.open_interval(mean_forgetting, "mean_forgetting", 0, 1)
     variance_forgetting = _checks.open_interval(variance_forgetting, "variance_forgetting", 0, 1)
@@ -469,48 +462,26 @@ def find_intervals(
     finite = np.isfinite(u) & np.isfinite(y)
     if setpoint is not None:
         finite &= np.isfinite(setpoint)
-    input_excited = np.zeros(u.size, dtype=bool)
-    output_excited = np.zeros(u.size, dtype=bool)
-    bounds = []
-    for first, end in mask_to_segments(finite):
-        stretch = slice(first, end)
-        input_excited[stretch] = _excited(
-            excitation[stretch], noise_std[0], mean_forgetting, variance_forgetting, excitation_threshold
-        )
-        output_excited[stretch] = _excited(
-            y[stretch], noise_std[1], mean_forgetting, variance_forgetting, excitation_threshold
-        )
-        bounds += _candidate_bounds(
-            input_excited[stretch] | output_excited[stretch], first, max(merge_gap, margin), margin
-        )
-
+    forgetting = (mean_forgetting, variance_forgetting, excitation_threshold)
+    input_excited, output_excited, bounds = _excited_stretches(
+        excitation, y, finite, noise_std, forgetting, max(merge_gap, margin), margin
+    )
     chi2_threshold = float(scipy.stats.chi2.ppf(1 - significance, laguerre_order))
-    candidates = []
-    for start, stop in bounds:
-        condition_number, chi2_statistic, static_gain = _laguerre_tests(
-            u[start:stop],
-            y[start:stop],
-            laguerre_order,
-            laguerre_pole,
-            None if setpoint is None else setpoint[start:stop],
+    candidates = [
+        _tested_candidate(
+            u,
+            y,
+            setpoint,
+            start,
+            stop,
+            bool(input_excited[start:stop].any()),
+            (laguerre_order, laguerre_pole),
+            min_length,
+            max_condition,
+            chi2_threshold,
         )
-        has_input = bool(input_excited[start:stop].any())
-        if not has_input:
-            reason = "no input excitation"
-        elif stop - start < min_length:
-            reason = "too short"
-        elif not condition_number <= max_condition:
-            reason = "ill-conditioned"
-        elif not chi2_statistic > chi2_threshold:
-            reason = "no causal relation"
-        else:
-            reason = "accepted"
-        candidates.append(
-            CandidateInterval(
-                start, stop, has_input, condition_number, chi2_statistic, chi2_threshold, static_gain, reason
-            )
-        )
-
+        for start, stop in bounds
+    ]
     accepted = np.array([(c.start, c.stop) for c in candidates if c.accepted], dtype=np.int64).reshape(-1, 2)
     settings = dict(
         dt=dt,
@@ -528,6 +499,61 @@ def find_intervals(
         significance=significance,
     )
     return BaselineResult(accepted, tuple(candidates), input_excited, output_excited, dt, settings)
+
+
+def _checked_record(u, y, setpoint):
+    """``u``, ``y`` and ``setpoint`` (or None) as float arrays of one length; NaN allowed (it breaks the record)."""
+    u = _checks.as_1d_float(u, "u", allow_nan=True)
+    y = _checks.as_1d_float(y, "y", allow_nan=True)
+    if u.size != y.size:
+        raise DataError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
+    if setpoint is not None:
+        setpoint = _checks.as_1d_float(setpoint, "setpoint", allow_nan=True)
+        if setpoint.size != u.size:
+            raise SettingsError(f"setpoint has {setpoint.size} samples but u has {u.size}; they must match")
+    return u, y, setpoint
+
+
+def _excited_stretches(excitation, y, finite, noise_std, forgetting, gap, margin):
+    """Where the excitation signal and the output are excited, and the candidate intervals that gives.
+
+    Each stretch of ``finite`` steps is detected on its own (NaN breaks the
+    record). ``forgetting`` is (mean_forgetting, variance_forgetting,
+    excitation_threshold). Returns the two (n_steps,) masks and the
+    candidates' ``(start, stop)`` bounds.
+    """
+    input_excited = np.zeros(y.size, dtype=bool)
+    output_excited = np.zeros(y.size, dtype=bool)
+    bounds = []
+    for first, end in mask_to_segments(finite):
+        stretch = slice(first, end)
+        input_excited[stretch] = _excited(excitation[stretch], noise_std[0], *forgetting)
+        output_excited[stretch] = _excited(y[stretch], noise_std[1], *forgetting)
+        bounds += _candidate_bounds(input_excited[stretch] | output_excited[stretch], first, gap, margin)
+    return input_excited, output_excited, bounds
+
+
+def _tested_candidate(u, y, setpoint, start, stop, has_input, laguerre, min_length, max_condition, chi2_threshold):
+    """The candidate [start, stop) with its Laguerre tests and the first check it fails (or "accepted").
+
+    ``laguerre`` is (order, pole); the checks run in the order of :data:`REASONS`.
+    """
+    condition_number, chi2_statistic, static_gain = _laguerre_tests(
+        u[start:stop], y[start:stop], *laguerre, None if setpoint is None else setpoint[start:stop]
+    )
+    if not has_input:
+        reason = "no input excitation"
+    elif stop - start < min_length:
+        reason = "too short"
+    elif not condition_number <= max_condition:
+        reason = "ill-conditioned"
+    elif not chi2_statistic > chi2_threshold:
+        reason = "no causal relation"
+    else:
+        reason = "accepted"
+    return CandidateInterval(
+        start, stop, has_input, condition_number, chi2_statistic, chi2_threshold, static_gain, reason
+    )
 
 
 def _excited(x, noise_std, forgetting, variance_forgetting, threshold):

@@ -80,7 +80,7 @@ from scipy.optimize import least_squares
 from . import _checks
 from .errors import DataError, ModelError, SettingsError
 from .models import Model
-from .segments import check_segments, mask_to_segments
+from .segment_lists import check_segments, mask_to_segments
 from .serial import json_number, json_ready
 
 __all__ = ["FitResult", "fit_segments", "validation_error", "OFFSETS", "X0_CHOICES"]
@@ -120,9 +120,6 @@ _AT_BOUND_RTOL = 1e-6
 # Gauss-Newton iterations are few (convergence is fast near the minimum) and
 # buy estimates whose error is the data's, not the solver's.
 _LSQ_TOLERANCE = 1e-12
-
-# random_segments restarts the placement this often before giving up.
-_PLACEMENT_ATTEMPTS = 1000
 
 # The HAC prewhitening's VAR(1) singular values and the bandwidth rule's
 # autocorrelation are capped here: (I - A)^-1 and the lag count grow without
@@ -465,54 +462,16 @@ def fit_segments(
     fixed = _named_values(fixed, "fixed", model.names)
     initial = _named_values(initial, "initial", model.names)
     bounds = _named_bounds(bounds, model.names)
-    free_names = [name for name in model.names if name not in fixed]
-    if not free_names:
-        raise SettingsError(f"fixed holds every parameter of {type(model).__name__}; nothing is left to fit")
-    clash = [name for name in initial if name in fixed]
-    if clash:
-        raise SettingsError(f"initial and fixed both name {clash}; a parameter is either fitted or fixed")
-    lower, upper, start = _box_and_start(free_names, bounds, initial)
-    _check_fixed_in_bounds(fixed, bounds)
-    for position, ((low, high), part) in enumerate(zip(segments, _measured_counts(y, segments))):
-        if part == 0:
-            raise DataError(f"segments[{position}] = ({low}, {high}) has no measured output (all NaN)")
+    free_names, lower, upper, start = _free_parameters(model, fixed, initial, bounds)
+    _check_measured(y, segments)
 
     simulator = _SegmentSimulator(u, y, model, segments, dt=dt, x0=x0, warmup=warmup)
     free = np.array([model.names.index(name) for name in free_names])
     base = np.array([fixed.get(name, 0.0) for name in model.names], dtype=float)
     typical = np.where(np.isfinite(upper - lower), upper - lower, np.maximum(np.abs(start), 1.0))
     residuals = _Residuals(simulator, base, free, lower, upper, typical, offset)
-
-    starts = [start]
-    if n_starts > 1:
-        if not (np.isfinite(lower).all() and np.isfinite(upper).all()):
-            raise SettingsError(
-                "n_starts > 1 draws starts uniformly in the bounds, which must then be finite "
-                "for every fitted parameter"
-            )
-        starts += list(_checks.generator(rng).uniform(lower, upper, (n_starts - 1, free.size)))
-    best, nfev = None, 0
-    for point in starts:
-        if not np.isfinite(residuals(point)).all():
-            raise ModelError(
-                f"the simulation overflows at the start "
-                f"{dict(zip(free_names, point.tolist()))}; choose bounds or initial values "
-                "where the model is stable"
-            )
-        solution = least_squares(
-            residuals,
-            point,
-            jac=residuals.forward_jacobian,
-            bounds=(lower, upper),
-            method="trf",
-            x_scale=typical,
-            ftol=_LSQ_TOLERANCE,
-            xtol=_LSQ_TOLERANCE,
-            gtol=_LSQ_TOLERANCE,
-        )
-        nfev += solution.nfev
-        if best is None or solution.cost < best.cost:
-            best = solution
+    starts = _starts(start, lower, upper, n_starts, rng)
+    best, nfev = _best_solution(residuals, starts, lower, upper, typical, free_names)
     return _summarise(
         best,
         nfev,
@@ -537,6 +496,66 @@ def fit_segments(
             n_starts=n_starts,
         ),
     )
+
+
+def _free_parameters(model, fixed, initial, bounds):
+    """The names of the parameters to fit, their box (lower, upper) and the first start, all checked."""
+    free_names = [name for name in model.names if name not in fixed]
+    if not free_names:
+        raise SettingsError(f"fixed holds every parameter of {type(model).__name__}; nothing is left to fit")
+    clash = [name for name in initial if name in fixed]
+    if clash:
+        raise SettingsError(f"initial and fixed both name {clash}; a parameter is either fitted or fixed")
+    lower, upper, start = _box_and_start(free_names, bounds, initial)
+    _check_fixed_in_bounds(fixed, bounds)
+    return free_names, lower, upper, start
+
+
+def _check_measured(y, segments):
+    """Raise a DataError naming the first segment without a measured output."""
+    for position, ((low, high), part) in enumerate(zip(segments, _measured_counts(y, segments))):
+        if part == 0:
+            raise DataError(f"segments[{position}] = ({low}, {high}) has no measured output (all NaN)")
+
+
+def _starts(start, lower, upper, n_starts, rng):
+    """``start``, then ``n_starts - 1`` starts drawn uniformly in the (finite) box from ``rng``."""
+    starts = [start]
+    if n_starts > 1:
+        if not (np.isfinite(lower).all() and np.isfinite(upper).all()):
+            raise SettingsError(
+                "n_starts > 1 draws starts uniformly in the bounds, which must then be finite "
+                "for every fitted parameter"
+            )
+        starts += list(_checks.generator(rng).uniform(lower, upper, (n_starts - 1, start.size)))
+    return starts
+
+
+def _best_solution(residuals, starts, lower, upper, typical, free_names):
+    """The least-squares solution of lowest cost over ``starts``, and the evaluations all of them took."""
+    best, nfev = None, 0
+    for point in starts:
+        if not np.isfinite(residuals(point)).all():
+            raise ModelError(
+                f"the simulation overflows at the start "
+                f"{dict(zip(free_names, point.tolist()))}; choose bounds or initial values "
+                "where the model is stable"
+            )
+        solution = least_squares(
+            residuals,
+            point,
+            jac=residuals.forward_jacobian,
+            bounds=(lower, upper),
+            method="trf",
+            x_scale=typical,
+            ftol=_LSQ_TOLERANCE,
+            xtol=_LSQ_TOLERANCE,
+            gtol=_LSQ_TOLERANCE,
+        )
+        nfev += solution.nfev
+        if best is None or solution.cost < best.cost:
+            best = solution
+    return best, nfev
 
 
 def _scheme(dt, x0, warmup, offset):

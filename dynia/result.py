@@ -632,7 +632,7 @@ class DyniaResult:
         >>> dict(ds.sizes), ds.ci.dims, ds.parameter.values.tolist()
         ({'parameter': 2, 'time': 3, 'side': 2, 'bin': 4, 'sample': 5}, ('parameter', 'time', 'side'), ['K', 'T'])
         """
-        from .io.netcdf import to_xarray
+        from .io.writer import to_xarray
 
         return to_xarray(self)
 
@@ -641,6 +641,6 @@ class DyniaResult:
 
         See :func:`dynia.io.netcdf.save` for what is written and what it raises.
         """
-        from .io.netcdf import save
+        from .io.writer import save
 
         save(self, path)

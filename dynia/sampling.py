@@ -11,6 +11,7 @@ from scipy.stats import qmc
 
 from . import _checks
 from .errors import SettingsError
+from .settings import SAMPLERS
 
 __all__ = ["sample", "uniform", "latin_hypercube", "sobol", "SAMPLERS"]
 
@@ -58,14 +59,15 @@ def sobol(n_samples, bounds, rng=None):
     return qmc.scale(unit, bounds[:, 0], bounds[:, 1])
 
 
-SAMPLERS = {"uniform": uniform, "lhs": latin_hypercube, "sobol": sobol}
+# The draw of each of the settings' SAMPLERS, by name.
+_DRAWS = dict(zip(SAMPLERS, (uniform, latin_hypercube, sobol), strict=True))
 
 
 def sample(method, n_samples, bounds, rng=None):
-    """Draw with the sampler named ``method`` (one of ``SAMPLERS``)."""
+    """Draw with the sampler named ``method`` (one of :data:`dynia.settings.SAMPLERS`)."""
     if method not in SAMPLERS:
-        raise SettingsError(f"sampler must be one of {tuple(SAMPLERS)}; got {method!r}")
-    return SAMPLERS[method](n_samples, bounds, rng)
+        raise SettingsError(f"sampler must be one of {SAMPLERS}; got {method!r}")
+    return _DRAWS[method](n_samples, bounds, rng)
 
 
 def _prepare(n_samples, bounds, rng):

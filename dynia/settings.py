@@ -51,8 +51,11 @@ __all__ = [
     "MAX_HALF_WINDOW",
     "MAX_WORKERS",
     "IC_THRESHOLD",
+    "IC_BATCHES",
+    "MIN_BATCH_BEHAVIOURAL",
     "check_dt",
     "check_x0",
+    "ic_batches",
     "parameter_box",
 ]
 
@@ -79,6 +82,12 @@ MAX_WORKERS = 1024
 # every rule that judges windows (verdicts, segments, second run, structure warnings). At 0.5 a window's band spans at
 # most half of the parameter's sampling range.
 IC_THRESHOLD = 0.5
+# Batches of the Monte Carlo error (see ic_batches): ten give the error's own
+# spread about 24 % (a standard deviation with 9 degrees of freedom), and a
+# batch keeps at least five behavioural sets, or the limits of the thesis
+# (sorted positions floor(c(count-1))) are the batch's extremes.
+IC_BATCHES = 10
+MIN_BATCH_BEHAVIOURAL = 5
 _SAMPLES_WHY = " (DYNIA needs thousands; beyond this the samples alone fill the memory)"
 
 
@@ -125,6 +134,40 @@ def check_dt(dt):
 def check_x0(x0):
     """Return the initial-state rule ("zero" or "steady"), or raise naming ``x0``."""
     return _choice(x0, "x0", X0)
+
+
+def ic_batches(n_samples, percentage):
+    """Batches B of the Monte Carlo error of IC for ``n_samples`` samples at ``percentage`` %.
+
+    Sample i belongs to batch ``i mod B``: interleaved, so that every batch
+    draws alike from samples drawn in stages (the adaptive samplers' uniform
+    stage and boxes). B is :data:`IC_BATCHES` (10), or the largest number
+    below it whose smallest batch (``n_samples // B`` samples) still keeps
+    :data:`MIN_BATCH_BEHAVIOURAL` (5) behavioural sets,
+    ``floor(n_samples//B * percentage/100)``. The engine reads IC off these
+    batches (:mod:`dynia.engine.flavours`); the settings check with it that
+    ``ic_error`` can be honoured.
+
+    Raises
+    ------
+    SettingsError
+        When not even 2 batches keep 5 behavioural sets each: the samples
+        are too few for an error estimate (raise n_samples or percentage).
+
+    Examples
+    --------
+    >>> ic_batches(2000, 10), ic_batches(50_000, 0.1), ic_batches(300, 10)
+    (10, 10, 6)
+    """
+    for batches in range(IC_BATCHES, 1, -1):
+        if math.floor(n_samples // batches * (percentage / 100)) >= MIN_BATCH_BEHAVIOURAL:
+            return batches
+    raise SettingsError(
+        f"ic_error needs at least 2 batches of {MIN_BATCH_BEHAVIOURAL} behavioural sets; percentage={percentage:g} "
+        f"of n_samples={n_samples} keeps {math.floor(n_samples * (percentage / 100))} in all (raise n_samples or "
+        "percentage)",
+        "ic_error",
+    )
 
 
 @dataclasses.dataclass(frozen=True)
@@ -268,8 +311,6 @@ class AnalysisSettings:
                 "target_se" if self.max_samples is None else "max_samples",
             )
         if self.ic_error:
-            from .engine.flavours import ic_batches
-
             ic_batches(self.n_samples, self.percentage)  # enough behavioural sets for two batches, or a clear error
         if self.ic_error and self.flavour == "mcat":
             raise SettingsError(

@@ -86,7 +86,6 @@ import scipy.stats
 
 from . import _checks
 from .errors import SettingsError
-from .result import DyniaResult
 from .segments import mask_to_segments
 from .settings import IC_THRESHOLD
 
@@ -204,8 +203,7 @@ def structure_warnings(result, *, ic_threshold=IC_THRESHOLD, min_windows=3, drif
     >>> structure_warnings(res)
     []
     """
-    if not isinstance(result, DyniaResult):
-        raise TypeError(f"result must be a DyniaResult; got {type(result).__name__}")
+    _checks.analysis_result(result)
     min_windows = _checks.whole_number(min_windows, "min_windows", minimum=1)
     drift_tolerance = _checks.open_interval(drift_tolerance, "drift_tolerance", 0, 1)
     usable = result.full_windows & ~_ignored_windows(result, ignore)  # raises if the geometry is unknown

@@ -363,28 +363,10 @@ def cooling_water_loop(
     end = days * MINUTES_PER_DAY
     raster = scan * np.arange(math.floor(end / scan * (1 + 1e-12)) + 1)  # the input's scans, <= end
 
-    # Steps: one in the middle 60 % of each of n_steps equal slots of [5 %, 60 %] of the record,
-    # on the input's scan raster; alternating excursions, the last back to input_level.
-    slot = 0.55 * end / n_steps
-    step_times = 0.05 * end + slot * (np.arange(n_steps) + rng.uniform(0.2, 0.8, n_steps))
-    step_times = raster[np.searchsorted(raster, step_times)]
-    sign = rng.choice([-1.0, 1.0]) * (-1.0) ** np.arange(n_steps - 1)
-    step_inputs = np.r_[input_level + sign * rng.uniform(low_offset, high_offset, n_steps - 1), input_level]
-    drift_start = end * rng.uniform(0.68, 0.72)
-    drift_end = drift_start + end * rng.uniform(0.08, 0.12)
-
-    # The glitch: a whole minute in a steady stretch.
-    margin = 30 * time_constant
-    minutes = np.arange(math.ceil(0.03 * end), math.floor(0.97 * end - glitch_lag))
-    steady = (np.abs(minutes[:, None] - step_times[None, :]) > margin).all(axis=1)
-    steady &= (minutes < drift_start - margin) | (minutes > drift_end + margin)
-    if not steady.any():
-        raise SettingsError(
-            f"days = {days} is too short: no steady minute at least {margin} minutes from the steps "
-            "and the drift is left for the glitch"
-        )
-    glitch_time = float(rng.choice(minutes[steady]))
-
+    step_times, step_inputs, drift_start, drift_end = _plan(
+        rng, end, raster, n_steps, input_level, low_offset, high_offset
+    )
+    glitch_time = _glitch_time(rng, days, end, step_times, drift_start, drift_end, 30 * time_constant, glitch_lag)
     truth = CoolingWaterTruth(
         gain=gain,
         gain_after=gain * input_level / drifted_input,
@@ -400,8 +382,52 @@ def cooling_water_loop(
         scan=scan,
         end=end,
     )
+    time_u, u, time_y, y = _tag_readings(rng, truth, raster, input_wander, output_disturbance, sensor_noise)
+    _zero_reading(time_u, u, glitch_time)
+    _zero_reading(time_y, y, glitch_time + glitch_lag)
+    stored_u = _exception_log(time_u, u, input_deadband, max_interval)
+    stored_y = _exception_log(time_y, y, output_deadband, max_interval)
+    return time_u[stored_u], u[stored_u], time_y[stored_y], y[stored_y], truth
 
-    # The process on the input's raster: u[k] is held on [raster[k], raster[k+1]).
+
+def _plan(rng, end, raster, n_steps, input_level, low_offset, high_offset):
+    """The input steps (times and levels) and the drift's start and end, drawn from ``rng``.
+
+    One step in the middle 60 % of each of n_steps equal slots of [5 %, 60 %]
+    of the record, on the input's scan raster; alternating excursions, the
+    last back to input_level. The drift starts at about 70 % and lasts about 10 %.
+    """
+    slot = 0.55 * end / n_steps
+    step_times = 0.05 * end + slot * (np.arange(n_steps) + rng.uniform(0.2, 0.8, n_steps))
+    step_times = raster[np.searchsorted(raster, step_times)]
+    sign = rng.choice([-1.0, 1.0]) * (-1.0) ** np.arange(n_steps - 1)
+    step_inputs = np.r_[input_level + sign * rng.uniform(low_offset, high_offset, n_steps - 1), input_level]
+    drift_start = end * rng.uniform(0.68, 0.72)
+    drift_end = drift_start + end * rng.uniform(0.08, 0.12)
+    return step_times, step_inputs, drift_start, drift_end
+
+
+def _glitch_time(rng, days, end, step_times, drift_start, drift_end, margin, glitch_lag):
+    """The glitch: a whole minute in a steady stretch, ``margin`` minutes from the steps and the drift."""
+    minutes = np.arange(math.ceil(0.03 * end), math.floor(0.97 * end - glitch_lag))
+    steady = (np.abs(minutes[:, None] - step_times[None, :]) > margin).all(axis=1)
+    steady &= (minutes < drift_start - margin) | (minutes > drift_end + margin)
+    if not steady.any():
+        raise SettingsError(
+            f"days = {days} is too short: no steady minute at least {margin} minutes from the steps "
+            "and the drift is left for the glitch"
+        )
+    return float(rng.choice(minutes[steady]))
+
+
+def _tag_readings(rng, truth, raster, input_wander, output_disturbance, sensor_noise):
+    """The process simulated on the input's raster, and what the two tags read of it: time_u, u, time_y, y.
+
+    u[k] is held on [raster[k], raster[k+1]). The input tag reads the input
+    at its scans (raster plus a late stamp); the output tag scans on its own
+    phase and reads the exact response between raster points.
+    """
+    scan, end, time_constant = truth.scan, truth.end, truth.time_constant
     u_true = truth.base_input_at(raster) + _ornstein_uhlenbeck(rng, raster.size, scan, 120.0, input_wander)
     drive = truth.gain_at(raster) * u_true
     pole = math.exp(-scan / time_constant)
@@ -409,8 +435,6 @@ def cooling_water_loop(
     states = np.r_[drive[0], states[:-1]]  # the output at each raster time, steady at the start
     disturbance = _ornstein_uhlenbeck(rng, raster.size, scan, 60.0, output_disturbance)
 
-    # The input tag reads u_true at its scans (raster plus a late stamp); the output tag scans
-    # on its own phase and reads the exact response between raster points.
     time_u = raster + rng.uniform(0, 0.2 * scan, raster.size)
     time_u[0] = 0.0
     keep = time_u < end
@@ -424,12 +448,7 @@ def cooling_water_loop(
         + disturbance[index]
         + rng.normal(0, sensor_noise, time_y.size)
     )
-
-    _zero_reading(time_u, u, glitch_time)
-    _zero_reading(time_y, y, glitch_time + glitch_lag)
-    stored_u = _exception_log(time_u, u, input_deadband, max_interval)
-    stored_y = _exception_log(time_y, y, output_deadband, max_interval)
-    return time_u[stored_u], u[stored_u], time_y[stored_y], y[stored_y], truth
+    return time_u, u, time_y, y
 
 
 def _range(pair, name):

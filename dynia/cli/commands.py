@@ -47,7 +47,7 @@ from ..pipeline import DroppedSamplesWarning, TargetNotReachedWarning, run
 from ..quality import check_quality
 from ..refine import narrowed_bounds
 from ..settings import FLAVOURS, IC_THRESHOLD, MAX_PARAMETER, SAMPLERS, AnalysisSettings
-from ..suggestion import MAX_SAMPLES, parse_duration, parse_size, suggest, window_half_width
+from ..suggestion import DEFAULT_MAX_SAMPLES, parse_duration, parse_size, suggest, window_half_width
 from ..verdicts import assess
 from . import report
 
@@ -265,8 +265,8 @@ def _parser():
         "--max-samples",
         type=int,
         metavar="N",
-        help=f"the most samples of the pilot and of the proposal (default {MAX_SAMPLES}); the behavioural share is "
-        "raised so that the pilot's 50 behavioural sets fit in N",
+        help=f"the most samples of the pilot and of the proposal (default {DEFAULT_MAX_SAMPLES}); the behavioural "
+        "share is raised so that the pilot's 50 behavioural sets fit in N",
     )
     pilot.add_argument(
         "--max-memory",
@@ -1288,7 +1288,7 @@ def _suggest(options, command_line, caught):
             options["bounds"],
             dt=data.dt,
             x0=options["x0"],
-            max_samples=MAX_SAMPLES if options["max_samples"] is None else options["max_samples"],
+            max_samples=DEFAULT_MAX_SAMPLES if options["max_samples"] is None else options["max_samples"],
             max_memory=options["max_memory"],
             progress=sys.stderr.isatty(),
             rng=options["seed"],

@@ -19,6 +19,7 @@ import numpy as np
 
 from .. import _checks
 from ..errors import SettingsError
+from ..settings import ENGINES, FLAVOURS, IC_BATCHES, MIN_BATCH_BEHAVIOURAL, ic_batches
 from . import cld, kernels
 from .noise import quantile_position
 from .selection import lowest_stable, lowest_weighted, selected_columns, stable_rank_mask
@@ -43,15 +44,6 @@ __all__ = [
     "BatchedFlavour",
     "WindowResults",
 ]
-
-FLAVOURS = ("thesis", "mcat", "weighted")
-ENGINES = ("auto", "numba", "numpy")
-# Batches of the Monte Carlo error (see ic_batches): ten give the error's own
-# spread about 24 % (a standard deviation with 9 degrees of freedom), and a
-# batch keeps at least five behavioural sets, or the limits of the thesis
-# (sorted positions floor(c(count-1))) are the batch's extremes.
-IC_BATCHES = 10
-MIN_BATCH_BEHAVIOURAL = 5
 
 
 class WindowResults(NamedTuple):
@@ -149,38 +141,6 @@ def flavour_analysis(
     if compiled:
         return CompiledFlavour(params, bounds, percentage, bins, conf_level, flavour, min_points)
     return FLAVOUR_CLASSES[flavour](params, bounds, percentage, bins, conf_level)
-
-
-def ic_batches(n_samples, percentage):
-    """Batches B of the Monte Carlo error of IC for ``n_samples`` samples at ``percentage`` %.
-
-    Sample i belongs to batch ``i mod B``: interleaved, so that every batch
-    draws alike from samples drawn in stages (the adaptive samplers' uniform
-    stage and boxes). B is :data:`IC_BATCHES` (10), or the largest number
-    below it whose smallest batch (``n_samples // B`` samples) still keeps
-    :data:`MIN_BATCH_BEHAVIOURAL` (5) behavioural sets,
-    ``floor(n_samples//B * percentage/100)``.
-
-    Raises
-    ------
-    SettingsError
-        When not even 2 batches keep 5 behavioural sets each: the samples
-        are too few for an error estimate (raise n_samples or percentage).
-
-    Examples
-    --------
-    >>> ic_batches(2000, 10), ic_batches(50_000, 0.1), ic_batches(300, 10)
-    (10, 10, 6)
-    """
-    for batches in range(IC_BATCHES, 1, -1):
-        if math.floor(n_samples // batches * (percentage / 100)) >= MIN_BATCH_BEHAVIOURAL:
-            return batches
-    raise SettingsError(
-        f"ic_error needs at least 2 batches of {MIN_BATCH_BEHAVIOURAL} behavioural sets; percentage={percentage:g} "
-        f"of n_samples={n_samples} keeps {math.floor(n_samples * (percentage / 100))} in all (raise n_samples or "
-        "percentage)",
-        "ic_error",
-    )
 
 
 def monte_carlo_errors(batch_ic, batch_ci):

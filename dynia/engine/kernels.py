@@ -100,24 +100,7 @@ def simulate_errors(
     output is not finite, or (-1, -1).
     """
     n_states, n_samples = c.shape
-    m = errors.shape[0]
     lo, hi = sample_start, sample_stop
-    sources = np.empty((n_states + 2, n_samples))
-    upcoming = np.empty((n_states, n_samples))
-    output = np.empty(n_samples)
-    for i in range(n_states):
-        sources[i, lo:hi] = state[i, lo:hi]
-    output_coefficients = np.empty((n_states + 2, n_samples))
-    for i in range(n_states):
-        output_coefficients[i] = c[i]
-    output_coefficients[n_states] = feed_now
-    output_coefficients[n_states + 1] = feed_prev
-    state_coefficients = np.empty((n_states, n_states + 2, n_samples))
-    for i in range(n_states):
-        for j in range(n_states):
-            state_coefficients[i, j] = phi[i, j]
-        state_coefficients[i, n_states] = gamma_now[i]
-        state_coefficients[i, n_states + 1] = gamma_prev[i]
     common_delay = delays.shape[0] == 1
     # The fused lag loop assumes the state carries over; when every sample's pole
     # underflows to 0 (a time constant far below dt) the general loop, which
@@ -142,24 +125,18 @@ def simulate_errors(
             lo,
             hi,
         )
+    output_coefficients, state_coefficients = _coefficient_tables(phi, gamma_now, gamma_prev, c, feed_now, feed_prev)
+    sources = np.empty((n_states + 2, n_samples))
+    upcoming = np.empty((n_states, n_samples))
+    output = np.empty(n_samples)
+    for i in range(n_states):
+        sources[i, lo:hi] = state[i, lo:hi]
     bad_step, bad_sample = -1, -1
-    for j in range(m):
+    for j in range(errors.shape[0]):
         k = first_step + j
-        if common_delay:
-            sources[n_states, lo:hi] = padded_input[max(k - delays[0], -1) + 1]
-            sources[n_states + 1, lo:hi] = padded_input[max(k - delays[0] - 1, -1) + 1]
-        else:
-            for s in range(lo, hi):
-                sources[n_states, s] = padded_input[max(k - delays[s], -1) + 1]
-                sources[n_states + 1, s] = padded_input[max(k - delays[s] - 1, -1) + 1]
+        _delayed_inputs(sources[n_states], sources[n_states + 1], padded_input, delays, k, lo, hi)
         _combine(output, output_coefficients, output_terms, sources, lo, hi)
-        y = measured[j]
-        row = errors[j]
-        if np.isnan(y):
-            row[lo:hi] = 0.0
-        else:
-            for s in range(lo, hi):
-                row[s] = abs(output[s] - y)
+        _absolute_errors(errors[j], output, measured[j], lo, hi)
         if bad_step < 0:
             for s in range(lo, hi):
                 if not np.isfinite(output[s]):
@@ -176,6 +153,50 @@ def simulate_errors(
     for i in range(n_states):
         state[i, lo:hi] = sources[i, lo:hi]
     return bad_step, bad_sample
+
+
+@_jit
+def _coefficient_tables(phi, gamma_now, gamma_prev, c, feed_now, feed_prev):
+    """The recursion's coefficients per source (the states, then u[k-d], then u[k-d-1]), every sample's.
+
+    Returns the output's (n_states + 2, n_samples) and each next state's
+    (n_states, n_states + 2, n_samples), the tables :func:`_combine` sums.
+    """
+    n_states, n_samples = c.shape
+    output_coefficients = np.empty((n_states + 2, n_samples))
+    for i in range(n_states):
+        output_coefficients[i] = c[i]
+    output_coefficients[n_states] = feed_now
+    output_coefficients[n_states + 1] = feed_prev
+    state_coefficients = np.empty((n_states, n_states + 2, n_samples))
+    for i in range(n_states):
+        for j in range(n_states):
+            state_coefficients[i, j] = phi[i, j]
+        state_coefficients[i, n_states] = gamma_now[i]
+        state_coefficients[i, n_states + 1] = gamma_prev[i]
+    return output_coefficients, state_coefficients
+
+
+@_jit
+def _delayed_inputs(now, previous, padded_input, delays, k, lo, hi):
+    """u[k-d] into ``now`` and u[k-d-1] into ``previous`` for samples [lo, hi): one dead time, or one each."""
+    if delays.shape[0] == 1:
+        now[lo:hi] = padded_input[max(k - delays[0], -1) + 1]
+        previous[lo:hi] = padded_input[max(k - delays[0] - 1, -1) + 1]
+    else:
+        for s in range(lo, hi):
+            now[s] = padded_input[max(k - delays[s], -1) + 1]
+            previous[s] = padded_input[max(k - delays[s] - 1, -1) + 1]
+
+
+@_jit
+def _absolute_errors(row, output, y, lo, hi):
+    """``row[lo:hi]`` = |output - y|, or 0 where the measurement ``y`` is missing (NaN)."""
+    if np.isnan(y):
+        row[lo:hi] = 0.0
+    else:
+        for s in range(lo, hi):
+            row[s] = abs(output[s] - y)
 
 
 @_jit
@@ -405,31 +426,7 @@ def _window_sums(errors, measured, t, slots, total):
 
 
 @_jit
-def _read_off(
-    cost,
-    count,
-    candidates,
-    found,
-    columns,
-    lows,
-    highs,
-    bins,
-    positions,
-    levels,
-    weighted,
-    t,
-    ic,
-    ci,
-    median,
-    gradient,
-    whole,
-    scratch,
-    selected,
-    weights,
-    values,
-    order,
-    buffer,
-):
+def _read_off(cost, count, candidates, found, rules, positions, t, ic, ci, median, gradient, whole, work):
     """Behavioural set of one window's ``cost`` and what it gives: ``ic``, ``ci``, ``median`` and ``gradient`` at t.
 
     The set is searched among ``candidates[:found]`` (see
@@ -440,10 +437,45 @@ def _read_off(
     median is read off as the limits are: the first sorted value whose CLD
     reaches 0.5 (``weighted``), or the value at sorted position
     ``(count - 1) // 2``, which is ``floor(0.5 (count - 1))``.
-    Returns the count-th smallest cost and the smallest.
+    ``rules`` is ``(columns, lows, highs, bins, levels, weighted)``, how every
+    window is read off, ``positions`` the thesis limits' sorted positions
+    (the population's or a batch's) and ``work`` the scratch arrays of
+    :func:`_workspace`. Returns the count-th smallest cost and the smallest.
     """
+    columns, lows, highs, bins, levels, weighted = rules
+    scratch, selected, weights, values, order, buffer = work
     n_params = columns.shape[0]
     threshold = _behavioural(cost, count, candidates, found, scratch, selected)
+    smallest = _likelihood_weights(cost, count, selected, weights)
+    for p in range(n_params):
+        low, high = lows[p], highs[p]
+        for i in range(count):
+            values[i] = columns[p, selected[i]]
+        if whole:
+            _gradient_column(values, weights, count, low, high, bins, gradient[p, :, t])
+        if weighted:
+            _stable_argsort(values, count, order, buffer)
+            for side in range(2):
+                ci[p, t, side] = _cld_read_off(values, weights, order, count, levels[side])
+            if whole:
+                median[p, t] = _cld_read_off(values, weights, order, count, 0.5)
+        else:
+            for side in range(2):
+                ci[p, t, side] = _order_statistic(values, count, positions[side], scratch)
+            if whole:
+                median[p, t] = _order_statistic(values, count, (count - 1) // 2, scratch)
+        ic[p, t] = 1 - (ci[p, t, 1] - ci[p, t, 0]) / (high - low)
+    return threshold, smallest
+
+
+@_jit
+def _likelihood_weights(cost, count, selected, weights):
+    """Fill ``weights[:count]`` with the behavioural set's normalised likelihoods 1 - cost; return its smallest cost.
+
+    As :func:`dynia.engine.cld.likelihood`: shifted to be non-negative when a
+    cost exceeds 1, equal when they all vanish, then divided by their total
+    summed in index order.
+    """
     lowest = np.inf
     smallest = np.inf
     for i in range(count):
@@ -462,47 +494,38 @@ def _read_off(
         weight_total = float(count)
     for i in range(count):
         weights[i] = weights[i] / weight_total
+    return smallest
 
-    for p in range(n_params):
-        low, high = lows[p], highs[p]
-        for i in range(count):
-            values[i] = columns[p, selected[i]]
-        if whole:
-            for b in range(bins):
-                gradient[p, b, t] = 0.0
-            for i in range(count):
-                which = int((values[i] - low) / (high - low) * bins)
-                which = min(max(which, 0), bins - 1)
-                gradient[p, which, t] += weights[i]
-        if weighted:
-            _stable_argsort(values, count, order, buffer)
-            for side in range(2):
-                cumulative = 0.0
-                reached = 0
-                for i in range(count):
-                    cumulative += weights[order[i]]
-                    if cumulative < levels[side]:
-                        reached += 1
-                ci[p, t, side] = values[order[min(reached, count - 1)]]
-            if whole:
-                cumulative = 0.0
-                reached = 0
-                for i in range(count):
-                    cumulative += weights[order[i]]
-                    if cumulative < 0.5:
-                        reached += 1
-                median[p, t] = values[order[min(reached, count - 1)]]
-        else:
-            for side in range(2):
-                for i in range(count):
-                    scratch[i] = values[i]
-                ci[p, t, side] = _select(scratch, count, positions[side])
-            if whole:
-                for i in range(count):
-                    scratch[i] = values[i]
-                median[p, t] = _select(scratch, count, (count - 1) // 2)
-        ic[p, t] = 1 - (ci[p, t, 1] - ci[p, t, 0]) / (high - low)
-    return threshold, smallest
+
+@_jit
+def _gradient_column(values, weights, count, low, high, bins, column):
+    """The likelihood mass of ``values[:count]`` in each of ``bins`` equal bins of [low, high], into ``column``."""
+    for b in range(bins):
+        column[b] = 0.0
+    for i in range(count):
+        which = int((values[i] - low) / (high - low) * bins)
+        which = min(max(which, 0), bins - 1)
+        column[which] += weights[i]
+
+
+@_jit
+def _cld_read_off(values, weights, order, count, level):
+    """The first of ``values[:count]``, sorted by ``order``, whose cumulative likelihood reaches ``level``."""
+    cumulative = 0.0
+    reached = 0
+    for i in range(count):
+        cumulative += weights[order[i]]
+        if cumulative < level:
+            reached += 1
+    return values[order[min(reached, count - 1)]]
+
+
+@_jit
+def _order_statistic(values, count, k, scratch):
+    """The k-th smallest of ``values[:count]`` (0-based), found in ``scratch`` so that ``values`` stays as it is."""
+    for i in range(count):
+        scratch[i] = values[i]
+    return _select(scratch, count, k)
 
 
 @_jit
@@ -565,62 +588,26 @@ def analyse_windows_batched(
     n_batches = batch_counts.shape[0]
     total = np.empty(n_samples)
     candidates = np.empty(n_samples, dtype=np.int64)
-    scratch = np.empty(n_samples)
-    selected = np.empty(count, dtype=np.int64)
-    weights = np.empty(count)
-    values = np.empty(count)
-    order = np.empty(count, dtype=np.int64)
-    buffer = np.empty(count, dtype=np.int64)
+    rules = (columns, lows, highs, bins, levels, weighted)
+    work = _workspace(n_samples, count)
+    scratch = work[0]
     bound = np.nan
     upper_bound = np.nan
     batch_bounds = np.full(n_batches, np.nan)
-    # Batch b holds samples b, b + n_batches, ...; row b lists its candidates (sample indices, ascending).
-    batch_of = np.empty(n_samples if n_batches else 0, dtype=np.int64)
-    for first in range(0, batch_of.shape[0], max(n_batches, 1)):
-        for b in range(min(n_batches, n_samples - first)):
-            batch_of[first + b] = b
+    batch_of = _batch_of(n_samples, n_batches)
     batch_candidates = np.empty((n_batches, (n_samples + n_batches - 1) // max(n_batches, 1)), dtype=np.int64)
     batch_found = np.empty(n_batches, dtype=np.int64)
     for t in range(m):
         present = _window_sums(errors, measured, t, slots, total)
         if present < min_points:
-            ic[:, t] = np.nan
-            ci[:, t, :] = np.nan
-            median[:, t] = np.nan
-            gradient[:, :, t] = np.nan
-            extreme_costs[:, t] = np.nan
-            for b in range(n_batches):
-                batch_ic[b, :, t] = np.nan
-                batch_ci[b, :, t, :] = np.nan
+            _blank_window(t, ic, ci, median, gradient, extreme_costs, batch_ic, batch_ci)
             continue
         for s in range(n_samples):
             mae = total[s] / present
             total[s] = mae * mae
         found = _candidates(total, 0, 1, count, bound, candidates)
         threshold, smallest = _read_off(
-            total,
-            count,
-            candidates,
-            found,
-            columns,
-            lows,
-            highs,
-            bins,
-            positions,
-            levels,
-            weighted,
-            t,
-            ic,
-            ci,
-            median,
-            gradient,
-            True,
-            scratch,
-            selected,
-            weights,
-            values,
-            order,
-            buffer,
+            total, count, candidates, found, rules, positions, t, ic, ci, median, gradient, True, work
         )
         bound = _next_bound(threshold)
         upper = _quantile_cost(total, upper_position, upper_bound, scratch)
@@ -630,15 +617,7 @@ def analyse_windows_batched(
         extreme_costs[2, t] = upper
         if n_batches == 0:
             continue
-        # The population's candidates (every cost at or below its bound) are dealt to their batches: a batch
-        # with at least its count among them has its behavioural set and every tie there; one with fewer
-        # searches its members against its own bound, and all of them if that finds too few.
-        batch_found[:] = 0
-        for i in range(found):
-            s = candidates[i]
-            b = batch_of[s]
-            batch_candidates[b, batch_found[b]] = s
-            batch_found[b] += 1
+        _deal_candidates(candidates, found, batch_of, batch_candidates, batch_found)
         for b in range(n_batches):
             members = batch_candidates[b]
             if batch_found[b] < batch_counts[b]:
@@ -648,27 +627,75 @@ def analyse_windows_batched(
                 batch_counts[b],
                 members,
                 batch_found[b],
-                columns,
-                lows,
-                highs,
-                bins,
+                rules,
                 batch_positions[b],
-                levels,
-                weighted,
                 t,
                 batch_ic[b],
                 batch_ci[b],
                 median,
                 gradient,
                 False,
-                scratch,
-                selected,
-                weights,
-                values,
-                order,
-                buffer,
+                work,
             )
             batch_bounds[b] = _next_bound(threshold)
+
+
+@_jit
+def _workspace(n_samples, count):
+    """The scratch arrays of :func:`_read_off`, made once a block: (scratch, selected, weights, values, order, buffer).
+
+    ``scratch`` (n_samples,) for the selections, then for ``count`` values:
+    the behavioural set's indices, likelihood weights and one parameter's
+    values, and the stable sort's order and its buffer.
+    """
+    return (
+        np.empty(n_samples),
+        np.empty(count, dtype=np.int64),
+        np.empty(count),
+        np.empty(count),
+        np.empty(count, dtype=np.int64),
+        np.empty(count, dtype=np.int64),
+    )
+
+
+@_jit
+def _batch_of(n_samples, n_batches):
+    """The batch of every sample: sample s belongs to batch s mod n_batches (none without batches)."""
+    batch_of = np.empty(n_samples if n_batches else 0, dtype=np.int64)
+    for first in range(0, batch_of.shape[0], max(n_batches, 1)):
+        for b in range(min(n_batches, n_samples - first)):
+            batch_of[first + b] = b
+    return batch_of
+
+
+@_jit
+def _blank_window(t, ic, ci, median, gradient, extreme_costs, batch_ic, batch_ci):
+    """NaN for every result of window t, which has too few measured points."""
+    ic[:, t] = np.nan
+    ci[:, t, :] = np.nan
+    median[:, t] = np.nan
+    gradient[:, :, t] = np.nan
+    extreme_costs[:, t] = np.nan
+    for b in range(batch_ic.shape[0]):
+        batch_ic[b, :, t] = np.nan
+        batch_ci[b, :, t, :] = np.nan
+
+
+@_jit
+def _deal_candidates(candidates, found, batch_of, batch_candidates, batch_found):
+    """Deal the population's ``candidates[:found]`` to their batches: row b of ``batch_candidates``, ascending.
+
+    The population's candidates are every cost at or below its bound: a batch
+    with at least its count among them has its behavioural set and every tie
+    there; one with fewer searches its members against its own bound, and all
+    of them if that finds too few.
+    """
+    batch_found[:] = 0
+    for i in range(found):
+        s = candidates[i]
+        b = batch_of[s]
+        batch_candidates[b, batch_found[b]] = s
+        batch_found[b] += 1
 
 
 @_jit

@@ -110,8 +110,8 @@ from .. import _checks
 from ..errors import DataError, SettingsError
 from ..io.arrays import ResultArrays, result_arrays
 from ..result import DyniaResult
-from ..settings import AnalysisSettings, RunRecord
-from .flavours import FLAVOURS, compiled_engine, flavour_analysis, monte_carlo_errors
+from ..settings import FLAVOURS, WINDOWS, AnalysisSettings, RunRecord
+from .flavours import compiled_engine, flavour_analysis, monte_carlo_errors
 from .noise import add_record_errors, floor_fields, floor_settings, record_noise_floor, record_residuals, window_points
 
 __all__ = [
@@ -132,8 +132,6 @@ __all__ = [
     "FLAVOURS",
     "WINDOWS",
 ]
-
-WINDOWS = ("centred", "trailing")
 
 # Records whose largest |y| lies beyond 2^SAFE_EXPONENT or below 2^-SAFE_EXPONENT have their errors scaled
 # (see "Magnitudes" in the module documentation): at that edge MAE^2 keeps 54 decades of room either side.

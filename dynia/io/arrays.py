@@ -54,6 +54,7 @@ import numpy as np
 from numpy.lib.mixins import NDArrayOperatorsMixin
 
 from ..errors import DataError, OutputError
+from .layout import TIME_VARIABLES, TIMESTAMP_ATTRIBUTES, metadata
 
 __all__ = [
     "TIME_VARIABLES",
@@ -68,15 +69,6 @@ __all__ = [
     "PartialFile",
 ]
 
-# The result arrays that lie along time, with the file's dimensions (as dynia.io.netcdf lays them out).
-TIME_VARIABLES = {
-    "ic": ("parameter", "time"),
-    "ci": ("parameter", "time", "side"),
-    "median": ("parameter", "time"),
-    "gradient": ("parameter", "bin", "time"),
-    "ic_se": ("parameter", "time"),
-    "ci_se": ("parameter", "time", "side"),
-}
 
 # Bytes of one on-disk chunk of the widest variable (the gradient of one parameter): large enough that
 # a row of IC is read in few requests, small enough for HDF5's chunk cache and for the write buffer.
@@ -317,8 +309,6 @@ class ResultFile(ResultArrays):
 
         ``result`` is the finished result whose arrays this file holds.
         """
-        from .netcdf import metadata
-
         attrs, variables = metadata(
             result,
             reserved=(*TIME_VARIABLES, "time", "timestamp", "parameter", "side", "samples", "bounds", "bin_centres"),
@@ -343,8 +333,6 @@ class ResultFile(ResultArrays):
 
     def _describe(self, file, result, attrs, variables):
         """Write the settings' array variables, the timestamps and the attributes through the h5netcdf ``file``."""
-        from .netcdf import TIMESTAMP_ATTRIBUTES
-
         for name, (dims, values) in variables.items():
             for axis, dim in enumerate(dims):
                 if dim not in file.dimensions:

@@ -66,6 +66,7 @@ Examples
 """
 
 import dataclasses
+import functools
 import json
 import numbers
 import os
@@ -74,6 +75,24 @@ import warnings
 import numpy as np
 
 from ..errors import DataError, SettingsError
+from ..result import DyniaResult
+from ..settings import AnalysisSettings, RunRecord
+from ..verdicts import VERDICTS, assess
+from .arrays import disk_arrays, read_block
+from .layout import (
+    ARRAYS,
+    FORMAT_VERSION,
+    NOISE_FLOOR,
+    OPTIONAL_ARRAYS,
+    TIME_VARIABLES,
+    TIMESTAMP_ATTRIBUTES,
+    TIMESTAMP_UNITS,
+    VARIABLE_TAG,
+    MalformedAttribute,
+    decoded,
+    metadata,
+)
+from .writer import save, to_xarray
 
 __all__ = [
     "to_xarray",
@@ -86,159 +105,6 @@ __all__ = [
     "StoredVerdictsWarning",
     "StoredSettingsWarning",
 ]
-
-# Written as the attribute "dynia_result"; a later layout raises it, and load refuses what it cannot read.
-FORMAT_VERSION = 1
-
-# Settings holding one value per parameter set: their variable lies along "sample".
-_PER_SAMPLE = frozenset({"weights"})
-
-_ARRAYS = {
-    "ic": ("parameter", "time"),
-    "ci": ("parameter", "time", "side"),
-    "gradient": ("parameter", "bin", "time"),
-    "bin_centres": ("parameter", "bin"),
-    "samples": ("sample", "parameter"),
-    "bounds": ("parameter", "side"),
-}
-# The noise floor along time (see dynia.engine.noise), written when the result has it. Part of the
-# metadata, so that a result written block by block (dynia.io.arrays) gets it too; the mask is int8 in a
-# file, since netCDF has no booleans, and bool again when loaded.
-_NOISE_FLOOR = ("informative", "discrimination", "noise_floor", "behavioural_spread", "behavioural_floor")
-# Written when the result has them (not None), read back when the file has them.
-_OPTIONAL_ARRAYS = {
-    "median": ("parameter", "time"),
-    "ic_se": ("parameter", "time"),
-    "ci_se": ("parameter", "time", "side"),
-}
-_COORDINATES = ("parameter", "time", "side", "timestamp")
-_SIDES = ("lower", "upper")
-
-# The timestamps as integer nanoseconds from the epoch: exact, and what any CF reader decodes to datetimes.
-_TIMESTAMP_UNITS = "nanoseconds since 1970-01-01"
-# The attributes of the timestamp variable in a file (what xarray writes with that encoding).
-TIMESTAMP_ATTRIBUTES = {"units": _TIMESTAMP_UNITS, "calendar": "proleptic_gregorian"}
-
-_TUPLE = "__tuple__"
-_VARIABLE = "__variable__"
-
-
-def to_xarray(result):
-    """``result`` as an :class:`xarray.Dataset` laid out as the module describes.
-
-    Raises
-    ------
-    SettingsError
-        A setting that JSON cannot hold (see :func:`save`).
-    """
-    import xarray as xr
-
-    coords = {
-        "parameter": ("parameter", np.array(result.names, dtype=str)),
-        "time": ("time", result.time, {"units": "s", "long_name": "time from the start of the record"}),
-        "side": ("side", np.array(_SIDES)),
-    }
-    if result.timestamps is not None:
-        coords["timestamp"] = ("time", np.asarray(result.timestamps, dtype="datetime64[ns]"))
-    variables = {name: _variable(getattr(result, name), dims) for name, dims in _ARRAYS.items()}
-    variables.update(
-        (name, _variable(getattr(result, name), dims))
-        for name, dims in _OPTIONAL_ARRAYS.items()
-        if getattr(result, name) is not None
-    )
-    attrs, array_settings = metadata(result, reserved=(*variables, *_COORDINATES))
-    variables.update(array_settings)
-    if result.informative is not None:
-        variables["informative"] = (("time",), np.asarray(result.informative, dtype=bool))
-    return xr.Dataset(variables, coords=coords, attrs=attrs)
-
-
-def _variable(values, dims):
-    """An array of a result as a Dataset variable: an array on disk stays there (read lazily by xarray)."""
-    from .arrays import DiskArray
-
-    if not isinstance(values, DiskArray):
-        return dims, values
-    import xarray as xr
-
-    opened = xr.open_dataset(values.filename, engine="h5netcdf", mask_and_scale=False, decode_times=False)
-    return opened[values.name].variable.transpose(*dims)
-
-
-def metadata(result, reserved):
-    """The file attributes of ``result`` (format, settings and verdicts as JSON) and its array settings.
-
-    Returns ``(attrs, variables)``: a field of the run record that is an
-    ndarray (``weights``) becomes a variable of its name, ``(dims, values)``, which must not be one of the
-    names ``reserved`` for the result's own variables; so does the noise
-    floor (``informative`` as int8, then ``discrimination``, ``noise_floor``,
-    ``behavioural_spread``, ``behavioural_floor``), when the result has it.
-
-    Raises
-    ------
-    SettingsError
-        As :func:`save`.
-    """
-    variables = {
-        name: (("time",), np.asarray(getattr(result, name), dtype=np.int8 if name == "informative" else float))
-        for name in _NOISE_FLOOR
-        if getattr(result, name) is not None
-    }
-    settings = {}
-    recorded = dict({} if result.settings is None else result.settings.to_dict(), **result.run.to_dict())
-    for key, value in recorded.items():
-        if isinstance(value, np.ndarray):
-            if key in reserved or key in _NOISE_FLOOR:
-                raise SettingsError(
-                    f"result.run.{key} is an array, saved as a variable of its name, but the result "
-                    f"has a variable {key!r} of its own",
-                    key,
-                )
-            dims = ("sample",) if key in _PER_SAMPLE else tuple(f"{key}_dim_{axis}" for axis in range(value.ndim))
-            variables[key] = (dims, value)
-            settings[key] = {_VARIABLE: key}
-        else:
-            settings[key] = _encoded(value, f"result.run.{key}", key)
-    attrs = {
-        "dynia_result": FORMAT_VERSION,
-        "settings": json.dumps(settings),
-        "verdicts": json.dumps(_encoded(result.verdicts, "result.verdicts", None)),
-    }
-    return attrs, variables
-
-
-def save(result, path):
-    """Write ``result`` to the netCDF-4 file ``path`` (replaced if it exists); :func:`load` reads it back.
-
-    Every array is written as it is, without a fill value, so NaN stays NaN
-    bit for bit; timestamps as int64 nanoseconds since 1970-01-01. A result
-    whose arrays are on disk (``store``, see :mod:`dynia.io.arrays`) is copied
-    one time block at a time, never loaded whole.
-
-    Raises
-    ------
-    SettingsError
-        A part of the verdicts that is not a str, number, bool, None, list,
-        tuple or dict with str keys (nested); numpy scalars are written as
-        Python numbers. The message names the part.
-    OutputError
-        ``path`` cannot be written (a missing folder, no permission, a full
-        disk); the file is written under a temporary name beside ``path``
-        and renamed when complete, so ``path`` is then left as it was.
-    """
-    from .arrays import DiskArray, write_netcdf, write_result
-
-    if isinstance(result.ic, DiskArray):
-        write_result(result, path)
-        return
-    dataset = to_xarray(result)
-    # Fletcher-32 checksums on every numeric variable, so that load tells a damaged file from a result.
-    encoding = {
-        name: {"_FillValue": None, "fletcher32": dataset[name].dtype.kind in "biuf"} for name in dataset.variables
-    }
-    if "timestamp" in dataset.variables:
-        encoding["timestamp"].update(units=_TIMESTAMP_UNITS, calendar="proleptic_gregorian", dtype="int64")
-    write_netcdf(lambda partial: dataset.to_netcdf(partial, engine="h5netcdf", encoding=encoding), path)
 
 
 def load(path, *, lazy=False):
@@ -301,8 +167,6 @@ def load(path, *, lazy=False):
 
 def _result(name, dataset, lazy):
     """The checked result of the open ``dataset`` of file ``name`` (see :func:`load`)."""
-    from ..result import DyniaResult
-
     version = dataset.attrs.get("dynia_result")
     if not isinstance(version, numbers.Integral) or not 1 <= version <= FORMAT_VERSION:
         found = "no dynia_result attribute" if version is None else f"format version {version}"
@@ -310,7 +174,7 @@ def _result(name, dataset, lazy):
             f"{name}: {found}; expected a result written by DyniaResult.save (format version {FORMAT_VERSION} "
             "or earlier)"
         )
-    missing = [key for key in (*_ARRAYS, "parameter", "time") if key not in dataset.variables]
+    missing = [key for key in (*ARRAYS, "parameter", "time") if key not in dataset.variables]
     missing += [key for key in ("settings", "verdicts") if key not in dataset.attrs]
     if missing:
         raise DataError(f"{name}: has no {', '.join(map(repr, missing))}; expected every part of a saved result")
@@ -319,16 +183,16 @@ def _result(name, dataset, lazy):
     names = tuple(str(label) for label in _values(name, dataset, "parameter", ("parameter",)))
     settings, run = _typed_settings(name, _settings(name, dataset))
     stored_verdicts = _attribute(name, dataset, "verdicts", (dict, type(None)), "an object or null")
-    eager = {key: dims for key, dims in _ARRAYS.items() if not (lazy and key in _TIME_ARRAYS)}
+    eager = {key: dims for key, dims in ARRAYS.items() if not (lazy and key in _TIME_ARRAYS)}
     eager.update(
-        (key, dims) for key, dims in _OPTIONAL_ARRAYS.items() if key in dataset and not (lazy and key in _TIME_ARRAYS)
+        (key, dims) for key, dims in OPTIONAL_ARRAYS.items() if key in dataset and not (lazy and key in _TIME_ARRAYS)
     )
     arrays = {key: _values(name, dataset, key, dims) for key, dims in eager.items()}
     time = _values(name, dataset, "time", ("time",))
     _check_fixed(name, names, time, arrays)
     # An older file's floor (mae_spread) tested another statistic: it loads as no floor, not as this one.
     if "discrimination" in dataset:
-        arrays.update((key, _values(name, dataset, key, ("time",))) for key in _NOISE_FLOOR if key in dataset)
+        arrays.update((key, _values(name, dataset, key, ("time",))) for key in NOISE_FLOOR if key in dataset)
         _check_floor(name, arrays)
         if "informative" in arrays:
             arrays["informative"] = arrays["informative"].astype(bool)
@@ -342,8 +206,8 @@ def _result(name, dataset, lazy):
     timestamps = None
     if "timestamp" in dataset.variables:
         stamps = dataset["timestamp"]
-        if stamps.attrs.get("units") != _TIMESTAMP_UNITS:
-            raise DataError(f"{name}: timestamp has units {stamps.attrs.get('units')!r}; expected {_TIMESTAMP_UNITS!r}")
+        if stamps.attrs.get("units") != TIMESTAMP_UNITS:
+            raise DataError(f"{name}: timestamp has units {stamps.attrs.get('units')!r}; expected {TIMESTAMP_UNITS!r}")
         timestamps = _values(name, dataset, "timestamp", ("time",))
         if timestamps.dtype.kind not in "iu":
             raise DataError(f"{name}: timestamp holds {timestamps.dtype}; expected int64 nanoseconds")
@@ -355,7 +219,7 @@ def _result(name, dataset, lazy):
 
 
 # The arrays along time: checked block by block (check_time_block), read lazily with lazy=True.
-_TIME_ARRAYS = ("ic", "ci", "median", "gradient", "ic_se", "ci_se")
+_TIME_ARRAYS = tuple(TIME_VARIABLES)
 _DAMAGED = "the file is damaged or was altered"
 
 
@@ -383,8 +247,8 @@ def _attribute(name, dataset, key, kinds, expected):
     if not isinstance(text, str):
         raise DataError(f"{name}: attribute {key!r} holds {type(text).__name__} {text!r}; expected JSON text")
     try:
-        value = json.loads(text, object_hook=_decoded)
-    except _Malformed as error:
+        value = json.loads(text, object_hook=decoded)
+    except MalformedAttribute as error:
         raise DataError(f"{name}: attribute {key!r}: {error}; expected JSON as DyniaResult.save writes it") from None
     except ValueError as error:
         raise DataError(f"{name}: attribute {key!r} is not JSON ({error}); expected JSON text") from None
@@ -397,11 +261,11 @@ def _settings(name, dataset):
     """The settings attribute, with array settings read from their variables."""
     settings = {}
     for key, value in _attribute(name, dataset, "settings", dict, "an object").items():
-        if isinstance(value, dict) and _VARIABLE in value:
-            variable = value[_VARIABLE]
-            if value.keys() != {_VARIABLE} or not isinstance(variable, str) or variable not in dataset.variables:
+        if isinstance(value, dict) and VARIABLE_TAG in value:
+            variable = value[VARIABLE_TAG]
+            if value.keys() != {VARIABLE_TAG} or not isinstance(variable, str) or variable not in dataset.variables:
                 raise DataError(
-                    f"{name}: settings[{key!r}] is {value!r}; expected {{{_VARIABLE!r}: the name of a variable of "
+                    f"{name}: settings[{key!r}] is {value!r}; expected {{{VARIABLE_TAG!r}: the name of a variable of "
                     "the file}"
                 )
             value = _values(name, dataset, variable, dataset[variable].dims)
@@ -411,8 +275,6 @@ def _settings(name, dataset):
 
 def _typed_settings(name, stored):
     """The :class:`~dynia.settings.AnalysisSettings` (None when the file has none) and the record of ``stored``."""
-    from ..settings import AnalysisSettings, RunRecord
-
     stored = dict(stored)
     stored.pop("bounds", None)  # written before the record: the same ranges as the bounds variable
     if stored.get("flavour") == "thesis-code":  # written before the record had thesis_code
@@ -463,7 +325,7 @@ def _check_floor(name, arrays):
     informative = arrays.get("informative")
     if informative is not None and not np.isin(informative, (0, 1)).all():
         raise DataError(f"{name}: informative holds values other than 0 and 1; {_DAMAGED}")
-    for key in _NOISE_FLOOR[1:]:
+    for key in NOISE_FLOOR[1:]:
         values = arrays.get(key)
         if values is not None and (values.dtype.kind != "f" or (values < 0).any() or np.isinf(values).any()):
             raise DataError(f"{name}: {key} holds negative or infinite values; expected >= 0 or NaN; {_DAMAGED}")
@@ -491,61 +353,79 @@ def check_time_block(name, names, bounds, spans, key, values, companions):
     ``name`` (the file) and ``names`` (the parameters) are for the message;
     ``bounds`` is (n_params, 2), ``spans`` the samples' max - min per parameter.
     """
-
-    def refuse(bad, what):
-        where = np.argwhere(bad)[0]
-        step = f"parameter {names[where[0]]!r}" if bad.ndim > 1 else "a step"
-        raise DataError(f"{name}: {key} {what} (first at {step}); {_DAMAGED}")
-
     values = np.asarray(values)
     if values.dtype.kind != "f":
         raise DataError(f"{name}: {key} holds {values.dtype}; expected floating point numbers")
     if key in ("ic", "median") and "ci" in companions:
         # The limits first, so that a forged limit is named as such rather than as the IC or median it disowns.
         check_time_block(name, names, bounds, spans, "ci", companions["ci"], {})
+    refuse = functools.partial(_refuse, name, names, key)
     with np.errstate(invalid="ignore", divide="ignore"):  # NaN compares False; a span of 0 never agrees
         if key == "ic":
-            outside = (values < 0) | (values > 1)
-            if outside.any():
-                refuse(outside, "lies outside [0, 1]")
-            if "ci" in companions:
-                limits = companions["ci"]
-                mismatch = np.isnan(values) != np.isnan(limits[..., 0])
-                if mismatch.any():
-                    refuse(mismatch, "is NaN where the limits are not, or not NaN where they are")
-                # Rounding to the dtype moves IC by half an ulp and each limit by half of its own.
-                width, size = limits[..., 1] - limits[..., 0], np.abs(limits).sum(axis=-1, dtype=float)
-                agrees = np.isnan(values)
-                for extent in (bounds[:, 1] - bounds[:, 0], spans):
-                    extent = np.asarray(extent, dtype=float)[:, None]
-                    tolerance = 4 * np.finfo(values.dtype).eps * (1 + size / extent)
-                    agrees |= np.abs(values - (1 - width.astype(float) / extent)) <= tolerance
-                if not agrees.all():
-                    refuse(~agrees, "is not 1 - (upper - lower) / range for its limits")
+            _check_ic(values, companions, bounds, spans, refuse)
         elif key == "ci":
-            low, high = (bounds[:, side].astype(values.dtype)[:, None] for side in (0, 1))
-            lower, upper = values[..., 0], values[..., 1]
-            bad = (lower < low) | (upper > high) | (lower > upper) | np.isinf(values).any(-1)
-            if bad.any():
-                refuse(bad, "has limits outside the bounds, or a lower limit above the upper")
-            if (np.isnan(lower) != np.isnan(upper)).any():
-                refuse(np.isnan(lower) != np.isnan(upper), "has one limit NaN and the other not")
+            _check_limits(values, bounds, refuse)
         elif key == "median":
             limits = companions["ci"]
             bad = (values < limits[..., 0]) | (values > limits[..., 1]) | (np.isnan(values) != np.isnan(limits[..., 0]))
             if bad.any():
                 refuse(bad, "lies outside the limits, or is NaN where they are not")
         elif key == "gradient":
-            tolerance = 4 * np.finfo(values.dtype).eps  # a bin's mass is a sum of weights summing to 1
-            bad = (values < 0) | (values > 1 + tolerance) | np.isinf(values)
-            if "ic" in companions:
-                bad |= np.isnan(values) != np.isnan(companions["ic"])[:, None, :]
-            if bad.any():
-                refuse(bad, "lies outside [0, 1], or is NaN where IC is not")
+            _check_gradient(values, companions, refuse)
         else:
             bad = (values < 0) | np.isinf(values)
             if bad.any():
                 refuse(bad, "is negative or infinite")
+
+
+def _refuse(name, names, key, bad, what):
+    """The DataError for array ``key`` of file ``name`` where ``bad``, naming the first parameter (or step)."""
+    where = np.argwhere(bad)[0]
+    step = f"parameter {names[where[0]]!r}" if bad.ndim > 1 else "a step"
+    raise DataError(f"{name}: {key} {what} (first at {step}); {_DAMAGED}")
+
+
+def _check_ic(values, companions, bounds, spans, refuse):
+    """IC in [0, 1], NaN exactly where the limits are, and 1 - (upper - lower) / range for its limits."""
+    outside = (values < 0) | (values > 1)
+    if outside.any():
+        refuse(outside, "lies outside [0, 1]")
+    if "ci" not in companions:
+        return
+    limits = companions["ci"]
+    mismatch = np.isnan(values) != np.isnan(limits[..., 0])
+    if mismatch.any():
+        refuse(mismatch, "is NaN where the limits are not, or not NaN where they are")
+    # Rounding to the dtype moves IC by half an ulp and each limit by half of its own.
+    width, size = limits[..., 1] - limits[..., 0], np.abs(limits).sum(axis=-1, dtype=float)
+    agrees = np.isnan(values)
+    for extent in (bounds[:, 1] - bounds[:, 0], spans):
+        extent = np.asarray(extent, dtype=float)[:, None]
+        tolerance = 4 * np.finfo(values.dtype).eps * (1 + size / extent)
+        agrees |= np.abs(values - (1 - width.astype(float) / extent)) <= tolerance
+    if not agrees.all():
+        refuse(~agrees, "is not 1 - (upper - lower) / range for its limits")
+
+
+def _check_limits(values, bounds, refuse):
+    """Each limit within the bounds (rounded to the dtype), lower at most upper, both NaN or neither."""
+    low, high = (bounds[:, side].astype(values.dtype)[:, None] for side in (0, 1))
+    lower, upper = values[..., 0], values[..., 1]
+    bad = (lower < low) | (upper > high) | (lower > upper) | np.isinf(values).any(-1)
+    if bad.any():
+        refuse(bad, "has limits outside the bounds, or a lower limit above the upper")
+    if (np.isnan(lower) != np.isnan(upper)).any():
+        refuse(np.isnan(lower) != np.isnan(upper), "has one limit NaN and the other not")
+
+
+def _check_gradient(values, companions, refuse):
+    """The likelihood mass per bin in [0, 1], NaN exactly where IC is."""
+    tolerance = 4 * np.finfo(values.dtype).eps  # a bin's mass is a sum of weights summing to 1
+    bad = (values < 0) | (values > 1 + tolerance) | np.isinf(values)
+    if "ic" in companions:
+        bad |= np.isnan(values) != np.isnan(companions["ic"])[:, None, :]
+    if bad.any():
+        refuse(bad, "lies outside [0, 1], or is NaN where IC is not")
 
 
 def _companions(key):
@@ -554,10 +434,6 @@ def _companions(key):
 
 def _lazy(name, dataset, names, bounds, spans):
     """The arrays along time as DiskArrays that check each block on its first read."""
-    import functools
-
-    from .arrays import TIME_VARIABLES, disk_arrays
-
     keys = [key for key in _TIME_ARRAYS if key in dataset]
     for key in keys:
         if dataset[key].dims != TIME_VARIABLES[key]:
@@ -571,8 +447,6 @@ def _lazy(name, dataset, names, bounds, spans):
 
 def _check_stored_block(name, names, bounds, spans, key, file, start, stop):
     """:func:`check_time_block` for steps [start, stop) of variable ``key`` of the open h5py ``file``."""
-    from .arrays import read_block
-
     companions = {other: read_block(file, other, start, stop) for other in _companions(key) if other in file}
     check_time_block(name, names, bounds, spans, key, read_block(file, key, start, stop), companions)
 
@@ -584,8 +458,6 @@ def _checked_verdicts(name, result, stored):
     (the texts may write times as the data file did); a stored ``noise_only`` of a result without the floor is
     taken on trust, as it came from the data and the model.
     """
-    from ..verdicts import VERDICTS, assess
-
     if list(stored) != list(result.names):
         raise DataError(f"{name}: verdicts name {list(stored)}; expected the parameters {list(result.names)}")
     for parameter, entry in stored.items():
@@ -635,36 +507,3 @@ class StoredVerdictsWarning(UserWarning):
 
 class StoredSettingsWarning(UserWarning):
     """A file holds settings that are not fields of the settings or the run record; :func:`load` leaves them out."""
-
-
-def _encoded(value, where, setting):
-    """``value`` as what json.dumps writes, tuples tagged; a SettingsError naming ``where`` for anything else."""
-    if value is None or isinstance(value, (str, bool, int, float)):
-        return value
-    if isinstance(value, np.generic) and isinstance(value.item(), (bool, int, float, str)):
-        return value.item()
-    if isinstance(value, (list, tuple)):
-        items = [_encoded(item, f"{where}[{index}]", setting) for index, item in enumerate(value)]
-        return {_TUPLE: items} if isinstance(value, tuple) else items
-    if isinstance(value, dict):
-        keys = [key for key in value if not isinstance(key, str)]
-        if keys:
-            raise SettingsError(f"{where} has the key {keys[0]!r}; only str keys can be saved", setting)
-        return {key: _encoded(item, f"{where}[{key!r}]", setting) for key, item in value.items()}
-    raise SettingsError(
-        f"{where} holds a value of type {type(value).__name__}, which cannot be saved; expected str, number, "
-        "bool, None, list, tuple or dict (an ndarray only as a setting of its own)",
-        setting,
-    )
-
-
-class _Malformed(ValueError):
-    """A JSON attribute that is JSON but not as :func:`save` writes it."""
-
-
-def _decoded(mapping):
-    if mapping.keys() != {_TUPLE}:
-        return mapping
-    if not isinstance(mapping[_TUPLE], list):
-        raise _Malformed(f"{mapping!r} tags a tuple but holds no list")
-    return tuple(mapping[_TUPLE])

@@ -1,0 +1,149 @@
+"""How a result lies in a netCDF file: the dimensions of its variables, its attributes and their JSON.
+
+The one home of what every side of a result file shares: :mod:`dynia.io.arrays`
+writes a file block by block while the windows are analysed and
+:mod:`dynia.io.writer` writes a result whole, both with the attributes of
+:func:`metadata`; :mod:`dynia.io.netcdf` reads either back and describes the
+layout for users.
+"""
+
+import json
+
+import numpy as np
+
+from ..errors import SettingsError
+
+__all__ = [
+    "FORMAT_VERSION",
+    "TIME_VARIABLES",
+    "ARRAYS",
+    "OPTIONAL_ARRAYS",
+    "NOISE_FLOOR",
+    "COORDINATES",
+    "SIDES",
+    "TIMESTAMP_UNITS",
+    "TIMESTAMP_ATTRIBUTES",
+    "VARIABLE_TAG",
+    "metadata",
+    "encoded",
+    "decoded",
+    "MalformedAttribute",
+]
+
+# Written as the attribute "dynia_result"; a later layout raises it, and load refuses what it cannot read.
+FORMAT_VERSION = 1
+
+# Settings holding one value per parameter set: their variable lies along "sample".
+_PER_SAMPLE = frozenset({"weights"})
+
+# The result arrays that lie along time, with the file's dimensions.
+TIME_VARIABLES = {
+    "ic": ("parameter", "time"),
+    "ci": ("parameter", "time", "side"),
+    "median": ("parameter", "time"),
+    "gradient": ("parameter", "bin", "time"),
+    "ic_se": ("parameter", "time"),
+    "ci_se": ("parameter", "time", "side"),
+}
+# The arrays every result has.
+ARRAYS = {
+    "ic": TIME_VARIABLES["ic"],
+    "ci": TIME_VARIABLES["ci"],
+    "gradient": TIME_VARIABLES["gradient"],
+    "bin_centres": ("parameter", "bin"),
+    "samples": ("sample", "parameter"),
+    "bounds": ("parameter", "side"),
+}
+# Written when the result has them (not None), read back when the file has them.
+OPTIONAL_ARRAYS = {name: TIME_VARIABLES[name] for name in ("median", "ic_se", "ci_se")}
+# The noise floor along time (see dynia.engine.noise), written when the result has it. Part of the
+# metadata, so that a result written block by block (dynia.io.arrays) gets it too; the mask is int8 in a
+# file, since netCDF has no booleans, and bool again when loaded.
+NOISE_FLOOR = ("informative", "discrimination", "noise_floor", "behavioural_spread", "behavioural_floor")
+COORDINATES = ("parameter", "time", "side", "timestamp")
+SIDES = ("lower", "upper")
+
+# The timestamps as integer nanoseconds from the epoch: exact, and what any CF reader decodes to datetimes.
+TIMESTAMP_UNITS = "nanoseconds since 1970-01-01"
+# The attributes of the timestamp variable in a file (what xarray writes with that encoding).
+TIMESTAMP_ATTRIBUTES = {"units": TIMESTAMP_UNITS, "calendar": "proleptic_gregorian"}
+
+_TUPLE = "__tuple__"
+# In the settings' JSON, the place of a setting written as a variable of its own: {VARIABLE_TAG: name}.
+VARIABLE_TAG = "__variable__"
+
+
+def metadata(result, reserved):
+    """The file attributes of ``result`` (format, settings and verdicts as JSON) and its array settings.
+
+    Returns ``(attrs, variables)``: a field of the run record that is an
+    ndarray (``weights``) becomes a variable of its name, ``(dims, values)``, which must not be one of the
+    names ``reserved`` for the result's own variables; so does the noise
+    floor (``informative`` as int8, then ``discrimination``, ``noise_floor``,
+    ``behavioural_spread``, ``behavioural_floor``), when the result has it.
+
+    Raises
+    ------
+    SettingsError
+        As :func:`save`.
+    """
+    variables = {
+        name: (("time",), np.asarray(getattr(result, name), dtype=np.int8 if name == "informative" else float))
+        for name in NOISE_FLOOR
+        if getattr(result, name) is not None
+    }
+    settings = {}
+    recorded = dict({} if result.settings is None else result.settings.to_dict(), **result.run.to_dict())
+    for key, value in recorded.items():
+        if isinstance(value, np.ndarray):
+            if key in reserved or key in NOISE_FLOOR:
+                raise SettingsError(
+                    f"result.run.{key} is an array, saved as a variable of its name, but the result "
+                    f"has a variable {key!r} of its own",
+                    key,
+                )
+            dims = ("sample",) if key in _PER_SAMPLE else tuple(f"{key}_dim_{axis}" for axis in range(value.ndim))
+            variables[key] = (dims, value)
+            settings[key] = {VARIABLE_TAG: key}
+        else:
+            settings[key] = encoded(value, f"result.run.{key}", key)
+    attrs = {
+        "dynia_result": FORMAT_VERSION,
+        "settings": json.dumps(settings),
+        "verdicts": json.dumps(encoded(result.verdicts, "result.verdicts", None)),
+    }
+    return attrs, variables
+
+
+def encoded(value, where, setting):
+    """``value`` as what json.dumps writes, tuples tagged; a SettingsError naming ``where`` for anything else."""
+    if value is None or isinstance(value, (str, bool, int, float)):
+        return value
+    if isinstance(value, np.generic) and isinstance(value.item(), (bool, int, float, str)):
+        return value.item()
+    if isinstance(value, (list, tuple)):
+        items = [encoded(item, f"{where}[{index}]", setting) for index, item in enumerate(value)]
+        return {_TUPLE: items} if isinstance(value, tuple) else items
+    if isinstance(value, dict):
+        keys = [key for key in value if not isinstance(key, str)]
+        if keys:
+            raise SettingsError(f"{where} has the key {keys[0]!r}; only str keys can be saved", setting)
+        return {key: encoded(item, f"{where}[{key!r}]", setting) for key, item in value.items()}
+    raise SettingsError(
+        f"{where} holds a value of type {type(value).__name__}, which cannot be saved; expected str, number, "
+        "bool, None, list, tuple or dict (an ndarray only as a setting of its own)",
+        setting,
+    )
+
+
+class MalformedAttribute(ValueError):
+    """A JSON attribute that is JSON but not as :func:`metadata` writes it."""
+
+
+def decoded(mapping):
+    """The ``object_hook`` of :func:`json.loads` for the attributes: a tagged tuple back as a tuple."""
+    if mapping.keys() != {_TUPLE}:
+        return mapping
+    if not isinstance(mapping[_TUPLE], list):
+        raise MalformedAttribute(f"{mapping!r} tags a tuple but holds no list")
+    return tuple(mapping[_TUPLE])

@@ -1,0 +1,88 @@
+"""A result written whole: as an xarray Dataset and as a netCDF-4 file.
+
+:func:`to_xarray` and :func:`save` lay a :class:`~dynia.result.DyniaResult`
+out as :mod:`dynia.io.netcdf` describes (the layout is
+:mod:`dynia.io.layout`); :meth:`DyniaResult.to_xarray` and
+:meth:`DyniaResult.save` call them, and :func:`dynia.io.netcdf.load` reads
+the file back. A result whose arrays are on disk is copied block by block
+(:func:`dynia.io.arrays.write_result`).
+"""
+
+import numpy as np
+
+from .arrays import DiskArray, write_netcdf, write_result
+from .layout import ARRAYS, COORDINATES, OPTIONAL_ARRAYS, SIDES, TIMESTAMP_UNITS, metadata
+
+__all__ = ["to_xarray", "save"]
+
+
+def to_xarray(result):
+    """``result`` as an :class:`xarray.Dataset` laid out as the module describes.
+
+    Raises
+    ------
+    SettingsError
+        A setting that JSON cannot hold (see :func:`save`).
+    """
+    import xarray as xr
+
+    coords = {
+        "parameter": ("parameter", np.array(result.names, dtype=str)),
+        "time": ("time", result.time, {"units": "s", "long_name": "time from the start of the record"}),
+        "side": ("side", np.array(SIDES)),
+    }
+    if result.timestamps is not None:
+        coords["timestamp"] = ("time", np.asarray(result.timestamps, dtype="datetime64[ns]"))
+    variables = {name: _variable(getattr(result, name), dims) for name, dims in ARRAYS.items()}
+    variables.update(
+        (name, _variable(getattr(result, name), dims))
+        for name, dims in OPTIONAL_ARRAYS.items()
+        if getattr(result, name) is not None
+    )
+    attrs, array_settings = metadata(result, reserved=(*variables, *COORDINATES))
+    variables.update(array_settings)
+    if result.informative is not None:
+        variables["informative"] = (("time",), np.asarray(result.informative, dtype=bool))
+    return xr.Dataset(variables, coords=coords, attrs=attrs)
+
+
+def _variable(values, dims):
+    """An array of a result as a Dataset variable: an array on disk stays there (read lazily by xarray)."""
+    if not isinstance(values, DiskArray):
+        return dims, values
+    import xarray as xr
+
+    opened = xr.open_dataset(values.filename, engine="h5netcdf", mask_and_scale=False, decode_times=False)
+    return opened[values.name].variable.transpose(*dims)
+
+
+def save(result, path):
+    """Write ``result`` to the netCDF-4 file ``path`` (replaced if it exists); :func:`load` reads it back.
+
+    Every array is written as it is, without a fill value, so NaN stays NaN
+    bit for bit; timestamps as int64 nanoseconds since 1970-01-01. A result
+    whose arrays are on disk (``store``, see :mod:`dynia.io.arrays`) is copied
+    one time block at a time, never loaded whole.
+
+    Raises
+    ------
+    SettingsError
+        A part of the verdicts that is not a str, number, bool, None, list,
+        tuple or dict with str keys (nested); numpy scalars are written as
+        Python numbers. The message names the part.
+    OutputError
+        ``path`` cannot be written (a missing folder, no permission, a full
+        disk); the file is written under a temporary name beside ``path``
+        and renamed when complete, so ``path`` is then left as it was.
+    """
+    if isinstance(result.ic, DiskArray):
+        write_result(result, path)
+        return
+    dataset = to_xarray(result)
+    # Fletcher-32 checksums on every numeric variable, so that load tells a damaged file from a result.
+    encoding = {
+        name: {"_FillValue": None, "fletcher32": dataset[name].dtype.kind in "biuf"} for name in dataset.variables
+    }
+    if "timestamp" in dataset.variables:
+        encoding["timestamp"].update(units=TIMESTAMP_UNITS, calendar="proleptic_gregorian", dtype="int64")
+    write_netcdf(lambda partial: dataset.to_netcdf(partial, engine="h5netcdf", encoding=encoding), path)
