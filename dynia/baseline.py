@@ -192,7 +192,7 @@ import scipy.stats
 
 from . import _checks
 from .errors import DataError, SettingsError
-from .segment_lists import mask_to_segments
+from .segments import mask_to_segments
 
 __all__ = ["find_intervals", "BaselineResult", "CandidateInterval", "REASONS"]
 

@@ -80,7 +80,7 @@ from scipy.optimize import least_squares
 from . import _checks
 from .errors import DataError, ModelError, SettingsError
 from .models import Model
-from .segment_lists import check_segments, mask_to_segments
+from .segments import check_segments, mask_to_segments
 from .serial import json_number, json_ready
 
 __all__ = ["FitResult", "fit_segments", "validation_error", "OFFSETS", "X0_CHOICES"]

@@ -110,7 +110,7 @@ class Identification:
         The held-out steps the validation error is computed on.
     validation_error : float
         RMS of the simulation error on ``validation``.
-    fit : dynia.segments.FitResult
+    fit : dynia.fit.FitResult
     dynia_result : DyniaResult or None
         The DYNIA run ("dynia" only).
     baseline_result : dynia.baseline.BaselineResult or None

@@ -58,8 +58,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from . import _checks
-from .errors import NothingSelected, SettingsError
-from .segment_lists import check_segments, mask_to_segments, segments_to_mask
+from .errors import DataError, NothingSelected, SettingsError
 from .settings import IC_THRESHOLD
 
 __all__ = [
@@ -80,6 +79,105 @@ MODES = ("any", "joint", "per_parameter")
 _PLACEMENT_ATTEMPTS = 1000
 
 # ---------------------------------------------------------------- segments
+
+
+def check_segments(segments, n_steps=None, name="segments"):
+    """Validate a list of segments, against a record of ``n_steps`` steps if given.
+
+    Parameters
+    ----------
+    segments : sequence of (start, stop) pairs of int, or array of shape (k, 2)
+        Steps ``start .. stop-1`` each; sorted, non-overlapping (touching is
+        fine), ``0 <= start < stop <= n_steps``. May be empty.
+    n_steps : int, optional
+        Length of the record; without it only ``0 <= start < stop`` is checked.
+    name : str
+        Argument name used in error messages.
+
+    Returns
+    -------
+    list of tuple of int
+        The segments as ``(start, stop)`` tuples of Python ints.
+
+    Raises
+    ------
+    ValueError
+        Naming the first offending segment and what is wrong with it.
+
+    Examples
+    --------
+    >>> check_segments([[0, 5], (7, 9)], 10)
+    [(0, 5), (7, 9)]
+    >>> check_segments([(0, 5), (4, 9)], 10)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    dynia.errors.SettingsError: segments[1] = (4, 9) overlaps segments[0] = (0, 5); ...
+    """
+    if n_steps is not None:
+        n_steps = _checks.whole_number(n_steps, "n_steps", minimum=1)
+    if isinstance(segments, (str, bytes, Mapping)):
+        raise TypeError(f"{name} must be a sequence of (start, stop) pairs; got {type(segments).__name__}")
+    checked = []
+    for position, pair in enumerate(segments):
+        try:
+            if isinstance(pair, (str, bytes)):
+                raise TypeError
+            start, stop = pair
+        except (TypeError, ValueError):
+            raise SettingsError(f"{name}[{position}] must be a (start, stop) pair; got {pair!r}") from None
+        start, stop = (_index(value, f"{name}[{position}]") for value in (start, stop))
+        if not 0 <= start < stop or (n_steps is not None and stop > n_steps):
+            record = "" if n_steps is None else f" of a record of {n_steps} steps"
+            limit = "" if n_steps is None else f" <= {n_steps}"
+            raise SettingsError(
+                f"{name}[{position}] = ({start}, {stop}) is not a segment{record}; "
+                f"need 0 <= start < stop{limit} (stop is exclusive)"
+            )
+        if checked and start < checked[-1][1]:
+            order = "overlaps" if start >= checked[-1][0] else "starts before"
+            raise SettingsError(
+                f"{name}[{position}] = ({start}, {stop}) {order} {name}[{position - 1}] = "
+                f"{checked[-1]}; segments must be sorted and non-overlapping"
+            )
+        checked.append((start, stop))
+    return checked
+
+
+def _index(value, name):
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        if isinstance(value, numbers.Real) and float(value).is_integer():
+            return int(value)
+        raise SettingsError(f"{name} must hold whole step indices; got {value!r}")
+    return int(value)
+
+
+def segments_to_mask(segments, n_steps):
+    """Boolean mask of the steps inside ``segments``, shape (n_steps,).
+
+    Examples
+    --------
+    >>> segments_to_mask([(1, 3)], 5).tolist()
+    [False, True, True, False, False]
+    """
+    mask = np.zeros(_checks.whole_number(n_steps, "n_steps", minimum=1), dtype=bool)
+    for start, stop in check_segments(segments, n_steps):
+        mask[start:stop] = True
+    return mask
+
+
+def mask_to_segments(mask):
+    """The runs of True in a boolean mask, as segments.
+
+    Examples
+    --------
+    >>> mask_to_segments([True, True, False, True])
+    [(0, 2), (3, 4)]
+    """
+    mask = np.asarray(mask)
+    if mask.ndim != 1 or mask.dtype != bool:
+        raise DataError(f"mask must be a 1-D boolean array; got dtype {mask.dtype}, shape {mask.shape}")
+    edges = np.diff(np.concatenate(([0], mask.astype(np.int8), [0])))
+    return [(int(start), int(stop)) for start, stop in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1))]
 
 
 def intersect_segments(segments, allowed):
@@ -402,16 +500,3 @@ def holdout_split(n_steps, held_out=0.3):
     if not fit_part:
         raise SettingsError("held_out covers the whole record; nothing is left to fit")
     return fit_part, validation
-
-
-_MOVED_TO_FIT = ("FitResult", "fit_segments", "validation_error")
-
-
-def __getattr__(name):
-    # The fit moved to dynia.fit, which imports this module; resolving the old
-    # names on first use keeps ``from dynia.segments import fit_segments`` working.
-    if name in _MOVED_TO_FIT:
-        from . import fit
-
-        return getattr(fit, name)
-    raise AttributeError(f"module 'dynia.segments' has no attribute {name!r}")

@@ -42,7 +42,7 @@
 #
 # Protocol, the same for every selection: a block of `held_out` (30 %) of
 # each record is held out, never seen by DYNIA, the baseline or the fit
-# (`dynia.segments.holdout_split`); every fit is `dynia.segments.fit_segments`
+# (`dynia.segments.holdout_split`); every fit is `dynia.fit.fit_segments`
 # (least squares, simulated from the start of the record on the measured
 # input, standard errors from the Jacobian); the validation error is the RMS
 # simulation error on the held-out block. The validation data are scored
