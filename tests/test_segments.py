@@ -8,11 +8,11 @@ import pytest
 
 from dynia import verdicts
 from dynia.errors import NothingSelected
+from dynia.fit import fit_segments, validation_error
 from dynia.models import FOPDT, FirstOrder
 from dynia.result import DyniaResult
 from dynia.segments import (
     check_segments,
-    fit_segments,
     holdout_split,
     intersect_segments,
     mask_to_segments,
@@ -20,7 +20,6 @@ from dynia.segments import (
     segments_from_ic,
     segments_to_mask,
     segments_to_times,
-    validation_error,
 )
 
 FIRST_ORDER_BOUNDS = {"K": (0.0, 7.0), "T": (0.0, 7.0)}
