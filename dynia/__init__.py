@@ -58,7 +58,7 @@ _VERBS = {
     "identify": ("identification", "identify"),
     "suggest": ("suggestion", "suggest"),
     "second_run": ("refine", "second_run"),
-    "load": ("io.netcdf", "load"),
+    "load": ("io.reader", "load"),
     "load_csv": ("io.csv", "load_csv"),
     "moving_window": ("engine.windows", "moving_window"),
     "AnalysisSettings": ("settings", "AnalysisSettings"),

@@ -620,7 +620,7 @@ class DyniaResult:
         return dates.date2num(self.timestamps)
 
     def to_xarray(self):
-        """The result as an :class:`xarray.Dataset`, laid out as :mod:`dynia.io.netcdf` describes.
+        """The result as an :class:`xarray.Dataset`, laid out as :mod:`dynia.io.layout` describes.
 
         Examples
         --------
@@ -639,7 +639,7 @@ class DyniaResult:
     def save(self, path):
         """Write the result to the netCDF-4 file ``path``; ``dynia.load(path)`` gives it back exactly.
 
-        See :func:`dynia.io.netcdf.save` for what is written and what it raises.
+        See :func:`dynia.io.writer.save` for what is written and what it raises.
         """
         from .io.writer import save
 

@@ -36,7 +36,7 @@ import dynia
 import dynia.cli.report
 import dynia.io.arrays
 from dynia.errors import DataError, OutputError
-from dynia.io.netcdf import StoredVerdictsWarning
+from dynia.io.reader import StoredVerdictsWarning
 from dynia.models import FirstOrder
 
 ROOT = Path(__file__).resolve().parent.parent

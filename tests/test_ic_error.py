@@ -8,10 +8,11 @@ import pytest
 import dynia
 import dynia.distributed
 from benchmarks.honesty import ic_error_honesty
-from dynia.engine.flavours import ic_batches, monte_carlo_errors
+from dynia.engine.flavours import monte_carlo_errors
 from dynia.engine.windows import moving_window
 from dynia.errors import SettingsError
 from dynia.pipeline import TargetNotReachedWarning, ic_se_that_matters
+from dynia.settings import ic_batches
 
 # The bar: over 20 seeds, the median predicted error and the median
 # seed-to-seed spread agree within this factor, either way.

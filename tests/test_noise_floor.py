@@ -24,7 +24,7 @@ from dynia.engine.noise import (
 )
 from dynia.engine.windows import moving_window
 from dynia.errors import SettingsError
-from dynia.io.netcdf import StoredVerdictsWarning
+from dynia.io.reader import StoredVerdictsWarning
 from dynia.models import FirstOrder
 from dynia.online import OnlineDynia
 from dynia.result import DyniaResult

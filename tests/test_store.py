@@ -1,4 +1,4 @@
-"""dynia.io.netcdf: DyniaResult to xarray and netCDF and back, exact to the bit; timestamps in tables and plots."""
+"""dynia.io.writer and dynia.io.reader: DyniaResult to xarray and netCDF and back, exact to the bit; timestamps too."""
 
 import dataclasses
 import json
@@ -159,7 +159,7 @@ def test_to_xarray_labels_every_axis(thesis_result):
     settings = json.loads(dataset.attrs["settings"])
     assert settings["n"] == 6 and settings["model"] == "FirstOrder" and "bounds" not in settings
     assert json.loads(dataset.attrs["verdicts"]) == thesis_result.verdicts
-    assert dataset.attrs["dynia_result"] == dynia.io.netcdf.FORMAT_VERSION
+    assert dataset.attrs["dynia_result"] == dynia.io.layout.FORMAT_VERSION
     assert "timestamp" not in thesis_result.to_xarray().variables
 
 
@@ -231,7 +231,7 @@ def test_a_file_of_the_layout_before_the_run_record_loads(thesis_result, tmp_pat
     _rewrite_settings(
         path, lambda settings: dict(settings, flavour="thesis-code", note="mine", target_se_rounds=[[1, 0.5]])
     )
-    with pytest.warns(dynia.io.netcdf.StoredSettingsWarning, match="'note' are neither"):
+    with pytest.warns(dynia.io.reader.StoredSettingsWarning, match="'note' are neither"):
         back = dynia.load(path)
     assert back.run.thesis_code and back.settings.flavour == "thesis" and back.run.target_se_rounds == ((1, 0.5),)
     _rewrite_settings(path, lambda settings: {"n": 1})  # a hand-built result's few settings
@@ -272,7 +272,7 @@ def test_load_names_what_it_cannot_read(thesis_result, tmp_path):
     foreign.to_netcdf(tmp_path / "foreign.nc", engine="h5netcdf")
     with pytest.raises(DataError, match=r"foreign\.nc: no dynia_result attribute; expected a result"):
         dynia.load(tmp_path / "foreign.nc")
-    foreign.attrs["dynia_result"] = dynia.io.netcdf.FORMAT_VERSION + 1
+    foreign.attrs["dynia_result"] = dynia.io.layout.FORMAT_VERSION + 1
     foreign.to_netcdf(tmp_path / "newer.nc", engine="h5netcdf")
     with pytest.raises(DataError, match=r"newer\.nc: format version 2; expected"):
         dynia.load(tmp_path / "newer.nc")

@@ -7,7 +7,7 @@ importance-weighted samples take :class:`ImportanceFlavour`; ``"mcat"`` is
 :class:`McatFlavour`. See :mod:`dynia.engine.windows` for what each computes.
 
 With ``ic_error`` every analysis also reads IC and limits off each batch of
-the samples (:func:`ic_batches`, :class:`BatchedFlavour`, and the compiled
+the samples (:func:`~dynia.settings.ic_batches`, :class:`BatchedFlavour`, and the compiled
 kernel :func:`dynia.engine.kernels.analyse_windows_batched`), from which
 :func:`monte_carlo_errors` gives their standard errors.
 """
@@ -19,7 +19,7 @@ import numpy as np
 
 from .. import _checks
 from ..errors import SettingsError
-from ..settings import ENGINES, FLAVOURS, IC_BATCHES, MIN_BATCH_BEHAVIOURAL, ic_batches
+from ..settings import ENGINES, FLAVOURS, ic_batches
 from . import cld, kernels
 from .noise import quantile_position
 from .selection import lowest_stable, lowest_weighted, selected_columns, stable_rank_mask
@@ -32,10 +32,7 @@ __all__ = [
     "flavour_analysis",
     "bin_centres_of",
     "importance_weights",
-    "ic_batches",
     "monte_carlo_errors",
-    "IC_BATCHES",
-    "MIN_BATCH_BEHAVIOURAL",
     "ThesisFlavour",
     "WeightedFlavour",
     "CompiledFlavour",
@@ -99,7 +96,7 @@ def flavour_analysis(
     :class:`WindowResults` of the windows and has ``count``, ``n_bins`` and
     ``bin_centres``. With importance ``weights`` (n_samples,) it is an
     :class:`ImportanceFlavour`. With ``ic_error`` it also has ``batches``
-    (see :func:`ic_batches`) and the results carry ``batch_ic`` and
+    (see :func:`~dynia.settings.ic_batches`) and the results carry ``batch_ic`` and
     ``batch_ci``, the IC and limits of every batch; the mcat flavour has no
     batches yet (:class:`~dynia.errors.SettingsError`).
     """
@@ -272,7 +269,7 @@ class WeightedFlavour(ThesisFlavour):
 class CompiledFlavour:
     """The thesis and weighted flavours on the compiled kernel :func:`dynia.engine.kernels.analyse_windows`.
 
-    With ``batches`` > 0 (see :func:`ic_batches`) on
+    With ``batches`` > 0 (see :func:`~dynia.settings.ic_batches`) on
     :func:`dynia.engine.kernels.analyse_windows_batched`, which also reads IC and
     limits off each batch of samples, from the same window costs.
     """
@@ -416,7 +413,7 @@ class BatchedFlavour:
     """A numpy flavour that also reads IC and limits off every batch of the samples.
 
     ``whole`` analyses all samples; ``parts[b]`` the samples of batch b
-    (b, b + B, ..., see :func:`ic_batches`), each a flavour of its own with
+    (b, b + B, ..., see :func:`~dynia.settings.ic_batches`), each a flavour of its own with
     its own behavioural count (importance weights renormalised within the
     batch). ``analyse(mae, usable)`` returns the :class:`WindowResults` of
     ``whole`` with ``batch_ic`` and ``batch_ci``; every batch's numbers are

@@ -79,7 +79,7 @@ IC and limits are estimates from a finite Monte Carlo sample. With
 ``ic_error`` the samples are split into B interleaved batches (sample i in
 batch ``i mod B``; B = 10, fewer so that every batch keeps at least 5
 behavioural sets, an error when not even 2 can: see
-:func:`dynia.engine.flavours.ic_batches`). In the same pass, every window's
+:func:`dynia.settings.ic_batches`). In the same pass, every window's
 costs, already formed for all samples, are read off each batch with the
 batch's own behavioural count and the flavour's own arithmetic, exactly as
 if the batch had been analysed alone. The result's ``ic_se`` (n_params,

@@ -2,8 +2,9 @@
 
 :mod:`~dynia.io.csv` reads logged plant data from CSV onto the uniform grid
 DYNIA needs (:func:`~dynia.io.csv.load_csv`); :mod:`~dynia.io.frames` takes a
-record held as pandas Series or DataFrames apart; :mod:`~dynia.io.netcdf`
-saves a :class:`~dynia.result.DyniaResult` as a netCDF file and loads it back;
+record held as pandas Series or DataFrames apart; a result file is laid out as :mod:`~dynia.io.layout` says,
+written by :mod:`~dynia.io.writer` (:meth:`DyniaResult.save <dynia.result.DyniaResult.save>`)
+and read back by :mod:`~dynia.io.reader` (:func:`dynia.load`);
 :mod:`~dynia.io.arrays` holds a run's result arrays, in memory or in a netCDF
 file written while the windows are analysed, and reads them back lazily;
 :mod:`~dynia.io.outdir` is the command line's output directory and the rules

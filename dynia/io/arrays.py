@@ -13,7 +13,7 @@ settings of :class:`dynia.settings.AnalysisSettings` bound that:
 ``store=PATH``
     Those arrays go to the netCDF-4 file ``PATH`` as they are produced, in
     time blocks (:class:`ResultFile`), never whole in memory. The file has
-    the layout :func:`dynia.io.netcdf.save` writes, chunked over time, so
+    the layout :func:`dynia.io.writer.save` writes, chunked over time, so
     :func:`dynia.load` reads it, and the returned result reads it lazily:
     its time-dependent arrays are :class:`DiskArray` objects, which index
     like numpy arrays (``res.ic[p]`` reads one parameter's row) and turn into
@@ -142,7 +142,7 @@ class ResultFile(ResultArrays):
     """Result arrays written to a netCDF-4 file as they are produced, then renamed into place.
 
     :meth:`allocate` creates ``.PATH.XXXX.partial`` beside ``PATH`` with
-    every variable laid out as :func:`dynia.io.netcdf.save` writes it, the
+    every variable laid out as :func:`dynia.io.writer.save` writes it, the
     time-dependent ones chunked over time; :meth:`write` fills them block by
     block (a time block is buffered until its on-disk chunks are complete, so
     each chunk is written once); :meth:`commit` adds the settings, verdicts and
@@ -552,7 +552,7 @@ def _remove(path):
 def write_result(result, path, dtype=None):
     """Write ``result`` to ``path`` through a :class:`ResultFile`, one time block at a time.
 
-    How :func:`dynia.io.netcdf.save` writes a result whose arrays are on disk
+    How :func:`dynia.io.writer.save` writes a result whose arrays are on disk
     (:class:`DiskArray`), so that saving it elsewhere never loads them whole.
     ``dtype`` defaults to that of ``result.ic``.
     """

@@ -3,8 +3,49 @@
 The one home of what every side of a result file shares: :mod:`dynia.io.arrays`
 writes a file block by block while the windows are analysed and
 :mod:`dynia.io.writer` writes a result whole, both with the attributes of
-:func:`metadata`; :mod:`dynia.io.netcdf` reads either back and describes the
-layout for users.
+:func:`metadata`; :mod:`dynia.io.reader` reads either back.
+
+The Dataset
+-----------
+Dimensions ``parameter``, ``time``, ``side``, ``bin`` and ``sample``;
+variables ``ic`` (parameter, time), ``ci`` (parameter, time, side),
+``gradient`` (parameter, bin, time), ``bin_centres`` (parameter, bin),
+``samples`` (sample, parameter) and ``bounds`` (parameter, side); when the
+result has its CLD median, ``median`` (parameter, time) (files written
+before it existed load with ``median`` None); when the
+result has its Monte Carlo errors, ``ic_se`` (parameter, time) and ``ci_se``
+(parameter, time, side) too; when it has its noise floor, ``informative``,
+``discrimination``, ``noise_floor``, ``behavioural_spread`` and
+``behavioural_floor`` (time), the mask as int8 in the file (netCDF has no
+booleans) and bool in the Dataset and when loaded; files without them, and
+files of the older floor (``mae_spread``, whose mask tested the behavioural
+spread), load with None there. Coordinates: ``parameter`` (the names),
+``time`` (seconds), ``side`` ("lower", "upper": ``ci.sel(side="lower")``
+is the lower limit, and for ``bounds`` the low end of the range) and, when
+the result has timestamps, ``timestamp`` (datetime64[ns], along ``time``).
+
+Settings and verdicts are the JSON attributes ``settings`` and ``verdicts``
+(``"null"`` for a result without verdicts). ``settings`` is one object:
+every field of the result's :class:`~dynia.settings.AnalysisSettings` (none
+for a result without settings) and the fields of its
+:class:`~dynia.settings.RunRecord` that are set (not None; ``thesis_code``
+only when True), each by its name; :func:`~dynia.io.reader.load` rebuilds both from it. The
+JSON is plain but for one tag: a tuple is written as ``{"__tuple__":
+[...]}``, so that it comes back a tuple while a list comes back a list. The
+adaptive samplers' ``weights`` (an ndarray) is written as a variable of its
+own name along ``sample`` instead, with ``{"__variable__": "weights"}`` in
+its place in the JSON. Attribute ``dynia_result`` holds the format version.
+
+Files written before the record existed hold the same object with a few
+more keys: ``bounds`` (the ``bounds`` variable holds them, and it is not
+read), flavour ``"thesis-code"`` (read as flavour "thesis" with
+``thesis_code``), and whatever a user had put into the settings dict (left
+out, with a :class:`~dynia.io.reader.StoredSettingsWarning` naming it).
+
+Why netCDF-4 through h5netcdf: netCDF-3 (scipy's writer, the one without
+extra dependencies) has no 64-bit integers, so it could not hold the
+timestamps to the nanosecond nor integer arrays exactly, and it limits a
+variable to 2 GB, which the gradient of a long record passes.
 """
 
 import json
@@ -85,7 +126,7 @@ def metadata(result, reserved):
     Raises
     ------
     SettingsError
-        As :func:`save`.
+        As :func:`~dynia.io.writer.save`.
     """
     variables = {
         name: (("time",), np.asarray(getattr(result, name), dtype=np.int8 if name == "informative" else float))
@@ -141,7 +182,7 @@ class MalformedAttribute(ValueError):
 
 
 def decoded(mapping):
-    """The ``object_hook`` of :func:`json.loads` for the attributes: a tagged tuple back as a tuple."""
+    """The ``object_hook`` of ``json.loads`` for the attributes: a tagged tuple back as a tuple."""
     if mapping.keys() != {_TUPLE}:
         return mapping
     if not isinstance(mapping[_TUPLE], list):

@@ -1,9 +1,9 @@
 """A result written whole: as an xarray Dataset and as a netCDF-4 file.
 
 :func:`to_xarray` and :func:`save` lay a :class:`~dynia.result.DyniaResult`
-out as :mod:`dynia.io.netcdf` describes (the layout is
-:mod:`dynia.io.layout`); :meth:`DyniaResult.to_xarray` and
-:meth:`DyniaResult.save` call them, and :func:`dynia.io.netcdf.load` reads
+out as :mod:`dynia.io.layout` describes (the layout is
+:mod:`dynia.io.layout`); :meth:`~dynia.result.DyniaResult.to_xarray` and
+:meth:`~dynia.result.DyniaResult.save` call them, and :func:`dynia.io.reader.load` reads
 the file back. A result whose arrays are on disk is copied block by block
 (:func:`dynia.io.arrays.write_result`).
 """
@@ -57,7 +57,7 @@ def _variable(values, dims):
 
 
 def save(result, path):
-    """Write ``result`` to the netCDF-4 file ``path`` (replaced if it exists); :func:`load` reads it back.
+    """Write ``result`` to the netCDF-4 file ``path`` (replaced if it exists); :func:`dynia.load` reads it back.
 
     Every array is written as it is, without a fill value, so NaN stays NaN
     bit for bit; timestamps as int64 nanoseconds since 1970-01-01. A result

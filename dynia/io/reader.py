@@ -1,51 +1,11 @@
-"""Results out: a :class:`~dynia.result.DyniaResult` as an xarray Dataset and a netCDF file, and back.
+"""Results back in: :func:`load` (``dynia.load``) reads a result file into the
+:class:`~dynia.result.DyniaResult` it came from, every array bit for bit, and checks it.
 
-:func:`to_xarray` (also :meth:`~dynia.result.DyniaResult.to_xarray`) labels every array of
-a result with its dimensions; :func:`save` (:meth:`~dynia.result.DyniaResult.save`) writes
-that Dataset to netCDF-4 and :func:`load` (``dynia.load``) reads it back into
-the result it came from, every array bit for bit.
-
-The Dataset
------------
-Dimensions ``parameter``, ``time``, ``side``, ``bin`` and ``sample``;
-variables ``ic`` (parameter, time), ``ci`` (parameter, time, side),
-``gradient`` (parameter, bin, time), ``bin_centres`` (parameter, bin),
-``samples`` (sample, parameter) and ``bounds`` (parameter, side); when the
-result has its CLD median, ``median`` (parameter, time) (files written
-before it existed load with ``median`` None); when the
-result has its Monte Carlo errors, ``ic_se`` (parameter, time) and ``ci_se``
-(parameter, time, side) too; when it has its noise floor, ``informative``,
-``discrimination``, ``noise_floor``, ``behavioural_spread`` and
-``behavioural_floor`` (time), the mask as int8 in the file (netCDF has no
-booleans) and bool in the Dataset and when loaded; files without them, and
-files of the older floor (``mae_spread``, whose mask tested the behavioural
-spread), load with None there. Coordinates: ``parameter`` (the names),
-``time`` (seconds), ``side`` ("lower", "upper": ``ci.sel(side="lower")``
-is the lower limit, and for ``bounds`` the low end of the range) and, when
-the result has timestamps, ``timestamp`` (datetime64[ns], along ``time``).
-
-Settings and verdicts are the JSON attributes ``settings`` and ``verdicts``
-(``"null"`` for a result without verdicts). ``settings`` is one object:
-every field of the result's :class:`~dynia.settings.AnalysisSettings` (none
-for a result without settings) and the fields of its
-:class:`~dynia.settings.RunRecord` that are set (not None; ``thesis_code``
-only when True), each by its name; :func:`load` rebuilds both from it. The
-JSON is plain but for one tag: a tuple is written as ``{"__tuple__":
-[...]}``, so that it comes back a tuple while a list comes back a list. The
-adaptive samplers' ``weights`` (an ndarray) is written as a variable of its
-own name along ``sample`` instead, with ``{"__variable__": "weights"}`` in
-its place in the JSON. Attribute ``dynia_result`` holds the format version.
-
-Files written before the record existed hold the same object with a few
-more keys: ``bounds`` (the ``bounds`` variable holds them, and it is not
-read), flavour ``"thesis-code"`` (read as flavour "thesis" with
-``thesis_code``), and whatever a user had put into the settings dict (left
-out, with a :class:`StoredSettingsWarning` naming it).
-
-Why netCDF-4 through h5netcdf: netCDF-3 (scipy's writer, the one without
-extra dependencies) has no 64-bit integers, so it could not hold the
-timestamps to the nanosecond nor integer arrays exactly, and it limits a
-variable to 2 GB, which the gradient of a long record passes.
+The file is laid out as :mod:`dynia.io.layout` describes and written by
+:func:`dynia.io.writer.save` (:meth:`~dynia.result.DyniaResult.save`). A damaged or
+altered file is a :class:`~dynia.errors.DataError` naming the file and what is wrong;
+stored verdicts that the arrays no longer give, and settings no run records, are
+warnings (:class:`StoredVerdictsWarning`, :class:`StoredSettingsWarning`).
 
 Examples
 --------
@@ -85,22 +45,14 @@ from .layout import (
     NOISE_FLOOR,
     OPTIONAL_ARRAYS,
     TIME_VARIABLES,
-    TIMESTAMP_ATTRIBUTES,
     TIMESTAMP_UNITS,
     VARIABLE_TAG,
     MalformedAttribute,
     decoded,
-    metadata,
 )
-from .writer import save, to_xarray
 
 __all__ = [
-    "to_xarray",
-    "save",
     "load",
-    "metadata",
-    "FORMAT_VERSION",
-    "TIMESTAMP_ATTRIBUTES",
     "check_time_block",
     "StoredVerdictsWarning",
     "StoredSettingsWarning",
@@ -108,7 +60,7 @@ __all__ = [
 
 
 def load(path, *, lazy=False):
-    """The :class:`~dynia.result.DyniaResult` that :func:`save` wrote to ``path``, checked.
+    """The :class:`~dynia.result.DyniaResult` that :func:`~dynia.io.writer.save` wrote to ``path``, checked.
 
     Every array comes back bit-identical (NaN where NaN), with the names, the
     timestamps, the settings (:class:`~dynia.settings.AnalysisSettings`), the
@@ -138,7 +90,7 @@ def load(path, *, lazy=False):
     ------
     DataError
         ``path`` is missing, not netCDF-4, or not a result written by
-        :func:`save` (of this format version or an earlier one); or any part
+        :func:`~dynia.io.writer.save` (of this format version or an earlier one); or any part
         of it is malformed, fails its checksum, or holds a value no analysis
         gives. The message names the
         file and the part. With ``lazy=True``, reads of a block that fails
@@ -146,7 +98,7 @@ def load(path, *, lazy=False):
 
     Examples
     --------
-    See :mod:`dynia.io.netcdf`.
+    See :mod:`dynia.io.reader`.
     """
     import xarray as xr
 
