@@ -348,6 +348,7 @@ def analyse_stream(
     y = _checks.as_1d_float(y, "y", allow_nan=True)
     params = _checks.as_2d_float(params, "params")
     errors = sim_chunks if hasattr(sim_chunks, "rows") else StreamedErrors(y, sim_chunks, params.shape[0])
+    bounds = _bounds_holding(params, bounds)
     # A store given as arrays already made is the caller's output, not a setting.
     given = isinstance(store, ResultArrays)
     # One place checks every setting; weighted samples are what the adaptive samplers produce.
@@ -423,7 +424,8 @@ def analyse_errors(
         :class:`dynia.engine.kernels.CompiledErrors`, in time order.
     params : ndarray (n_samples, n_params)
         The parameter sets analysed, inside ``bounds``.
-    bounds : array_like (n_params, 2)
+    bounds : ndarray (n_params, 2)
+        [low, high] of each parameter, checked.
     settings : dynia.settings.AnalysisSettings
         The analysis; its ``n_samples`` is taken as the rows of ``params``
         (the sets analysed, after any were dropped), and its ``store`` and
@@ -440,7 +442,6 @@ def analyse_errors(
     DyniaResult
     """
     n_samples, n_params = params.shape
-    bounds = _bounds_holding(params, bounds)
     if settings.n_samples != n_samples:  # sets were dropped after sampling: the checks hold for those analysed
         settings = settings.replace(n_samples=n_samples)
     before, after = window_halos(settings.n, settings.window)
