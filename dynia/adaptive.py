@@ -59,10 +59,10 @@ from scipy.optimize import differential_evolution
 
 from . import _checks
 from .engine.selection import lowest_weighted
-from .engine.windows import moving_window, window_costs
+from .engine.windows import ArrayErrors, analyse_errors, window_costs
 from .errors import SettingsError
 from .settings import ADAPTIVE_SAMPLERS as SCHEMES
-from .settings import AnalysisSettings, parameter_box
+from .settings import AnalysisSettings, RunRecord, merged_settings, parameter_box
 from .verdicts import assess
 
 __all__ = ["BoxMixture", "adaptive_run", "SCHEMES"]
@@ -190,47 +190,68 @@ def adaptive_run(
         ``.samples``, ``run.n_evaluations`` the evaluations spent and
         ``run.n_blocks`` the blocks of windows.
     """
-    if settings is None:
-        settings = AnalysisSettings(n_samples=10_000, percentage=1, sampler=scheme or "iis")
-    settings = AnalysisSettings.build(
+    settings = merged_settings(
         settings,
-        sampler=scheme,
-        dt=dt,
-        n_samples=n_samples,
-        n=n,
-        percentage=percentage,
-        bins=bins,
-        conf_level=conf_level,
-        flavour=flavour,
-        x0=x0,
-        min_points=min_points,
-        window=window,
-        engine=engine,
-        workers=workers,
-        ic_error=ic_error,
+        dict(locals(), sampler=scheme),
+        default=AnalysisSettings(n_samples=10_000, percentage=1, sampler="iis"),
     )
     if settings.sampler not in SCHEMES:
         raise SettingsError(f"adaptive_run takes sampler (scheme) 'iis' or 'de'; got {settings.sampler!r}")
-    scheme, dt, x0, window, n = settings.sampler, settings.dt, settings.x0, settings.window, settings.n
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
     names, prior = parameter_box(bounds, model.names, type(model).__name__)
     order = [names.index(name) for name in model.names]
-    rng = _checks.generator(rng)
-    n_samples = settings.n_samples
-    fraction = settings.percentage / 100
-    n_blocks = blocks or max(1, min(50, y.size // (2 * n + 1)))
-    edges = np.linspace(0, y.size, n_blocks + 1).astype(int)
+    n_blocks = blocks or max(1, min(50, y.size // settings.window_length))
 
     def simulate(points):
-        return model.simulate(points[:, order], u, dt=dt, x0=x0)
+        return model.simulate(points[:, order], u, dt=settings.dt, x0=settings.x0)
 
+    samples, sims, mixture, spent = _staged_samples(
+        y,
+        simulate,
+        prior,
+        settings,
+        np.linspace(0, y.size, n_blocks + 1).astype(int),
+        _checks.generator(rng),
+        initial_share=initial_share,
+        stages=stages,
+        margin=margin,
+        de_share=de_share,
+    )
+    weights = mixture.importance_weights(samples)
+    run = dataclasses.replace(
+        RunRecord.of(model, n_sampled=spent, n_dropped=0), n_evaluations=spent, weights=weights, n_blocks=n_blocks
+    )
+    result = analyse_errors(
+        y,
+        ArrayErrors(y, sims),
+        samples,
+        prior,
+        settings,
+        names=names,
+        time=np.arange(y.size) * settings.dt,
+        progress=progress,
+        run=run,
+        weights=weights,
+        simulations=lambda rows: [sims[rows]],
+    )
+    # The engine gives the noise floor, so the verdicts need neither data nor simulation.
+    return dataclasses.replace(result, verdicts=assess(result))
+
+
+def _staged_samples(y, simulate, prior, settings, edges, rng, *, initial_share, stages, margin, de_share):
+    """Every stage's samples and simulations, the mixture they were drawn from and the evaluations spent.
+
+    A uniform stage over the prior first, then the scheme's boxes around
+    the low-cost regions of each block of windows (``edges``).
+    """
+    n_samples, fraction, n, window = settings.n_samples, settings.percentage / 100, settings.n, settings.window
     mixture = BoxMixture(prior)
     initial = max(10, int(n_samples * initial_share))
     samples = _uniform_in(prior, initial, rng)
     sims = simulate(samples)
     mixture.counts[0] = initial
     spent = initial
-    if scheme == "iis":
+    if settings.sampler == "iis":
         per_stage = (n_samples - spent) // max(stages, 1)
         for _ in range(stages):
             weights = mixture.importance_weights(samples)
@@ -241,59 +262,24 @@ def adaptive_run(
             samples = np.r_[samples, new_samples]
             sims = np.r_[sims, simulate(new_samples)]
             spent += new_samples.shape[0]
-    else:
-        budget = int(n_samples * de_share)
-        population_size = _population_size(prior.shape[0])
-        needed = spent + n_blocks * (2 * population_size + 1)
-        if n_samples < needed:
-            raise SettingsError(
-                f"the 'de' scheme needs at least {needed} evaluations for {n_blocks} blocks of windows "
-                f"(a population of {population_size} evolved twice per block); got n_samples={n_samples}: "
-                "raise n_samples or lower blocks"
-            )
-        regions, used = _evolved_boxes(y, simulate, prior, fraction, n, edges, budget, margin, rng, window)
-        spent += used
-        new_samples = _draw_in_boxes(mixture, regions, n_samples - spent, rng)
-        samples = np.r_[samples, new_samples]
-        sims = np.r_[sims, simulate(new_samples)]
-        spent += new_samples.shape[0]
-    weights = mixture.importance_weights(samples)
-    result = moving_window(
-        y,
-        sims,
-        samples,
-        prior,
-        n=n,
-        percentage=settings.percentage,
-        bins=settings.bins,
-        conf_level=settings.conf_level,
-        flavour=settings.flavour,
-        names=names,
-        time=np.arange(y.size) * dt,
-        weights=weights,
-        window=window,
-        min_points=settings.min_points,
-        engine=settings.engine,
-        workers=settings.workers,
-        progress=progress,
-        ic_error=settings.ic_error,
-    )
-    # What the engine analysed (the samples kept, the engine that ran) wins over what was asked, as in dynia.run.
-    result = dataclasses.replace(
-        result,
-        settings=settings.replace(n_samples=result.settings.n_samples, engine=result.settings.engine),
-        run=dataclasses.replace(
-            result.run,
-            model=type(model).__name__,
-            n_sampled=spent,
-            n_dropped=0,
-            n_evaluations=spent,
-            weights=weights,
-            n_blocks=n_blocks,
-        ),
-    )
-    # moving_window gives the noise floor, so the verdicts need neither data nor simulation.
-    return dataclasses.replace(result, verdicts=assess(result))
+        return samples, sims, mixture, spent
+    n_blocks = edges.size - 1
+    budget = int(n_samples * de_share)
+    population_size = _population_size(prior.shape[0])
+    needed = spent + n_blocks * (2 * population_size + 1)
+    if n_samples < needed:
+        raise SettingsError(
+            f"the 'de' scheme needs at least {needed} evaluations for {n_blocks} blocks of windows "
+            f"(a population of {population_size} evolved twice per block); got n_samples={n_samples}: "
+            "raise n_samples or lower blocks"
+        )
+    regions, used = _evolved_boxes(y, simulate, prior, fraction, n, edges, budget, margin, rng, window)
+    spent += used
+    new_samples = _draw_in_boxes(mixture, regions, n_samples - spent, rng)
+    samples = np.r_[samples, new_samples]
+    sims = np.r_[sims, simulate(new_samples)]
+    spent += new_samples.shape[0]
+    return samples, sims, mixture, spent
 
 
 def _uniform_in(box, count, rng):

@@ -117,7 +117,7 @@ from .errors import DataError, DyniaError, ModelError, SettingsError
 from .pipeline import warn_dropped
 from .result import DyniaResult
 from .sampling import sample
-from .settings import SAMPLERS, AnalysisSettings, RunRecord, parameter_box
+from .settings import SAMPLERS, RunRecord, merged_settings, parameter_box
 
 __all__ = ["run"]
 
@@ -238,22 +238,7 @@ def run(
             f"client must be a distributed.Client, or None for a local cluster; got {type(client).__name__}"
         )
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
-    settings = AnalysisSettings.build(
-        settings,
-        dt=dt,
-        n_samples=n_samples,
-        sampler=sampler,
-        n=n,
-        percentage=percentage,
-        bins=bins,
-        conf_level=conf_level,
-        flavour=flavour,
-        x0=x0,
-        min_points=min_points,
-        window=window,
-        engine=engine,
-        ic_error=ic_error,
-    )
+    settings = merged_settings(settings, locals())
     settings.require(
         "dynia.distributed.run",
         sampler=SAMPLERS,
@@ -265,100 +250,114 @@ def run(
         "use dynia.run; the cluster's workers are its threads",
     )
     names, box = parameter_box(bounds, model.names, type(model).__name__)
-    n_samples, dt, x0, flavour = settings.n_samples, settings.dt, settings.x0, settings.flavour
-    before, after = window_halos(settings.n, settings.window)
     settings.check_record(y.size)
-    compiled = compiled_engine(settings.engine, flavour)
+    windows = _Windows(
+        *window_halos(settings.n, settings.window),
+        settings.min_points,
+        compiled_engine(settings.engine, settings.flavour),
+        error_scale(y),
+    )
     if sample_chunks is not None:
         sample_chunks = _checks.whole_number(sample_chunks, "sample_chunks", minimum=1)
     if time_chunks is not None:
         time_chunks = _checks.whole_number(time_chunks, "time_chunks", minimum=1)
-
-    samples = sample(settings.sampler, n_samples, box, _checks.generator(rng))
+    samples = sample(settings.sampler, settings.n_samples, box, _checks.generator(rng))
     model_order = [names.index(name) for name in model.names]
     # simulate_chunks checks u, dt and x0 (and the model's constraints on the
     # first sample) when called, so mistakes surface here, before any cluster.
-    model.simulate_chunks(samples[:1, model_order], u, dt=dt, x0=x0)
+    model.simulate_chunks(samples[:1, model_order], u, dt=settings.dt, x0=settings.x0)
 
     with _connected(client, distributed) as client, _worker_loss_explained(client, distributed) as need:
-        threads = max(1, sum(client.nthreads().values()))
-        if sample_chunks is None:
-            sample_chunks = math.ceil(n_samples / threads)
-        # What one time chunk needs, should a worker be lost before the chunks are set (as below, all sets kept).
-        need.update(
-            samples=n_samples,
-            steps=(time_chunks or max(1, min(math.ceil(y.size / (4 * threads)), _BLOCK_VALUES // n_samples)))
-            + before
-            + after,
-        )
-        u_data, y_data = client.scatter([u, y], broadcast=True, hash=False)
-        finite = np.concatenate(
-            client.gather(
-                [
-                    client.submit(_finite_rows, model, rows, u_data, dt, x0, first, pure=False)
-                    for first, rows in _scatter_rows(client, samples[:, model_order], sample_chunks)
-                ]
-            )
-        )
-        if not finite.any():
-            raise ModelError(
-                f"the simulation of every one of the {n_samples} parameter sets overflowed; "
-                "check the model and the parameter ranges"
-            )
-        samples = samples[finite]
-        warn_dropped(int(n_samples - samples.shape[0]), n_samples, u)
-        flavour_impl = flavour_analysis(
-            flavour,
-            compiled,
-            samples,
-            box,
-            settings.percentage,
-            settings.bins,
-            settings.conf_level,
-            settings.min_points,
-            ic_error=settings.ic_error,
-        )
-        n_steps = y.size
-        if time_chunks is None:
-            time_chunks = max(1, min(math.ceil(n_steps / (4 * threads)), _BLOCK_VALUES // samples.shape[0]))
-        windows = _Windows(before, after, settings.min_points, compiled, error_scale(y))
-        need.update(samples=samples.shape[0], steps=time_chunks + windows.slots - 1)
-        row_chunks = list(_scatter_rows(client, samples[:, model_order], sample_chunks))
-        if model.resumable:
-            blocks = _ChainedBlocks(client, model, row_chunks, u_data, y_data, dt, x0, windows)
-        else:
-            blocks = _WholeRecordBlocks(
-                client, model, row_chunks, u_data, y_data, dt, x0, windows, n_steps, time_chunks
-            )
-        ic, ci, median, gradient, best, upper, threshold, ic_se, ci_se, overflowed = _analyse_on_cluster(
+        samples, flavour_impl, analysed, totals = _on_cluster(
             client,
-            blocks,
-            flavour_impl,
+            need,
+            model,
+            u,
+            y,
+            box,
+            samples,
+            model_order,
+            settings,
             windows,
-            [(start, min(start + time_chunks, n_steps)) for start in range(0, n_steps, time_chunks)],
-            stateful=flavour in _STATEFUL_FLAVOURS,
-            progress=progress,
-            ahead=_CHUNKS_AHEAD_PER_THREAD * threads,
+            (sample_chunks, time_chunks),
+            progress,
         )
-        # Every sample's record total absolute error, added step by step as dynia.run adds them.
-        totals = np.concatenate(client.gather(blocks.totals()))
-        report_overflowed(overflowed, best, np.arange(n_steps) * float(dt), y)
-        for extreme in (best, upper, threshold):
-            extreme /= windows.scale  # exact: a power of two
+    return _result(u, y, model, names, box, samples, settings, flavour_impl, windows, analysed, totals)
 
+
+def _on_cluster(client, need, model, u, y, box, samples, model_order, settings, windows, chunk_sizes, progress):
+    """Stages 0 to 2 on the cluster: the samples kept, the flavour, the analysed windows and the record totals.
+
+    ``chunk_sizes`` are the sample and time chunks given (None: set here for
+    the cluster's worker threads); ``need`` is filled with what one time
+    chunk needs (:func:`_worker_loss_explained`).
+    """
+    sample_chunks, time_chunks = chunk_sizes
+    threads = max(1, sum(client.nthreads().values()))
+    sample_chunks = sample_chunks or math.ceil(settings.n_samples / threads)
+    # What one time chunk needs, should a worker be lost before the chunks are set (as below, all sets kept).
+    need.update(
+        samples=settings.n_samples,
+        steps=(time_chunks or _time_chunks(y.size, threads, settings.n_samples)) + windows.slots - 1,
+    )
+    u_data, y_data = client.scatter([u, y], broadcast=True, hash=False)
+    samples = _finite_samples(client, model, samples, model_order, u_data, u, settings, sample_chunks)
+    flavour_impl = flavour_analysis(
+        settings.flavour,
+        windows.compiled,
+        samples,
+        box,
+        settings.percentage,
+        settings.bins,
+        settings.conf_level,
+        settings.min_points,
+        ic_error=settings.ic_error,
+    )
+    time_chunks = time_chunks or _time_chunks(y.size, threads, samples.shape[0])
+    need.update(samples=samples.shape[0], steps=time_chunks + windows.slots - 1)
+    row_chunks = list(_scatter_rows(client, samples[:, model_order], sample_chunks))
+    if model.resumable:
+        blocks = _ChainedBlocks(client, model, row_chunks, u_data, y_data, settings, windows)
+    else:
+        blocks = _WholeRecordBlocks(client, model, row_chunks, u_data, y_data, settings, windows, y.size, time_chunks)
+    analysed = _analyse_on_cluster(
+        client,
+        blocks,
+        flavour_impl,
+        windows,
+        [(start, min(start + time_chunks, y.size)) for start in range(0, y.size, time_chunks)],
+        stateful=settings.flavour in _STATEFUL_FLAVOURS,
+        progress=progress,
+        ahead=_CHUNKS_AHEAD_PER_THREAD * threads,
+    )
+    # Every sample's record total absolute error, added step by step as dynia.run adds them.
+    totals = np.concatenate(client.gather(blocks.totals()))
+    return samples, flavour_impl, analysed, totals
+
+
+def _result(u, y, model, names, box, samples, settings, flavour_impl, windows, analysed, totals):
+    """The result of the analysed windows, with the noise floor and the same record as dynia.run's."""
+    ic, ci, median, gradient, best, upper, threshold, ic_se, ci_se, overflowed = analysed
+    n_steps, n_samples, dt = y.size, settings.n_samples, settings.dt
+    report_overflowed(overflowed, best, np.arange(n_steps) * float(dt), y)
+    for extreme in (best, upper, threshold):
+        extreme /= windows.scale  # exact: a power of two
     # The record-best set and its neighbours are simulated once more here, as dynia.run does.
+    model_order = [names.index(name) for name in model.names]
     residuals = record_residuals(
         y,
         samples,
         box,
         totals,
-        lambda rows: model.simulate_chunks(samples[rows][:, model_order], u, dt=dt, x0=x0, chunk_steps=RESIDUAL_CHUNK),
+        lambda rows: model.simulate_chunks(
+            samples[rows][:, model_order], u, dt=dt, x0=settings.x0, chunk_steps=RESIDUAL_CHUNK
+        ),
     )
     floor = record_noise_floor(
         best,
         upper,
         threshold,
-        window_points(y, before, after),
+        window_points(y, windows.before, windows.after),
         windows.slots,
         len(names),
         settings.percentage,
@@ -382,12 +381,38 @@ def run(
         median=median,
         gradient=gradient,
         bin_centres=flavour_impl.bin_centres,
-        settings=settings.replace(n_samples=samples.shape[0], engine="numba" if compiled else "numpy"),
+        settings=settings.replace(n_samples=samples.shape[0], engine="numba" if windows.compiled else "numpy"),
         run=recorded,
         ic_se=ic_se,
         ci_se=ci_se,
         **floor_fields(floor),
     )
+
+
+def _time_chunks(n_steps, threads, n_samples):
+    """Steps per time chunk when none are given: about four per worker thread, at most ``_BLOCK_VALUES`` values."""
+    return max(1, min(math.ceil(n_steps / (4 * threads)), _BLOCK_VALUES // n_samples))
+
+
+def _finite_samples(client, model, samples, model_order, u_data, u, settings, sample_chunks):
+    """Stage 0: the samples whose simulation is finite over the record; the others dropped (and warned about)."""
+    finite = np.concatenate(
+        client.gather(
+            [
+                client.submit(_finite_rows, model, rows, u_data, settings, first, pure=False)
+                for first, rows in _scatter_rows(client, samples[:, model_order], sample_chunks)
+            ]
+        )
+    )
+    n_samples = settings.n_samples
+    if not finite.any():
+        raise ModelError(
+            f"the simulation of every one of the {n_samples} parameter sets overflowed; "
+            "check the model and the parameter ranges"
+        )
+    samples = samples[finite]
+    warn_dropped(int(n_samples - samples.shape[0]), n_samples, u)
+    return samples
 
 
 def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, progress, ahead):
@@ -533,10 +558,10 @@ def _sample_chunk_context(first, count):
         ) from error
 
 
-def _finite_rows(model, params, u, dt, x0, first):
+def _finite_rows(model, params, u, settings, first):
     """Stage 0: which samples of one chunk simulate to finite output, (rows,) bool."""
     with _sample_chunk_context(first, params.shape[0]):
-        return model.finite_samples(params, u, dt=dt, x0=x0)
+        return model.finite_samples(params, u, dt=settings.dt, x0=settings.x0)
 
 
 @dataclass(frozen=True)
@@ -599,9 +624,9 @@ class _ChainedBlocks:
     a chain in time and none simulates more than a time chunk and its halo.
     """
 
-    def __init__(self, client, model, row_chunks, u, y, dt, x0, windows):
+    def __init__(self, client, model, row_chunks, u, y, settings, windows):
         self._client = client
-        self._arguments = (model, u, y, dt, x0, windows)
+        self._arguments = (model, u, y, settings, windows)
         self._row_chunks = row_chunks
         self._previous = [None] * len(row_chunks)
 
@@ -627,7 +652,7 @@ def _handed_totals(output):
     return output[1][2]
 
 
-def _chained_window_inputs(params, first, previous, start, stop, model, u, y, dt, x0, windows):
+def _chained_window_inputs(params, first, previous, start, stop, model, u, y, settings, windows):
     """Stage 1, resumable: one sample chunk's window inputs at steps [start, stop), and what to hand on.
 
     ``previous`` is the output of the task of the previous time chunk (None
@@ -642,7 +667,8 @@ def _chained_window_inputs(params, first, previous, start, stop, model, u, y, dt
     reach_back, reach_ahead = max(start - windows.before, 0), min(stop + windows.after, n_steps)
     with _sample_chunk_context(first, params.shape[0]):
         if previous is None:
-            state, errors = model.start_simulation(params, u, dt=dt, x0=x0), np.empty((0, params.shape[0]))
+            state = model.start_simulation(params, u, dt=settings.dt, x0=settings.x0)
+            errors = np.empty((0, params.shape[0]))
             totals = np.zeros(params.shape[0])
         else:
             _, (state, errors, totals) = previous
@@ -686,10 +712,10 @@ class _WholeRecordBlocks:
     released after its analysis.
     """
 
-    def __init__(self, client, model, row_chunks, u, y, dt, x0, windows, n_steps, time_chunks):
+    def __init__(self, client, model, row_chunks, u, y, settings, windows, n_steps, time_chunks):
         whole_record = [
             client.submit(
-                _whole_record_window_inputs, model, rows, u, y, dt, x0, windows, time_chunks, first, pure=False
+                _whole_record_window_inputs, model, rows, u, y, settings, windows, time_chunks, first, pure=False
             )
             for first, rows in row_chunks
         ]
@@ -710,7 +736,7 @@ class _WholeRecordBlocks:
         return self._totals
 
 
-def _whole_record_window_inputs(model, params, u, y, dt, x0, windows, time_chunks, first):
+def _whole_record_window_inputs(model, params, u, y, settings, windows, time_chunks, first):
     """Stage 1, not resumable: simulate one sample chunk over the record; its window inputs per time chunk.
 
     Each time chunk's block comes with nothing to hand on, as a chained task's output does; the samples'
@@ -720,7 +746,9 @@ def _whole_record_window_inputs(model, params, u, y, dt, x0, windows, time_chunk
     totals = np.zeros(params.shape[0])
     with _sample_chunk_context(first, params.shape[0]):
         errors = StreamedErrors(
-            y, model.simulate_chunks(params, u, dt=dt, x0=x0, chunk_steps=time_chunks), params.shape[0]
+            y,
+            model.simulate_chunks(params, u, dt=settings.dt, x0=settings.x0, chunk_steps=time_chunks),
+            params.shape[0],
         )
         inputs = [
             (windows.block(errors, start, min(start + time_chunks, n_steps), n_steps, totals), None)

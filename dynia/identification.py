@@ -80,7 +80,7 @@ from .segments import (
     segments_to_times,
 )
 from .serial import json_number
-from .settings import IC_THRESHOLD, AnalysisSettings, parameter_box
+from .settings import IC_THRESHOLD, merged_settings, parameter_box
 from .structure import structure_warnings
 
 __all__ = ["Identification", "identify", "METHODS", "SELECTED_ALL_SHARE"]
@@ -257,50 +257,14 @@ def identify(
     Identification
     """
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
-    if method not in METHODS:
-        raise SettingsError(f"method must be one of {METHODS}; got {method!r}")
-    if model.n_inputs > 1 and (method == "baseline" or quality or exclude_flagged):
-        raise SettingsError(
-            f"the baseline interval search and the data-quality checks take one input; {model!r} has {model.n_inputs}"
-        )
-    if (segments is None) != (method != "given"):
-        raise SettingsError("segments are given exactly when method='given'")
-    analysis = AnalysisSettings.build(
-        settings,
-        dt=dt,
-        x0=x0,
-        n_samples=n_samples,
-        sampler=sampler,
-        n=n,
-        percentage=percentage,
-        flavour=flavour,
-        min_points=min_points,
-    )
+    _check_method(model, method, segments, quality or exclude_flagged)
+    analysis = merged_settings(settings, locals())
     dt, x0 = analysis.dt, analysis.x0
     names, box = parameter_box(bounds, model.names, type(model).__name__)
     bounds = {name: tuple(map(float, row)) for name, row in zip(names, box)}
     rng = _checks.generator(rng)
-    time = np.arange(y.size) * dt
-
-    report = None
-    if quality or exclude_flagged:
-        report = check_quality(time, u, y, **(quality_options or {}))
-        if exclude_flagged:
-            u, y = report.exclude(u, signal="u"), report.exclude(y, signal="y")
-
-    fit_part, validation = holdout_split(y.size, held_out)
-    fit_steps = sum(stop - start for start, stop in fit_part)
-    needed, why = (
-        (analysis.window_length, f"one window, 2n+1 with n = {analysis.n}")
-        if method == "dynia"
-        else (len(names) + 1, "one more than the parameters")
-    )
-    if fit_steps < needed:
-        raise SettingsError(
-            f"held_out {held_out if isinstance(held_out, numbers.Real) else 'as given'} leaves {fit_steps} of the "
-            f"record's {y.size} steps to select and fit on; expected at least {needed} ({why}): hold out less",
-            "held_out",
-        )
+    u, y, report = _quality_checked(u, y, dt, quality, exclude_flagged, quality_options)
+    fit_part, validation = _split(y.size, held_out, method, analysis, len(names))
     y_fit = np.where(segments_to_mask(validation, y.size), np.nan, y)
     notes = []
     dynia_result = baseline_result = None
@@ -330,14 +294,58 @@ def identify(
         chosen = intersect_segments(check_segments(segments, y.size), fit_part)
     if not chosen:
         raise NothingSelected(f"method {method!r} selected no data to fit on: {_NOTHING_SELECTED[method]}")
-    if report is not None:
-        inside = sum(len(found) for found in report.findings_in(chosen).values())
-        if inside:
-            notes.append(
-                f"{inside} data-quality finding(s) lie inside the fitted segments"
-                + ("" if exclude_flagged else "; exclude them with exclude_flagged=True")
-            )
+    fit = fit_segments(u, y_fit, model, chosen, bounds=bounds, dt=dt, x0=x0, n_starts=n_starts, rng=rng)
+    segmenting = dict(ic_threshold=ic_threshold, mode=mode, min_length=min_length, merge_gap=merge_gap)
+    asked = dict(method=method, n_starts=n_starts, quality=quality, exclude_flagged=exclude_flagged)
+    recorded = _recorded(asked, analysis, bounds, validation, baseline_result, segmenting)
+    found = dict(dynia_result=dynia_result, baseline_result=baseline_result, quality=report, settings=recorded)
+    return _identification(asked, segmenting, fit, u, y, (chosen, fit_part, validation), notes, **found)
 
+
+def _quality_checked(u, y, dt, quality, exclude_flagged, quality_options):
+    """The record and its data-quality report (None unless asked for), flagged samples excluded when asked."""
+    if not (quality or exclude_flagged):
+        return u, y, None
+    report = check_quality(np.arange(y.size) * dt, u, y, **(quality_options or {}))
+    if exclude_flagged:
+        u, y = report.exclude(u, signal="u"), report.exclude(y, signal="y")
+    return u, y, report
+
+
+def _recorded(asked, analysis, bounds, validation, baseline_result, segmenting):
+    """``Identification.settings``: what was asked, and the DYNIA run's or the interval search's settings."""
+    method, exclude_flagged = asked["method"], asked["exclude_flagged"]
+    recorded = dict(
+        method=method,
+        dt=analysis.dt,
+        x0=analysis.x0,
+        held_out_steps=int(sum(b - a for a, b in validation)),
+        bounds={name: list(pair) for name, pair in bounds.items()},
+        n_starts=asked["n_starts"],
+        quality=bool(asked["quality"] or exclude_flagged),
+        exclude_flagged=bool(exclude_flagged),
+    )
+    if method == "dynia":
+        recorded.update(analysis.to_dict(), **segmenting)
+    if method == "baseline":
+        recorded["baseline"] = {
+            key: json_number(value) if isinstance(value, float) else value
+            for key, value in baseline_result.settings.items()
+            if isinstance(value, (int, float, str, bool))
+        }
+    return recorded
+
+
+def _identification(asked, segmenting, fit, u, y, parts, notes, **found):
+    """The :class:`Identification` of ``fit``, with the notes on the segments chosen and on the held-out part.
+
+    ``parts`` are the segments chosen, the fitting part and the held-out
+    part; ``found`` the other fields.
+    """
+    chosen, fit_part, validation = parts
+    method, ic_threshold, report = asked["method"], segmenting["ic_threshold"], found["quality"]
+    if report is not None:
+        notes += _findings_inside(report, chosen, asked["exclude_flagged"])
     fitting_steps = sum(stop - start for start, stop in fit_part)
     selected_steps = sum(stop - start for start, stop in chosen)
     selected_share = selected_steps / fitting_steps
@@ -347,28 +355,7 @@ def identify(
             f"steps): nearly every step has an IC of at least {ic_threshold:g}, so the fit is that of the whole "
             "fitting part (method 'whole') and the selection added nothing; raise ic_threshold or use mode 'joint'"
         )
-    fit = fit_segments(u, y_fit, model, chosen, bounds=bounds, dt=dt, x0=x0, n_starts=n_starts, rng=rng)
     notes += _quiet_held_out(u, y, fit, validation)
-    recorded = dict(
-        method=method,
-        dt=dt,
-        x0=x0,
-        held_out_steps=int(sum(b - a for a, b in validation)),
-        bounds={name: list(pair) for name, pair in bounds.items()},
-        n_starts=n_starts,
-        quality=bool(quality or exclude_flagged),
-        exclude_flagged=bool(exclude_flagged),
-    )
-    if method == "dynia":
-        recorded.update(
-            analysis.to_dict(), ic_threshold=ic_threshold, mode=mode, min_length=min_length, merge_gap=merge_gap
-        )
-    if method == "baseline":
-        recorded["baseline"] = {
-            key: json_number(value) if isinstance(value, float) else value
-            for key, value in baseline_result.settings.items()
-            if isinstance(value, (int, float, str, bool))
-        }
     return Identification(
         method=method,
         parameters=dict(fit.parameters),
@@ -378,12 +365,9 @@ def identify(
         validation=list(validation),
         validation_error=fit.validation_error(u, y, validation),
         fit=fit,
-        dynia_result=dynia_result,
-        baseline_result=baseline_result,
-        quality=report,
         warnings=notes,
-        settings=recorded,
         selected_share=selected_share,
+        **found,
     )
 
 
@@ -393,6 +377,51 @@ _NOTHING_SELECTED = {
     "baseline": "the interval search accepted no interval in the fitting part; loosen baseline_options",
     "given": "no given segment reaches into the fitting part; give segments outside held_out",
 }
+
+
+def _check_method(model, method, segments, quality):
+    """Raise unless ``method`` is known and can take ``model``, and ``segments`` come exactly with "given"."""
+    if method not in METHODS:
+        raise SettingsError(f"method must be one of {METHODS}; got {method!r}")
+    if model.n_inputs > 1 and (method == "baseline" or quality):
+        raise SettingsError(
+            f"the baseline interval search and the data-quality checks take one input; {model!r} has {model.n_inputs}"
+        )
+    if (segments is None) != (method != "given"):
+        raise SettingsError("segments are given exactly when method='given'")
+
+
+def _split(n_steps, held_out, method, analysis, n_params):
+    """The fitting part and the held-out validation part; an error when the fitting part is too short.
+
+    A DYNIA selection needs one window in it, a fit one step more than the parameters.
+    """
+    fit_part, validation = holdout_split(n_steps, held_out)
+    fit_steps = sum(stop - start for start, stop in fit_part)
+    needed, why = (
+        (analysis.window_length, f"one window, 2n+1 with n = {analysis.n}")
+        if method == "dynia"
+        else (n_params + 1, "one more than the parameters")
+    )
+    if fit_steps < needed:
+        raise SettingsError(
+            f"held_out {held_out if isinstance(held_out, numbers.Real) else 'as given'} leaves {fit_steps} of the "
+            f"record's {n_steps} steps to select and fit on; expected at least {needed} ({why}): hold out less",
+            "held_out",
+        )
+    return fit_part, validation
+
+
+def _findings_inside(report, chosen, exclude_flagged):
+    """A note (in a list) on the data-quality findings inside the segments ``chosen``, else []."""
+    inside = sum(len(found) for found in report.findings_in(chosen).values())
+    if not inside:
+        return []
+    return [
+        f"{inside} data-quality finding(s) lie inside the fitted segments"
+        + ("" if exclude_flagged else "; exclude them with exclude_flagged=True")
+    ]
+
 
 # A held-out part too quiet to validate anything (module docs): its input's
 # standard deviation below this share of the fitted data's ...

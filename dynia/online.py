@@ -51,7 +51,7 @@ from .errors import DataError, ModelError
 from .models import Model
 from .result import DyniaResult
 from .sampling import sample
-from .settings import SAMPLERS, AnalysisSettings, RunRecord, parameter_box
+from .settings import SAMPLERS, AnalysisSettings, RunRecord, merged_settings, parameter_box
 
 __all__ = ["OnlineDynia"]
 
@@ -159,19 +159,7 @@ class OnlineDynia:
             raise TypeError(
                 f"model must be a dynia.models.Model, e.g. dynia.models.FirstOrder(); got {type(model).__name__}"
             )
-        settings = AnalysisSettings.build(
-            settings or AnalysisSettings(window="trailing"),
-            n_samples=n_samples,
-            n=n,
-            percentage=percentage,
-            bins=bins,
-            conf_level=conf_level,
-            flavour=flavour,
-            dt=dt,
-            x0=x0,
-            sampler=sampler,
-            min_points=min_points,
-        )
+        settings = merged_settings(settings, locals(), default=AnalysisSettings(window="trailing"))
         settings.require(
             "OnlineDynia",
             window=("trailing",),
@@ -187,16 +175,9 @@ class OnlineDynia:
             "for a stored or float32 result replay the record through dynia.run(window='trailing')",
         )
         names, box = parameter_box(bounds, model.names, type(model).__name__)
-        n_samples, dt, x0 = settings.n_samples, settings.dt, settings.x0
-        self._n = settings.n
-        self._min_points = settings.min_points
-        percentage, bins, conf_level, flavour = (
-            settings.percentage,
-            settings.bins,
-            settings.conf_level,
-            settings.flavour,
-        )
-
+        n_samples = settings.n_samples
+        # The settings of every result: an update is analysed by numpy.
+        self._analysis = settings.replace(engine="numpy")
         self.names = tuple(names)
         self.bounds = box
         self.samples = sample(settings.sampler, n_samples, box, _checks.generator(rng))
@@ -204,32 +185,30 @@ class OnlineDynia:
         model_order = [names.index(name) for name in model.names]
         self._model_params = self.samples[:, model_order]
         self._model = model
-        self._x0 = x0
-        self._flavour_args = (self.samples, box, percentage, bins, conf_level)
+        self._flavour_args = (self.samples, box, settings.percentage, settings.bins, settings.conf_level)
         # Built once here so that bad settings fail now rather than at the first update.
-        self._flavour = FLAVOUR_CLASSES[flavour](*self._flavour_args)
-        self._stepper = model.stepper(self._model_params, dt=dt, x0=x0)  # checks dt and x0
-        self._dt = float(dt)
+        self._flavour = FLAVOUR_CLASSES[settings.flavour](*self._flavour_args)
+        self._stepper = model.stepper(self._model_params, dt=settings.dt, x0=settings.x0)  # checks dt and x0
         self.bin_centres = self._flavour.bin_centres
-        self._settings = settings.replace(engine="numpy")
         self._run = dataclasses.replace(
             RunRecord.of(model, n_sampled=n_samples, n_dropped=0), n_behavioural=self._flavour.count
         )
+        self._allocate_window(settings.window_length, n_samples)
+        self.steps = 0
+        self._blank_results()
 
-        width = 2 * self._n + 1
+    def _allocate_window(self, width, n_samples):
+        """The ring of the window's last ``width`` steps of errors, and the per-sample work arrays."""
         self._errors = np.zeros((width, n_samples))  # ring: row t % width holds step t
         self._measured = np.zeros(width, dtype=bool)
         self._mae = np.empty((1, n_samples))
         self._finite = np.empty(n_samples, dtype=bool)
         self._diverged = np.zeros(n_samples, dtype=bool)
-        self._percentage = percentage
-        self.steps = 0
-        self._blank_results()
 
     @property
     def time(self):
         """Time of the latest step, ``(steps - 1) * dt``; NaN before the first update."""
-        return (self.steps - 1) * self._dt if self.steps else float("nan")
+        return (self.steps - 1) * self._analysis.dt if self.steps else float("nan")
 
     @property
     def n_diverged(self):
@@ -238,8 +217,8 @@ class OnlineDynia:
 
     def reset(self):
         """Start again at step 0 with the same samples, as a new object would."""
-        self._flavour = FLAVOUR_CLASSES[self._settings.flavour](*self._flavour_args)
-        self._stepper = self._model.stepper(self._model_params, dt=self._dt, x0=self._x0)
+        self._flavour = FLAVOUR_CLASSES[self._analysis.flavour](*self._flavour_args)
+        self._stepper = self._model.stepper(self._model_params, dt=self._analysis.dt, x0=self._analysis.x0)
         self._errors.fill(0.0)
         self._measured.fill(False)
         self._diverged.fill(False)
@@ -352,7 +331,7 @@ class OnlineDynia:
             points,
             width,
             n_params,
-            self._percentage,
+            self._analysis.percentage,
             self.samples.shape[0],
             residuals=record_residuals(y, self.samples, self.bounds, totals, self._simulations(u, start)),
         )
@@ -361,13 +340,13 @@ class OnlineDynia:
             names=self.names,
             samples=np.array(self.samples),
             bounds=self.bounds.copy(),
-            time=(first + np.arange(y.size)) * self._dt,
+            time=(first + np.arange(y.size)) * self._analysis.dt,
             ic=ic,
             ci=ci,
             median=median,
             gradient=gradient,
             bin_centres=self.bin_centres,
-            settings=self._settings,
+            settings=self._analysis,
             run=run,
             **floor_fields(floor),
         )
@@ -384,7 +363,7 @@ class OnlineDynia:
             if start is None:
                 model_params = self._model_params[rows]
                 return self._model.simulate_chunks(
-                    model_params, u, dt=self._dt, x0=self._x0, chunk_steps=RESIDUAL_CHUNK
+                    model_params, u, dt=self._analysis.dt, x0=self._analysis.x0, chunk_steps=RESIDUAL_CHUNK
                 )
             return _stepped(copy.deepcopy(start), u, rows)
 
@@ -407,7 +386,7 @@ class OnlineDynia:
         if present:
             total /= float(present)
         self._present = present
-        return present >= self._min_points
+        return present >= self._analysis.min_points
 
     def _analyse(self, usable):
         """Rank, select and read off the window's results with the engine's flavour code."""

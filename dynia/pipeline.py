@@ -11,14 +11,14 @@ from .adaptive import adaptive_run
 from .engine.flavours import compiled_engine
 from .engine.kernels import CompiledErrors
 from .engine.noise import RESIDUAL_CHUNK
-from .engine.windows import ArrayErrors, analyse_stream, default_chunk_steps
+from .engine.windows import ArrayErrors, StreamedErrors, analyse_errors, default_chunk_steps
 from .errors import ModelError, SettingsError
 from .io.arrays import result_arrays
 from .io.frames import unpack
 from .models import LinearModel, Model, StateSpaceModel
 from .models.custom import StateErrors
 from .sampling import sample
-from .settings import ADAPTIVE_SAMPLERS, IC_THRESHOLD, MAX_PARAMETER, AnalysisSettings, RunRecord, parameter_box
+from .settings import ADAPTIVE_SAMPLERS, IC_THRESHOLD, MAX_PARAMETER, RunRecord, merged_settings, parameter_box
 from .verdicts import assess
 
 __all__ = [
@@ -187,29 +187,8 @@ def run(
     (2, 80)
     """
     # pandas in: a time index (dates, durations, seconds) gives dt; dates become the result's time axis.
-    u, y, dt_of_index, timestamps = unpack(u, y, dt if dt is not None else getattr(settings, "dt", None))
-    dt = dt if dt is not None else dt_of_index
-    settings = AnalysisSettings.build(
-        settings,
-        dt=dt,
-        n_samples=n_samples,
-        sampler=sampler,
-        n=n,
-        percentage=percentage,
-        bins=bins,
-        conf_level=conf_level,
-        flavour=flavour,
-        x0=x0,
-        min_points=min_points,
-        window=window,
-        engine=engine,
-        workers=workers,
-        ic_error=ic_error,
-        target_se=target_se,
-        max_samples=max_samples,
-        dtype=dtype,
-        store=store,
-    )
+    u, y, dt, timestamps = unpack(u, y, dt if dt is not None else getattr(settings, "dt", None))
+    settings = merged_settings(settings, locals())
     if not isinstance(model, Model):
         raise ModelError(
             f"model must be a dynia.models.Model (e.g. FirstOrder(), FunctionModel(fn, names) or "
@@ -274,34 +253,25 @@ def _analyse_samples(u, y, model, names, box, samples, settings, progress, outpu
         elif compiled and _compiled_state_space(model):
             errors = StateErrors(model, analysed[:, model_order], u, y, dt=settings.dt, workers=workers)
         else:
-            errors = model.simulate_chunks(
+            chunks = model.simulate_chunks(
                 analysed[:, model_order], u, dt=settings.dt, x0=settings.x0, chunk_steps=chunk_steps
             )
+            errors = StreamedErrors(y, chunks, analysed.shape[0])
         n_dropped = int(n_sampled - analysed.shape[0])
         recorded = RunRecord.of(model, n_sampled=n_sampled, n_dropped=n_dropped)
         try:
-            result = analyse_stream(
+            result = analyse_errors(
                 y,
                 errors,
                 analysed,
                 box,
-                n=settings.n,
-                percentage=settings.percentage,
-                bins=settings.bins,
-                conf_level=settings.conf_level,
-                flavour=settings.flavour,
+                settings,
                 names=names,
                 time=_time_axis(y.size, settings.dt),
                 chunk_steps=chunk_steps,
                 progress=progress,
-                min_points=settings.min_points,
-                settings=settings,
                 run=recorded,
-                window=settings.window,
-                engine=settings.engine,
-                workers=workers,
-                ic_error=settings.ic_error,
-                store=output,
+                output=output,
                 simulations=_simulations(u, model, analysed[:, model_order], sims, settings),
             )
         finally:

@@ -56,6 +56,7 @@ __all__ = [
     "check_dt",
     "check_x0",
     "ic_batches",
+    "merged_settings",
     "parameter_box",
 ]
 
@@ -612,6 +613,40 @@ class RunRecord:
             for item in dataclasses.fields(self)
             if getattr(self, item.name) is not None and not (item.name == "thesis_code" and not self.thesis_code)
         }
+
+
+def merged_settings(settings, keywords, default=None):
+    """The settings of a front-end call: ``settings`` (else ``default``, else the defaults) with its keywords put in.
+
+    Every front-end (:func:`dynia.run`, :func:`dynia.adaptive.adaptive_run`,
+    :func:`dynia.distributed.run`, :class:`dynia.online.OnlineDynia`,
+    :func:`dynia.identify`) takes ``settings=`` and names its setting
+    keywords after the fields of :class:`AnalysisSettings`, defaulting to
+    None; this is the one place they are merged, so a keyword given
+    overrides the object and nothing given is dropped.
+
+    Parameters
+    ----------
+    settings : AnalysisSettings or None
+    keywords : mapping
+        The front-end's arguments (its ``locals()`` before it assigns
+        anything else); those named after a setting and not None are put in,
+        the others are not settings and are left out.
+    default : AnalysisSettings, optional
+        The front-end's own defaults, used when ``settings`` is None.
+
+    Examples
+    --------
+    >>> merged_settings(None, dict(n=3, percentage=None, rng=1)).n
+    3
+    >>> merged_settings(AnalysisSettings(n=5), {"n": None}).n
+    5
+    """
+    given = {name: keywords[name] for name in _FIELDS if keywords.get(name) is not None}
+    return AnalysisSettings.build(default if settings is None else settings, **given)
+
+
+_FIELDS = tuple(field.name for field in dataclasses.fields(AnalysisSettings))
 
 
 def parameter_box(bounds, model_names, model_label="the model"):

@@ -144,7 +144,7 @@ from .errors import DataError, ModelError, SettingsError, SuggestionError
 from .fit import fit_segments
 from .pipeline import run
 from .serial import json_number
-from .settings import IC_BATCHES, MIN_BATCH_BEHAVIOURAL, check_dt, check_x0, parameter_box
+from .settings import IC_BATCHES, MIN_BATCH_BEHAVIOURAL, AnalysisSettings, check_dt, check_x0, parameter_box
 
 __all__ = [
     "Suggestion",
@@ -588,8 +588,55 @@ def suggest(
     max_samples = _checks.whole_number(max_samples, "max_samples", minimum=_PILOT_MIN)
     limit, limit_source = _memory_limit(max_memory)
     rng = _checks.generator(rng)
-    n_steps = y.size
 
+    scale, n, reasons, notes = _window(u, y, dt, x0)
+    percentage = _share(len(names), max_samples, reasons, notes)
+    pilot_settings = AnalysisSettings(
+        n_samples=min(max_samples, max(_PILOT_MIN, math.ceil(_PILOT_BEHAVIOURAL / (percentage / 100)))),
+        n=n,
+        percentage=percentage,
+        x0=x0,
+        dt=dt,
+        ic_error=True,
+    )
+    memory = _pilot_memory(model, pilot_settings, y.size, limit, limit_source)
+    pilot = _pilot(u, y, model, bounds, pilot_settings, progress=progress, rng=rng)
+    n_samples = _sample_count(pilot, target, max_samples, percentage, reasons, notes)
+    memory["proposed"] = run_memory(model, n_samples, y.size, n)
+    if limit is not None and memory["proposed"] > limit:
+        notes.append(
+            f"the proposed run would need about {_size(memory['proposed'])}, more than {_size(limit)} "
+            f"({limit_source}): give fewer samples"
+        )
+    for name, entry in pilot["parameters"].items():
+        if entry["max_ic"] is not None and entry["max_ic"] < 0.5:
+            notes.append(
+                f"{name}: the pilot's highest IC is {entry['max_ic']:.2f}; more samples sharpen the IC, they do not "
+                "raise it: this record may hold little information on it"
+            )
+    fit = _ranges(u, y, model, bounds, dt, x0, rng, reasons, notes)
+    return Suggestion(
+        n=n,
+        window=(2 * n + 1) * dt,
+        percentage=percentage,
+        n_samples=int(n_samples),
+        time_scale=scale,
+        pilot=pilot,
+        fit=fit,
+        reasons=reasons,
+        notes=notes,
+        dt=dt,
+        memory=memory,
+    )
+
+
+def _window(u, y, dt, x0):
+    """The half window n from the record's dominant time constant: the time scale, n, and their reasons and notes.
+
+    Raises :class:`~dynia.errors.SuggestionError` when the record shows no
+    time scale to size a window by.
+    """
+    n_steps = y.size
     measured = y[~np.isnan(y)]
     if measured.size and (measured == measured[0]).all():
         raise SuggestionError(
@@ -631,8 +678,11 @@ def suggest(
     if n < wanted:
         notes.append(f"the window is capped at the record's length ({n_steps} steps); a longer record would help")
     notes += _close_changes(u, n, dt)
+    return scale, n, reasons, notes
 
-    d = len(names)
+
+def _share(d, max_samples, reasons, notes):
+    """The behavioural percentage for ``d`` parameters within ``max_samples``; its reason and notes appended."""
     wanted_percentage = min(_MAX_PERCENTAGE, 100.0 / _RANGE_SHARE_INVERSE**d)
     percentage = max(wanted_percentage, _round_up_share(100.0 * _PILOT_BEHAVIOURAL / max_samples))
     if percentage > wanted_percentage:
@@ -655,29 +705,24 @@ def suggest(
             f"window pins them all, so their IC can reach about 0.9 (the default 10 % spans "
             f"{100 * 0.1 ** (1 / d):.0f} % of each)"
         )
+    return percentage
 
-    pilot_samples = min(max_samples, max(_PILOT_MIN, math.ceil(_PILOT_BEHAVIOURAL / (percentage / 100))))
-    memory = dict(pilot=run_memory(model, pilot_samples, n_steps, n), limit=limit)
+
+def _pilot_memory(model, settings, n_steps, limit, limit_source):
+    """``memory`` of the Suggestion with the pilot's estimate; an error when it exceeds ``limit`` bytes."""
+    memory = dict(pilot=run_memory(model, settings.n_samples, n_steps, settings.n), limit=limit)
     if limit is not None and memory["pilot"] > limit:
         raise SettingsError(
-            f"max_memory: the pilot run ({pilot_samples} samples, window {2 * n + 1} steps, {n_steps} steps) would "
-            f"need about {_size(memory['pilot'])}, more than the limit of {_size(limit)} ({limit_source}); lower "
-            "max_samples or raise max_memory",
+            f"max_memory: the pilot run ({settings.n_samples} samples, window {settings.window_length} steps, "
+            f"{n_steps} steps) would need about {_size(memory['pilot'])}, more than the limit of {_size(limit)} "
+            f"({limit_source}); lower max_samples or raise max_memory",
             "max_memory",
         )
-    pilot = _pilot(
-        u,
-        y,
-        model,
-        bounds,
-        dt=dt,
-        x0=x0,
-        n=n,
-        percentage=percentage,
-        n_samples=pilot_samples,
-        progress=progress,
-        rng=rng,
-    )
+    return memory
+
+
+def _sample_count(pilot, target, max_samples, percentage, reasons, notes):
+    """Samples whose IC standard error reaches ``target``, from the pilot's; its reason and notes appended."""
     worst = max(pilot["parameters"], key=lambda name: pilot["parameters"][name]["ic_se"])
     worst_se = pilot["parameters"][worst]["ic_se"]
     needed = pilot["n_samples"] * (worst_se / target) ** 2
@@ -696,23 +741,14 @@ def suggest(
             f"{max_samples} samples (max_samples) bring the IC standard error of {worst} to about "
             f"{worst_se * math.sqrt(pilot['n_samples'] / max_samples):.3f}, not {target:g}"
         )
-    memory["proposed"] = run_memory(model, n_samples, n_steps, n)
-    if limit is not None and memory["proposed"] > limit:
-        notes.append(
-            f"the proposed run would need about {_size(memory['proposed'])}, more than {_size(limit)} "
-            f"({limit_source}): give fewer samples"
-        )
-    for name, entry in pilot["parameters"].items():
-        if entry["max_ic"] is not None and entry["max_ic"] < 0.5:
-            notes.append(
-                f"{name}: the pilot's highest IC is {entry['max_ic']:.2f}; more samples sharpen the IC, they do not "
-                "raise it: this record may hold little information on it"
-            )
+    return n_samples
 
-    fitted = fit_segments(u, y, model, [(0, n_steps)], bounds=bounds, dt=dt, x0=x0, n_starts=3, rng=rng)
+
+def _ranges(u, y, model, bounds, dt, x0, rng, reasons, notes):
+    """Least squares on the whole record, per parameter; its reason and the notes on the ranges appended."""
+    fitted = fit_segments(u, y, model, [(0, y.size)], bounds=bounds, dt=dt, x0=x0, n_starts=3, rng=rng)
     fit = {}
-    for name in names:
-        low, high = bounds[name]
+    for name, (low, high) in bounds.items():
         estimate = fitted.parameters[name]
         at_bound = name in fitted.at_bound
         fit[name] = dict(
@@ -723,21 +759,7 @@ def suggest(
             identifiable=fitted.identifiable[name],
         )
         if at_bound:
-            side = "lower" if estimate - low <= high - estimate else "upper"
-            bound = low if side == "lower" else high
-            refusal = _refusal_beyond(model, fitted.parameters, name, bound, high - low, side)
-            if refusal is None:
-                notes.append(
-                    f"the range [{low:g}, {high:g}] of {name} excludes the least-squares fit: its estimate lies on "
-                    f"the {side} bound {bound:g}; widen the range beyond it"
-                )
-            else:
-                notes.append(
-                    f"the least-squares estimate of {name} lies on the {side} bound {bound:g} of its range, the "
-                    f"{'least' if side == 'lower' else 'greatest'} value {type(model).__name__} accepts ({refusal}): "
-                    "keep the range; the record would fit a value the model excludes, so check the model and the "
-                    "alignment of input and output"
-                )
+            notes.append(_at_bound(model, fitted, name, low, high))
         elif not fitted.identifiable[name]:
             notes.append(f"least squares on the whole record does not determine {name}: no window will pin it")
     reasons.append(
@@ -745,18 +767,25 @@ def suggest(
         + ", ".join(f"{name} = {entry['estimate']:.4g} +- {entry['std_error']:.2g}" for name, entry in fit.items())
         + (" (inside every range)" if not fitted.at_bound else "")
     )
-    return Suggestion(
-        n=n,
-        window=(2 * n + 1) * dt,
-        percentage=percentage,
-        n_samples=int(n_samples),
-        time_scale=scale,
-        pilot=pilot,
-        fit=fit,
-        reasons=reasons,
-        notes=notes,
-        dt=dt,
-        memory=memory,
+    return fit
+
+
+def _at_bound(model, fitted, name, low, high):
+    """The note on an estimate of ``name`` on a bound of its range [low, high]: widen it, or keep it (the model's)."""
+    estimate = fitted.parameters[name]
+    side = "lower" if estimate - low <= high - estimate else "upper"
+    bound = low if side == "lower" else high
+    refusal = _refusal_beyond(model, fitted.parameters, name, bound, high - low, side)
+    if refusal is None:
+        return (
+            f"the range [{low:g}, {high:g}] of {name} excludes the least-squares fit: its estimate lies on "
+            f"the {side} bound {bound:g}; widen the range beyond it"
+        )
+    return (
+        f"the least-squares estimate of {name} lies on the {side} bound {bound:g} of its range, the "
+        f"{'least' if side == 'lower' else 'greatest'} value {type(model).__name__} accepts ({refusal}): "
+        "keep the range; the record would fit a value the model excludes, so check the model and the "
+        "alignment of input and output"
     )
 
 
@@ -832,23 +861,10 @@ def _size(size):
     return f"{size:.0f} B"
 
 
-def _pilot(u, y, model, bounds, *, dt, x0, n, percentage, n_samples, progress, rng):
-    """IC standard error near each parameter's highest IC, from a pilot run's ``ic_se``."""
+def _pilot(u, y, model, bounds, settings, *, progress, rng):
+    """IC standard error near each parameter's highest IC, from the ``ic_se`` of a pilot run with ``settings``."""
     seed = int(rng.integers(2**63))
-    result = run(
-        u,
-        y,
-        model,
-        bounds,
-        dt=dt,
-        x0=x0,
-        n=n,
-        percentage=percentage,
-        n_samples=n_samples,
-        ic_error=True,
-        rng=seed,
-        progress=progress,
-    )
+    result = run(u, y, model, bounds, settings=settings, rng=seed, progress=progress)
     ic, variance = result.ic, result.ic_se**2
     parameters = {}
     for p, name in enumerate(bounds):
@@ -858,7 +874,7 @@ def _pilot(u, y, model, bounds, *, dt, x0, n, percentage, n_samples, progress, r
         highest = float(np.nanmax(ic[p]))
         near = ic[p] >= highest - _PEAK_MARGIN
         parameters[name] = dict(max_ic=highest, ic_se=float(math.sqrt(np.nanmean(variance[p][near]))))
-    return dict(n_samples=n_samples, seed=seed, parameters=parameters)
+    return dict(n_samples=settings.n_samples, seed=seed, parameters=parameters)
 
 
 def _close_changes(u, n, dt):

@@ -117,6 +117,7 @@ from .noise import add_record_errors, floor_fields, floor_settings, record_noise
 __all__ = [
     "moving_window",
     "analyse_stream",
+    "analyse_errors",
     "window_costs",
     "window_halos",
     "default_chunk_steps",
@@ -269,7 +270,7 @@ def moving_window(
         raise SettingsError(
             f"params has {params.shape[0]} rows but sims has {sims.shape[0]}; one row per parameter set"
         )
-    return _analyse(
+    return analyse_stream(
         y,
         ArrayErrors(y, sims),
         params,
@@ -350,30 +351,43 @@ def analyse_stream(
     y = _checks.as_1d_float(y, "y", allow_nan=True)
     params = _checks.as_2d_float(params, "params")
     errors = sim_chunks if hasattr(sim_chunks, "rows") else StreamedErrors(y, sim_chunks, params.shape[0])
-    return _analyse(
-        y,
-        errors,
-        params,
-        bounds,
+    bounds = _bounds_holding(params, bounds)
+    # A store given as arrays already made is the caller's output, not a setting.
+    given = isinstance(store, ResultArrays)
+    # One place checks every setting; weighted samples are what the adaptive samplers produce.
+    keywords = dict(
         n=n,
         percentage=percentage,
         bins=bins,
         conf_level=conf_level,
         flavour=flavour,
-        names=names,
-        time=time,
         min_points=min_points,
-        chunk_steps=chunk_steps,
-        workers=workers,
-        progress=progress,
-        settings=settings,
-        run=run,
-        weights=weights,
         window=window,
         engine=engine,
+        workers=workers,
         ic_error=ic_error,
         dtype=dtype,
-        store=store,
+        store=None if given else store,
+    )
+    # The keywords win over the caller's settings, which keep what the keywords do not say (dt, x0, ...).
+    checked = (
+        AnalysisSettings(n_samples=params.shape[0], sampler="uniform" if weights is None else "iis", **keywords)
+        if settings is None
+        else settings.replace(n_samples=params.shape[0], **keywords)
+    )
+    return analyse_errors(
+        y,
+        errors,
+        params,
+        bounds,
+        checked,
+        names=names,
+        time=time,
+        chunk_steps=chunk_steps,
+        progress=progress,
+        run=run,
+        weights=weights,
+        output=store if given else None,
         simulations=simulations,
     )
 
@@ -385,35 +399,154 @@ def window_halos(n, window):
     return (n, n) if window == "centred" else (2 * n, 0)
 
 
-def _analyse(
+def analyse_errors(
     y,
     errors,
     params,
     bounds,
+    settings,
     *,
-    n,
-    percentage,
-    bins,
-    conf_level,
-    flavour,
-    names,
-    time,
-    min_points,
-    chunk_steps,
-    progress,
-    workers=None,
-    settings=None,
+    names=None,
+    time=None,
+    chunk_steps=None,
+    progress=False,
     run=None,
     weights=None,
-    window="centred",
-    engine="auto",
-    ic_error=False,
-    dtype="float64",
-    store=None,
+    output=None,
     simulations=None,
 ):
+    """The moving window over a source of absolute errors, every setting taken from ``settings``.
+
+    What :func:`analyse_stream` and :func:`moving_window` run once their
+    keywords are checked, and what :func:`dynia.run` and
+    :func:`dynia.adaptive.adaptive_run` run with their own settings.
+
+    Parameters
+    ----------
+    y : ndarray (n_steps,)
+        The record, checked (NaN marks a missing sample).
+    errors : source of absolute errors
+        ``rows(start, stop)`` and ``columns(start, stop)``, e.g.
+        :class:`ArrayErrors`, :class:`StreamedErrors` or
+        :class:`dynia.engine.kernels.CompiledErrors`, in time order.
+    params : ndarray (n_samples, n_params)
+        The parameter sets analysed, inside ``bounds``.
+    bounds : ndarray (n_params, 2)
+        [low, high] of each parameter, checked.
+    settings : dynia.settings.AnalysisSettings
+        The analysis; its ``n_samples`` is taken as the rows of ``params``
+        (the sets analysed, after any were dropped), and its ``store`` and
+        ``dtype`` make the output unless ``output`` is given.
+    names, time, chunk_steps, progress, weights, simulations
+        As :func:`analyse_stream`.
+    run : dynia.settings.RunRecord, optional
+        What the caller knows of the run (the model, the samples drawn and
+        dropped, ...); the result's record adds what the engine did.
+    output : dynia.io.arrays.ResultArrays, optional
+        Where the arrays go, made and committed by the caller.
+
+    Returns
+    -------
+    DyniaResult
+    """
     n_samples, n_params = params.shape
-    bounds = _checks.bounds_array(bounds, n_params)
+    if settings.n_samples != n_samples:  # sets were dropped after sampling: the checks hold for those analysed
+        settings = settings.replace(n_samples=n_samples)
+    before, after = window_halos(settings.n, settings.window)
+    settings.check_record(y.size)
+    names, time = _parameter_names(names, n_params), _time_of_steps(time, y.size)
+    if chunk_steps is None:
+        chunk_steps = default_chunk_steps(n_samples, 2 * settings.n)
+    chunk_steps = _checks.whole_number(chunk_steps, "chunk_steps", minimum=1)
+    compiled, flavour_impl = _flavour(settings, params, bounds, weights)
+    scale = error_scale(y)
+    if scale != 1.0:
+        errors = ScaledErrors(errors, scale)
+    # In memory or, with a store, in a file written as the chunks come (dynia.io.arrays).
+    own_output = output is None
+    output = result_arrays(settings.store, settings.dtype) if own_output else output
+    _allocate(output, flavour_impl, settings.ic_error, y.size, names=names, samples=params, bounds=bounds, time=time)
+    passed = _windows_pass(errors, flavour_impl, compiled, output, settings, (before, after), chunk_steps, progress)
+    floor = _noise_floor(y, params, bounds, time, settings, passed, scale, simulations)
+    # What the engine did wins over what the caller asked: the samples analysed
+    # (after any were dropped) and the engine that ran ("auto" resolved).
+    recorded = settings.replace(n_samples=n_samples, engine="numba" if compiled else "numpy")
+    run = dataclasses.replace(
+        run or RunRecord(),
+        n_behavioural=flavour_impl.count,
+        ic_batches=flavour_impl.batches if settings.ic_error else None,
+        **floor_settings(floor),
+    )
+    arrays = output.arrays()
+    result = DyniaResult(
+        names=names,
+        samples=params,
+        bounds=bounds,
+        time=time,
+        ic=arrays["ic"],
+        ci=arrays["ci"],
+        median=arrays["median"],
+        gradient=arrays["gradient"],
+        bin_centres=flavour_impl.bin_centres,
+        settings=recorded,
+        run=run,
+        ic_se=arrays.get("ic_se"),
+        ci_se=arrays.get("ci_se"),
+        **floor_fields(floor),
+    )
+    # An output given by the caller is committed by the caller, once it has added the verdicts.
+    return output.commit(result) if own_output else result
+
+
+def _noise_floor(y, params, bounds, time, settings, passed, scale, simulations):
+    """The record's noise floor (:func:`dynia.engine.noise.record_noise_floor`) from what the windows' pass left.
+
+    Windows whose MAE overflowed are reported first; the MAEs are divided by
+    the error ``scale`` back to the record's units.
+    """
+    best, threshold, upper, totals, overflowed = passed
+    report_overflowed(overflowed, best, time, y)
+    for extreme in (best, threshold, upper):
+        extreme /= scale  # exact: a power of two
+    before, after = window_halos(settings.n, settings.window)
+    points = window_points(y, before, after)
+    residuals = None if simulations is None else record_residuals(y, params, bounds, totals, simulations)
+    n_samples, n_params = params.shape
+    slots = before + after + 1
+    return record_noise_floor(
+        best, upper, threshold, points, slots, n_params, settings.percentage, n_samples, residuals
+    )
+
+
+def _flavour(settings, params, bounds, weights):
+    """Whether the compiled kernels run, and the flavour's analysis of one window's costs."""
+    compiled = compiled_engine(settings.engine, settings.flavour, weights)
+    flavour_impl = flavour_analysis(
+        settings.flavour,
+        compiled,
+        params,
+        bounds,
+        settings.percentage,
+        settings.bins,
+        settings.conf_level,
+        settings.min_points,
+        weights=weights,
+        ic_error=settings.ic_error,
+    )
+    return compiled, flavour_impl
+
+
+def _time_of_steps(time, n_steps):
+    """``time`` checked as one value per step, or 0, 1, ... when None."""
+    time = np.arange(n_steps, dtype=float) if time is None else _checks.as_1d_float(time, "time")
+    if time.size != n_steps:
+        raise SettingsError(f"time has {time.size} values but y has {n_steps}; they must match")
+    return time
+
+
+def _bounds_holding(params, bounds):
+    """``bounds`` checked as (n_params, 2), and every sample inside them."""
+    bounds = _checks.bounds_array(bounds, params.shape[1])
     outside = (params < bounds[:, 0]) | (params > bounds[:, 1])
     if outside.any():
         row, col = np.argwhere(outside)[0]
@@ -421,46 +554,12 @@ def _analyse(
             f"params row {row}, column {col} = {params[row, col]} lies outside its bounds "
             f"[{bounds[col, 0]}, {bounds[col, 1]}]; samples must come from the ranges analysed"
         )
-    # One place checks every setting; weighted samples are what the adaptive samplers produce.
-    checked = AnalysisSettings(
-        n_samples=n_samples,
-        sampler="uniform" if weights is None else "iis",
-        n=n,
-        percentage=percentage,
-        bins=bins,
-        conf_level=conf_level,
-        flavour=flavour,
-        min_points=min_points,
-        window=window,
-        engine=engine,
-        workers=workers,
-        ic_error=ic_error,
-        dtype=dtype,
-        store=None if isinstance(store, ResultArrays) else store,
-    )
-    n, percentage, bins, conf_level = checked.n, checked.percentage, checked.bins, checked.conf_level
-    min_points, workers = checked.min_points, checked.workers
-    before, after = window_halos(n, window)
-    checked.check_record(y.size)
-    names = _parameter_names(names, n_params)
-    time = np.arange(y.size, dtype=float) if time is None else _checks.as_1d_float(time, "time")
-    if time.size != y.size:
-        raise SettingsError(f"time has {time.size} values but y has {y.size}; they must match")
-    if chunk_steps is None:
-        chunk_steps = default_chunk_steps(n_samples, 2 * n)
-    chunk_steps = _checks.whole_number(chunk_steps, "chunk_steps", minimum=1)
-    workers = 1 if flavour == "mcat" else workers or _checks.default_workers()
+    return bounds
 
-    compiled = compiled_engine(engine, flavour, weights)
-    flavour_impl = flavour_analysis(
-        flavour, compiled, params, bounds, percentage, bins, conf_level, min_points, weights=weights, ic_error=ic_error
-    )
-    n_steps = y.size
-    scale = error_scale(y)
-    if scale != 1.0:
-        errors = ScaledErrors(errors, scale)
-    # In memory or, with a store, in a file written as the chunks come (dynia.io.arrays).
-    output = result_arrays(store, checked.dtype)
+
+def _allocate(output, flavour_impl, ic_error, n_steps, **coordinates):
+    """Room in ``output`` for every time-dependent result array (and the Monte Carlo errors with ``ic_error``)."""
+    n_params = flavour_impl.bin_centres.shape[0]
     shapes = dict(
         ic=(n_params, n_steps),
         ci=(n_params, n_steps, 2),
@@ -469,14 +568,24 @@ def _analyse(
     )
     if ic_error:
         shapes.update(ic_se=(n_params, n_steps), ci_se=(n_params, n_steps, 2))
-    output.allocate(shapes, names=names, samples=params, bounds=bounds, time=time, bin_centres=flavour_impl.bin_centres)
+    output.allocate(shapes, bin_centres=flavour_impl.bin_centres, **coordinates)
 
-    slots = before + after + 1
-    # Three numbers a step for the noise floor, which needs every window's before it can judge any, and every
-    # sample's record total absolute error, whose lowest gives the residuals the floor's noise model comes from.
+
+def _windows_pass(errors, flavour_impl, compiled, output, settings, halos, chunk_steps, progress):
+    """Analyse every window, chunk by chunk of time, into ``output``.
+
+    Returns what the noise floor needs, which needs every window's before it
+    can judge any: each window's best, threshold and upper behavioural MAE
+    (n_steps,), every sample's record total absolute error (n_samples,),
+    whose lowest gives the residuals the floor's noise model comes from, and
+    the windows left without results because their MAE overflowed (n_steps,).
+    """
+    before, after = halos
+    n_steps, slots, min_points = errors.y.size, before + after + 1, settings.min_points
     best, threshold, upper = np.full(n_steps, np.nan), np.full(n_steps, np.nan), np.full(n_steps, np.nan)
-    totals = np.zeros(n_samples)
+    totals = np.zeros(settings.n_samples)
     overflowed = np.zeros(n_steps, dtype=bool)
+    workers = 1 if settings.flavour == "mcat" else settings.workers or _checks.default_workers()
 
     def analyse_chunk(start, stop, window_errors, measured):
         if compiled:
@@ -488,7 +597,7 @@ def _analyse(
         start, stop, results = finished.result()
         overflowed[start:stop] = blank_overflowed(results)
         chunks = dict(ic=results.ic, ci=results.ci, median=results.median, gradient=results.gradient)
-        if ic_error:
+        if settings.ic_error:
             chunks["ic_se"], chunks["ci_se"] = monte_carlo_errors(results.batch_ic, results.batch_ci)
         output.write(start, stop, chunks)
         best[start:stop], threshold[start:stop], upper[start:stop] = results.best, results.threshold, results.upper
@@ -518,52 +627,7 @@ def _analyse(
                 write(pending.popleft())
         while pending:
             write(pending.popleft())
-
-    report_overflowed(overflowed, best, time, y)
-    for extreme in (best, threshold, upper):
-        extreme /= scale  # exact: a power of two
-    points = window_points(y, before, after)
-    residuals = None if simulations is None else record_residuals(y, params, bounds, totals, simulations)
-    floor = record_noise_floor(best, upper, threshold, points, slots, n_params, percentage, n_samples, residuals)
-    # What the engine did wins over what the caller asked: the samples analysed
-    # (after any were dropped) and the engine that ran ("auto" resolved).
-    recorded = (checked if settings is None else settings).replace(
-        n=n,
-        window=window,
-        percentage=percentage,
-        bins=bins,
-        conf_level=conf_level,
-        flavour=flavour,
-        min_points=min_points,
-        n_samples=n_samples,
-        engine="numba" if compiled else "numpy",
-        ic_error=ic_error,
-    )
-    run = dataclasses.replace(
-        run or RunRecord(),
-        n_behavioural=flavour_impl.count,
-        ic_batches=flavour_impl.batches if ic_error else None,
-        **floor_settings(floor),
-    )
-    arrays = output.arrays()
-    result = DyniaResult(
-        names=names,
-        samples=params,
-        bounds=bounds,
-        time=time,
-        ic=arrays["ic"],
-        ci=arrays["ci"],
-        median=arrays["median"],
-        gradient=arrays["gradient"],
-        bin_centres=flavour_impl.bin_centres,
-        settings=recorded,
-        run=run,
-        ic_se=arrays.get("ic_se"),
-        ci_se=arrays.get("ci_se"),
-        **floor_fields(floor),
-    )
-    # An output given by the caller is committed by the caller, once it has added the verdicts.
-    return result if isinstance(store, ResultArrays) else output.commit(result)
+    return best, threshold, upper, totals, overflowed
 
 
 def _parameter_names(names, n_params):
