@@ -7,6 +7,7 @@ are byte-identical afterwards, and that no staging (``.partial``) or lock litter
 """
 
 import hashlib
+import importlib
 import json
 import os
 import re
@@ -41,6 +42,9 @@ from dynia.io.outdir import MARKER, OutputDirectory
 from dynia.models import FOPDT, TransferFunction
 from dynia.pipeline import DroppedSamplesWarning
 from dynia.verdicts import VERDICTS
+
+# The module (dynia.cli.main is the function the package exports under the same name).
+CLI_MODULE = importlib.import_module("dynia.cli.main")
 
 
 def _csv(path, time, u, y):
@@ -82,7 +86,7 @@ def never_analysed(monkeypatch):
         raise AssertionError("the analysis started although the command should have stopped before")
 
     for name in ("run", "load_csv", "identify"):
-        monkeypatch.setattr(dynia.cli.main, name, refuse)
+        monkeypatch.setattr(CLI_MODULE, name, refuse)
 
 
 # ------------------------------------------------------------------ output directory: never destroy anything
@@ -125,7 +129,7 @@ def test_out_current_directory_or_its_parent_is_refused(tmp_path, capsys, monkey
     def refuse(*args, **kwargs):
         raise AssertionError("the analysis started")
 
-    monkeypatch.setattr(dynia.cli.main, "run", refuse)
+    monkeypatch.setattr(CLI_MODULE, "run", refuse)
     cli_one_error(*cli_analyse(capsys, data, *BASE, "--out", out, "--overwrite"), "--out")
     cli_one_error(*cli_analyse(capsys, data, *BASE, "--out", out), "--out")
     assert tree_state(tmp_path) == before
