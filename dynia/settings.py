@@ -163,7 +163,7 @@ class AnalysisSettings:
         Sample time of the record.
     ic_error : bool, default False
         Also estimate the Monte Carlo standard error of IC and limits (batch
-        means; ``result.ic_se``, ``result.ci_se``, see
+        means): ``result.ic_se``, ``result.ci_se`` (see
         :mod:`dynia.engine.windows`). Not for the mcat flavour.
     target_se : float or None, default None
         Add samples until the largest IC standard error where it can change a

@@ -97,8 +97,8 @@ def _one_line(error):
 def _named_as_options(command):
     """A SettingsError naming a setting (``error.setting``) as one naming the option of ``command`` that gives it.
 
-    A message that starts with the setting's name starts with the option instead (``conf_level is ...`` becomes
-    ``--conf-level is ...``); any other is led by the option (``--percentage: the mcat flavour ...``).
+    Where the message names the setting as a word, the option takes its place (``conf_level is ...`` becomes
+    ``--conf-level is ...``); a message that does not is led by the option.
     """
     try:
         yield
@@ -106,9 +106,17 @@ def _named_as_options(command):
         option = setting_options(command).get(error.setting) if isinstance(error.setting, str) else None
         if option is None:
             raise
-        message = str(error)
-        named = message.startswith(error.setting) and not message[len(error.setting) :][:1].isidentifier()
-        raise UsageError(option + message[len(error.setting) :] if named else f"{option}: {message}") from None
+        pieces = str(error).split(error.setting)
+        message = pieces[0]
+        for piece in pieces[1:]:
+            alone = not (message and _joins(message[-1])) and not (piece and _joins(piece[0]))
+            message += (option if alone else error.setting) + piece
+        raise UsageError(message if message != str(error) else f"{option}: {message}") from None
+
+
+def _joins(char):
+    """Whether ``char`` next to a setting's name makes it part of a longer word (than, --n, 100/percentage)."""
+    return char.isalnum() or char in "_-/"
 
 
 def _options(args):
@@ -150,21 +158,7 @@ def _options(args):
         if not options.get(key):
             option = "DATA.csv" if key == "data" else f"--{key}"
             raise UsageError(f"{option} is required (on the command line or in --config)")
-    options["output"] = _one_column(options["output"], "--output")
-    if isinstance(options["input"], str):
-        options["input"] = [options["input"]]
-    if options["output"] in options["input"] and not options["long"]:
-        raise UsageError(
-            f"--input and --output name the same column {options['output']!r}; "
-            "the output must be logged apart from the input"
-        )
-    if not options["long"]:  # in the long layout --input and --output name tags, not columns
-        for option, names in (("--input", options["input"]), ("--output", [options["output"]])):
-            if options["time"].strip() in (name.strip() for name in names):
-                raise UsageError(
-                    f"{option} names the time column {options['time'].strip()!r} (--time); expected the column "
-                    f"of the {option[2:]}'s values"
-                )
+    _check_columns(options)
     if not options.get("param"):
         raise UsageError("give a range for every model parameter with --param NAME=LOW:HIGH")
     _ranges(options["param"])  # checked before the model runs; against the model below
@@ -189,6 +183,25 @@ def _options(args):
         raise UsageError(f"--quality checks one input; the model {model!r} has {model.n_inputs}")
     options["bounds"] = _bounds(options["param"], model)
     return options
+
+
+def _check_columns(options):
+    """One --output, and --input, --output and --time naming different columns (unless they name tags)."""
+    options["output"] = _one_column(options["output"], "--output")
+    if isinstance(options["input"], str):
+        options["input"] = [options["input"]]
+    if options["output"] in options["input"] and not options["long"]:
+        raise UsageError(
+            f"--input and --output name the same column {options['output']!r}; "
+            "the output must be logged apart from the input"
+        )
+    if not options["long"]:  # in the long layout --input and --output name tags, not columns
+        for option, names in (("--input", options["input"]), ("--output", [options["output"]])):
+            if options["time"].strip() in (name.strip() for name in names):
+                raise UsageError(
+                    f"{option} names the time column {options['time'].strip()!r} (--time); expected the column "
+                    f"of the {option[2:]}'s values"
+                )
 
 
 def _attached(parser, words):
