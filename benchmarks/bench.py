@@ -611,120 +611,162 @@ def main(argv=None):
         print(_describe(name, result), flush=True)
 
 
+def _describe_yardstick(r):
+    lines = [
+        f"dynia.run against the bare fused pass (simulate + accumulate |y - sim|, compiled), "
+        f"{r['n_samples']} samples x {r['n_steps']} steps, thesis flavour, wall clock, best of 3 "
+        f"({r['machine']['processor']}, {r['machine']['cores']} cores, load {r['machine']['load_average']:.1f}):"
+    ]
+    lines += [
+        f"  {row['input']}, n = {row['n']}: bare {row['bare_s']:.2f} s "
+        f"({r['n_samples'] * r['n_steps'] / row['bare_s']:.3g}/s), dynia.run {row['run_s']:.2f} s "
+        f"({r['n_samples'] * r['n_steps'] / row['run_s']:.3g}/s) -> {row['ratio']:.1f}x the bare pass (goal <= 8x)"
+        for row in r["rows"]
+    ]
+    e = r["exponents"]
+    lines.append(
+        f"  scaling exponents of dynia.run: samples {e['samples']:.2f}, steps {e['steps']:.2f}, "
+        f"half window n {e['half_window']:.2f} (goal: about 1, 1 and 0)"
+    )
+    return "\n".join(lines)
+
+
+def _describe_ic_error_honesty(r):
+    lines = ["IC standard error, predicted (mean ic_se) vs empirical (SD over 20 seeds), medians over the steps:"]
+    lines += [
+        f"  example {row['example']} at {row['percentage']:g} % ({row['n_samples']} samples), {row['parameter']}: "
+        f"empirical {row['empirical_median']:.4f}, predicted {row['predicted_median']:.4f}, ratio "
+        f"{row['ratio']:.2f} (step by step {row['stepwise_ratio']:.2f}; target within 1/1.5 .. 1.5)"
+        for row in r["rows"]
+    ]
+    return "\n".join(lines)
+
+
+def _describe_ic_error_cost(r):
+    costs = "; ".join(
+        f"{level}: {r[level]['plain_s']:.2f} s plain, {r[level]['ic_error_s']:.2f} s with ic_error "
+        f"({r[level]['ic_error_s'] / r[level]['plain_s']:.2f}x)"
+        for level in ("10 %", "1 %", "0.1 %")
+    )
+    return (
+        f"Monte Carlo error of IC, complete runs of {r['n_samples']} samples x {r['n_steps']} steps, one thread, "
+        "CPU seconds: "
+        f"{costs} (target well under 2x)"
+    )
+
+
+def _describe_port_vs_engine(r):
+    return (
+        f"thesis example 1 (500 steps, 2000 samples, K and T): port {r['port_s']:.2f} s, "
+        f"engine {r['engine_s'] * 1e3:.1f} ms -> {r['ratio']:.0f}x (target >= 300x); "
+        f"one thread {r['engine_one_thread_s'] * 1e3:.1f} ms -> {r['ratio_one_thread']:.0f}x; "
+        f"peak RSS {r['peak_rss_mb']:.0f} MB"
+    )
+
+
+def _describe_throughput_20000x20000(r):
+    engines = "; ".join(
+        f"{engine} engine {r[engine]['seconds']:.2f} s = {r[engine]['sample_steps_per_s']:.3g} "
+        f"sample-steps/s, {r[engine]['ratio_to_port']:.0f}x the port"
+        for engine in ("numba", "numpy")
+    )
+    return (
+        f"complete analysis (simulate + K and T, thesis flavour), 20 000 samples x 20 000 steps: "
+        f"{engines} (port {r['port_sample_steps_per_s']:.3g} sample-steps/s on example 1; "
+        f"target >= 1e8); peak RSS {r['peak_rss_mb']:.0f} MB"
+    )
+
+
+def _describe_memory_100000x100000(r):
+    return (
+        f"dynia.run, 10^5 samples x 10^5 steps ({r['engine']} engine): {r['seconds']:.0f} s, "
+        f"{r['sample_steps_per_s']:.3g} sample-steps/s, peak RSS {r['peak_rss_mb']:.0f} MB "
+        "(target <= 2048 MB)"
+    )
+
+
+def _describe_online_10000(r):
+    return (
+        f"OnlineDynia.update, 10 000 samples, first order, n=10 ({r['updates']} updates): mean "
+        f"{r['mean_ms']:.3f} ms, median {r['median_ms']:.3f} ms, 99th percentile {r['p99_ms']:.3f} ms "
+        f"(target <= 1 ms); peak RSS {r['peak_rss_mb']:.0f} MB"
+    )
+
+
+def _describe_custom_models(r):
+    built_in, custom = r["built-in FirstOrder"], r["StateSpaceModel (numba)"]
+    function = r["function_model"]
+    return (
+        f"20 000 samples x 20 000 steps, complete runs: built-in FirstOrder {built_in['seconds']:.2f} s = "
+        f"{built_in['sample_steps_per_s']:.3g} sample-steps/s, StateSpaceModel with numba step/output "
+        f"{custom['seconds']:.2f} s = {custom['sample_steps_per_s']:.3g} -> {r['ratio']:.2f} of the built-in "
+        f"(target >= 0.33); pure-numpy FunctionModel at 5 000 x 5 000: dynia.run {function['run_s']:.2f} s, fn + "
+        f"moving_window by hand {function['by_hand_s']:.2f} s -> overhead {100 * function['overhead']:.1f} % "
+        f"(target < 10 %); peak RSS {r['peak_rss_mb']:.0f} MB"
+    )
+
+
+def _describe_distributed(r):
+    workers = "; ".join(
+        f"{count} {r[count]['seconds']:.0f} s = {r[count]['sample_steps_per_s']:.3g} sample-steps/s, "
+        f"worker peak RSS {', '.join(f'{peak:.0f}' for peak in r[count]['worker_peak_rss_mb'])} MB, "
+        f"worker CPU {' + '.join(f'{cpu:.0f}' for cpu in r[count]['worker_cpu_s'])} s, "
+        f"load average {r[count]['load_average']:.1f}"
+        for count in ("1 workers", "2 workers")
+    )
+    return (
+        f"dynia.distributed.run, {r['n_samples']:,} samples x {r['n_steps']:,} steps, local cluster: {workers} "
+        f"(target <= 1024 MB per worker); speed-up {r['speed_up']:.2f}"
+    )
+
+
+def _describe_long_record(r):
+    return (
+        f"dynia.run, {r['n_samples']:,} samples x {r['n_steps']:,} steps, float32 + store: {r['seconds']:.0f} s "
+        f"= {r['sample_steps_per_s']:.3g} sample-steps/s, peak RSS {r['run_peak_rss_mb']:.0f} MB "
+        f"(the data alone {r['data_peak_rss_mb']:.0f} MB; target <= 4096 MB), after summary and plots "
+        f"{r['peak_rss_mb']:.0f} MB ({r['summary_and_plots_s']:.0f} s); file {r['file_mb']:.0f} MB"
+    )
+
+
+def _describe_cli_500000_rows(r):
+    return (
+        f"dynia analyse on a {r['rows']:,}-row CSV, 500 samples, plots on ({r['figures']} figures, exit "
+        f"{r['status']}): {r['seconds']:.0f} s, peak RSS {r['peak_rss_mb']:.0f} MB (target <= 1536 MB)"
+    )
+
+
+def _describe_sampling_example1(r):
+    runs = ", ".join(
+        f"{key}: RMSE {value['rmse']:.3f} in {value['seconds']:.1f} s"
+        for key, value in r.items()
+        if key != "peak_rss_mb"
+    )
+    return (
+        f"example 1 at percentage 0.1, IC error against uniform 400 000 by sampler and "
+        f"evaluations: {runs} (goal: an adaptive sampler at 10 000 matching uniform at 100 000)"
+    )
+
+
+_DESCRIPTIONS = {
+    "yardstick": _describe_yardstick,
+    "ic-error-cost": _describe_ic_error_cost,
+    "ic-error-honesty": _describe_ic_error_honesty,
+    "port-vs-engine": _describe_port_vs_engine,
+    "throughput-20000x20000": _describe_throughput_20000x20000,
+    "memory-100000x100000": _describe_memory_100000x100000,
+    "online-10000": _describe_online_10000,
+    "custom-models": _describe_custom_models,
+    "distributed": _describe_distributed,
+    "long-record": _describe_long_record,
+    "cli-500000-rows": _describe_cli_500000_rows,
+    "sampling-example1": _describe_sampling_example1,
+}
+
+
 def _describe(name, r):
-    if name == "yardstick":
-        lines = [
-            f"dynia.run against the bare fused pass (simulate + accumulate |y - sim|, compiled), "
-            f"{r['n_samples']} samples x {r['n_steps']} steps, thesis flavour, wall clock, best of 3 "
-            f"({r['machine']['processor']}, {r['machine']['cores']} cores, load {r['machine']['load_average']:.1f}):"
-        ]
-        lines += [
-            f"  {row['input']}, n = {row['n']}: bare {row['bare_s']:.2f} s "
-            f"({r['n_samples'] * r['n_steps'] / row['bare_s']:.3g}/s), dynia.run {row['run_s']:.2f} s "
-            f"({r['n_samples'] * r['n_steps'] / row['run_s']:.3g}/s) -> {row['ratio']:.1f}x the bare pass (goal <= 8x)"
-            for row in r["rows"]
-        ]
-        e = r["exponents"]
-        lines.append(
-            f"  scaling exponents of dynia.run: samples {e['samples']:.2f}, steps {e['steps']:.2f}, "
-            f"half window n {e['half_window']:.2f} (goal: about 1, 1 and 0)"
-        )
-        return "\n".join(lines)
-    if name == "ic-error-cost":
-        costs = "; ".join(
-            f"{level}: {r[level]['plain_s']:.2f} s plain, {r[level]['ic_error_s']:.2f} s with ic_error "
-            f"({r[level]['ic_error_s'] / r[level]['plain_s']:.2f}x)"
-            for level in ("10 %", "1 %", "0.1 %")
-        )
-        return (
-            f"Monte Carlo error of IC, complete runs of {r['n_samples']} samples x {r['n_steps']} steps, one thread, "
-            "CPU seconds: "
-            f"{costs} (target well under 2x)"
-        )
-    if name == "ic-error-honesty":
-        lines = ["IC standard error, predicted (mean ic_se) vs empirical (SD over 20 seeds), medians over the steps:"]
-        lines += [
-            f"  example {row['example']} at {row['percentage']:g} % ({row['n_samples']} samples), {row['parameter']}: "
-            f"empirical {row['empirical_median']:.4f}, predicted {row['predicted_median']:.4f}, ratio "
-            f"{row['ratio']:.2f} (step by step {row['stepwise_ratio']:.2f}; target within 1/1.5 .. 1.5)"
-            for row in r["rows"]
-        ]
-        return "\n".join(lines)
-    if name == "port-vs-engine":
-        return (
-            f"thesis example 1 (500 steps, 2000 samples, K and T): port {r['port_s']:.2f} s, "
-            f"engine {r['engine_s'] * 1e3:.1f} ms -> {r['ratio']:.0f}x (target >= 300x); "
-            f"one thread {r['engine_one_thread_s'] * 1e3:.1f} ms -> {r['ratio_one_thread']:.0f}x; "
-            f"peak RSS {r['peak_rss_mb']:.0f} MB"
-        )
-    if name == "throughput-20000x20000":
-        engines = "; ".join(
-            f"{engine} engine {r[engine]['seconds']:.2f} s = {r[engine]['sample_steps_per_s']:.3g} "
-            f"sample-steps/s, {r[engine]['ratio_to_port']:.0f}x the port"
-            for engine in ("numba", "numpy")
-        )
-        return (
-            f"complete analysis (simulate + K and T, thesis flavour), 20 000 samples x 20 000 steps: "
-            f"{engines} (port {r['port_sample_steps_per_s']:.3g} sample-steps/s on example 1; "
-            f"target >= 1e8); peak RSS {r['peak_rss_mb']:.0f} MB"
-        )
-    if name == "memory-100000x100000":
-        return (
-            f"dynia.run, 10^5 samples x 10^5 steps ({r['engine']} engine): {r['seconds']:.0f} s, "
-            f"{r['sample_steps_per_s']:.3g} sample-steps/s, peak RSS {r['peak_rss_mb']:.0f} MB "
-            "(target <= 2048 MB)"
-        )
-    if name == "online-10000":
-        return (
-            f"OnlineDynia.update, 10 000 samples, first order, n=10 ({r['updates']} updates): mean "
-            f"{r['mean_ms']:.3f} ms, median {r['median_ms']:.3f} ms, 99th percentile {r['p99_ms']:.3f} ms "
-            f"(target <= 1 ms); peak RSS {r['peak_rss_mb']:.0f} MB"
-        )
-    if name == "custom-models":
-        built_in, custom = r["built-in FirstOrder"], r["StateSpaceModel (numba)"]
-        function = r["function_model"]
-        return (
-            f"20 000 samples x 20 000 steps, complete runs: built-in FirstOrder {built_in['seconds']:.2f} s = "
-            f"{built_in['sample_steps_per_s']:.3g} sample-steps/s, StateSpaceModel with numba step/output "
-            f"{custom['seconds']:.2f} s = {custom['sample_steps_per_s']:.3g} -> {r['ratio']:.2f} of the built-in "
-            f"(target >= 0.33); pure-numpy FunctionModel at 5 000 x 5 000: dynia.run {function['run_s']:.2f} s, fn + "
-            f"moving_window by hand {function['by_hand_s']:.2f} s -> overhead {100 * function['overhead']:.1f} % "
-            f"(target < 10 %); peak RSS {r['peak_rss_mb']:.0f} MB"
-        )
-    if name == "distributed":
-        workers = "; ".join(
-            f"{count} {r[count]['seconds']:.0f} s = {r[count]['sample_steps_per_s']:.3g} sample-steps/s, "
-            f"worker peak RSS {', '.join(f'{peak:.0f}' for peak in r[count]['worker_peak_rss_mb'])} MB, "
-            f"worker CPU {' + '.join(f'{cpu:.0f}' for cpu in r[count]['worker_cpu_s'])} s, "
-            f"load average {r[count]['load_average']:.1f}"
-            for count in ("1 workers", "2 workers")
-        )
-        return (
-            f"dynia.distributed.run, {r['n_samples']:,} samples x {r['n_steps']:,} steps, local cluster: {workers} "
-            f"(target <= 1024 MB per worker); speed-up {r['speed_up']:.2f}"
-        )
-    if name == "long-record":
-        return (
-            f"dynia.run, {r['n_samples']:,} samples x {r['n_steps']:,} steps, float32 + store: {r['seconds']:.0f} s "
-            f"= {r['sample_steps_per_s']:.3g} sample-steps/s, peak RSS {r['run_peak_rss_mb']:.0f} MB "
-            f"(the data alone {r['data_peak_rss_mb']:.0f} MB; target <= 4096 MB), after summary and plots "
-            f"{r['peak_rss_mb']:.0f} MB ({r['summary_and_plots_s']:.0f} s); file {r['file_mb']:.0f} MB"
-        )
-    if name == "cli-500000-rows":
-        return (
-            f"dynia analyse on a {r['rows']:,}-row CSV, 500 samples, plots on ({r['figures']} figures, exit "
-            f"{r['status']}): {r['seconds']:.0f} s, peak RSS {r['peak_rss_mb']:.0f} MB (target <= 1536 MB)"
-        )
-    if name == "sampling-example1":
-        runs = ", ".join(
-            f"{key}: RMSE {value['rmse']:.3f} in {value['seconds']:.1f} s"
-            for key, value in r.items()
-            if key != "peak_rss_mb"
-        )
-        return (
-            f"example 1 at percentage 0.1, IC error against uniform 400 000 by sampler and "
-            f"evaluations: {runs} (goal: an adaptive sampler at 10 000 matching uniform at 100 000)"
-        )
+    if name in _DESCRIPTIONS:
+        return _DESCRIPTIONS[name](r)
     return (
         f"{name}: {r['seconds']:.2f} s, {r['sample_steps_per_s']:.3g} sample-steps/s, "
         f"peak RSS {r['peak_rss_mb']:.0f} MB"

@@ -183,73 +183,142 @@ class AnalysisSettings:
         How the parameter box is sampled; "iis" and "de" are the adaptive
         schemes of :mod:`dynia.adaptive`.
     n : int, default 10
-        Half window: a window holds 2n+1 steps; 0 to :data:`MAX_HALF_WINDOW`,
+        Half window: each window holds 2n+1 steps; 0 to :data:`MAX_HALF_WINDOW`,
         and below the record's length (:func:`dynia.run` checks that).
     percentage : float, default 10
-        Behavioural share of the samples, in percent, in (0, 100].
+        Behavioural share of the samples in percent, in (0, 100].
     bins : int, default 40
-        CLD-gradient bins, 1 to :data:`MAX_BINS`.
+        CLD gradient bins, at most 1000 (:data:`MAX_BINS`).
     conf_level : float, default 90
-        Confidence level of the band in percent, in (50, 100): below 50 the
+        Confidence level of the band, percent in (50, 100): below 50 the
         "band" would hold less than half of the behavioural set.
     flavour : {"thesis", "mcat", "weighted"}, default "thesis"
+        The variant of the method: the thesis's, MCAT's, or the thesis's with
+        likelihood-weighted limits (the README's table of flavours).
     x0 : {"zero", "steady"}, default "zero"
-        Initial state of every simulation.
+        Initial state of every simulation: zero, or steady at the first input.
     min_points : int, default 1
-        Windows with fewer measured output points report NaN; at most the
-        window length 2n+1.
+        Windows with fewer measured output points report a missing IC (NaN);
+        at most the window length 2n+1.
     window : {"centred", "trailing"}, default "centred"
+        Where a window lies: centred on its step, or trailing it (the 2n+1
+        steps up to the step, as an online analysis sees them).
     engine : {"auto", "numba", "numpy"}, default "auto"
+        The compiled kernels (numba), plain numpy, or numba where it can;
+        results agree.
     workers : int or None, default None
         Threads (None: every core), at most :data:`MAX_WORKERS`. Results do
         not depend on it.
     dt : float, default 1.0
         Sample time of the record.
     ic_error : bool, default False
-        Also estimate the Monte Carlo standard errors of IC and limits
-        (``result.ic_se``, ``result.ci_se``; batch means, see
+        Also estimate the Monte Carlo standard error of IC and limits (batch
+        means): ``result.ic_se``, ``result.ci_se`` (see
         :mod:`dynia.engine.windows`). Not for the mcat flavour.
     target_se : float or None, default None
-        With :func:`dynia.run`: add samples until the largest IC standard
-        error of the steps that matter is below this, in (0, 1); implies
-        ``ic_error``, needs ``max_samples`` and the uniform sampler.
+        Add samples until the largest IC standard error where it can change a
+        verdict is at most this (implies ``ic_error``; needs ``max_samples``):
+        in (0, 1), with :func:`dynia.run` and the uniform sampler.
     max_samples : int or None, default None
         The budget of ``target_se``: at most this many samples, at least
         ``n_samples`` and at most :data:`MAX_SAMPLES`.
     dtype : {"float64", "float32"}, default "float64"
-        Type of the result's time-dependent arrays (IC, limits, median, gradient and
-        their errors). The engine computes in float64 either way; float32
-        keeps each value rounded to the nearest float32, at half the memory
-        (see :mod:`dynia.io.arrays`).
+        Type of the result arrays: float32 halves their memory and their netCDF
+        file.
+        The arrays are the time-dependent ones (IC, limits, median, gradient
+        and their errors); the engine computes in float64 either way, float32
+        keeps each value rounded to the nearest float32 (see
+        :mod:`dynia.io.arrays`).
     store : str or os.PathLike or None, default None
         A netCDF file that the time-dependent arrays are written to as they
         are produced, so that they never lie whole in memory; the result
         reads them from it (see :mod:`dynia.io.arrays`). Kept as a str.
     """
 
-    n_samples: int = 2000
-    sampler: str = "uniform"
-    n: int = 10
-    percentage: float = 10.0
-    bins: int = 40
-    conf_level: float = 90.0
-    flavour: str = "thesis"
-    x0: str = "zero"
-    min_points: int = 1
-    window: str = "centred"
-    engine: str = "auto"
-    workers: int | None = None
-    dt: float = 1.0
-    ic_error: bool = False
-    target_se: float | None = None
-    max_samples: int | None = None
-    dtype: str = "float64"
-    store: str | None = None
+    # Each field's metadata says what a front-end needs to offer it, once: "help" (one line, lower case; the first
+    # words of the Attributes entry above; {name} marks another setting, named as the front-end names it),
+    # "option" (the command line's option, where it is not --name with dashes), "metavar" and "choices" (the
+    # values the field accepts). The value type is the annotation, the default the field's own.
+    n_samples: int = dataclasses.field(
+        default=2000,
+        metadata=dict(help="Monte Carlo parameter sets", option="--samples", metavar="N"),
+    )
+    sampler: str = dataclasses.field(
+        default="uniform", metadata=dict(help="how the parameter box is sampled", choices=SAMPLERS + ADAPTIVE_SAMPLERS)
+    )
+    n: int = dataclasses.field(default=10, metadata=dict(help="half window: each window holds 2n+1 steps", metavar="N"))
+    percentage: float = dataclasses.field(
+        default=10.0, metadata=dict(help="behavioural share of the samples in percent", metavar="P")
+    )
+    bins: int = dataclasses.field(default=40, metadata=dict(help=f"CLD gradient bins, at most {MAX_BINS}", metavar="B"))
+    conf_level: float = dataclasses.field(
+        default=90.0, metadata=dict(help="confidence level of the band, percent in (50, 100)", metavar="C")
+    )
+    flavour: str = dataclasses.field(
+        default="thesis",
+        metadata=dict(
+            help="the variant of the method: the thesis's, MCAT's, or the thesis's with likelihood-weighted limits",
+            choices=FLAVOURS,
+        ),
+    )
+    x0: str = dataclasses.field(
+        default="zero",
+        metadata=dict(help="initial state of every simulation: zero, or steady at the first input", choices=X0),
+    )
+    min_points: int = dataclasses.field(
+        default=1, metadata=dict(help="windows with fewer measured output points report a missing IC", metavar="N")
+    )
+    window: str = dataclasses.field(
+        default="centred",
+        metadata=dict(help="where a window lies: centred on its step, or trailing it", choices=WINDOWS),
+    )
+    engine: str = dataclasses.field(
+        default="auto",
+        metadata=dict(help="the compiled kernels (numba), plain numpy, or numba where it can", choices=ENGINES),
+    )
+    workers: int | None = dataclasses.field(default=None, metadata=dict(help="threads (None: every core)", metavar="N"))
+    dt: float = dataclasses.field(default=1.0, metadata=dict(help="sample time of the record", metavar="SECONDS"))
+    ic_error: bool = dataclasses.field(
+        default=False,
+        metadata=dict(help="also estimate the Monte Carlo standard error of IC and limits (batch means)"),
+    )
+    target_se: float | None = dataclasses.field(
+        default=None,
+        metadata=dict(
+            help="add samples until the largest IC standard error where it can change a verdict is at most this "
+            "(implies {ic_error}; needs {max_samples})",
+            metavar="SE",
+        ),
+    )
+    max_samples: int | None = dataclasses.field(
+        default=None, metadata=dict(help="the budget of {target_se}", metavar="N")
+    )
+    dtype: str = dataclasses.field(
+        default="float64",
+        metadata=dict(
+            help="type of the result arrays: float32 halves their memory and their netCDF file", choices=DTYPES
+        ),
+    )
+    store: str | None = dataclasses.field(
+        default=None,
+        metadata=dict(
+            help="a netCDF file that the time-dependent arrays are written to as they are produced", metavar="FILE"
+        ),
+    )
 
     def __post_init__(self):
-        def store(name, value):
-            object.__setattr__(self, name, value)
+        self._check_sampling()
+        self._check_window()
+        self._check_errors_and_storage()
+        self._check_combinations()
 
+    def _store(self, name, value):
+        """Put the checked ``value`` in place of the one given (the object is frozen)."""
+        object.__setattr__(self, name, value)
+
+    def _check_sampling(self):
+        """The Monte Carlo sample, the behavioural share and the band."""
+        store = self._store
         store("n_samples", _whole(self.n_samples, "n_samples", 1, MAX_SAMPLES, _SAMPLES_WHY))
         store("sampler", _choice(self.sampler, "sampler", SAMPLERS + ADAPTIVE_SAMPLERS))
         store("n", _whole(self.n, "n", 0, MAX_HALF_WINDOW))
@@ -268,6 +337,10 @@ class AnalysisSettings:
             hint = f" (did you mean {conf_level * 100:g}?)" if 0.5 < conf_level < 1 else ""
             raise SettingsError(f"conf_level is a percentage in (50, 100); got {conf_level:g}{hint}", "conf_level")
         store("conf_level", conf_level)
+
+    def _check_window(self):
+        """The flavour, the initial state, the window and the engine."""
+        store = self._store
         store("flavour", _choice(self.flavour, "flavour", FLAVOURS))
         store("x0", check_x0(self.x0))
         min_points = _whole(self.min_points, "min_points", 1)
@@ -283,6 +356,10 @@ class AnalysisSettings:
         if self.workers is not None:
             store("workers", _whole(self.workers, "workers", 1, MAX_WORKERS, " threads"))
         store("dt", check_dt(self.dt))
+
+    def _check_errors_and_storage(self):
+        """The Monte Carlo error, its target, and where the result arrays go."""
+        store = self._store
         if not isinstance(self.ic_error, bool):
             raise SettingsError(
                 f"ic_error must be True or False; got {self.ic_error!r} ({type(self.ic_error).__name__})", "ic_error"
@@ -302,9 +379,16 @@ class AnalysisSettings:
                     f"store must be the path of a file (str or os.PathLike); got {self.store!r}", "store"
                 )
             store("store", os.fspath(self.store))
-        self._check_combinations()
 
     def _check_combinations(self):
+        """The settings that only work together, or not at all together."""
+        self._check_error_target()
+        if self.sampler in ADAPTIVE_SAMPLERS:
+            self._check_adaptive()
+        else:
+            self._check_behavioural()
+
+    def _check_error_target(self):
         if (self.target_se is None) != (self.max_samples is None):
             raise SettingsError(
                 "target_se and max_samples go together: the target of the Monte Carlo error and the budget of "
@@ -325,26 +409,28 @@ class AnalysisSettings:
                 f"hypercube or Sobol design does not extend, an adaptive one is redrawn); got sampler {self.sampler!r}",
                 "target_se",
             )
-        if self.sampler in ADAPTIVE_SAMPLERS:
-            if self.store is not None or self.dtype != "float64":
-                raise SettingsError(
-                    f"sampler {self.sampler!r} holds every simulation in memory, so the storage settings for "
-                    "long records (store, dtype) do not help it; use the uniform, lhs or sobol sampler with them",
-                    "store" if self.store is not None else "dtype",
-                )
-            if self.flavour == "mcat":
-                raise SettingsError(
-                    f"sampler {self.sampler!r} draws importance-weighted samples, which the mcat flavour cannot "
-                    "use; take flavour 'thesis' or 'weighted'"
-                )
-            if self.engine == "numba":
-                raise SettingsError(
-                    f"sampler {self.sampler!r} draws importance-weighted samples, which the compiled engine does "
-                    "not take; use engine 'auto' or 'numpy'"
-                )
-            if self.n_samples < 10:
-                raise SettingsError(f"sampler {self.sampler!r} needs n_samples >= 10; got {self.n_samples}")
-            return
+
+    def _check_adaptive(self):
+        if self.store is not None or self.dtype != "float64":
+            raise SettingsError(
+                f"sampler {self.sampler!r} holds every simulation in memory, so the storage settings for "
+                "long records (store, dtype) do not help it; use the uniform, lhs or sobol sampler with them",
+                "store" if self.store is not None else "dtype",
+            )
+        if self.flavour == "mcat":
+            raise SettingsError(
+                f"sampler {self.sampler!r} draws importance-weighted samples, which the mcat flavour cannot "
+                "use; take flavour 'thesis' or 'weighted'"
+            )
+        if self.engine == "numba":
+            raise SettingsError(
+                f"sampler {self.sampler!r} draws importance-weighted samples, which the compiled engine does "
+                "not take; use engine 'auto' or 'numpy'"
+            )
+        if self.n_samples < 10:
+            raise SettingsError(f"sampler {self.sampler!r} needs n_samples >= 10; got {self.n_samples}", "n_samples")
+
+    def _check_behavioural(self):
         if self.engine == "numba" and self.flavour == "mcat":
             raise SettingsError(
                 "engine 'numba' covers the 'thesis' and 'weighted' flavours; use engine "
@@ -355,11 +441,13 @@ class AnalysisSettings:
             if abs(blocks - round(blocks)) > 1e-9 * blocks:
                 raise SettingsError(
                     f"the mcat flavour splits the samples into 100/percentage blocks; percentage "
-                    f"{self.percentage:g} does not divide 100 into a whole number of blocks"
+                    f"{self.percentage:g} does not divide 100 into a whole number of blocks",
+                    "percentage",
                 )
             if self.n_samples // round(blocks) < 1:
                 raise SettingsError(
-                    f"percentage {self.percentage:g} of n_samples {self.n_samples} leaves no behavioural set"
+                    f"percentage {self.percentage:g} of n_samples {self.n_samples} leaves no behavioural set",
+                    "percentage",
                 )
         elif self.n_behavioural < 2:
             raise SettingsError(
@@ -430,7 +518,8 @@ class AnalysisSettings:
             if value not in supported:
                 shown = ", ".join(repr(item) for item in supported)
                 raise SettingsError(
-                    f"{front_end} does not support {name}={value!r}; it takes {shown}" + (f" ({why})" if why else "")
+                    f"{front_end} does not support {name}={value!r}; it takes {shown}" + (f" ({why})" if why else ""),
+                    name,
                 )
         return self
 

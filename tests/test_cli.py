@@ -399,7 +399,7 @@ def test_target_se_records_its_rounds_and_warns_when_the_budget_runs_out(tmp_pat
 @pytest.mark.parametrize(
     "extra, message",
     [
-        (["--target-se", "0.02"], "--target-se and --max-samples go together"),
+        (["--target-se", "0.02"], "--target-se and max_samples go together"),
         (["--ic-error", "--samples", "30"], "--ic-error needs at least 2 batches of 5 behavioural sets"),
         (["--target-se", "2", "--max-samples", "900"], "--target-se is an IC standard error in (0, 1)"),
         (["--ic-error", "--flavour", "mcat"], "mcat"),

@@ -7,6 +7,7 @@ are byte-identical afterwards, and that no staging (``.partial``) or lock litter
 """
 
 import hashlib
+import importlib
 import json
 import os
 import re
@@ -41,6 +42,9 @@ from dynia.io.outdir import MARKER, OutputDirectory
 from dynia.models import FOPDT, TransferFunction
 from dynia.pipeline import DroppedSamplesWarning
 from dynia.verdicts import VERDICTS
+
+# The module (dynia.cli.main is the function the package exports under the same name).
+CLI_MODULE = importlib.import_module("dynia.cli.commands")
 
 
 def _csv(path, time, u, y):

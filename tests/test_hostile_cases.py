@@ -5,6 +5,7 @@ poor message. An error must be exactly one ``dynia: error:`` line naming the opt
 traceback and no user file touched. Model and engine cases are in ``test_hostile_engine.py``.
 """
 
+import importlib
 import json
 import subprocess
 import sys
@@ -29,6 +30,9 @@ from dynia.io.frames import unpack
 from dynia.io.outdir import MARKER
 from dynia.models import FirstOrder
 from dynia.settings import AnalysisSettings
+
+# The module (dynia.cli.main is the function the package exports under the same name).
+CLI_MODULE = importlib.import_module("dynia.cli.commands")
 
 # The data and model options of BASE, without the method options that dynia suggest does not take.
 DATA_AND_MODEL = "--time time --input u --output y --model first-order --param K=0:5 --param T=0:5".split()

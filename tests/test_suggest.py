@@ -224,7 +224,7 @@ def test_a_window_in_time_units_becomes_n_on_the_grid_and_is_recorded(short_reco
         (["--window", "1h"], "--window 3600 s is 1801 steps of 2 s (2n+1 with n = 900), longer than the record's"),
         (["--window", "60s", "--n", "5"], "--window and --n both set the window; give one of them"),
         (["--window", "fortnight"], "--window must be a duration such as 60s"),
-        (["--window", "20s", "--min-points", "30"], "min_points 30 is more than a window holds"),
+        (["--window", "20s", "--min-points", "30"], "--min-points 30 is more than a window holds"),
     ],
 )
 def test_a_bad_window_is_one_line(short_record, tmp_path, capsys, options, message):

@@ -26,7 +26,6 @@ import json
 import math
 import os
 import platform
-import re
 import shlex
 import signal
 import sys
@@ -46,409 +45,15 @@ from ..models.base import user_code_failed
 from ..pipeline import DroppedSamplesWarning, TargetNotReachedWarning, run
 from ..quality import check_quality
 from ..refine import narrowed_bounds
-from ..settings import FLAVOURS, IC_THRESHOLD, MAX_PARAMETER, SAMPLERS, AnalysisSettings
-from ..suggestion import DEFAULT_MAX_SAMPLES, parse_duration, parse_size, suggest, window_half_width
+from ..settings import MAX_PARAMETER, AnalysisSettings
+from ..suggestion import parse_duration, parse_size, suggest, window_half_width
 from ..verdicts import assess
 from . import report
+from .parser import OPTIONS, WRITING_OPTIONS, UsageError, parser, setting_options, unwritten
 
 __all__ = ["main"]
 
-IDENTIFY_METHODS = ("dynia", "baseline", "whole")
-
 MODELS = {"first-order": models.FirstOrder, "fopdt": models.FOPDT, "second-order-delay": models.SecondOrderDelay}
-
-EXAMPLE = """\
-example (the DaISy heating-system record shipped in data/; it starts in steady state
-at an input of 6 V, so the model works in deviations from that operating point):
-  dynia analyse data/heating_system/heating_system.csv --time time --input u --output y \\
-      --model first-order --param K=0:40 --param T=0:200 \\
-      --input-offset 6 --offset first --x0 zero --seed 1 --out results/heating
-
-  writes results/heating/: ic.csv, limits.csv, samples.csv, summary.json, result.nc and
-  PNG figures (the data, and per parameter its information content and its
-  identifiability plot). All settings can also come from a TOML file:
-  dynia analyse --config run.toml (keys as the long options, e.g. samples = 5000,
-  and param = ["K=0:30", "T=0:300"]); options given on the command line win.
-"""
-
-
-IDENTIFY_EXAMPLE = """\
-example (the heating-system record; the last 30 % of it is held out for validation):
-  dynia identify data/heating_system/heating_system.csv --time time --input u --output y \\
-      --model first-order --param K=0:40 --param T=0:200 \\
-      --input-offset 6 --offset first --x0 zero --method dynia --seed 1 --out results/heating-fit
-
-  writes results/heating-fit/identified.json (parameters, std_errors, segments as
-  [start_time, end_time] pairs, validation_error, settings) and fit.png.
-"""
-
-
-SUGGEST_EXAMPLE = """\
-example (proposes --n, --percentage and --samples for dynia analyse, with the reasons):
-  dynia suggest data/heating_system/heating_system.csv --time time --input u --output y \\
-      --model first-order --param K=0:40 --param T=0:200 \\
-      --input-offset 6 --offset first --x0 zero --seed 1
-"""
-
-
-class UsageError(SettingsError):
-    """A mistake in the command's options, reported as one line with exit status 2."""
-
-
-class _Parser(argparse.ArgumentParser):
-    """argparse, but a usage mistake is one line on stderr (no usage dump), exit status 2."""
-
-    def error(self, message):
-        raise UsageError(message)
-
-
-def _parser():
-    parser = _Parser(
-        prog="dynia",
-        description="Dynamic Identifiability Analysis (DYNIA) of process data: "
-        "find the stretches of logged data that carry information about each model parameter.",
-    )
-    parser.add_argument("--version", action="version", version=f"dynia {__version__}")
-    commands = parser.add_subparsers(dest="command", metavar="COMMAND")
-    analyse = commands.add_parser(
-        "analyse",
-        help="run DYNIA on a CSV file and write the results to a directory",
-        description="Sample the model's parameters, simulate every sample on the logged input and, "
-        "at every time step, rank the samples over a moving window: the information "
-        "content IC(t) of each parameter, its confidence band and the CLD gradient.",
-        epilog=EXAMPLE,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
-    _add_data_and_model_options(analyse)
-    method = analyse.add_argument_group("method")
-    method.add_argument("--samples", type=int, metavar="N", help="Monte Carlo parameter sets (default 2000)")
-    method.add_argument("--sampler", choices=sorted(SAMPLERS), help="uniform (default), lhs or sobol")
-    method.add_argument("--n", type=int, help="half window: each window holds 2n+1 steps (default 10)")
-    method.add_argument("--window", metavar="DURATION", help=_WINDOW_HELP)
-    method.add_argument(
-        "--percentage", type=float, metavar="P", help="behavioural share of the samples in percent (default 10)"
-    )
-    method.add_argument("--bins", type=int, metavar="B", help="CLD gradient bins, at most 1000 (default 40)")
-    method.add_argument(
-        "--conf-level", type=float, metavar="C", help="confidence level of the band, percent in (50, 100) (default 90)"
-    )
-    method.add_argument("--flavour", choices=FLAVOURS, help="thesis (default), mcat or weighted")
-    method.add_argument(
-        "--min-points",
-        type=int,
-        metavar="N",
-        help="windows with fewer measured output points report a missing IC (default 1)",
-    )
-    method.add_argument(
-        "--ic-error",
-        action="store_true",
-        help="also estimate the Monte Carlo standard error of IC and limits (batch means): "
-        "NAME_se columns in ic.csv, max_ic_se in summary.json, IC +- 2 SE shaded in the plots",
-    )
-    method.add_argument(
-        "--target-se",
-        type=float,
-        metavar="SE",
-        help="add samples until the largest IC standard error where it can change a verdict is at most SE "
-        "(implies --ic-error; needs --max-samples)",
-    )
-    method.add_argument("--max-samples", type=int, metavar="N", help="the budget of --target-se")
-    method.add_argument(
-        "--dtype",
-        choices=("float64", "float32"),
-        help="type of the result arrays: float32 halves their memory and result.nc (default float64)",
-    )
-    method.add_argument(
-        "--on-disk",
-        action="store_true",
-        help="write result.nc as the windows are analysed and read it back lazily: for records whose CLD "
-        "gradient does not fit in memory (a year of 1 Hz data)",
-    )
-    method.add_argument(
-        "--second-run",
-        action="store_true",
-        help="narrow the range of every parameter whose highest IC reaches "
-        "--narrow-threshold to its band there, and analyse again (thesis 3.1): "
-        "results in DIR/second_run/",
-    )
-    method.add_argument(
-        "--narrow-threshold",
-        type=float,
-        metavar="IC",
-        help=f"IC from which a window is informative, for the narrowing (default {IC_THRESHOLD:g})",
-    )
-    method.add_argument(
-        "--narrow-margin",
-        type=float,
-        metavar="M",
-        help="the band is widened by M times its width on each side (default 0.5)",
-    )
-    method.add_argument(
-        "--seed", type=int, metavar="S", help="seed of every random draw (default: drawn at random and recorded)"
-    )
-    _add_output_options(analyse)
-
-    identify = commands.add_parser(
-        "identify",
-        help="re-identify the model by least squares on selected data and validate it",
-        description="Choose the data to fit on (DYNIA's high-IC segments, the intervals of the "
-        "Bittencourt et al. 2015 search, or the whole record), estimate the parameters "
-        "by least squares with standard errors, and score the model on the held-out end "
-        "of the record. Writes DIR/identified.json and DIR/fit.png.",
-        epilog=IDENTIFY_EXAMPLE,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
-    _add_data_and_model_options(identify)
-    selection = identify.add_argument_group("selection and fit")
-    selection.add_argument(
-        "--method",
-        choices=IDENTIFY_METHODS,
-        help="dynia (default): segments where the IC reaches --ic-threshold; baseline: "
-        "the accepted intervals of the Bittencourt et al. (2015) search; whole: "
-        "the whole record before the held-out part",
-    )
-    selection.add_argument(
-        "--ic-threshold",
-        type=float,
-        metavar="IC",
-        help=f"dynia: IC from which a window is informative (default {IC_THRESHOLD:g})",
-    )
-    selection.add_argument(
-        "--mode",
-        choices=("any", "joint"),
-        help="dynia: a step is informative when any parameter's IC reaches the threshold (default) or when all do",
-    )
-    selection.add_argument(
-        "--held-out",
-        type=float,
-        metavar="FRACTION",
-        help="share of the record, at its end, kept for validation (default 0.3)",
-    )
-    selection.add_argument(
-        "--exclude-flagged",
-        action="store_true",
-        help="check the data and leave out what is flagged (output as missing, input interpolated)",
-    )
-    selection.add_argument(
-        "--starts",
-        type=int,
-        metavar="N",
-        help="least-squares starting points: the middle of the ranges, then random (default 1)",
-    )
-    selection.add_argument("--samples", type=int, metavar="N", help="dynia: Monte Carlo parameter sets (default 2000)")
-    selection.add_argument("--n", type=int, help="dynia: half window, each window holds 2n+1 steps (default 10)")
-    selection.add_argument("--window", metavar="DURATION", help="dynia: " + _WINDOW_HELP)
-    selection.add_argument(
-        "--percentage", type=float, metavar="P", help="dynia: behavioural share of the samples in percent (default 10)"
-    )
-    selection.add_argument(
-        "--seed", type=int, metavar="S", help="seed of every random draw (default: drawn at random and recorded)"
-    )
-    _add_output_options(identify)
-
-    proposal = commands.add_parser(
-        "suggest",
-        help="propose a window, a behavioural share and a number of samples for analyse, and say why",
-        description="Estimate the record's dominant time constant, choose a window of about one time constant, "
-        "a behavioural share that lets the IC reach high values, and the number of samples that brings a "
-        "pilot run's IC standard error to 0.02; check the parameter ranges against a least-squares fit. "
-        "Writes nothing; prints the proposal (--json: as JSON).",
-        epilog=SUGGEST_EXAMPLE,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
-    _add_data_and_model_options(proposal)
-    pilot = proposal.add_argument_group("pilot and output")
-    pilot.add_argument(
-        "--seed", type=int, metavar="S", help="seed of the pilot runs (default: drawn at random and printed)"
-    )
-    pilot.add_argument(
-        "--max-samples",
-        type=int,
-        metavar="N",
-        help=f"the most samples of the pilot and of the proposal (default {DEFAULT_MAX_SAMPLES}); the behavioural "
-        "share is raised so that the pilot's 50 behavioural sets fit in N",
-    )
-    pilot.add_argument(
-        "--max-memory",
-        metavar="SIZE",
-        help="the most memory the pilot may take, e.g. 4GB or 512MB (default: half the memory available); "
-        "a pilot estimated above it is refused",
-    )
-    pilot.add_argument("--json", action="store_true", help="print the proposal as JSON")
-    pilot.add_argument("--config", metavar="FILE.toml", help="read the settings from a TOML file")
-    # Not options of suggest, which writes nothing: known only to say so, instead of argparse's "ambiguous option"
-    # (--out abbreviates --output and --output-file).
-    for option in _WRITING_OPTIONS:
-        pilot.add_argument(
-            option, nargs="?", const=True, dest=f"unwritten_{option[2:].replace('-', '_')}", help=argparse.SUPPRESS
-        )
-    return parser
-
-
-_WRITING_OPTIONS = ("--out", "--overwrite", "--no-plots")
-
-
-_WINDOW_HELP = (
-    "the window as a duration, e.g. 60s, 2min or 1h (a bare number is seconds), instead of --n: "
-    "n = round(DURATION / (2 dt)) on the data's grid"
-)
-
-
-def _add_output_options(command):
-    output = command.add_argument_group("output")
-    output.add_argument("--out", metavar="DIR", help="directory for the results (must not exist; see --overwrite)")
-    output.add_argument(
-        "--overwrite",
-        action="store_true",
-        help="replace DIR if it holds the results of an earlier dynia run (never anything else)",
-    )
-    output.add_argument("--no-plots", action="store_true", help="write the tables and the summary, no figures")
-    output.add_argument("--config", metavar="FILE.toml", help="read the settings from a TOML file")
-
-
-def _add_data_and_model_options(command):
-    data = command.add_argument_group("data")
-    data.add_argument(
-        "data", nargs="?", metavar="DATA.csv", help="CSV file with a header row: time, input and output columns"
-    )
-    data.add_argument("--time", help="name of the time column: seconds, or ISO 8601 timestamps")
-    data.add_argument(
-        "--time-format",
-        metavar="FORMAT",
-        help="strptime format of the time column for other timestamps, e.g. '%%d.%%m.%%Y %%H:%%M' for 01.01.2012 00:15",
-    )
-    data.add_argument(
-        "--input", action="append", help="name of the input column (in long format: the input's tag); give one"
-    )
-    data.add_argument(
-        "--output", action="append", help="name of the output column (in long format: the output's tag); give one"
-    )
-    data.add_argument(
-        "--output-file",
-        metavar="FILE",
-        help="the output is logged in this second file, with its own time column of the "
-        "same name: both logs are resampled onto a common grid",
-    )
-    data.add_argument(
-        "--long", action="store_true", help="DATA.csv is a long-format event log: columns time, tag, value"
-    )
-    data.add_argument("--tag-column", help="long format: the tag column (default: tag)")
-    data.add_argument("--value-column", help="long format: the value column (default: value)")
-    data.add_argument(
-        "--dt",
-        type=float,
-        metavar="SECONDS",
-        help="grid spacing for irregular or event-based data (default: the median spacing of the rows)",
-    )
-    data.add_argument(
-        "--max-gap",
-        type=float,
-        metavar="STEPS",
-        help="a stretch without rows longer than this many grid steps is a gap: the output there is "
-        "left missing, not interpolated (default 5; inf interpolates across everything)",
-    )
-    data.add_argument(
-        "--duplicates",
-        choices=("error", "mean"),
-        help="rows that repeat a timestamp: an error (default), or mean: average their values",
-    )
-    data.add_argument(
-        "--quality",
-        action="store_true",
-        help="check the data for absurd magnitudes, glitches, outliers and stuck values and report them",
-    )
-    data.add_argument(
-        "--offset",
-        metavar="{none,first,VALUE}",
-        help="subtract an output offset before fitting: none (default), first (the first measured output) or a number",
-    )
-    data.add_argument(
-        "--input-offset",
-        metavar="{none,first,VALUE}",
-        help="subtract an input offset before simulating: none (default), first or a "
-        "number; with --offset and --x0 zero this makes a deviation model around "
-        "an operating point",
-    )
-    model = command.add_argument_group("model")
-    model.add_argument(
-        "--model",
-        metavar="MODEL",
-        help="first-order: K/(T s+1); fopdt: K e^(-theta s)/(T s+1); "
-        "second-order-delay: K e^(-theta s)/((T1 s+1)(T2 s+1)); or your own, MODULE:NAME or FILE.py:NAME, "
-        "a dynia.models.Model or a function returning one (e.g. mymodels.py:tank)",
-    )
-    model.add_argument(
-        "--param",
-        action="append",
-        metavar="NAME=LOW:HIGH",
-        help="sampling range of a model parameter; give one per parameter",
-    )
-    model.add_argument(
-        "--x0",
-        choices=["zero", "steady"],
-        help="initial state of every simulation: zero (default) or steady at the first input",
-    )
-
-
-# Every option: its type in a --config file, its default and the commands that take it.
-# One table, so that a config key of the wrong type is refused the same way as a
-# command-line value, and a summary records exactly the options of its command.
-_BOTH = ("analyse", "identify")
-_ALL = ("analyse", "identify", "suggest")
-_ANALYSE = ("analyse",)
-_IDENTIFY = ("identify",)
-OPTIONS = {
-    "data": ("text", None, _ALL),
-    "time": ("text", None, _ALL),
-    "time_format": ("text", None, _ALL),
-    "input": ("names", None, _ALL),
-    "output": ("names", None, _ALL),
-    "output_file": ("text", None, _ALL),
-    "long": ("flag", False, _ALL),
-    "tag_column": ("text", "tag", _ALL),
-    "value_column": ("text", "value", _ALL),
-    "dt": ("number", None, _ALL),
-    "max_gap": ("number", 5.0, _ALL),
-    "duplicates": ("text", "error", _ALL),
-    "offset": ("offset", "none", _ALL),
-    "input_offset": ("offset", "none", _ALL),
-    "model": ("text", None, _ALL),
-    "param": ("names", None, _ALL),
-    "x0": ("text", "zero", _ALL),
-    "samples": ("whole", 2000, _BOTH),
-    "n": ("whole", 10, _BOTH),
-    "window": ("text", None, _BOTH),
-    "percentage": ("number", 10.0, _BOTH),
-    "seed": ("whole", None, _ALL),
-    "quality": ("flag", False, _ALL),
-    "no_plots": ("flag", False, _BOTH),
-    "out": ("text", None, _BOTH),
-    "overwrite": ("flag", False, _BOTH),
-    "sampler": ("text", "uniform", _ANALYSE),
-    "bins": ("whole", 40, _ANALYSE),
-    "conf_level": ("number", 90.0, _ANALYSE),
-    "flavour": ("text", "thesis", _ANALYSE),
-    "min_points": ("whole", 1, _ANALYSE),
-    "ic_error": ("flag", False, _ANALYSE),
-    "target_se": ("number", None, _ANALYSE),
-    "max_samples": ("whole", None, ("analyse", "suggest")),
-    "dtype": ("text", "float64", _ANALYSE),
-    "on_disk": ("flag", False, _ANALYSE),
-    "second_run": ("flag", False, _ANALYSE),
-    "narrow_threshold": ("number", IC_THRESHOLD, _ANALYSE),
-    "narrow_margin": ("number", 0.5, _ANALYSE),
-    "method": ("text", "dynia", _IDENTIFY),
-    "ic_threshold": ("number", IC_THRESHOLD, _IDENTIFY),
-    "mode": ("text", "any", _IDENTIFY),
-    "held_out": ("number", 0.3, _IDENTIFY),
-    "exclude_flagged": ("flag", False, _IDENTIFY),
-    "starts": ("whole", 1, _IDENTIFY),
-    "json": ("flag", False, ("suggest",)),
-    "max_memory": ("size", None, ("suggest",)),
-}
-
-# The command line's name of each AnalysisSettings field, for error messages.
-_SETTING_OPTIONS = {"n_samples": "--samples"}
 
 
 def main(argv=None):
@@ -459,20 +64,20 @@ def main(argv=None):
     128 + its number and nothing written. Any other exception is a bug in
     dynia and keeps its traceback.
     """
-    parser = _parser()
+    command_parser = parser()
     command_line = ["dynia", *(sys.argv[1:] if argv is None else map(str, argv))]
     try:
         # Warnings of numpy, matplotlib and the rest would break the promise of
         # one line per error; dynia's own warnings are reported by the commands.
         with warnings.catch_warnings(record=True) as caught, np.errstate(all="ignore"):
             warnings.simplefilter("always")
-            args = parser.parse_args(_attached(parser, command_line[1:]))
+            args = command_parser.parse_args(_attached(command_parser, command_line[1:]))
             if args.command is None:
-                parser.print_help()
+                command_parser.print_help()
                 return 2
-            options = _options(args)
             run_command = {"analyse": _analyse, "identify": _identify, "suggest": _suggest}[args.command]
-            return run_command(options, command_line, caught)
+            with _named_as_options(args.command):
+                return run_command(_options(args), command_line, caught)
     except DyniaError as error:
         print(f"dynia: error: {_one_line(error)}", file=sys.stderr)
         return 2
@@ -488,6 +93,32 @@ def _one_line(error):
     return " ".join(str(error).split())
 
 
+@contextlib.contextmanager
+def _named_as_options(command):
+    """A SettingsError naming a setting (``error.setting``) as one naming the option of ``command`` that gives it.
+
+    Where the message names the setting as a word, the option takes its place (``conf_level is ...`` becomes
+    ``--conf-level is ...``); a message that does not is led by the option.
+    """
+    try:
+        yield
+    except SettingsError as error:
+        option = setting_options(command).get(error.setting) if isinstance(error.setting, str) else None
+        if option is None:
+            raise
+        pieces = str(error).split(error.setting)
+        message = pieces[0]
+        for piece in pieces[1:]:
+            alone = not (message and _joins(message[-1])) and not (piece and _joins(piece[0]))
+            message += (option if alone else error.setting) + piece
+        raise UsageError(message if message != str(error) else f"{option}: {message}") from None
+
+
+def _joins(char):
+    """Whether ``char`` next to a setting's name makes it part of a longer word (than, --n, 100/percentage)."""
+    return char.isalnum() or char in "_-/"
+
+
 def _options(args):
     """Command-line options over the config file over the defaults, every one checked.
 
@@ -495,54 +126,14 @@ def _options(args):
     imported (running its code, side effects and all) only once the rest of the command is known to be valid.
     """
     command = args.command
-    unwritten = [option for option in _WRITING_OPTIONS if getattr(args, _unwritten(option), None) is not None]
-    if unwritten:
-        raise UsageError(
-            f"dynia suggest writes nothing (it prints its proposal), so it takes no {unwritten[0]}; "
-            "give --out to the dynia analyse command it proposes"
-        )
-    given = {
-        key: value
-        for key, value in vars(args).items()
-        if value is not None
-        and key not in ("command", "config")
-        and value is not False
-        and not key.startswith("unwritten_")
-    }
-    options = {key: default for key, (_, default, commands) in OPTIONS.items() if command in commands}
-    configured = {}
-    if args.config:
-        configured = _read_config(args.config, command)
-        options.update(configured)
-        options["config"] = args.config
-    options.update(given)
+    options, set_by_user = _merged_options(args, command)
     if options.get("max_memory") is not None:
         options["max_memory"] = parse_size(options["max_memory"], "--max-memory")
     if options.get("window") is not None:
-        if "n" in given or "n" in configured:
+        if "n" in set_by_user:
             raise UsageError("--window and --n both set the window; give one of them")
         options["window_seconds"] = parse_duration(options["window"], "--window")
-    for key in ("data", "time", "input", "output", "model") + (("out",) if command != "suggest" else ()):
-        if not options.get(key):
-            option = "DATA.csv" if key == "data" else f"--{key}"
-            raise UsageError(f"{option} is required (on the command line or in --config)")
-    options["output"] = _one_column(options["output"], "--output")
-    if isinstance(options["input"], str):
-        options["input"] = [options["input"]]
-    if options["output"] in options["input"] and not options["long"]:
-        raise UsageError(
-            f"--input and --output name the same column {options['output']!r}; "
-            "the output must be logged apart from the input"
-        )
-    if not options["long"]:  # in the long layout --input and --output name tags, not columns
-        for option, names in (("--input", options["input"]), ("--output", [options["output"]])):
-            if options["time"].strip() in (name.strip() for name in names):
-                raise UsageError(
-                    f"{option} names the time column {options['time'].strip()!r} (--time); expected the column "
-                    f"of the {option[2:]}'s values"
-                )
-    if not options.get("param"):
-        raise UsageError("give a range for every model parameter with --param NAME=LOW:HIGH")
+    _check_required(options, command)
     _ranges(options["param"])  # checked before the model runs; against the model below
     if command != "suggest":  # suggest proposes the analysis settings
         options["analysis"] = _analysis_settings(options)
@@ -567,9 +158,61 @@ def _options(args):
     return options
 
 
-def _unwritten(option):
-    """The argparse destination of an output option that suggest knows only to refuse."""
-    return f"unwritten_{option[2:].replace('-', '_')}"
+def _merged_options(args, command):
+    """The command's defaults, then its --config file, then the command line; and the keys the user set."""
+    refused = [option for option in WRITING_OPTIONS if getattr(args, unwritten(option), None) is not None]
+    if refused:
+        raise UsageError(
+            f"dynia suggest writes nothing (it prints its proposal), so it takes no {refused[0]}; "
+            "give --out to the dynia analyse command it proposes"
+        )
+    given = {
+        key: value
+        for key, value in vars(args).items()
+        if value is not None
+        and key not in ("command", "config")
+        and value is not False
+        and not key.startswith("unwritten_")
+    }
+    options = {key: option.default for key, option in OPTIONS[command].items()}
+    options["command"] = command
+    configured = {}
+    if args.config:
+        configured = _read_config(args.config, command)
+        options.update(configured)
+        options["config"] = args.config
+    options.update(given)
+    return options, set(given) | set(configured)
+
+
+def _check_required(options, command):
+    """Raise unless the data, its columns, the model, its ranges and (but for suggest) --out are given."""
+    for key in ("data", "time", "input", "output", "model") + (("out",) if command != "suggest" else ()):
+        if not options.get(key):
+            option = "DATA.csv" if key == "data" else f"--{key}"
+            raise UsageError(f"{option} is required (on the command line or in --config)")
+    _check_columns(options)
+    if not options.get("param"):
+        raise UsageError("give a range for every model parameter with --param NAME=LOW:HIGH")
+
+
+def _check_columns(options):
+    """One --output, and --input, --output and --time naming different columns (unless they name tags)."""
+    options["output"] = _one_column(options["output"], "--output")
+    if isinstance(options["input"], str):
+        options["input"] = [options["input"]]
+    if options["output"] in options["input"] and not options["long"]:
+        raise UsageError(
+            f"--input and --output name the same column {options['output']!r}; "
+            "the output must be logged apart from the input"
+        )
+    if not options["long"]:  # in the long layout --input and --output name tags, not columns
+        for option, names in (("--input", options["input"]), ("--output", [options["output"]])):
+            if options["time"].strip() in (name.strip() for name in names):
+                raise UsageError(
+                    f"{option} names the time column {options['time'].strip()!r} (--time); expected the column "
+                    f"of the {option[2:]}'s values"
+                )
 
 
 def _attached(parser, words):
@@ -707,38 +350,12 @@ def _import_model_module(where, spec):
 
 
 def _analysis_settings(options):
-    """The AnalysisSettings of the command's options, with errors naming the command-line option."""
-    fields = dict(n_samples=options["samples"], n=options["n"], percentage=options["percentage"], x0=options["x0"])
-    if "bins" in options:  # the analyse-only options
-        fields.update(
-            sampler=options["sampler"],
-            bins=options["bins"],
-            conf_level=options["conf_level"],
-            flavour=options["flavour"],
-            ic_error=options["ic_error"],
-            target_se=options["target_se"],
-            max_samples=options["max_samples"],
-            dtype=options["dtype"],
-            # With --window the window's length is known only on the data's grid; checked then (_load).
-            min_points=options["min_points"] if options.get("window") is None else 1,
-        )
-    try:
-        return AnalysisSettings(**fields)
-    except SettingsError as error:
-        message = str(error)
-        if error.setting:
-            message = message.replace(str(error.setting), _option_of(error.setting), 1)
-            # Other settings the message names, as the command line names them (those with an underscore
-            # only: a bare "n" is too common a word to rewrite).
-            for setting in sorted(set(fields) - {error.setting}, key=len, reverse=True):
-                if "_" in setting:
-                    message = re.sub(rf"(?<!-)\b{setting}\b", _option_of(setting), message)
-        raise UsageError(message) from None
-
-
-def _option_of(setting):
-    """The command-line option of an AnalysisSettings field."""
-    return _SETTING_OPTIONS.get(setting, f"--{str(setting).replace('_', '-')}")
+    """The AnalysisSettings of the command's options; the settings check them (and errors name the options)."""
+    fields = {option.setting: options[key] for key, option in OPTIONS[options["command"]].items() if option.is_setting}
+    if options.get("window") is not None and "min_points" in fields:
+        # With --window the window's length is known only on the data's grid; min_points is checked then (_load).
+        fields["min_points"] = 1
+    return AnalysisSettings(**fields)
 
 
 def _check_command_options(options):
@@ -765,16 +382,6 @@ def _check_command_options(options):
             f"--max-gap is a multiple of the grid step above 1 (a gap longer than that many steps is "
             f"left missing); got {options['max_gap']:g}"
         )
-    for key, choices in (
-        ("sampler", SAMPLERS),
-        ("flavour", FLAVOURS),
-        ("x0", ("zero", "steady")),
-        ("method", IDENTIFY_METHODS),
-        ("mode", ("any", "joint")),
-        ("duplicates", ("error", "mean")),
-    ):
-        if key in options and options[key] not in choices:
-            raise UsageError(f"--{key} must be one of {', '.join(choices)}; got {options[key]!r}")
 
 
 def _read_config(path, command):
@@ -788,17 +395,21 @@ def _read_config(path, command):
     except tomllib.TOMLDecodeError as error:
         raise UsageError(f"--config {path}: not valid TOML: {error}") from None
     config = {key.replace("-", "_"): value for key, value in config.items()}
-    allowed = sorted(key for key, (_, _, commands) in OPTIONS.items() if command in commands)
+    allowed = sorted(OPTIONS[command])
     unknown = sorted(set(config) - set(allowed))
     if unknown:
         raise UsageError(
             f"--config {path}: unknown key(s) for dynia {command}: {', '.join(unknown)}; allowed: {', '.join(allowed)}"
         )
-    return {key: _typed(value, OPTIONS[key][0], f"--config {path}: {key}") for key, value in config.items()}
+    return {key: _typed(value, OPTIONS[command][key], f"--config {path}: {key}") for key, value in config.items()}
 
 
-def _typed(value, kind, where):
-    """A config value of the kind its option takes, or a one-line error (never truthy strings)."""
+def _typed(value, option, where):
+    """A config value of the kind its option takes, one of its choices if it has them, or a one-line error (never
+    truthy strings): checked as argparse checks the value on the command line."""
+    if option.choices and value not in option.choices:
+        raise UsageError(f"{where} must be one of {', '.join(option.choices)}; got {value!r}")
+    kind = option.kind
     is_number = isinstance(value, (int, float)) and not isinstance(value, bool)
     if kind == "flag" and isinstance(value, bool):
         return value
@@ -1054,7 +665,7 @@ def _provenance(options, command_line):
 
 def _recorded(options, analysis, offset, input_offset):
     """Exactly the options of this command as used, and the analysis settings."""
-    command_keys = [key for key in OPTIONS if key in options]
+    command_keys = [key for key in OPTIONS[options["command"]] if key in options]
     recorded = {key: options[key] for key in command_keys if key not in ("param",)}
     if len(recorded["input"]) == 1:
         recorded["input"] = recorded["input"][0]
@@ -1201,8 +812,7 @@ def _identify(options, command_line, caught):
         notices, _ = _data_warnings(data, u, y, dict(options, quality=False))
         for line in notices:
             print(f"dynia: warning: {line}", file=sys.stderr)
-        found = _named_options(
-            identify,
+        found = identify(
             u,
             y,
             model,
@@ -1258,16 +868,6 @@ def _identify(options, command_line, caught):
     return _done(options)
 
 
-def _named_options(function, *args, **kwargs):
-    """``function(*args, **kwargs)``, with a SettingsError naming a setting as the command line names it."""
-    try:
-        return function(*args, **kwargs)
-    except SettingsError as error:
-        if not error.setting or str(error.setting) not in OPTIONS:
-            raise
-        raise UsageError(str(error).replace(str(error.setting), _option_of(error.setting), 1)) from None
-
-
 def _suggest(options, command_line, caught):
     data, offset, input_offset = _load(options)
     u, y = data.u - input_offset, data.y - offset
@@ -1280,25 +880,18 @@ def _suggest(options, command_line, caught):
             f"{entry['reason']}"
             for entry in findings
         ]
-    try:
-        found = suggest(
-            u,
-            y,
-            options["model_object"],
-            options["bounds"],
-            dt=data.dt,
-            x0=options["x0"],
-            max_samples=DEFAULT_MAX_SAMPLES if options["max_samples"] is None else options["max_samples"],
-            max_memory=options["max_memory"],
-            progress=sys.stderr.isatty(),
-            rng=options["seed"],
-        )
-    except SettingsError as error:
-        # The limits as the command line names them.
-        message = str(error)
-        for setting in ("max_samples", "max_memory"):
-            message = re.sub(rf"(?<!-)\b{setting}\b", _option_of(setting), message)
-        raise UsageError(message) from None
+    found = suggest(
+        u,
+        y,
+        options["model_object"],
+        options["bounds"],
+        dt=data.dt,
+        x0=options["x0"],
+        max_samples=options["max_samples"],
+        max_memory=options["max_memory"],
+        progress=sys.stderr.isatty(),
+        rng=options["seed"],
+    )
     # Printed once there is a proposal: a record that gets none ends in its one error line, which says why.
     dropped = _dynia_warnings(caught)
     for line in notices + dropped:

@@ -1,0 +1,450 @@
+"""The options of the ``dynia`` command, each defined once, and the argparse parser made of them.
+
+An option of the command line is an :class:`Option`: its ``--config`` key, its kind of value, its help, its default
+and, where it gives one, the setting of the library it gives (for error messages that name that setting). The
+analysis settings (``--samples``, ``--conf-level``, ...) are not restated here: their options are made from the
+metadata of :class:`~dynia.settings.AnalysisSettings`' fields (help, option name, metavar, choices), their type is
+the field's annotation and their default the field's own, which the help shows. :data:`OPTIONS` maps each command to
+its options, in the order ``--help`` lists them.
+"""
+
+import argparse
+import dataclasses
+import types
+
+from .. import __version__
+from ..errors import SettingsError
+from ..settings import IC_THRESHOLD, SAMPLERS, AnalysisSettings
+from ..suggestion import DEFAULT_MAX_SAMPLES
+
+__all__ = ["OPTIONS", "Option", "UsageError", "WRITING_OPTIONS", "parser", "setting_options", "unwritten"]
+
+
+class UsageError(SettingsError):
+    """A mistake in the command's options, reported as one line with exit status 2."""
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse, but a usage mistake is one line on stderr (no usage dump), exit status 2."""
+
+    def error(self, message):
+        raise UsageError(message)
+
+
+@dataclasses.dataclass(frozen=True)
+class Option:
+    """One option of the command line.
+
+    Attributes
+    ----------
+    key : str
+        The argparse destination and the ``--config`` key; the option is ``--key`` with dashes.
+    kind : {"flag", "whole", "number", "text", "names", "offset", "size"}
+        The value it takes, on the command line and in a ``--config`` file.
+    help : str
+        Its help; ``{default}`` in it is the default, else a default that is not None or False is added at the end
+        (unless the help says which value is the default).
+    default : object
+        Its value when given neither on the command line nor in ``--config``.
+    metavar, choices
+        As argparse takes them.
+    setting : str or None
+        The library's name of what it gives (an :class:`~dynia.settings.AnalysisSettings` field, or an argument of
+        the command's function): a :class:`~dynia.errors.SettingsError` naming it is reported naming the option.
+    """
+
+    key: str
+    kind: str
+    help: str
+    default: object = None
+    metavar: str | None = None
+    choices: tuple | None = None
+    setting: str | None = None
+
+    @property
+    def flag(self):
+        """The option as typed: ``--key`` with dashes, or ``DATA.csv`` for the data file."""
+        return "DATA.csv" if self.key == "data" else "--" + self.key.replace("_", "-")
+
+    @property
+    def is_setting(self):
+        """Whether it gives a field of :class:`~dynia.settings.AnalysisSettings`."""
+        return self.setting in _FIELDS
+
+    def text(self):
+        """The help as ``--help`` shows it, with its default."""
+        if "{default" in self.help:
+            return self.help.format(default=self.default)
+        if self.default is None or self.default is False or "(default" in self.help:
+            return self.help
+        shown = f"{self.default:g}" if isinstance(self.default, float) else self.default
+        return f"{self.help} (default {shown})"
+
+    def add_to(self, group):
+        """Add the option to an argparse group (defaults stay None: a given value is one that is not None)."""
+        if self.key == "data":
+            group.add_argument("data", nargs="?", metavar=self.metavar, help=self.text())
+            return
+        how = dict(help=self.text().replace("%", "%%"))
+        if self.kind == "flag":
+            how.update(action="store_true")
+        elif self.kind == "names":
+            how.update(action="append")
+        elif self.kind in ("whole", "number"):
+            how.update(type=int if self.kind == "whole" else float)
+        how.update({name: value for name, value in (("metavar", self.metavar), ("choices", self.choices)) if value})
+        group.add_argument(self.flag, **how)
+
+
+_FIELDS = {field.name: field for field in dataclasses.fields(AnalysisSettings)}
+
+# The command line's name of every field, as the fields' help texts name each other.
+_SETTING_FLAGS = {name: field.metadata.get("option", "--" + name.replace("_", "-")) for name, field in _FIELDS.items()}
+
+# The kind of value of each field's annotation (int | None takes a whole number, or is left out).
+_KINDS = {int: "whole", float: "number", bool: "flag", str: "text"}
+
+# What the command line offers of a setting that is not all the library takes: the adaptive samplers are the
+# library's (dynia.adaptive); the command line's reports assume a plain Monte Carlo sample.
+_OFFERED = {"sampler": tuple(sorted(SAMPLERS))}
+
+# What the command line adds to a setting's help: where it writes what the setting adds.
+_WRITES = {"ic_error": ": NAME_se columns in ic.csv, max_ic_se in summary.json, IC +- 2 SE shaded in the plots"}
+
+
+def setting_option(name, prefix=""):
+    """The option of the AnalysisSettings field ``name``, made from the field's metadata, annotation and default."""
+    field = _FIELDS[name]
+    meta = field.metadata
+    annotation = field.type
+    if isinstance(annotation, types.UnionType):  # int | None: the option takes an int, or is left out
+        annotation = next(member for member in annotation.__args__ if member is not type(None))
+    flag = _SETTING_FLAGS[name]
+    return Option(
+        key=flag[2:].replace("-", "_"),
+        kind=_KINDS[annotation],
+        help=prefix + meta["help"].format(**_SETTING_FLAGS) + _WRITES.get(name, ""),
+        default=field.default,
+        metavar=meta.get("metavar"),
+        choices=_OFFERED.get(name, meta.get("choices")),
+        setting=name,
+    )
+
+
+_SEED = Option("seed", "whole", "seed of every random draw (default: drawn at random and recorded)", metavar="S")
+
+
+_WINDOW_HELP = (
+    "the window as a duration, e.g. 60s, 2min or 1h (a bare number is seconds), instead of --n: "
+    "n = round(DURATION / (2 dt)) on the data's grid"
+)
+
+_DATA = (
+    Option("data", "text", "CSV file with a header row: time, input and output columns", metavar="DATA.csv"),
+    Option("time", "text", "name of the time column: seconds, or ISO 8601 timestamps"),
+    Option(
+        "time_format",
+        "text",
+        "strptime format of the time column for other timestamps, e.g. '%d.%m.%Y %H:%M' for 01.01.2012 00:15",
+        metavar="FORMAT",
+    ),
+    Option("input", "names", "name of the input column (in long format: the input's tag); give one"),
+    Option("output", "names", "name of the output column (in long format: the output's tag); give one"),
+    Option(
+        "output_file",
+        "text",
+        "the output is logged in this second file, with its own time column of the "
+        "same name: both logs are resampled onto a common grid",
+        metavar="FILE",
+        setting="output_path",
+    ),
+    Option("long", "flag", "DATA.csv is a long-format event log: columns time, tag, value"),
+    Option("tag_column", "text", "long format: the tag column (default: {default})", default="tag"),
+    Option("value_column", "text", "long format: the value column (default: {default})", default="value"),
+    Option(
+        "dt",
+        "number",
+        "grid spacing for irregular or event-based data (default: the median spacing of the rows)",
+        metavar="SECONDS",
+    ),
+    Option(
+        "max_gap",
+        "number",
+        "a stretch without rows longer than this many grid steps is a gap: the output there is "
+        "left missing, not interpolated (default {default:g}; inf interpolates across everything)",
+        default=5.0,
+        metavar="STEPS",
+    ),
+    Option(
+        "duplicates",
+        "text",
+        "rows that repeat a timestamp: an error (default), or mean: average their values",
+        default="error",
+        choices=("error", "mean"),
+    ),
+    Option(
+        "quality",
+        "flag",
+        "check the data for absurd magnitudes, glitches, outliers and stuck values and report them",
+    ),
+    Option(
+        "offset",
+        "offset",
+        "subtract an output offset before fitting: {default} (default), first (the first measured output) or a number",
+        default="none",
+        metavar="{none,first,VALUE}",
+    ),
+    Option(
+        "input_offset",
+        "offset",
+        "subtract an input offset before simulating: {default} (default), first or a "
+        "number; with --offset and --x0 zero this makes a deviation model around "
+        "an operating point",
+        default="none",
+        metavar="{none,first,VALUE}",
+    ),
+)
+
+_MODEL = (
+    Option(
+        "model",
+        "text",
+        "first-order: K/(T s+1); fopdt: K e^(-theta s)/(T s+1); "
+        "second-order-delay: K e^(-theta s)/((T1 s+1)(T2 s+1)); or your own, MODULE:NAME or FILE.py:NAME, "
+        "a dynia.models.Model or a function returning one (e.g. mymodels.py:tank)",
+        metavar="MODEL",
+    ),
+    Option("param", "names", "sampling range of a model parameter; give one per parameter", metavar="NAME=LOW:HIGH"),
+    setting_option("x0"),
+)
+
+_OUTPUT = (
+    Option("out", "text", "directory for the results (must not exist; see --overwrite)", metavar="DIR"),
+    Option("overwrite", "flag", "replace DIR if it holds the results of an earlier dynia run (never anything else)"),
+    Option("no_plots", "flag", "write the tables and the summary, no figures"),
+)
+
+# Read before the other options, so not one of them (a config file does not name another).
+_CONFIG = Option("config", "text", "read the settings from a TOML file", metavar="FILE.toml")
+
+_ANALYSE_METHOD = (
+    setting_option("n_samples"),
+    setting_option("sampler"),
+    setting_option("n"),
+    Option("window", "text", _WINDOW_HELP, metavar="DURATION"),
+    setting_option("percentage"),
+    setting_option("bins"),
+    setting_option("conf_level"),
+    setting_option("flavour"),
+    setting_option("min_points"),
+    setting_option("ic_error"),
+    setting_option("target_se"),
+    setting_option("max_samples"),
+    setting_option("dtype"),
+    Option(
+        "on_disk",
+        "flag",
+        "write result.nc as the windows are analysed and read it back lazily: for records whose CLD "
+        "gradient does not fit in memory (a year of 1 Hz data)",
+    ),
+    Option(
+        "second_run",
+        "flag",
+        "narrow the range of every parameter whose highest IC reaches "
+        "--narrow-threshold to its band there, and analyse again (thesis 3.1): "
+        "results in DIR/second_run/",
+    ),
+    Option(
+        "narrow_threshold",
+        "number",
+        "IC from which a window is informative, for the narrowing",
+        default=IC_THRESHOLD,
+        metavar="IC",
+        setting="ic_threshold",
+    ),
+    Option(
+        "narrow_margin",
+        "number",
+        "the band is widened by M times its width on each side",
+        default=0.5,
+        metavar="M",
+        setting="margin",
+    ),
+    _SEED,
+)
+
+IDENTIFY_METHODS = ("dynia", "baseline", "whole")
+
+_IDENTIFY_SELECTION = (
+    Option(
+        "method",
+        "text",
+        "{default} (default): segments where the IC reaches --ic-threshold; baseline: "
+        "the accepted intervals of the Bittencourt et al. (2015) search; whole: "
+        "the whole record before the held-out part",
+        default="dynia",
+        choices=IDENTIFY_METHODS,
+    ),
+    Option(
+        "ic_threshold", "number", "dynia: IC from which a window is informative", default=IC_THRESHOLD, metavar="IC"
+    ),
+    Option(
+        "mode",
+        "text",
+        "dynia: a step is informative when any parameter's IC reaches the threshold (default) or when all do",
+        default="any",
+        choices=("any", "joint"),
+    ),
+    Option(
+        "held_out",
+        "number",
+        "share of the record, at its end, kept for validation",
+        default=0.3,
+        metavar="FRACTION",
+    ),
+    Option(
+        "exclude_flagged",
+        "flag",
+        "check the data and leave out what is flagged (output as missing, input interpolated)",
+    ),
+    Option(
+        "starts",
+        "whole",
+        "least-squares starting points: the middle of the ranges, then random",
+        default=1,
+        metavar="N",
+        setting="n_starts",
+    ),
+    setting_option("n_samples", "dynia: "),
+    setting_option("n", "dynia: "),
+    Option("window", "text", "dynia: " + _WINDOW_HELP, metavar="DURATION"),
+    setting_option("percentage", "dynia: "),
+    _SEED,
+)
+
+_SUGGEST_PILOT = (
+    Option("seed", "whole", "seed of the pilot runs (default: drawn at random and printed)", metavar="S"),
+    Option(
+        "max_samples",
+        "whole",
+        "the most samples of the pilot and of the proposal (default {default}); the behavioural share is "
+        "raised so that the pilot's 50 behavioural sets fit in N",
+        default=DEFAULT_MAX_SAMPLES,
+        metavar="N",
+    ),
+    Option(
+        "max_memory",
+        "size",
+        "the most memory the pilot may take, e.g. 4GB or 512MB (default: half the memory available); "
+        "a pilot estimated above it is refused",
+        metavar="SIZE",
+    ),
+    Option("json", "flag", "print the proposal as JSON"),
+)
+
+# Each command's option groups, in the order of its --help.
+_GROUPS = {
+    "analyse": (("data", _DATA), ("model", _MODEL), ("method", _ANALYSE_METHOD), ("output", _OUTPUT)),
+    "identify": (
+        ("data", _DATA),
+        ("model", _MODEL),
+        ("selection and fit", _IDENTIFY_SELECTION),
+        ("output", _OUTPUT),
+    ),
+    "suggest": (("data", _DATA), ("model", _MODEL), ("pilot and output", _SUGGEST_PILOT)),
+}
+
+# Every command's options by key: their defaults, their kinds in a --config file, and exactly what its summary records.
+OPTIONS = {
+    command: {option.key: option for _, options in groups for option in options} for command, groups in _GROUPS.items()
+}
+
+
+def setting_options(command):
+    """{library name: option as typed} of ``command``'s options, for naming a SettingsError's setting."""
+    return {option.setting or option.key: option.flag for option in OPTIONS[command].values()}
+
+
+# Not options of suggest, which writes nothing: known only to say so, instead of argparse's "ambiguous option"
+# (--out abbreviates --output and --output-file).
+WRITING_OPTIONS = ("--out", "--overwrite", "--no-plots")
+
+
+def unwritten(option):
+    """The argparse destination of an output option that suggest knows only to refuse."""
+    return f"unwritten_{option[2:].replace('-', '_')}"
+
+
+_COMMANDS = {
+    "analyse": dict(
+        help="run DYNIA on a CSV file and write the results to a directory",
+        description="Sample the model's parameters, simulate every sample on the logged input and, "
+        "at every time step, rank the samples over a moving window: the information "
+        "content IC(t) of each parameter, its confidence band and the CLD gradient.",
+        epilog="""\
+example (the DaISy heating-system record shipped in data/; it starts in steady state
+at an input of 6 V, so the model works in deviations from that operating point):
+  dynia analyse data/heating_system/heating_system.csv --time time --input u --output y \\
+      --model first-order --param K=0:40 --param T=0:200 \\
+      --input-offset 6 --offset first --x0 zero --seed 1 --out results/heating
+
+  writes results/heating/: ic.csv, limits.csv, samples.csv, summary.json, result.nc and
+  PNG figures (the data, and per parameter its information content and its
+  identifiability plot). All settings can also come from a TOML file:
+  dynia analyse --config run.toml (keys as the long options, e.g. samples = 5000,
+  and param = ["K=0:30", "T=0:300"]); options given on the command line win.
+""",
+    ),
+    "identify": dict(
+        help="re-identify the model by least squares on selected data and validate it",
+        description="Choose the data to fit on (DYNIA's high-IC segments, the intervals of the "
+        "Bittencourt et al. 2015 search, or the whole record), estimate the parameters "
+        "by least squares with standard errors, and score the model on the held-out end "
+        "of the record. Writes DIR/identified.json and DIR/fit.png.",
+        epilog="""\
+example (the heating-system record; the last 30 % of it is held out for validation):
+  dynia identify data/heating_system/heating_system.csv --time time --input u --output y \\
+      --model first-order --param K=0:40 --param T=0:200 \\
+      --input-offset 6 --offset first --x0 zero --method dynia --seed 1 --out results/heating-fit
+
+  writes results/heating-fit/identified.json (parameters, std_errors, segments as
+  [start_time, end_time] pairs, validation_error, settings) and fit.png.
+""",
+    ),
+    "suggest": dict(
+        help="propose a window, a behavioural share and a number of samples for analyse, and say why",
+        description="Estimate the record's dominant time constant, choose a window of about one time constant, "
+        "a behavioural share that lets the IC reach high values, and the number of samples that brings a "
+        "pilot run's IC standard error to 0.02; check the parameter ranges against a least-squares fit. "
+        "Writes nothing; prints the proposal (--json: as JSON).",
+        epilog="""\
+example (proposes --n, --percentage and --samples for dynia analyse, with the reasons):
+  dynia suggest data/heating_system/heating_system.csv --time time --input u --output y \\
+      --model first-order --param K=0:40 --param T=0:200 \\
+      --input-offset 6 --offset first --x0 zero --seed 1
+""",
+    ),
+}
+
+
+def parser():
+    """The argparse parser of the ``dynia`` command and its three commands."""
+    top = _Parser(
+        prog="dynia",
+        description="Dynamic Identifiability Analysis (DYNIA) of process data: "
+        "find the stretches of logged data that carry information about each model parameter.",
+    )
+    top.add_argument("--version", action="version", version=f"dynia {__version__}")
+    commands = top.add_subparsers(dest="command", metavar="COMMAND")
+    for command, text in _COMMANDS.items():
+        sub = commands.add_parser(command, formatter_class=argparse.RawDescriptionHelpFormatter, **text)
+        groups = _GROUPS[command]
+        for title, options in groups:
+            group = sub.add_argument_group(title)
+            for option in options:
+                option.add_to(group)
+        group.add_argument(_CONFIG.flag, metavar=_CONFIG.metavar, help=_CONFIG.help)
+        if command == "suggest":
+            for option in WRITING_OPTIONS:
+                group.add_argument(option, nargs="?", const=True, dest=unwritten(option), help=argparse.SUPPRESS)
+    return top
