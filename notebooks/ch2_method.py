@@ -736,7 +736,7 @@ for p, name in enumerate(example.model.names):
 #   share of informative windows (the power).
 #
 # The columns on the right are what the runs estimated
-# (`settings["noise_autocorrelation"]` and `["noise_size_factor"]`, medians
+# (`result.run.noise_autocorrelation` and `.noise_size_factor`, medians
 # over the pure-noise records).
 
 # %%
