@@ -7,6 +7,8 @@ zero-order-hold linear models (:class:`FirstOrder`, :class:`FOPDT`,
 :class:`SecondOrderDelay`, :class:`TransferFunction` for any python-control
 model); :mod:`~dynia.models.custom` wraps your own simulator
 (:class:`FunctionModel`) or state update (:class:`StateSpaceModel`).
+:mod:`~dynia.models.conceptual` holds nonlinear conceptual models built on
+them (HYMOD, a draining tank), loaded on first use.
 
 Examples
 --------
@@ -20,6 +22,8 @@ Examples
 array([[0.   , 1.264, 1.729, 1.9  ],
        [0.   , 0.   , 0.787, 1.554]])
 """
+
+import importlib
 
 from .base import Model, SimulationState
 from .custom import FunctionModel, StateSpaceModel
@@ -37,3 +41,10 @@ __all__ = [
     "FunctionModel",
     "StateSpaceModel",
 ]
+
+
+def __getattr__(name):
+    # The conceptual models (HYMOD, a tank) load on first use: dynia.models.conceptual.hymod().
+    if name == "conceptual":
+        return importlib.import_module(f"{__name__}.conceptual")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
