@@ -39,16 +39,9 @@ Examples
 
 import importlib
 
-from .errors import (
-    DataError,
-    DyniaError,
-    Interrupted,
-    ModelError,
-    NothingSelected,
-    OutputError,
-    SettingsError,
-    SuggestionError,
-)
+# The error types are part of the top-level API: catch dynia.DyniaError, dynia.SettingsError, ...
+from .errors import *  # noqa: F403
+from .errors import __all__ as _ERRORS
 
 __version__ = "0.1.0"
 
@@ -102,18 +95,7 @@ _SUBMODULES = frozenset(
     }
 )
 
-__all__ = [
-    *_VERBS,
-    "DyniaError",
-    "DataError",
-    "SettingsError",
-    "ModelError",
-    "OutputError",
-    "SuggestionError",
-    "NothingSelected",
-    "Interrupted",
-    "__version__",
-]
+__all__ = [*_VERBS, *_ERRORS, "__version__"]
 
 
 def __getattr__(name):
