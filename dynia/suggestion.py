@@ -74,7 +74,7 @@ constant on a heater step test. The share proposed is ``100 * 0.1^d`` %
 (capped at 10 %), a tenth of each range: 10 % for one parameter (the
 thesis's choice), 1 % for two, 0.1 % for three, the s^d law of the thesis's
 section 4.2. It is raised to at least ``100 * 50 / max_samples`` %, so that
-the pilot's 50 behavioural sets fit in ``max_samples`` (:data:`DEFAULT_MAX_SAMPLES`,
+the pilot's 50 behavioural sets fit in ``max_samples`` (:data:`~dynia.settings.DEFAULT_MAX_SAMPLES`,
 200 000): with five parameters 0.001 % would need five million samples for
 the pilot alone; 0.025 % spans about a fifth of each range instead of a
 tenth, and the reasons say so.
@@ -144,7 +144,15 @@ from .errors import DataError, ModelError, SettingsError, SuggestionError
 from .fit import fit_segments
 from .pipeline import run
 from .serial import json_number
-from .settings import IC_BATCHES, MIN_BATCH_BEHAVIOURAL, AnalysisSettings, check_dt, check_x0, parameter_box
+from .settings import (
+    DEFAULT_MAX_SAMPLES,
+    IC_BATCHES,
+    MIN_BATCH_BEHAVIOURAL,
+    AnalysisSettings,
+    check_dt,
+    check_x0,
+    parameter_box,
+)
 
 __all__ = [
     "Suggestion",
@@ -157,15 +165,12 @@ __all__ = [
     "run_memory",
     "available_memory",
     "IC_SE_TARGET",
-    "DEFAULT_MAX_SAMPLES",
     "MEMORY_SHARE",
     "MIN_EXPLAINED",
 ]
 
 # The Monte Carlo standard error of the IC the proposed number of samples aims at.
 IC_SE_TARGET = 0.02
-# The default of max_samples: the most samples the pilot and the proposal use (module docs, "The behavioural share").
-DEFAULT_MAX_SAMPLES = 200_000
 # Without a max_memory, a pilot may take this share of the memory available when suggest starts.
 MEMORY_SHARE = 0.5
 # Below this share of the output's variance explained (R^2) the first-order fit sizes no window.

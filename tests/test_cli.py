@@ -12,7 +12,9 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from dynia import __version__, load
-from dynia.cli.commands import UsageError, _bounds, main
+from dynia.cli import main
+from dynia.cli.commands import _bounds
+from dynia.cli.parser import UsageError
 from dynia.models import FirstOrder
 
 HEATING_ARGS = (

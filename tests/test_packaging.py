@@ -106,3 +106,18 @@ def test_nothing_in_the_package_tests_notebooks_or_benchmarks_uses_the_old_homes
         if old_home.search(line)
     ]
     assert offenders == []
+
+
+def test_the_commands_version_and_help_load_neither_the_engine_nor_numba():
+    code = (
+        "import sys\n"
+        "from dynia.cli import main\n"
+        "for words in (['--version'], ['analyse', '--help']):\n"
+        "    try:\n"
+        "        main(words)\n"
+        "    except SystemExit:\n"
+        "        pass\n"
+        "print(sorted(m for m in ('numba', 'scipy', 'dynia.engine', 'dynia.pipeline') if m in sys.modules))"
+    )
+    printed = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert printed.strip().endswith("[]")

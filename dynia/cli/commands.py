@@ -15,7 +15,6 @@ why (:mod:`dynia.suggestion`); ``--json`` prints it for machines. ``--window
 Bad input ends the command with one line on stderr and exit status 2.
 """
 
-import argparse
 import contextlib
 import dataclasses
 import errno
@@ -27,17 +26,15 @@ import math
 import os
 import platform
 import shlex
-import signal
 import sys
 import tomllib
-import warnings
 from pathlib import Path
 
 import numpy as np
 
 from .. import __version__, models
 from ..engine.windows import OverflowedWindowsWarning
-from ..errors import DyniaError, Interrupted, ModelError, OutputError, SettingsError
+from ..errors import DyniaError, ModelError, OutputError, SettingsError
 from ..identification import identify
 from ..io.csv import load_csv
 from ..io.outdir import OutputDirectory
@@ -49,48 +46,21 @@ from ..settings import MAX_PARAMETER, AnalysisSettings
 from ..suggestion import parse_duration, parse_size, suggest, window_half_width
 from ..verdicts import assess
 from . import report
-from .parser import OPTIONS, WRITING_OPTIONS, UsageError, parser, setting_options, unwritten
+from .parser import OPTIONS, WRITING_OPTIONS, UsageError, setting_options, unwritten
 
-__all__ = ["main"]
+__all__ = ["execute"]
 
 MODELS = {"first-order": models.FirstOrder, "fopdt": models.FOPDT, "second-order-delay": models.SecondOrderDelay}
 
 
-def main(argv=None):
-    """Entry point of the ``dynia`` command; returns the exit status.
+def execute(args, command_line, caught):
+    """Run the parsed command ``args``; returns the exit status (see :func:`dynia.cli.main`).
 
-    Errors in what the user gave (a :class:`~dynia.errors.DyniaError`) end
-    the command with one line on stderr and status 2; a signal with status
-    128 + its number and nothing written. Any other exception is a bug in
-    dynia and keeps its traceback.
+    ``caught`` collects the warnings of the run, which the command reports itself.
     """
-    command_parser = parser()
-    command_line = ["dynia", *(sys.argv[1:] if argv is None else map(str, argv))]
-    try:
-        # Warnings of numpy, matplotlib and the rest would break the promise of
-        # one line per error; dynia's own warnings are reported by the commands.
-        with warnings.catch_warnings(record=True) as caught, np.errstate(all="ignore"):
-            warnings.simplefilter("always")
-            args = command_parser.parse_args(_attached(command_parser, command_line[1:]))
-            if args.command is None:
-                command_parser.print_help()
-                return 2
-            run_command = {"analyse": _analyse, "identify": _identify, "suggest": _suggest}[args.command]
-            with _named_as_options(args.command):
-                return run_command(_options(args), command_line, caught)
-    except DyniaError as error:
-        print(f"dynia: error: {_one_line(error)}", file=sys.stderr)
-        return 2
-    except Interrupted as error:
-        print(f"dynia: {error}; nothing was written", file=sys.stderr)
-        return 128 + getattr(signal, error.signal_name)
-    except KeyboardInterrupt:
-        print("dynia: interrupted; nothing was written", file=sys.stderr)
-        return 130
-
-
-def _one_line(error):
-    return " ".join(str(error).split())
+    run_command = {"analyse": _analyse, "identify": _identify, "suggest": _suggest}[args.command]
+    with _named_as_options(args.command):
+        return run_command(_options(args), command_line, caught)
 
 
 @contextlib.contextmanager
@@ -213,42 +183,6 @@ def _check_columns(options):
                     f"{option} names the time column {options['time'].strip()!r} (--time); expected the column "
                     f"of the {option[2:]}'s values"
                 )
-
-
-def _attached(parser, words):
-    """``--window -60s`` as ``--window=-60s``.
-
-    argparse reads a word starting with ``-`` after an option that takes a value as another option, and fails
-    with "expected one argument"; attached, the value reaches the option's own check and its message.
-    """
-    takes_value, known = set(), set()
-    for action in parser._actions:
-        if isinstance(action, argparse._SubParsersAction):
-            for command in action.choices.values():
-                for option in command._actions:
-                    known.update(option.option_strings)
-                    if option.option_strings and option.nargs is None:
-                        takes_value.update(option.option_strings)
-    attached, index = [], 0
-    while index < len(words):
-        word = words[index]
-        if word == "--":
-            attached += words[index:]
-            break
-        following = words[index + 1] if index + 1 < len(words) else None
-        if (
-            word in takes_value
-            and following is not None
-            and following.startswith("-")
-            and not following.startswith("--")
-            and following not in known
-        ):
-            attached.append(f"{word}={following}")
-            index += 2
-            continue
-        attached.append(word)
-        index += 1
-    return attached
 
 
 def _model_file(spec):

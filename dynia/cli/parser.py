@@ -14,10 +14,9 @@ import types
 
 from .. import __version__
 from ..errors import SettingsError
-from ..settings import IC_THRESHOLD, SAMPLERS, AnalysisSettings
-from ..suggestion import DEFAULT_MAX_SAMPLES
+from ..settings import DEFAULT_MAX_SAMPLES, IC_THRESHOLD, SAMPLERS, AnalysisSettings
 
-__all__ = ["OPTIONS", "Option", "UsageError", "WRITING_OPTIONS", "parser", "setting_options", "unwritten"]
+__all__ = ["OPTIONS", "Option", "UsageError", "WRITING_OPTIONS", "attached", "parser", "setting_options", "unwritten"]
 
 
 class UsageError(SettingsError):
@@ -448,3 +447,39 @@ def parser():
             for option in WRITING_OPTIONS:
                 group.add_argument(option, nargs="?", const=True, dest=unwritten(option), help=argparse.SUPPRESS)
     return top
+
+
+def attached(parser, words):
+    """``--window -60s`` as ``--window=-60s``.
+
+    argparse reads a word starting with ``-`` after an option that takes a value as another option, and fails
+    with "expected one argument"; attached, the value reaches the option's own check and its message.
+    """
+    takes_value, known = set(), set()
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for command in action.choices.values():
+                for option in command._actions:
+                    known.update(option.option_strings)
+                    if option.option_strings and option.nargs is None:
+                        takes_value.update(option.option_strings)
+    attached, index = [], 0
+    while index < len(words):
+        word = words[index]
+        if word == "--":
+            attached += words[index:]
+            break
+        following = words[index + 1] if index + 1 < len(words) else None
+        if (
+            word in takes_value
+            and following is not None
+            and following.startswith("-")
+            and not following.startswith("--")
+            and following not in known
+        ):
+            attached.append(f"{word}={following}")
+            index += 2
+            continue
+        attached.append(word)
+        index += 1
+    return attached
