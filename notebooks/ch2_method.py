@@ -522,10 +522,11 @@ print(f"of the flagged steps with IC(rt) > 0.5, share whose band misses the true
 # windows' best fits show and the autocorrelation that the residuals of the
 # record's best fit show (a stretch the model cannot fit raises that
 # autocorrelation, and with it the floor; see the section on coloured noise
-# below). The light grey veil marks the windows below the noise floor, where even the
-# worst-fitting tenth of the sampled rt values fits no worse than the best
-# beyond noise; and in the windows above it, the verdicts also ask whether
-# the behavioural set ties within noise, so that the band ranks noise. The
+# below). The light grey veil marks the windows that are not informative
+# (`DyniaResult.informative_windows`, the one rule of the package): those
+# below the noise floor, where even the worst-fitting tenth of the sampled
+# rt values fits no worse than the best beyond noise, and those above it
+# whose behavioural set ties within noise, so that the band ranks noise. The
 # last printed lines say how many of the steps that look identified either
 # check flags, and how often the band misses the true rt with and without a
 # flag. With the defaults every such step without flow above the noise is

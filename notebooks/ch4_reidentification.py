@@ -751,7 +751,7 @@ for label, summary in summaries.items():
 #   points, a larger error.
 # - **The automated second run depends on its narrowing rule.** It needs the
 #   first run to narrow the gain (`dynia.refine.narrowed_bounds`: the bands
-#   of the windows with IC >= 0.75 must overlap). Windows whose output is
+#   of the informative windows, IC >= 0.5, must overlap). Windows whose output is
 #   only noise can have a high IC with a band that excludes the true gain;
 #   counted, one such window stops the narrowing and the second run selects
 #   nothing. The rule therefore leaves out bands pressed against a bound of
@@ -803,8 +803,10 @@ print(f"first-order model on second-order data: K = {wrong_structure.parameters[
       f"{score(wrong_structure, *second_order['clean']):.4f} against "
       f"{score(right_structure, *second_order['clean']):.4f} "
       f"with the right structure (noise {noise})")
-print(f"highest IC of T: {np.nanmax(wrong_structure.dynia_result.ic[1]):.2f} (structure_warnings counts windows "
-      "from IC 0.75)")
+wrong_t_informative = wrong_structure.dynia_result.informative_windows(parameters=["T"])[0]
+print(f"highest IC of T: {np.nanmax(wrong_structure.dynia_result.ic[1]):.2f}; windows informative about T "
+      f"(IC >= {dynia.settings.IC_THRESHOLD}, above the noise floor, not tied), which structure_warnings "
+      f"compares: {int(wrong_t_informative.sum())}")
 print("Identification.warnings:", wrong_structure.warnings)
 
 cooling_report = check_quality(None, cooling_u_all, cooling_y_all)
@@ -855,17 +857,20 @@ fig.savefig(f"{figure_dir}/reid_structure.png", dpi=120, bbox_inches="tight")
 # `reid_structure.png`, top: the first-order model's time constant on the
 # second-order record. Its band spans most of [0, 100] except right after
 # the steps, where only its lower limit rises; the least-squares T lands
-# near T1 + T2 + theta. Grey veils the windows below the noise floor: the
-# start, at input 0, and the held-out block, which this run does not see.
+# near T1 + T2 + theta. Grey veils the windows that are not informative
+# (below the noise floor, or with best sets tied within noise): the start,
+# at input 0, the held-out block, which this run does not see, and wherever
+# T's band only ranks noise.
 # Bottom: the gain on the whole cooling-water record
 # with the narrow range, and the true gain (dashed), which falls from 2.0 to
 # 1.8 during the change of operating mode (orange).
 #
 # - **The wrong structure draws no warning.** The first-order model fits the
 #   second-order responses clearly worse (the validation error above is well
-#   above the noise level, against the right structure's at it), but T's IC
-#   stays below the 0.75 from which the check counts a window (its highest
-#   value is printed above), so the drift test has nothing to compare; and a
+#   above the noise level, against the right structure's at it), but no
+#   window is informative about T: where its IC is highest (printed above)
+#   the window is below the noise floor or its best sets tie within noise,
+#   so the drift test has nothing to compare; and a
 #   misfit that is the same at every step would not move a parameter anyway.
 #   The validation error shows the structure error; the warning does not.
 # - **A parameter that really varies does draw one, if the range is narrow

@@ -73,8 +73,10 @@ fig.savefig(f"{figure_dir}/quickstart_example1.png", dpi=120)
 # curve, this much apart. And every result carries the noise floor
 # (`res.informative`, one flag per step): a window is informative when the
 # worst-fitting tenth of the samples fits it clearly worse than the best, by
-# more than measurement noise alone would make them differ. The plots veil the
-# other windows grey. `res.summary()` gives, per parameter, the IC of one
+# more than measurement noise alone would make them differ. The plots veil
+# grey the windows that are not informative: below the floor, or with best
+# sets that tie within noise (`res.informative_windows()`, the one rule that
+# segments, the second run, the structure warnings and the verdicts use). `res.summary()` gives, per parameter, the IC of one
 # window with its error, and a verdict on it: the highest IC among the
 # windows that can be evidence (whole, above the noise floor, behavioural set
 # not tied within noise) when one reaches 0.5, else the highest IC of all:
