@@ -61,6 +61,7 @@ from . import _checks
 from .engine.selection import lowest_weighted
 from .engine.windows import ArrayErrors, analyse_errors, window_costs
 from .errors import SettingsError
+from .io.frames import unpack
 from .settings import ADAPTIVE_SAMPLERS as SCHEMES
 from .settings import AnalysisSettings, RunRecord, merged_settings, parameter_box
 from .verdicts import assess
@@ -151,6 +152,9 @@ def adaptive_run(
     ----------
     u, y, model, bounds, dt, n, percentage, bins, conf_level, flavour, x0, rng, min_points, window, workers, progress
         As :func:`dynia.run`; ``bounds`` is a mapping name -> (low, high).
+        pandas ``u`` and ``y`` too, as :func:`dynia.run` takes them
+        (:func:`dynia.io.frames.unpack`): one index, whose time gives dt and
+        whose dates become the result's ``timestamps``.
     scheme : {"iis", "de"}, optional
         How the boxes are placed (see the module documentation); the
         settings' ``sampler``. Default "iis".
@@ -190,6 +194,8 @@ def adaptive_run(
         ``.samples``, ``run.n_evaluations`` the evaluations spent and
         ``run.n_blocks`` the blocks of windows.
     """
+    # pandas in, as dynia.run takes it: a time index gives dt (so before the settings), dates the result's time axis.
+    u, y, dt, timestamps = unpack(u, y, dt if dt is not None else getattr(settings, "dt", None))
     settings = merged_settings(
         settings,
         dict(locals(), sampler=scheme),
@@ -234,6 +240,7 @@ def adaptive_run(
         weights=weights,
         simulations=lambda rows: [sims[rows]],
     )
+    result = dataclasses.replace(result, timestamps=timestamps)
     # The engine gives the noise floor, so the verdicts need neither data nor simulation.
     return dataclasses.replace(result, verdicts=assess(result))
 

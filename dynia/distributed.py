@@ -114,6 +114,7 @@ from .engine.windows import (
     window_mean,
 )
 from .errors import DataError, DyniaError, ModelError, SettingsError
+from .io.frames import unpack
 from .pipeline import warn_dropped
 from .result import DyniaResult
 from .sampling import sample
@@ -164,8 +165,11 @@ def run(
 
     Parameters
     ----------
-    u, y : array_like, shape (n_steps,)
+    u, y : array_like, shape (n_steps,), or pandas Series / DataFrame
         Input and measured output; NaN in ``y`` marks a missing measurement.
+        pandas objects as :func:`dynia.run` takes them
+        (:func:`dynia.io.frames.unpack`): one index, whose time gives dt
+        and whose dates become the result's ``timestamps``.
     model : dynia.models.Model
         The model simulated; it is sent to the workers (pickled).
     bounds : mapping of str to (low, high)
@@ -237,6 +241,8 @@ def run(
         raise TypeError(
             f"client must be a distributed.Client, or None for a local cluster; got {type(client).__name__}"
         )
+    # pandas in, as dynia.run takes it: a time index gives dt (so before the settings), dates the result's time axis.
+    u, y, dt, timestamps = unpack(u, y, dt if dt is not None else getattr(settings, "dt", None))
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
     settings = merged_settings(settings, locals())
     settings.require(
@@ -282,7 +288,8 @@ def run(
             (sample_chunks, time_chunks),
             progress,
         )
-    return _result(u, y, model, names, box, samples, settings, flavour_impl, windows, analysed, totals)
+    result = _result(u, y, model, names, box, samples, settings, flavour_impl, windows, analysed, totals)
+    return result if timestamps is None else dataclasses.replace(result, timestamps=timestamps)
 
 
 def _on_cluster(client, need, model, u, y, box, samples, model_order, settings, windows, chunk_sizes, progress):

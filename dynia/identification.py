@@ -61,7 +61,7 @@ Examples
 """
 
 import numbers
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -69,6 +69,7 @@ from . import _checks
 from .baseline import find_intervals
 from .errors import NothingSelected, SettingsError
 from .fit import fit_segments
+from .io.frames import unpack
 from .pipeline import run
 from .quality import check_quality
 from .segments import (
@@ -82,6 +83,7 @@ from .segments import (
 from .serial import json_number
 from .settings import IC_THRESHOLD, merged_settings, parameter_box
 from .structure import structure_warnings
+from .verdicts import assess
 
 __all__ = ["Identification", "identify", "METHODS", "SELECTED_ALL_SHARE"]
 
@@ -209,16 +211,19 @@ def identify(
 
     Parameters
     ----------
-    u, y : array_like, shape (n_steps,)
+    u, y : array_like, shape (n_steps,), or pandas Series / DataFrame
         Input and output, deviation variables around the operating point
         (as ``dynia analyse --offset/--input-offset`` prepares them). NaN in
-        ``y`` marks a missing sample.
+        ``y`` marks a missing sample. pandas objects as :func:`dynia.run`
+        takes them (:func:`dynia.io.frames.unpack`): one index, whose time
+        gives dt and whose dates become ``dynia_result.timestamps``.
     model : dynia.models.Model
     bounds : mapping of str to (low, high)
         Every model parameter's range: DYNIA's prior and the fit's bounds.
     method : {"dynia", "baseline", "whole", "given"}
         How the fitting data are chosen (see the module documentation).
     dt : float, default 1.0
+        Sample time; with a time index its spacing (a ``dt`` given must agree).
     x0 : {"zero", "steady"}, default "zero"
         Initial state of every simulation, in DYNIA and in the fit.
     held_out : float or list of (start, stop), default 0.3
@@ -256,6 +261,8 @@ def identify(
     -------
     Identification
     """
+    # pandas in, as dynia.run takes it, before anything is cut out of the record by step.
+    u, y, dt, timestamps = unpack(u, y, dt if dt is not None else getattr(settings, "dt", None))
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
     _check_method(model, method, segments, quality or exclude_flagged)
     analysis = merged_settings(settings, locals())
@@ -269,7 +276,7 @@ def identify(
     notes = []
     dynia_result = baseline_result = None
     if method == "dynia":
-        dynia_result = run(u, y_fit, model, bounds, settings=analysis, rng=rng)
+        dynia_result = _dated(run(u, y_fit, model, bounds, settings=analysis, rng=rng), timestamps)
         chosen = intersect_segments(
             segments_from_ic(
                 dynia_result, ic_threshold=ic_threshold, mode=mode, min_length=min_length, merge_gap=merge_gap
@@ -300,6 +307,14 @@ def identify(
     recorded = _recorded(asked, analysis, bounds, validation, baseline_result, segmenting)
     found = dict(dynia_result=dynia_result, baseline_result=baseline_result, quality=report, settings=recorded)
     return _identification(asked, segmenting, fit, u, y, (chosen, fit_part, validation), notes, **found)
+
+
+def _dated(result, timestamps):
+    """``result`` with the record's dates, as :func:`dynia.run` gives them, and its verdicts naming them."""
+    if timestamps is None:
+        return result
+    dated = replace(result, timestamps=timestamps)
+    return replace(dated, verdicts=assess(dated))
 
 
 def _quality_checked(u, y, dt, quality, exclude_flagged, quality_options):

@@ -47,7 +47,8 @@ from .engine.noise import (
     record_noise_floor,
     record_residuals,
 )
-from .errors import DataError, ModelError
+from .errors import DataError, ModelError, SettingsError
+from .io.frames import unpack
 from .models import Model
 from .result import DyniaResult
 from .sampling import sample
@@ -287,8 +288,12 @@ class OnlineDynia:
 
         Parameters
         ----------
-        u, y : array_like, shape (n_steps,)
+        u, y : array_like, shape (n_steps,), or pandas Series / DataFrame
             Input and measured output (NaN marks a missing measurement).
+            pandas objects as :func:`dynia.run` takes them
+            (:func:`dynia.io.frames.unpack`): one index; a time index must be
+            spaced by the ``dt`` this object steps by, and its dates become
+            the result's ``timestamps``.
 
         Returns
         -------
@@ -305,6 +310,17 @@ class OnlineDynia:
             lowest total absolute error over the replayed steps, which is
             simulated once more; a single update cannot give them.
         """
+        # The samples step by the dt they were made with: a time index is checked against it, never adopted.
+        dt = self._analysis.dt
+        try:
+            u, y, _, timestamps = unpack(u, y, dt)
+        except SettingsError:
+            spacing = unpack(u, y)[2]
+            raise SettingsError(
+                f"the index of the record replayed is spaced {spacing:g} s, but this OnlineDynia steps by dt = {dt:g} "
+                f"s; make it with dt={spacing:g}",
+                "dt",
+            ) from None
         u, y = _checks.record(u, y, n_inputs=self._model.n_inputs)
         n_params, n_bins = self.bin_centres.shape
         ic = np.empty((n_params, y.size))
@@ -348,6 +364,7 @@ class OnlineDynia:
             bin_centres=self.bin_centres,
             settings=self._analysis,
             run=run,
+            timestamps=timestamps,
             **floor_fields(floor),
         )
 

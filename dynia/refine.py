@@ -118,7 +118,10 @@ def second_run(u, y, model, bounds, *, ic_threshold=IC_THRESHOLD, margin=0.5, **
 
     ``options`` go to both :func:`dynia.run` calls (``rng`` too: give a
     Generator to draw different samples for the second run, or a seed to
-    draw the same uniform numbers scaled to the new ranges).
+    draw the same uniform numbers scaled to the new ranges). ``u`` and ``y``
+    go to both as given, so that pandas objects are unpacked by both alike
+    (:func:`dynia.io.frames.unpack`): the two runs see the same aligned
+    record, dt and ``timestamps``.
 
     Returns
     -------

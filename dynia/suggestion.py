@@ -142,6 +142,7 @@ from . import _checks
 from .engine.windows import default_chunk_steps
 from .errors import DataError, ModelError, SettingsError, SuggestionError
 from .fit import fit_segments
+from .io.frames import unpack
 from .pipeline import run
 from .serial import json_number
 from .settings import (
@@ -369,15 +370,17 @@ class TimeScale:
     x0: str = "zero"
 
 
-def dominant_time_constant(u, y, dt=1.0, x0="zero"):
+def dominant_time_constant(u, y, dt=None, x0="zero"):
     """The time constant of a first-order fit to the whole record (module docs).
 
     Parameters
     ----------
-    u : array_like, shape (n_steps,) or (n_steps, n_inputs)
-    y : array_like, shape (n_steps,)
-        NaN marks a missing value.
-    dt : float, default 1.0
+    u : array_like, shape (n_steps,) or (n_steps, n_inputs), or pandas Series / DataFrame
+    y : array_like, shape (n_steps,), or pandas Series
+        NaN marks a missing value. pandas objects as :func:`dynia.run` takes
+        them (:func:`dynia.io.frames.unpack`): one index, whose time gives dt.
+    dt : float, optional
+        Sample time; default the spacing of a time index, else 1.0.
     x0 : {"zero", "steady"}, default "zero"
         The analysis's initial state: the responses start at rest at zero
         input, or at rest at the inputs' first values.
@@ -386,7 +389,8 @@ def dominant_time_constant(u, y, dt=1.0, x0="zero"):
     -------
     TimeScale
     """
-    dt, x0 = check_dt(dt), check_x0(x0)
+    u, y, dt, _ = unpack(u, y, dt)
+    dt, x0 = check_dt(1.0 if dt is None else dt), check_x0(x0)
     columns = np.asarray(u, dtype=float)
     n_inputs = 1 if columns.ndim == 1 else columns.shape[1]
     u, y = _checks.record(u, y, n_inputs=n_inputs)
@@ -533,7 +537,7 @@ def suggest(
     model,
     bounds,
     *,
-    dt=1.0,
+    dt=None,
     x0="zero",
     ic_se_target=IC_SE_TARGET,
     max_samples=DEFAULT_MAX_SAMPLES,
@@ -548,14 +552,19 @@ def suggest(
 
     Parameters
     ----------
-    u, y : array_like
+    u, y : array_like, or pandas Series / DataFrame
         Input (n_steps,) or (n_steps, n_inputs) and output (n_steps,), as
         :func:`dynia.run` takes them (deviation variables when the analysis
-        uses offsets). NaN in ``y`` marks a missing value.
+        uses offsets). NaN in ``y`` marks a missing value. Two pandas
+        objects must share one index; a time index must be uniformly spaced
+        and gives dt, so that the window and the time constant are in
+        seconds (:func:`dynia.io.frames.unpack`).
     model : dynia.models.Model
     bounds : mapping of str to (low, high)
         The ranges the analysis would sample.
-    dt : float, default 1.0
+    dt : float, optional
+        Sample time in seconds; default the spacing of a time index, else
+        1.0. Given with a time index, it must agree with its spacing.
     x0 : {"zero", "steady"}, default "zero"
         The analysis's initial state, used by the time-scale fit, the pilot
         and the least-squares fit.
@@ -583,9 +592,16 @@ def suggest(
         the output's variance: the record shows no time scale to size a
         window by.
     dynia.errors.SettingsError
-        When the pilot would need more memory than ``max_memory``.
+        When the pilot would need more memory than ``max_memory``, or ``dt``
+        disagrees with the spacing of a time index.
+    dynia.errors.DataError
+        pandas ``u`` and ``y`` on different indexes, or a time index that is
+        not uniformly spaced (a gap of missing rows): their values are never
+        paired by position.
     """
-    dt, x0 = check_dt(dt), check_x0(x0)
+    # pandas in, as dynia.run takes it: aligned on one index, dt from its time.
+    u, y, dt, _ = unpack(u, y, dt)
+    dt, x0 = check_dt(1.0 if dt is None else dt), check_x0(x0)
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
     names, box = parameter_box(bounds, model.names, repr(model))
     bounds = {name: (float(low), float(high)) for name, (low, high) in zip(names, box)}
