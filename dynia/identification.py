@@ -61,7 +61,7 @@ Examples
 """
 
 import numbers
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -70,7 +70,7 @@ from .baseline import find_intervals
 from .errors import NothingSelected, SettingsError
 from .fit import fit_segments
 from .io.frames import unpack
-from .pipeline import run
+from .pipeline import dated, run
 from .quality import check_quality
 from .segments import (
     check_segments,
@@ -83,7 +83,6 @@ from .segments import (
 from .serial import json_number
 from .settings import IC_THRESHOLD, merged_settings, parameter_box
 from .structure import structure_warnings
-from .verdicts import assess
 
 __all__ = ["Identification", "identify", "METHODS", "SELECTED_ALL_SHARE"]
 
@@ -276,7 +275,9 @@ def identify(
     notes = []
     dynia_result = baseline_result = None
     if method == "dynia":
-        dynia_result = _dated(run(u, y_fit, model, bounds, settings=analysis, rng=rng), timestamps)
+        dynia_result = run(u, y_fit, model, bounds, settings=analysis, rng=rng)
+        if timestamps is not None:
+            dynia_result = dated(dynia_result, timestamps)
         chosen = intersect_segments(
             segments_from_ic(
                 dynia_result, ic_threshold=ic_threshold, mode=mode, min_length=min_length, merge_gap=merge_gap
@@ -307,14 +308,6 @@ def identify(
     recorded = _recorded(asked, analysis, bounds, validation, baseline_result, segmenting)
     found = dict(dynia_result=dynia_result, baseline_result=baseline_result, quality=report, settings=recorded)
     return _identification(asked, segmenting, fit, u, y, (chosen, fit_part, validation), notes, **found)
-
-
-def _dated(result, timestamps):
-    """``result`` with the record's dates, as :func:`dynia.run` gives them, and its verdicts naming them."""
-    if timestamps is None:
-        return result
-    dated = replace(result, timestamps=timestamps)
-    return replace(dated, verdicts=assess(dated))
 
 
 def _quality_checked(u, y, dt, quality, exclude_flagged, quality_options):

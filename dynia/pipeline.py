@@ -23,6 +23,7 @@ from .verdicts import assess
 
 __all__ = [
     "run",
+    "dated",
     "ic_se_that_matters",
     "DROPPED_WARNING_SHARE",
     "DroppedSamplesWarning",
@@ -202,7 +203,7 @@ def run(
             u, y, model, dict(zip(names, map(tuple, box))), scheme=settings.sampler, settings=settings, rng=rng
         )
         # The verdicts name times: again with the dates, when there are dates.
-        return result if timestamps is None else _assessed(_dated(result, timestamps))
+        return result if timestamps is None else dated(result, timestamps)
     generator = _checks.generator(rng)
     samples = sample(settings.sampler, settings.n_samples, box, generator)
     # The arrays in memory, or in settings.store as they are produced, committed with the verdicts (dynia.io.arrays).
@@ -211,7 +212,7 @@ def run(
             result = _analyse_samples(u, y, model, names, box, samples, settings, progress, output)
         else:
             result = _analyse_to_target(u, y, model, names, box, samples, settings, generator, progress, output)
-        return output.commit(_assessed(_dated(result, timestamps)))
+        return output.commit(dated(result, timestamps))
 
 
 def _analyse_samples(u, y, model, names, box, samples, settings, progress, output):
@@ -387,13 +388,14 @@ def _time_axis(n_steps, dt):
     return time
 
 
-def _assessed(result):
-    """``result`` with its verdicts: it carries the noise floor, so they need neither data nor simulation."""
+def dated(result, timestamps):
+    """``result`` with the record's dates (when it has them) and its verdicts, which then name the dates.
+
+    The result carries the noise floor, so the verdicts need neither data nor simulation.
+    """
+    if timestamps is not None:
+        result = dataclasses.replace(result, timestamps=timestamps)
     return dataclasses.replace(result, verdicts=assess(result))
-
-
-def _dated(result, timestamps):
-    return result if timestamps is None else dataclasses.replace(result, timestamps=timestamps)
 
 
 def _compiled_state_space(model):
