@@ -50,7 +50,8 @@ from .engine.noise import (
 )
 from .engine.windows import OverflowedWindowsWarning, blank_overflowed, error_scale
 from .errors import DataError, ModelError
-from .models import Model
+from .models import FunctionModel, Model, StateSpaceModel
+from .models.base import SameOutput, refuse_ignored_params
 from .result import DyniaResult
 from .sampling import sample
 from .settings import SAMPLERS, AnalysisSettings, RunRecord, merged_settings, parameter_box
@@ -215,6 +216,7 @@ class OnlineDynia:
             RunRecord.of(model, n_sampled=n_samples, n_dropped=0), n_behavioural=self._flavour.count
         )
         self._allocate_window(settings.window_length, n_samples)
+        self._same = SameOutput(model, self._model_params, _functions(model))
         self.steps = 0
         self._blank_results()
         self._unscaled()
@@ -244,6 +246,7 @@ class OnlineDynia:
         self._errors.fill(0.0)
         self._measured.fill(False)
         self._diverged.fill(False)
+        self._same = SameOutput(self._model, self._model_params, _functions(self._model))
         self.steps = 0
         self._blank_results()
         self._unscaled()
@@ -294,6 +297,7 @@ class OnlineDynia:
         # An unstable set may overflow; it is caught below, so numpy need not warn.
         with np.errstate(over="ignore", invalid="ignore"):
             simulated = self._stepper.step(u_t)
+            self._same.check(simulated[:, None], last=False)  # refused by replay, which sees the whole record
             np.isfinite(simulated, out=self._finite)
             if not self._finite.all():
                 self._diverged |= ~self._finite
@@ -345,6 +349,14 @@ class OnlineDynia:
             autocorrelation comes from the residuals of the set with the
             lowest total absolute error over the replayed steps, which is
             simulated once more; a single update cannot give them.
+
+        Raises
+        ------
+        ModelError
+            When every parameter set's output has been the same at every
+            step fed since the start (or :meth:`reset`), as :func:`dynia.run`
+            refuses such a model: every window's sets tie. A single update
+            cannot tell, since a later input may still excite the model.
         """
         u, y = _checks.record(u, y, n_inputs=self._model.n_inputs)
         n_params, n_bins = self.bin_centres.shape
@@ -367,6 +379,8 @@ class OnlineDynia:
             best[step], upper[step], threshold[step] = self._best, self._upper, self._threshold
             points[step] = self._present
             add_record_errors(totals, self._errors[(self.steps - 1) % width][None])  # as the batch engine adds them
+        if self._same.same:  # every set tied in every window: no result is one
+            refuse_ignored_params(self._model, self._model_params, _functions(self._model))
         totals[self._diverged] = np.inf
         floor = record_noise_floor(
             best,
@@ -489,6 +503,15 @@ class OnlineDynia:
         self.ci = np.full((n_params, 2), np.nan)
         self.median = np.full(n_params, np.nan)
         self.gradient = np.full((n_params, n_bins), np.nan)
+
+
+def _functions(model):
+    """What of ``model`` computes its output, as its 'ignores params' refusal names it."""
+    if isinstance(model, FunctionModel):
+        return "fn"
+    if isinstance(model, StateSpaceModel):
+        return "step and output"
+    return "the simulation"
 
 
 def _stepped(stepper, u, rows):
