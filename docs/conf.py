@@ -75,8 +75,13 @@ def exported_names(package):
     lines = []
     for name in getattr(module, "__all__", ()):
         obj = getattr(module, name)
-        defined_here = getattr(obj, "__module__", package) == package
-        if defined_here or inspect.ismodule(obj) or f"{package}.{name}" in sys.modules:
+        if inspect.ismodule(obj) or f"{package}.{name}" in sys.modules:
+            continue
+        if not (inspect.isfunction(obj) or inspect.isclass(obj)):
+            continue  # constants: documented in the module that defines them (module_data)
+        if obj.__module__ == package:
+            # Defined in the package itself (dynia.cli.main): documented here, its one home.
+            lines += [f".. auto{'class' if inspect.isclass(obj) else 'function'}:: {package}.{name}", ""]
             continue
         home = f"{obj.__module__}.{obj.__qualname__}"
         if inspect.isclass(obj):

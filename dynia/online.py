@@ -34,6 +34,7 @@ grows with the number of steps.
 import copy
 import dataclasses
 import numbers
+import warnings
 
 import numpy as np
 
@@ -47,9 +48,11 @@ from .engine.noise import (
     record_noise_floor,
     record_residuals,
 )
+from .engine.windows import OverflowedWindowsWarning, blank_overflowed, error_scale
 from .errors import DataError, ModelError, SettingsError
 from .io.frames import unpack
-from .models import Model
+from .models import FunctionModel, Model, StateSpaceModel
+from .models.base import SameOutput, refuse_ignored_params
 from .result import DyniaResult
 from .sampling import sample
 from .settings import SAMPLERS, AnalysisSettings, RunRecord, merged_settings, parameter_box
@@ -103,6 +106,9 @@ class OnlineDynia:
         (n_params, n_bins); NaN before the first usable window.
     median : ndarray (n_params,)
         The CLD median of the latest step (see :attr:`dynia.result.DyniaResult.median`).
+    error_scale : float
+        The power of two every absolute error is multiplied by: 1.0 until the
+        first measured value that is not zero fixes it (see Notes).
 
     Notes
     -----
@@ -119,6 +125,22 @@ class OnlineDynia:
     ``.n_diverged`` counts them. With ``x0="steady"``, a dead time longer
     than the whole record can differ from the batch run in the last bits
     (see :meth:`dynia.models.base.Model.stepper`).
+
+    Magnitudes: the batch run multiplies every absolute error by the power
+    of two that brings the record's largest ``|y|`` within 2^±332
+    (:func:`dynia.engine.windows.error_scale`), so that the costs, MAEs
+    squared, neither overflow nor underflow into ties. Online the largest
+    ``|y|`` is not known in advance: the power of two is fixed from the first
+    measured value that is not zero (the errors logged before it, against
+    zeros, are rescaled alike), and ``.error_scale`` holds it. A power of two
+    scales exactly, so the results equal the batch run's, whose power may
+    differ, as long as the record stays within about 1e54 of that first
+    value. A window whose behavioural MAE still overflows is left without
+    results with an :class:`~dynia.engine.windows.OverflowedWindowsWarning`,
+    as in the batch run, when the first value's power suits every measurement
+    so far; when a later measurement lies beyond it, the update raises a
+    :class:`~dynia.errors.DataError` naming both magnitudes, since one pass
+    cannot rescale the windows already analysed.
 
     Examples
     --------
@@ -195,8 +217,10 @@ class OnlineDynia:
             RunRecord.of(model, n_sampled=n_samples, n_dropped=0), n_behavioural=self._flavour.count
         )
         self._allocate_window(settings.window_length, n_samples)
+        self._same = SameOutput(model, self._model_params, _functions(model))
         self.steps = 0
         self._blank_results()
+        self._unscaled()
 
     def _allocate_window(self, width, n_samples):
         """The ring of the window's last ``width`` steps of errors, and the per-sample work arrays."""
@@ -223,8 +247,23 @@ class OnlineDynia:
         self._errors.fill(0.0)
         self._measured.fill(False)
         self._diverged.fill(False)
+        self._same = SameOutput(self._model, self._model_params, _functions(self._model))
         self.steps = 0
         self._blank_results()
+        self._unscaled()
+
+    def _unscaled(self):
+        """No error scale fixed yet (see Magnitudes in the class Notes)."""
+        self.error_scale = 1.0
+        self._scaled_by = None  # (step, y_t) of the measured value that fixed the scale
+        self._largest = 0.0  # the largest |y| measured so far
+
+    def _fix_scale(self, y_t):
+        """Fix the error scale from ``y_t``, the first measured value that is not zero; rescale the window's errors."""
+        self.error_scale = error_scale([y_t])
+        self._scaled_by = (self.steps, y_t)
+        if self.error_scale != 1.0:
+            self._errors *= self.error_scale  # exact: a power of two; errors against zeros so far
 
     def update(self, u_t, y_t):
         """Feed the input and the measured output logged at the next step.
@@ -259,6 +298,7 @@ class OnlineDynia:
         # An unstable set may overflow; it is caught below, so numpy need not warn.
         with np.errstate(over="ignore", invalid="ignore"):
             simulated = self._stepper.step(u_t)
+            self._same.check(simulated[:, None], last=False)  # refused by replay, which sees the whole record
             np.isfinite(simulated, out=self._finite)
             if not self._finite.all():
                 self._diverged |= ~self._finite
@@ -271,8 +311,13 @@ class OnlineDynia:
                     )
             self._measured[slot] = y_t == y_t
             if self._measured[slot]:
+                if self._scaled_by is None and y_t != 0.0:
+                    self._fix_scale(y_t)
+                self._largest = max(self._largest, abs(y_t))
                 np.subtract(simulated, y_t, out=errors)  # |s - y| == |y - s| bit for bit
                 np.abs(errors, out=errors)
+                if self.error_scale != 1.0:
+                    errors *= self.error_scale  # as the batch engine's ScaledErrors
             else:
                 errors.fill(0.0)
             self.steps += 1
@@ -309,6 +354,14 @@ class OnlineDynia:
             autocorrelation comes from the residuals of the set with the
             lowest total absolute error over the replayed steps, which is
             simulated once more; a single update cannot give them.
+
+        Raises
+        ------
+        ModelError
+            When every parameter set's output has been the same at every
+            step fed since the start (or :meth:`reset`), as :func:`dynia.run`
+            refuses such a model: every window's sets tie. A single update
+            cannot tell, since a later input may still excite the model.
         """
         # The samples step by the dt they were made with: a time index is checked against it, never adopted.
         dt = self._analysis.dt
@@ -334,11 +387,16 @@ class OnlineDynia:
         totals = np.zeros(self.samples.shape[0])
         width = self._errors.shape[0]
         for step, (u_t, y_t) in enumerate(zip(u.tolist(), y.tolist())):  # u_t a list for several inputs
+            scale = self.error_scale
             ic[:, step], ci[:, step], gradient[:, :, step] = self.update(u_t, y_t)
+            if self.error_scale != scale:  # fixed at this step: the errors added so far are rescaled alike
+                totals *= self.error_scale
             median[:, step] = self.median
             best[step], upper[step], threshold[step] = self._best, self._upper, self._threshold
             points[step] = self._present
             add_record_errors(totals, self._errors[(self.steps - 1) % width][None])  # as the batch engine adds them
+        if self._same.same:  # every set tied in every window: no result is one
+            refuse_ignored_params(self._model, self._model_params, _functions(self._model))
         totals[self._diverged] = np.inf
         floor = record_noise_floor(
             best,
@@ -410,12 +468,36 @@ class OnlineDynia:
         if self._diverged.any():
             usable = self._rank_diverged_last() and usable
         results = self._flavour.analyse(self._mae, np.array([usable]))
+        if blank_overflowed(results)[0]:
+            self._report_overflowed()
         self.ic, self.ci, self.gradient = results.ic[:, 0], results.ci[:, 0], results.gradient[:, :, 0]
         self.median = results.median[:, 0]
+        # In the record's units, as the batch engine reports them: the scale is a power of two.
         self._best, self._threshold, self._upper = (
-            float(results.best[0]),
-            float(results.threshold[0]),
-            float(results.upper[0]),
+            float(results.best[0]) / self.error_scale,
+            float(results.threshold[0]) / self.error_scale,
+            float(results.upper[0]) / self.error_scale,
+        )
+
+    def _report_overflowed(self):
+        """The newest window's behavioural MAE overflowed when squared: refuse if the scale is to blame, else warn."""
+        step = self.steps - 1
+        if error_scale([self._largest]) != self.error_scale:
+            first_step, first = self._scaled_by
+            raise DataError(
+                f"y reaches {self._largest:.3g} in magnitude by step {step}, beyond what the error scale fixed "
+                f"online from the first measured value that is not zero ({first:.3g} at step {first_step}) can "
+                "hold: the squared errors overflow and every set ties; OnlineDynia cannot rescale the windows "
+                "it has analysed, so give y (and the model's output) in a unit that keeps them within about 1e54 "
+                "of their first value, or analyse the record with dynia.run(..., window='trailing')"
+            )
+        warnings.warn(
+            f"the behavioural parameter sets' mean absolute error is beyond 1.3e154 in the window ending at step "
+            f"{step}, so its square, the cost, overflows and they tie, while y is at most {self._largest:.3g} in "
+            "magnitude: the simulated output lies more than 1e54 times beyond the data there (check the input "
+            "for absurd values and the model's output for its units); the window is left without results",
+            OverflowedWindowsWarning,
+            stacklevel=4,
         )
 
     def _rank_diverged_last(self):
@@ -438,6 +520,15 @@ class OnlineDynia:
         self.ci = np.full((n_params, 2), np.nan)
         self.median = np.full(n_params, np.nan)
         self.gradient = np.full((n_params, n_bins), np.nan)
+
+
+def _functions(model):
+    """What of ``model`` computes its output, as its 'ignores params' refusal names it."""
+    if isinstance(model, FunctionModel):
+        return "fn"
+    if isinstance(model, StateSpaceModel):
+        return "step and output"
+    return "the simulation"
 
 
 def _stepped(stepper, u, rows):

@@ -197,6 +197,33 @@ def test_a_function_model_cannot_change_the_callers_input():
     np.testing.assert_array_equal(u, U)
 
 
+def _lag_writing_params(x, u_k, p, dt):
+    p[:, 0] = 1.0  # every set's K becomes 1 from the first step on
+    return x + dt / p[:, 1:2] * (p[:, 0:1] * u_k - x)
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_a_state_space_model_cannot_change_the_parameter_sets(compiled):
+    """Before: the compiled engine and the online stepper handed step a writable params, so every K became 1."""
+    step, output = _lag_writing_params, lambda x, u_k, p: x[:, 0].copy()
+    if compiled:
+        step, output = numba.njit(step), numba.njit(output)
+    model = StateSpaceModel(step, output, [0.0], ["K", "T"], n_states=1)
+    for engine in ("numba", "numpy"):
+        with pytest.raises(ModelError, match="read-only"):
+            dynia.run(U, Y, model, BOUNDS, rng=1, engine=engine, **SETTINGS)
+    online = OnlineDynia(model, BOUNDS, n_samples=100, n=2, rng=1)
+    samples = online.samples.copy()
+    with pytest.raises(ModelError, match="read-only"):
+        online.update(1.0, 1.0)
+    np.testing.assert_array_equal(online.samples, samples)
+    params = np.array([[2.0, 3.0], [4.0, 5.0]])
+    state = model.start_simulation(params, U)
+    with pytest.raises(ModelError, match="read-only"):
+        model.simulate_span(state, U, 50)
+    np.testing.assert_array_equal(params, [[2.0, 3.0], [4.0, 5.0]])
+
+
 # ------------------------------------------------------------------ online, short records, percentage 100
 
 

@@ -1,6 +1,7 @@
 """Tests of dynia.online: the semi-online mode equals the batch trailing-window analysis."""
 
 import math
+import warnings
 
 import control
 import numpy as np
@@ -8,8 +9,8 @@ import pytest
 from numpy.testing import assert_array_equal
 
 import dynia
-from dynia.engine.windows import moving_window
-from dynia.models import FOPDT, FirstOrder, SecondOrderDelay, TransferFunction
+from dynia.engine.windows import OverflowedWindowsWarning, moving_window
+from dynia.models import FOPDT, FirstOrder, SecondOrderDelay, StateSpaceModel, TransferFunction
 from dynia.online import OnlineDynia
 
 FIRST_ORDER_BOUNDS = {"K": (0.0, 5.0), "T": (0.0, 8.0)}
@@ -295,3 +296,98 @@ def test_replay_checks_the_whole_record_before_feeding():
     with pytest.raises(ValueError, match="u holds a non-finite value at index 3"):
         online.replay([0.0, 0.0, 0.0, np.nan], np.zeros(4))
     assert online.steps == 0
+
+
+# ------------------------------------------------------------------ magnitudes (issue 20)
+
+MAGNITUDE_U = np.r_[np.zeros(20), np.ones(80), np.zeros(100)]
+# At rest before the step: the first measured values are exactly zero, so the scale is fixed at the step.
+MAGNITUDE_Y = (
+    FirstOrder().simulate([[2.0, 3.0]], MAGNITUDE_U)[0]
+    + np.r_[np.zeros(20), np.random.default_rng(0).normal(0, 0.05, 180)]
+)
+MAGNITUDE_BOUNDS = {"K": (0.0, 7.0), "T": (0.5, 7.0)}
+
+
+def scaled_lag(factor, beyond=None):
+    """A first-order lag (Euler) whose output is ``factor`` times its state; ``beyond`` times more while u > 0.5.
+
+    Parameters cannot reach 1e200 (the box refuses them), so the magnitude is in the output map.
+    """
+
+    def output(x, u_k, p):
+        return factor * x[:, 0] * (beyond if beyond is not None and u_k > 0.5 else 1.0)
+
+    return StateSpaceModel(
+        lambda x, u_k, p, dt: x + dt / p[:, 1:2] * (p[:, 0:1] * u_k - x), output, [0.0], ["K", "T"], n_states=1
+    )
+
+
+@pytest.fixture(scope="module")
+def unscaled_online():
+    return OnlineDynia(scaled_lag(1.0), MAGNITUDE_BOUNDS, n_samples=300, n=5, rng=1).replay(MAGNITUDE_U, MAGNITUDE_Y)
+
+
+@pytest.mark.parametrize("factor", [2.0**665, 1e200, 1e-200, 2.0**-665])
+def test_online_equals_batch_at_huge_and_tiny_magnitudes(unscaled_online, factor):
+    """Before: the costs overflowed (underflowed) and tied, IC 0.279/0.112 and noise sigma NaN (0) online."""
+    model = scaled_lag(factor)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        online = OnlineDynia(model, MAGNITUDE_BOUNDS, n_samples=300, n=5, rng=1)
+        result = online.replay(MAGNITUDE_U, MAGNITUDE_Y * factor)
+        batch = dynia.run(MAGNITUDE_U, MAGNITUDE_Y * factor, model, MAGNITUDE_BOUNDS, n_samples=300, n=5, rng=1,
+                          window="trailing")  # fmt: skip
+    assert online.error_scale != 1.0
+    for field in ("ic", "ci", "median", "gradient", "informative"):
+        assert_array_equal(getattr(result, field), getattr(batch, field), err_msg=field)
+    assert result.run.noise_sigma == batch.run.noise_sigma
+    # DYNIA on MAEs does not depend on the unit: a power of two changes no ranking at all.
+    if math.log2(factor).is_integer():
+        assert_array_equal(result.ic, unscaled_online.ic)
+        assert_array_equal(result.ci, unscaled_online.ci)
+        assert_array_equal(result.informative, unscaled_online.informative)
+        assert result.run.noise_sigma == unscaled_online.run.noise_sigma * factor
+    np.testing.assert_allclose(np.nanmax(result.ic, axis=1), np.nanmax(unscaled_online.ic, axis=1), atol=0.01)
+    assert np.nanmax(result.ic, axis=1).min() > 0.9
+
+
+def test_online_refuses_a_record_that_outgrows_its_first_value():
+    """The scale is fixed at the first measured value (1.0 here); y at 1e200 later cannot be squared at it."""
+    y = MAGNITUDE_Y.copy()
+    y[120:] = 1e200
+    online = OnlineDynia(scaled_lag(1.0), MAGNITUDE_BOUNDS, n_samples=300, n=5, rng=1)
+    with pytest.raises(dynia.errors.DataError, match=r"y reaches 1e\+200 in magnitude by step 120.*first measured"):
+        online.replay(MAGNITUDE_U, y)
+
+
+def test_online_blanks_windows_whose_model_output_overflows_as_the_batch_run_does():
+    """Model output 1e180 times the data while u = 1: those windows' costs tie at inf, so they have no results."""
+    model = scaled_lag(1.0, beyond=1e180)
+    online = OnlineDynia(model, MAGNITUDE_BOUNDS, n_samples=300, n=5, rng=1)
+    with pytest.warns(OverflowedWindowsWarning, match="window ending at step [0-9]+, so its square"):
+        result = online.replay(MAGNITUDE_U, MAGNITUDE_Y)
+    with pytest.warns(OverflowedWindowsWarning):
+        batch = dynia.run(MAGNITUDE_U, MAGNITUDE_Y, model, MAGNITUDE_BOUNDS, n_samples=300, n=5, rng=1,
+                          window="trailing")  # fmt: skip
+    assert np.isnan(result.ic[:, 25:100]).all() and not np.isnan(result.ic[:, 150:]).any()
+    assert_array_equal(result.ic, batch.ic)
+    assert_array_equal(result.gradient, batch.gradient)
+
+
+def test_replay_refuses_a_model_that_ignores_its_parameters():
+    """Before: the linear model's windows all tied (IC from ties); the state-space model's refusal named 5 sets."""
+    ignoring = [
+        StateSpaceModel(
+            lambda x, u_k, p, dt: x + dt * (u_k - x), lambda x, u_k, p: x[:, 0], [0.0], ["K", "T"], n_states=1
+        ),  # fmt: skip
+        TransferFunction(lambda p: control.tf([1.0], [1.0, 1.0]), names=("K", "T")),
+    ]
+    for model, functions in zip(ignoring, ["step and output", "the simulation"]):
+        online = OnlineDynia(model, MAGNITUDE_BOUNDS, n_samples=300, n=5, rng=1)
+        with pytest.raises(dynia.errors.ModelError, match=f"{functions} returned the same output for all 300 "):
+            online.replay(MAGNITUDE_U, MAGNITUDE_Y)
+        online.reset()
+        for u_t, y_t in zip(MAGNITUDE_U, MAGNITUDE_Y):  # an update cannot know that no later input excites it
+            online.update(u_t, y_t)
+        assert online.steps == MAGNITUDE_U.size

@@ -428,7 +428,7 @@ def analyse_errors(
     errors : source of absolute errors
         ``rows(start, stop)`` and ``columns(start, stop)``, e.g.
         :class:`ArrayErrors`, :class:`StreamedErrors` or
-        :class:`dynia.engine.kernels.CompiledErrors`, in time order.
+        ``dynia.engine.kernels.CompiledErrors``, in time order.
     params : ndarray (n_samples, n_params)
         The parameter sets analysed, inside ``bounds``.
     bounds : ndarray (n_params, 2)

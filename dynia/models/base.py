@@ -52,10 +52,12 @@ from ..errors import DataError, DyniaError, Interrupted, ModelError
 __all__ = [
     "Model",
     "SimulationState",
+    "SameOutput",
     "VALUES_PER_CHUNK",
     "FLUSH_BELOW",
     "check_names",
     "flush_tiny",
+    "refuse_ignored_params",
     "user_code_failed",
 ]
 
@@ -474,3 +476,32 @@ def check_names(names) -> tuple[str, ...]:
     if not names or len(set(names)) != len(names):
         raise ModelError(f"names must be non-empty and unique; got {names}")
     return names
+
+
+def refuse_ignored_params(model, params, functions):
+    """The ModelError for a model whose output was the same for every parameter set, unless the sets are too."""
+    if np.unique(params, axis=0).shape[0] > 1:
+        raise ModelError(
+            f"{model!r}: {functions} returned the same output for all {params.shape[0]} parameter sets over the "
+            "whole record; it must use params (one row per set, columns in the order of names), or the input "
+            "never excites the model"
+        )
+
+
+class SameOutput:
+    """Whether every parameter set's output has been the same so far, fed the record chunk by chunk.
+
+    A chunk before the first input change may well be the same for all sets;
+    only a whole record that is shows a model ignoring ``params``.
+    """
+
+    def __init__(self, model, params, functions):
+        self._model, self._params, self._functions = model, params, functions
+        self.same = params.shape[0] > 1
+
+    def check(self, sims, *, last):
+        """Take the next chunk (n_samples, m); at the ``last`` one, refuse a record the same for every set."""
+        if self.same:
+            self.same = bool(np.array_equal(sims, np.broadcast_to(sims[:1], sims.shape)))
+            if self.same and last:
+                refuse_ignored_params(self._model, self._params, self._functions)

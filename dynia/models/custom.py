@@ -45,7 +45,7 @@ import numpy as np
 
 from ..errors import DyniaError, ModelError
 from ..settings import check_dt, check_x0
-from .base import FLUSH_BELOW, Model, SimulationState, flush_tiny, user_code_failed
+from .base import FLUSH_BELOW, Model, SameOutput, SimulationState, flush_tiny, refuse_ignored_params, user_code_failed
 
 try:
     import numba
@@ -186,7 +186,7 @@ class FunctionModel(Model):
 
     def _streamed(self, params, u, dt, chunk_steps):
         state = self._initial_state(params)
-        same = _SameOutput(self, params, "fn")
+        same = SameOutput(self, params, "fn")
         for start in range(0, u.shape[0], chunk_steps):
             sims, state = self._called(params, u[start : start + chunk_steps], dt, state)
             same.check(sims, last=start + chunk_steps >= u.shape[0])
@@ -298,7 +298,7 @@ class StateSpaceModel(Model):
     simulate_chunks.__doc__ = Model.simulate_chunks.__doc__
 
     def stepper(self, params, dt: float = 1.0, x0: str = "zero"):
-        params = self.check_params(params)
+        params = _read_only(self.check_params(params))
         self._check_x0_setting(x0)
         return _ChunkStepper(self, params, check_dt(dt))
 
@@ -311,7 +311,7 @@ class StateSpaceModel(Model):
     resumable.__doc__ = Model.resumable.__doc__
 
     def start_simulation(self, params, u, dt: float = 1.0, x0: str = "zero") -> SimulationState:
-        params = self.check_params(params)
+        params = _read_only(self.check_params(params))
         u = self.check_input(u)
         self._check_x0_setting(x0)
         return SimulationState(0, u.shape[0], params.shape[0], (params, check_dt(dt), self.initial_state(params)))
@@ -319,8 +319,9 @@ class StateSpaceModel(Model):
     start_simulation.__doc__ = Model.start_simulation.__doc__
 
     def simulate_span(self, state, u, stop, *, time_major=False):
-        u = self.check_span(state, u, stop)
+        u = _read_only(self.check_span(state, u, stop))
         params, dt, values = state.carried
+        params = _read_only(params)  # a state sent to another process arrives writable
         # step may update the state in place; the state given must stay as it was.
         sims, values = self._span(values.copy(), u[state.step : stop], params, dt, first=state.step == 0)
         resumed = SimulationState(stop, state.n_steps, state.n_samples, (params, dt, values))
@@ -349,7 +350,7 @@ class StateSpaceModel(Model):
             raise ModelError(f"{self!r} starts from its own x0; x0={x0!r} is not available for it")
 
     def _chunks(self, params, u, dt, chunk_steps, state):
-        same = _SameOutput(self, params, "step and output")
+        same = SameOutput(self, params, "step and output")
         for start in range(0, u.shape[0], chunk_steps):
             sims, state = self._span(state, u[start : start + chunk_steps], params, dt, first=start == 0)
             same.check(sims, last=start + chunk_steps >= u.shape[0])
@@ -475,8 +476,9 @@ class StateErrors:
     """
 
     def __init__(self, model, params, u, y, *, dt, workers):
-        params = model.check_params(params)
-        u = model.check_input(u)
+        # step and output must not change the parameter sets or the caller's input (numba types them read-only).
+        params = _read_only(model.check_params(params))
+        u = _read_only(model.check_input(u))
         state = model.initial_state(params)
         # Clear errors for wrong shapes and indexes, before compiled code.
         model.check_compiled(state, u[0], params, dt)
@@ -489,13 +491,13 @@ class StateErrors:
         self.diverged = np.zeros(n_samples, dtype=np.bool_)
         edges = np.linspace(0, n_samples, max(1, min(workers, n_samples)) + 1).astype(int)
         self._ranges = list(zip(edges[:-1], edges[1:]))
-        self._params = [np.ascontiguousarray(params[lo:hi]) for lo, hi in self._ranges]
+        self._params = [_read_only(np.ascontiguousarray(params[lo:hi])) for lo, hi in self._ranges]
         self._states = [np.ascontiguousarray(state[lo:hi]) for lo, hi in self._ranges]
         self._pool = ThreadPoolExecutor(max_workers=len(self._ranges)) if len(self._ranges) > 1 else None
         self._start = 0
         self._buffer = np.zeros((0, n_samples))
         # The errors are |output - y|: equal for every set at every step when the output does not depend on params.
-        self._same = _SameOutput(model, params, "step and output")
+        self._same = SameOutput(model, params, "step and output")
 
     def rows(self, start, stop):
         """Errors for times [start, stop), shape (stop - start, n_samples)."""
@@ -557,7 +559,7 @@ class _ChunkStepper:
 
     def step(self, u_k):
         """Take the input of step k (a float, or (n_inputs,)) and return every sample's output y[k]."""
-        u_k = self._model.check_input(np.reshape(np.asarray(u_k, dtype=float), (1, -1)))
+        u_k = _read_only(self._model.check_input(np.reshape(np.asarray(u_k, dtype=float), (1, -1))))
         if isinstance(self._model, StateSpaceModel):
             if self._state is None:
                 self._state = self._model.initial_state(self._params)
@@ -595,7 +597,7 @@ def _checked_output(model, sims, params, u, *, whole_record):
         and np.array_equal(sims[1], sims[0])
         and np.array_equal(sims, np.broadcast_to(sims[:1], expected))
     ):
-        _refuse_ignored_params(model, params, "fn")
+        refuse_ignored_params(model, params, "fn")
     return sims
 
 
@@ -604,32 +606,3 @@ def _read_only(array):
     view = array.view()
     view.flags.writeable = False
     return view
-
-
-def _refuse_ignored_params(model, params, functions):
-    """The ModelError for a model whose output was the same for every parameter set, unless the sets are too."""
-    if np.unique(params, axis=0).shape[0] > 1:
-        raise ModelError(
-            f"{model!r}: {functions} returned the same output for all {params.shape[0]} parameter sets over the "
-            "whole record; it must use params (one row per set, columns in the order of names), or the input "
-            "never excites the model"
-        )
-
-
-class _SameOutput:
-    """Whether every parameter set's output has been the same so far, fed the record chunk by chunk.
-
-    A chunk before the first input change may well be the same for all sets;
-    only a whole record that is shows a model ignoring ``params``.
-    """
-
-    def __init__(self, model, params, functions):
-        self._model, self._params, self._functions = model, params, functions
-        self.same = params.shape[0] > 1
-
-    def check(self, sims, *, last):
-        """Take the next chunk (n_samples, m); at the ``last`` one, refuse a record the same for every set."""
-        if self.same:
-            self.same = bool(np.array_equal(sims, np.broadcast_to(sims[:1], sims.shape)))
-            if self.same and last:
-                _refuse_ignored_params(self._model, self._params, self._functions)
