@@ -71,8 +71,9 @@ class DyniaResult:
         The time axis as datetimes, one per step (``time`` stays seconds):
         :func:`dynia.run` sets it from a pandas DatetimeIndex (in UTC when
         the index had a time zone), see :func:`dynia.io.frames.unpack`. When
-        present, :meth:`to_dataframe` and :meth:`to_xarray` carry it and the
-        plots draw against it. None otherwise.
+        present, :meth:`to_dataframe` and :meth:`to_xarray` carry it, the
+        plots draw against it and :meth:`summary` reports its times as dates.
+        None otherwise.
     ic_se : ndarray (n_params, n_steps) or None
         Monte Carlo standard error of ``ic``: how much the IC would change
         with another sample of the same size (``dynia.run(...,
@@ -353,13 +354,31 @@ class DyniaResult:
         ``high_ic_span`` gives the time of the first and of the last of
         them ([None, None] when there is none).
 
+        The times (``time_of_max_ic``, ``time_of_highest_ic``,
+        ``high_ic_span``) are seconds from the start of the record (floats,
+        as :attr:`time`), or for a dated result (:attr:`timestamps`) the
+        dates of those steps, ``numpy.datetime64`` scalars in nanoseconds
+        equal to ``timestamps[step]``.
+
         Returns
         -------
         dict
             ``{name: {"max_ic", "time_of_max_ic", "band": [lower, upper], "estimate", "highest_ic",
             "time_of_highest_ic", "high_ic_windows", "high_ic_span": [first, last], "verdict", "reasons"}}``
-            with plain Python values; with the Monte Carlo errors also
+            with plain Python values but the dates; with the Monte Carlo errors also
             ``"max_ic_se"``, the standard error of the max IC.
+
+        Examples
+        --------
+        >>> import dataclasses, numpy as np
+        >>> res = DyniaResult(names=("K",), samples=np.zeros((2, 1)), bounds=np.array([[0.0, 1.0]]),
+        ...                   time=np.array([0.0, 60.0, 120.0]), ic=np.array([[0.2, 0.9, 0.4]]), ci=np.zeros((1, 3, 2)),
+        ...                   gradient=np.zeros((1, 1, 3)), bin_centres=np.zeros((1, 1)), settings=dict(n=1))
+        >>> res.summary()["K"]["time_of_max_ic"]
+        60.0
+        >>> dates = np.array(["2015-01-31T23:59", "2015-02-01T00:00", "2015-02-01T00:01"], dtype="datetime64[ns]")
+        >>> dataclasses.replace(res, timestamps=dates).summary()["K"]["time_of_max_ic"]
+        np.datetime64('2015-02-01T00:00:00.000000000')
         """
         # verdicts reads results: imported here to keep the modules acyclic
         from .verdicts import assess, high_ic_windows, reported_step
@@ -381,21 +400,27 @@ class DyniaResult:
                 highest = int(np.nanargmax(self.ic[p]))
                 summary[name] = dict(
                     max_ic=float(self.ic[p, best]),
-                    time_of_max_ic=float(self.time[best]),
+                    time_of_max_ic=self._when(best),
                     band=[float(self.ci[p, best, 0]), float(self.ci[p, best, 1])],
                     estimate=self._estimate(p, best),
                     highest_ic=float(self.ic[p, highest]),
-                    time_of_highest_ic=float(self.time[highest]),
+                    time_of_highest_ic=self._when(highest),
                 )
                 if self.ic_se is not None:
                     summary[name]["max_ic_se"] = float(self.ic_se[p, best])
             steps = np.flatnonzero(high_ic_windows(self, p))
             summary[name].update(
                 high_ic_windows=int(steps.size),
-                high_ic_span=[float(self.time[steps[0]]), float(self.time[steps[-1]])] if steps.size else [None, None],
+                high_ic_span=[self._when(steps[0]), self._when(steps[-1])] if steps.size else [None, None],
             )
             summary[name].update(verdict=verdicts[name]["verdict"], reasons=list(verdicts[name]["reasons"]))
         return summary
+
+    def _when(self, step):
+        """The time of ``step`` as :meth:`summary` reports it: its date (datetime64[ns]) when dated, else seconds."""
+        if self.timestamps is None:
+            return float(self.time[step])
+        return np.datetime64(self.timestamps[step], "ns")
 
     def _estimate(self, p, step):
         """Parameter ``p``'s estimate at ``step``: its CLD median, or without one the band's midpoint."""

@@ -54,7 +54,7 @@ import numpy as np
 from numpy.lib.mixins import NDArrayOperatorsMixin
 
 from ..errors import DataError, OutputError
-from .layout import TIME_VARIABLES, TIMESTAMP_ATTRIBUTES, metadata
+from .layout import COORDINATES, SECONDS_ATTRIBUTES, TIME_VARIABLES, TIMESTAMP_ATTRIBUTES, metadata
 
 __all__ = [
     "TIME_VARIABLES",
@@ -145,8 +145,8 @@ class ResultFile(ResultArrays):
     every variable laid out as :func:`dynia.io.writer.save` writes it, the
     time-dependent ones chunked over time; :meth:`write` fills them block by
     block (a time block is buffered until its on-disk chunks are complete, so
-    each chunk is written once); :meth:`commit` adds the settings, verdicts and
-    timestamps of the finished result, renames the file to ``PATH`` and
+    each chunk is written once); :meth:`commit` adds the time coordinate (the
+    dates of a dated result), the settings and the verdicts of the finished result, renames the file to ``PATH`` and
     returns the result reading from it. :meth:`discard` (also on an error in
     ``with``) deletes the partial file.
 
@@ -233,8 +233,7 @@ class ResultFile(ResultArrays):
         file.create_variable(
             "side", ("side",), dtype=h5py.string_dtype(), data=np.array(["lower", "upper"], dtype=object)
         )
-        stamps = file.create_variable("time", ("time",), dtype="f8", data=time, chunks=(self._block,), fletcher32=True)
-        stamps.attrs.update(units="s", long_name="time from the start of the record")
+        # The time variable waits for the commit (_describe): whether it holds seconds or dates is known then.
         for name, data, dims in (
             ("samples", samples, ("sample", "parameter")),
             ("bounds", bounds, ("parameter", "side")),
@@ -305,13 +304,12 @@ class ResultFile(ResultArrays):
         return {name: DiskArray(variable) for name, variable in self._variables.items()}
 
     def commit(self, result):
-        """Add ``result``'s settings, verdicts and timestamps, rename the file to ``path``, return it read lazily.
+        """Add ``result``'s time coordinate, settings and verdicts, rename the file to ``path``, return it read lazily.
 
         ``result`` is the finished result whose arrays this file holds.
         """
         attrs, variables = metadata(
-            result,
-            reserved=(*TIME_VARIABLES, "time", "timestamp", "parameter", "side", "samples", "bounds", "bin_centres"),
+            result, reserved=(*TIME_VARIABLES, *COORDINATES, "samples", "bounds", "bin_centres")
         )
         with self._writing():
             with _netcdf(self._h5, "a") as file:
@@ -332,22 +330,28 @@ class ResultFile(ResultArrays):
         return dataclasses.replace(result, **committed)
 
     def _describe(self, file, result, attrs, variables):
-        """Write the settings' array variables, the timestamps and the attributes through the h5netcdf ``file``."""
+        """Write the time coordinate, the settings' array variables and the attributes through the h5netcdf ``file``.
+
+        ``time`` holds the seconds, or for a result with timestamps the dates, with the seconds as ``elapsed``
+        (the layout of :mod:`dynia.io.layout`).
+        """
+        seconds = {"dtype": "f8", "data": np.asarray(result.time, dtype=float)}
+        if result.timestamps is None:
+            times = {"time": (seconds, SECONDS_ATTRIBUTES)}
+        else:
+            dates = np.asarray(result.timestamps, dtype="datetime64[ns]").view(np.int64)
+            times = {
+                "time": ({"dtype": "i8", "data": dates}, TIMESTAMP_ATTRIBUTES),
+                "elapsed": (seconds, SECONDS_ATTRIBUTES),
+            }
+        for name, (values, attributes) in times.items():
+            variable = file.create_variable(name, ("time",), chunks=(self._block,), fletcher32=True, **values)
+            variable.attrs.update(attributes)
         for name, (dims, values) in variables.items():
             for axis, dim in enumerate(dims):
                 if dim not in file.dimensions:
                     file.dimensions[dim] = values.shape[axis]
             file.create_variable(name, dims, data=values, fletcher32=values.dtype.kind in "biuf")
-        if result.timestamps is not None:
-            stamps = file.create_variable(
-                "timestamp",
-                ("time",),
-                dtype="i8",
-                data=np.asarray(result.timestamps, dtype="datetime64[ns]").view(np.int64),
-                chunks=(self._block,),
-                fletcher32=True,
-            )
-            stamps.attrs.update(TIMESTAMP_ATTRIBUTES)
         file.attrs.update(attrs)
 
     def discard(self):

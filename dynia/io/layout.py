@@ -20,9 +20,16 @@ result has its Monte Carlo errors, ``ic_se`` (parameter, time) and ``ci_se``
 booleans) and bool in the Dataset and when loaded; files without them, and
 files of the older floor (``mae_spread``, whose mask tested the behavioural
 spread), load with None there. Coordinates: ``parameter`` (the names),
-``time`` (seconds), ``side`` ("lower", "upper": ``ci.sel(side="lower")``
-is the lower limit, and for ``bounds`` the low end of the range) and, when
-the result has timestamps, ``timestamp`` (datetime64[ns], along ``time``).
+``time``, ``side`` ("lower", "upper": ``ci.sel(side="lower")`` is the lower
+limit, and for ``bounds`` the low end of the range). ``time`` is the time
+of each step in seconds from the start of the record, or, when the result
+has timestamps (a dated record), its dates (datetime64[ns]), so that
+``ds.sel(time="2015-01")`` and ``ds.sel(time=slice("2015-01-01",
+"2015-02-01"))`` select by date; a dated result keeps the seconds as the
+coordinate ``elapsed`` along ``time`` (units "s"), not an index. In the
+file, dates are int64 nanoseconds since 1970-01-01 (attributes ``units``
+:data:`TIMESTAMP_UNITS` and ``calendar`` "proleptic_gregorian", which any
+CF reader decodes to datetimes).
 
 Settings and verdicts are the JSON attributes ``settings`` and ``verdicts``
 (``"null"`` for a result without verdicts). ``settings`` is one object:
@@ -34,7 +41,21 @@ JSON is plain but for one tag: a tuple is written as ``{"__tuple__":
 [...]}``, so that it comes back a tuple while a list comes back a list. The
 adaptive samplers' ``weights`` (an ndarray) is written as a variable of its
 own name along ``sample`` instead, with ``{"__variable__": "weights"}`` in
-its place in the JSON. Attribute ``dynia_result`` holds the format version.
+its place in the JSON.
+
+Attribute ``dynia_result`` holds the format version: the lowest version
+whose reader reads the file right (:func:`format_version`), so that a file
+an older dynia can read says so.
+
+- Version 1: ``time`` in seconds always; the dates of a dated result in a
+  non-index coordinate ``timestamp`` along ``time``.
+- Version 2 (a dated result): ``time`` holds the dates, ``elapsed`` the
+  seconds, and there is no ``timestamp``. A result without timestamps is
+  still written as version 1, its file unchanged. A dynia that reads only
+  version 1 refuses a version 2 file by its version, rather than misread
+  its dates as seconds.
+
+:func:`~dynia.io.reader.load` reads both.
 
 Files written before the record existed hold the same object with a few
 more keys: ``bounds`` (the ``bounds`` variable holds them, and it is not
@@ -56,6 +77,7 @@ from ..errors import SettingsError
 
 __all__ = [
     "FORMAT_VERSION",
+    "format_version",
     "TIME_VARIABLES",
     "ARRAYS",
     "OPTIONAL_ARRAYS",
@@ -64,6 +86,7 @@ __all__ = [
     "SIDES",
     "TIMESTAMP_UNITS",
     "TIMESTAMP_ATTRIBUTES",
+    "SECONDS_ATTRIBUTES",
     "VARIABLE_TAG",
     "metadata",
     "encoded",
@@ -71,8 +94,9 @@ __all__ = [
     "MalformedAttribute",
 ]
 
-# Written as the attribute "dynia_result"; a later layout raises it, and load refuses what it cannot read.
-FORMAT_VERSION = 1
+# The latest layout, written as the attribute "dynia_result" (see format_version); a later layout raises it,
+# and load refuses what it cannot read.
+FORMAT_VERSION = 2
 
 # Settings holding one value per parameter set: their variable lies along "sample".
 _PER_SAMPLE = frozenset({"weights"})
@@ -101,17 +125,24 @@ OPTIONAL_ARRAYS = {name: TIME_VARIABLES[name] for name in ("median", "ic_se", "c
 # metadata, so that a result written block by block (dynia.io.arrays) gets it too; the mask is int8 in a
 # file, since netCDF has no booleans, and bool again when loaded.
 NOISE_FLOOR = ("informative", "discrimination", "noise_floor", "behavioural_spread", "behavioural_floor")
-COORDINATES = ("parameter", "time", "side", "timestamp")
+COORDINATES = ("parameter", "time", "side", "timestamp", "elapsed")
 SIDES = ("lower", "upper")
 
 # The timestamps as integer nanoseconds from the epoch: exact, and what any CF reader decodes to datetimes.
 TIMESTAMP_UNITS = "nanoseconds since 1970-01-01"
 # The attributes of the timestamp variable in a file (what xarray writes with that encoding).
 TIMESTAMP_ATTRIBUTES = {"units": TIMESTAMP_UNITS, "calendar": "proleptic_gregorian"}
+# The attributes of the seconds from the start: ``time`` of a result without timestamps, ``elapsed`` of one with.
+SECONDS_ATTRIBUTES = {"units": "s", "long_name": "time from the start of the record"}
 
 _TUPLE = "__tuple__"
 # In the settings' JSON, the place of a setting written as a variable of its own: {VARIABLE_TAG: name}.
 VARIABLE_TAG = "__variable__"
+
+
+def format_version(result):
+    """The format version of ``result``'s file: 2 when it has timestamps (dated ``time``), else 1 (see the module)."""
+    return FORMAT_VERSION if result.timestamps is not None else 1
 
 
 def metadata(result, reserved):
@@ -149,7 +180,7 @@ def metadata(result, reserved):
         else:
             settings[key] = encoded(value, f"result.run.{key}", key)
     attrs = {
-        "dynia_result": FORMAT_VERSION,
+        "dynia_result": format_version(result),
         "settings": json.dumps(settings),
         "verdicts": json.dumps(encoded(result.verdicts, "result.verdicts", None)),
     }

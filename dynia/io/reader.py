@@ -67,7 +67,8 @@ def load(path, *, lazy=False):
     run record (:class:`~dynia.settings.RunRecord`) and the verdicts equal
     to those saved: in the verdicts a tuple comes back a tuple and a list a
     list, a numpy scalar as the Python number it was written as. Files of
-    the layout before the record load too (see the module documentation).
+    the layout before the record, and of format version 1 (dates beside
+    ``time``, not in it), load too (see :mod:`dynia.io.layout`).
 
     With ``lazy=True`` the arrays along time (IC, limits, median, gradient
     and their errors) stay in the file as :class:`dynia.io.arrays.DiskArray` objects,
@@ -140,7 +141,7 @@ def _result(name, dataset, lazy):
         (key, dims) for key, dims in OPTIONAL_ARRAYS.items() if key in dataset and not (lazy and key in _TIME_ARRAYS)
     )
     arrays = {key: _values(name, dataset, key, dims) for key, dims in eager.items()}
-    time = _values(name, dataset, "time", ("time",))
+    time, timestamps = _time(name, dataset)
     _check_fixed(name, names, time, arrays)
     # An older file's floor (mae_spread) tested another statistic: it loads as no floor, not as this one.
     if "discrimination" in dataset:
@@ -155,19 +156,38 @@ def _result(name, dataset, lazy):
         along_time = {key: arrays[key] for key in _TIME_ARRAYS if key in arrays}
         for key, values in along_time.items():
             check_time_block(name, names, arrays["bounds"], spans, key, values, along_time)
-    timestamps = None
-    if "timestamp" in dataset.variables:
-        stamps = dataset["timestamp"]
-        if stamps.attrs.get("units") != TIMESTAMP_UNITS:
-            raise DataError(f"{name}: timestamp has units {stamps.attrs.get('units')!r}; expected {TIMESTAMP_UNITS!r}")
-        timestamps = _values(name, dataset, "timestamp", ("time",))
-        if timestamps.dtype.kind not in "iu":
-            raise DataError(f"{name}: timestamp holds {timestamps.dtype}; expected int64 nanoseconds")
-        timestamps = timestamps.astype(np.int64).view("datetime64[ns]")
     result = DyniaResult(names=names, time=time, settings=settings, run=run, timestamps=timestamps, **arrays)
     if stored_verdicts is None:
         return result
     return dataclasses.replace(result, verdicts=_checked_verdicts(name, result, stored_verdicts))
+
+
+def _time(name, dataset):
+    """The seconds of each step and the dates (datetime64[ns], None for an undated result) of the file.
+
+    A version 2 file of a dated result holds the dates in ``time`` and the seconds in ``elapsed``; any other
+    file the seconds in ``time`` and, a version 1 file of a dated result, the dates in ``timestamp``.
+    """
+    dated = dataset.attrs["dynia_result"] >= 2 and dataset["time"].attrs.get("units") == TIMESTAMP_UNITS
+    if not dated:
+        stamps = _timestamps(name, dataset, "timestamp") if "timestamp" in dataset.variables else None
+        return _values(name, dataset, "time", ("time",)), stamps
+    if "elapsed" not in dataset.variables:
+        raise DataError(f"{name}: time holds dates but the file has no 'elapsed'; expected the seconds there")
+    if "timestamp" in dataset.variables:
+        raise DataError(f"{name}: time holds dates and the file has a 'timestamp' too; expected the dates once")
+    return _values(name, dataset, "elapsed", ("time",)), _timestamps(name, dataset, "time")
+
+
+def _timestamps(name, dataset, key):
+    """Variable ``key`` of int64 nanoseconds since 1970-01-01 as datetime64[ns]; a DataError for anything else."""
+    units = dataset[key].attrs.get("units")
+    if units != TIMESTAMP_UNITS:
+        raise DataError(f"{name}: {key} has units {units!r}; expected {TIMESTAMP_UNITS!r}")
+    stamps = _values(name, dataset, key, ("time",))
+    if stamps.dtype.kind not in "iu":
+        raise DataError(f"{name}: {key} holds {stamps.dtype}; expected int64 nanoseconds")
+    return stamps.astype(np.int64).view("datetime64[ns]")
 
 
 # The arrays along time: checked block by block (check_time_block), read lazily with lazy=True.

@@ -11,7 +11,7 @@ the file back. A result whose arrays are on disk is copied block by block
 import numpy as np
 
 from .arrays import DiskArray, write_netcdf, write_result
-from .layout import ARRAYS, COORDINATES, OPTIONAL_ARRAYS, SIDES, TIMESTAMP_UNITS, metadata
+from .layout import ARRAYS, COORDINATES, OPTIONAL_ARRAYS, SECONDS_ATTRIBUTES, SIDES, TIMESTAMP_ATTRIBUTES, metadata
 
 __all__ = ["to_xarray", "save"]
 
@@ -26,13 +26,14 @@ def to_xarray(result):
     """
     import xarray as xr
 
-    coords = {
-        "parameter": ("parameter", np.array(result.names, dtype=str)),
-        "time": ("time", result.time, {"units": "s", "long_name": "time from the start of the record"}),
-        "side": ("side", np.array(SIDES)),
-    }
-    if result.timestamps is not None:
-        coords["timestamp"] = ("time", np.asarray(result.timestamps, dtype="datetime64[ns]"))
+    coords = {"parameter": ("parameter", np.array(result.names, dtype=str))}
+    if result.timestamps is None:
+        coords["time"] = ("time", result.time, SECONDS_ATTRIBUTES)
+    else:
+        # The dates index time, so that ds.sel(time="2015-01") selects by date; the seconds stay alongside.
+        coords["time"] = ("time", np.asarray(result.timestamps, dtype="datetime64[ns]"))
+        coords["elapsed"] = ("time", result.time, SECONDS_ATTRIBUTES)
+    coords["side"] = ("side", np.array(SIDES))
     variables = {name: _variable(getattr(result, name), dims) for name, dims in ARRAYS.items()}
     variables.update(
         (name, _variable(getattr(result, name), dims))
@@ -60,7 +61,7 @@ def save(result, path):
     """Write ``result`` to the netCDF-4 file ``path`` (replaced if it exists); :func:`dynia.load` reads it back.
 
     Every array is written as it is, without a fill value, so NaN stays NaN
-    bit for bit; timestamps as int64 nanoseconds since 1970-01-01. A result
+    bit for bit; the dates of a dated result (``time``) as int64 nanoseconds since 1970-01-01. A result
     whose arrays are on disk (``store``, see :mod:`dynia.io.arrays`) is copied
     one time block at a time, never loaded whole.
 
@@ -81,8 +82,8 @@ def save(result, path):
     dataset = to_xarray(result)
     # Fletcher-32 checksums on every numeric variable, so that load tells a damaged file from a result.
     encoding = {
-        name: {"_FillValue": None, "fletcher32": dataset[name].dtype.kind in "biuf"} for name in dataset.variables
+        name: {"_FillValue": None, "fletcher32": dataset[name].dtype.kind in "biufM"} for name in dataset.variables
     }
-    if "timestamp" in dataset.variables:
-        encoding["timestamp"].update(units=TIMESTAMP_UNITS, calendar="proleptic_gregorian", dtype="int64")
+    if result.timestamps is not None:
+        encoding["time"].update(TIMESTAMP_ATTRIBUTES, dtype="int64")
     write_netcdf(lambda partial: dataset.to_netcdf(partial, engine="h5netcdf", encoding=encoding), path)
