@@ -13,8 +13,10 @@ from dynia.cli.report import write_analysis
 from dynia.errors import DataError, OutputError, SettingsError
 from dynia.io.csv import ProcessData
 from dynia.io.frames import unpack
+from dynia.io.layout import TIMESTAMP_UNITS
 from dynia.models import FirstOrder
 from dynia.settings import AnalysisSettings, RunRecord
+from dynia.verdicts import high_ic_windows, reported_step
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -151,16 +153,23 @@ def test_to_xarray_labels_every_axis(thesis_result):
     }
     assert dataset["parameter"].values.tolist() == ["K", "T"]
     assert dataset["side"].values.tolist() == ["lower", "upper"]
-    assert np.array_equal(dataset["time"].values, thesis_result.time)
-    assert dataset["timestamp"].dims == ("time",) and np.array_equal(dataset["timestamp"].values, stamps)
+    # Dated: the dates index time, the seconds stay as a coordinate that is no index.
+    assert np.array_equal(dataset["time"].values, stamps) and list(dataset.indexes["time"]) == list(stamps)
+    assert dataset["elapsed"].dims == ("time",) and np.array_equal(dataset["elapsed"].values, thesis_result.time)
+    assert dataset["elapsed"].attrs["units"] == "s" and "elapsed" not in dataset.indexes
+    assert "timestamp" not in dataset.variables
     upper_t = dataset["ci"].sel(parameter="T", side="upper").values
     assert np.array_equal(upper_t, thesis_result.ci[1, :, 1], equal_nan=True)
     assert dataset["bounds"].sel(parameter="K").values.tolist() == [0.0, 7.0]
     settings = json.loads(dataset.attrs["settings"])
     assert settings["n"] == 6 and settings["model"] == "FirstOrder" and "bounds" not in settings
     assert json.loads(dataset.attrs["verdicts"]) == thesis_result.verdicts
-    assert dataset.attrs["dynia_result"] == dynia.io.layout.FORMAT_VERSION
-    assert "timestamp" not in thesis_result.to_xarray().variables
+    assert dataset.attrs["dynia_result"] == dynia.io.layout.FORMAT_VERSION == 2
+    # Undated: seconds in time, as in format version 1, which the file says.
+    undated = thesis_result.to_xarray()
+    assert np.array_equal(undated["time"].values, thesis_result.time) and undated["time"].attrs["units"] == "s"
+    assert "timestamp" not in undated.variables and "elapsed" not in undated.variables
+    assert undated.attrs["dynia_result"] == 1
 
 
 def test_the_run_record_keeps_its_types_through_a_file(thesis_result, tmp_path):
@@ -274,7 +283,7 @@ def test_load_names_what_it_cannot_read(thesis_result, tmp_path):
         dynia.load(tmp_path / "foreign.nc")
     foreign.attrs["dynia_result"] = dynia.io.layout.FORMAT_VERSION + 1
     foreign.to_netcdf(tmp_path / "newer.nc", engine="h5netcdf")
-    with pytest.raises(DataError, match=r"newer\.nc: format version 2; expected"):
+    with pytest.raises(DataError, match=rf"newer\.nc: format version {dynia.io.layout.FORMAT_VERSION + 1}; expected"):
         dynia.load(tmp_path / "newer.nc")
     partial = thesis_result.to_xarray().drop_vars("gradient")
     partial.to_netcdf(tmp_path / "partial.nc", engine="h5netcdf")
@@ -325,3 +334,151 @@ def test_plots_draw_against_the_timestamps(thesis_result, kind):
         assert not isinstance(ax.xaxis.get_major_formatter(), dates.AutoDateFormatter)
     finally:
         plt.close(fig)
+
+
+# --- dated results: dates in the summary, a date index in xarray and in the file ----------------------------------
+
+# The dated record: thesis_result's record on a 1 s DatetimeIndex from 2015-01-31 23:59, February from step 60.
+FEBRUARY = 60
+TIME_KEYS = ("time_of_max_ic", "time_of_highest_ic", "high_ic_span")
+
+
+def _dated_series(steps=120):
+    pd = pytest.importorskip("pandas")
+    u, y = _record(steps)
+    index = pd.date_range("2015-01-31 23:59", periods=steps, freq="1s")
+    return pd.Series(u, index), pd.Series(y, index)
+
+
+@pytest.fixture(scope="module")
+def dated_result():
+    return dynia.run(*_dated_series(), FirstOrder(), BOUNDS, n=6, n_samples=400, flavour="thesis", rng=1)
+
+
+def test_a_dated_runs_summary_gives_the_dates_of_its_steps(dated_result, thesis_result):
+    assert np.array_equal(dated_result.ic, thesis_result.ic, equal_nan=True)  # the same analysis, dated
+    stamps = dated_result.timestamps
+    dated, undated = dated_result.summary(), thesis_result.summary()
+    for p, name in enumerate(dated_result.names):
+        entry = dated[name]
+        step, highest = reported_step(dated_result, p), int(np.nanargmax(dated_result.ic[p]))
+        evidence = np.flatnonzero(high_ic_windows(dated_result, p))
+        assert type(entry["time_of_max_ic"]) is np.datetime64 and entry["time_of_max_ic"] == stamps[step]
+        assert entry["time_of_max_ic"].dtype == np.dtype("datetime64[ns]")
+        assert entry["time_of_highest_ic"] == stamps[highest]
+        # Undated, the same steps in seconds, as before; the rest alike (the reasons' texts may name dates).
+        plain = undated[name]
+        assert type(plain["time_of_max_ic"]) is float and plain["time_of_max_ic"] == thesis_result.time[step]
+        assert plain["time_of_highest_ic"] == thesis_result.time[highest]
+        if evidence.size:
+            assert entry["high_ic_span"] == [stamps[evidence[0]], stamps[evidence[-1]]]
+            assert plain["high_ic_span"] == [thesis_result.time[evidence[0]], thesis_result.time[evidence[-1]]]
+        else:
+            assert entry["high_ic_span"] == plain["high_ic_span"] == [None, None]
+        others = [key for key in entry if key not in (*TIME_KEYS, "reasons")]
+        assert {key: entry[key] for key in others} == {key: plain[key] for key in others}
+        assert [reason["code"] for reason in entry["reasons"]] == [reason["code"] for reason in plain["reasons"]]
+    assert dated["K"]["high_ic_windows"] > 0  # the span's dates are checked
+
+
+def test_to_xarray_of_a_dated_run_selects_by_date(dated_result):
+    dataset = dated_result.to_xarray()
+    assert dataset["time"].dtype == np.dtype("datetime64[ns]") and "time" in dataset.indexes
+    february = dataset.sel(time="2015-02")
+    assert february.sizes["time"] == dated_result.time.size - FEBRUARY
+    assert np.array_equal(february["ic"].values, dated_result.ic[:, FEBRUARY:], equal_nan=True)
+    assert np.array_equal(february["elapsed"].values, dated_result.time[FEBRUARY:])
+    assert dataset.sel(time="2015-01").sizes["time"] == FEBRUARY
+    around = dataset.sel(time=slice("2015-01-31T23:59:30", "2015-02-01T00:00:10"))
+    assert np.array_equal(around["elapsed"].values, np.arange(30.0, 71.0))  # both ends included
+    assert dataset.sel(time=slice("2015-02-01", "2015-02-02")).sizes == february.sizes
+
+
+@pytest.mark.parametrize("dated", [False, True])
+def test_a_dated_and_an_undated_run_come_back_with_their_dates_and_summary(
+    dated_result, thesis_result, tmp_path, dated
+):
+    result = dated_result if dated else thesis_result
+    back = _round_trip(result, tmp_path)
+    _assert_identical(back, result)
+    _same_settings(back, result)
+    if dated:
+        assert back.timestamps.dtype == np.dtype("datetime64[ns]")
+        assert back.timestamps.tobytes() == result.timestamps.tobytes()
+    else:
+        assert back.timestamps is None
+    assert back.summary() == result.summary()
+    assert back.to_xarray().identical(result.to_xarray())
+    with h5py.File(tmp_path / "result.nc", "r") as file:
+        # An undated file is format version 1, as before: an older dynia reads it.
+        assert file.attrs["dynia_result"] == (2 if dated else 1)
+        assert file["time"].dtype == (np.int64 if dated else np.float64) and "timestamp" not in file
+        assert ("elapsed" in file) == dated and all(file[key].fletcher32 for key in ("time", "elapsed") if key in file)
+
+
+def test_a_dated_run_stored_block_by_block_loads_with_its_dates(dated_result, tmp_path):
+    xr = pytest.importorskip("xarray")
+    path = tmp_path / "stored.nc"
+    stored = dynia.run(*_dated_series(), FirstOrder(), BOUNDS, n=6, n_samples=400, flavour="thesis", rng=1, store=path)
+    assert type(stored.ic).__name__ == "DiskArray"
+    assert stored.summary() == dated_result.summary()
+    for lazy in (False, True):
+        back = dynia.load(path, lazy=lazy)
+        assert np.array_equal(back.ic, dated_result.ic, equal_nan=True) and np.array_equal(back.time, dated_result.time)
+        assert back.timestamps.tobytes() == dated_result.timestamps.tobytes()
+        assert back.summary() == dated_result.summary()
+    assert stored.to_xarray().sel(time="2015-02").sizes["time"] == dated_result.time.size - FEBRUARY
+    with xr.open_dataset(path, engine="h5netcdf") as opened:  # any CF reader decodes the dates
+        assert np.array_equal(opened["time"].values, dated_result.timestamps)
+        assert np.array_equal(opened.sel(time="2015-02")["elapsed"].values, dated_result.time[FEBRUARY:])
+
+
+def _version_1(result, path):
+    """``result`` written as dynia wrote format version 1: seconds in time, the dates beside them in ``timestamp``."""
+    dataset = dataclasses.replace(result, timestamps=None).to_xarray()
+    assert dataset.attrs["dynia_result"] == 1
+    encoding = {
+        name: {"_FillValue": None, "fletcher32": dataset[name].dtype.kind in "biuf"} for name in dataset.variables
+    }
+    if result.timestamps is not None:
+        dataset = dataset.assign_coords(timestamp=("time", result.timestamps))
+        encoding["timestamp"] = dict(
+            _FillValue=None, units=TIMESTAMP_UNITS, calendar="proleptic_gregorian", dtype="int64"
+        )
+    dataset.to_netcdf(path, engine="h5netcdf", encoding=encoding)
+
+
+@pytest.mark.parametrize("dated", [False, True])
+def test_a_version_1_file_still_loads(dated_result, thesis_result, tmp_path, dated):
+    result = dated_result if dated else thesis_result
+    path = tmp_path / "version1.nc"
+    _version_1(result, path)
+    with h5py.File(path, "r") as file:
+        assert ("timestamp" in file) == dated and file["time"].dtype == np.float64
+    for lazy in (False, True):
+        back = dynia.load(path, lazy=lazy)
+        assert np.array_equal(back.ic, result.ic, equal_nan=True) and back.time.tobytes() == result.time.tobytes()
+        assert (back.timestamps is None) if not dated else back.timestamps.tobytes() == result.timestamps.tobytes()
+        assert back.summary() == result.summary()
+    if dated:
+        assert dynia.load(path).to_xarray().sel(time="2015-02").sizes["time"] == result.time.size - FEBRUARY
+
+
+def test_a_dynia_reading_version_1_only_refuses_a_dated_file(dated_result, tmp_path, monkeypatch):
+    path = tmp_path / "result.nc"
+    dated_result.save(path)
+    monkeypatch.setattr(dynia.io.reader, "FORMAT_VERSION", 1)
+    with pytest.raises(DataError, match=r"result\.nc: format version 2; expected .*format version 1 or earlier"):
+        dynia.load(path)
+
+
+def test_a_dated_file_without_its_seconds_is_a_data_error(dated_result, tmp_path):
+    dataset = dated_result.to_xarray()
+    encoding = {"time": dict(units=TIMESTAMP_UNITS, calendar="proleptic_gregorian", dtype="int64")}
+    dataset.drop_vars("elapsed").to_netcdf(tmp_path / "no_elapsed.nc", engine="h5netcdf", encoding=encoding)
+    with pytest.raises(DataError, match=r"no_elapsed\.nc: time holds dates but the file has no 'elapsed'"):
+        dynia.load(tmp_path / "no_elapsed.nc")
+    stamped = dataset.assign_coords(timestamp=("time", dated_result.timestamps))
+    stamped.to_netcdf(tmp_path / "twice.nc", engine="h5netcdf", encoding=encoding)
+    with pytest.raises(DataError, match=r"twice\.nc: time holds dates and the file has a 'timestamp' too"):
+        dynia.load(tmp_path / "twice.nc")
