@@ -424,3 +424,24 @@ def test_on_disk_float32_writes_what_the_in_memory_float32_run_writes(tmp_path, 
     header, _ = _read_csv(tmp_path / "disk" / "ic.csv")
     assert header == ["time", "K", "T", "informative"]
     assert json.loads((tmp_path / "disk" / "summary.json").read_text())["settings"]["analysis"]["dtype"] == "float32"
+
+
+def test_a_dated_record_gives_every_time_of_the_summary_as_a_date(tmp_path, capsys):
+    # Every time of a parameter's entry is in the file's terms: the highest IC's too, so that the table
+    # does not take the same window, once as a date and once as seconds, for two.
+    lines = HEATING.read_text().splitlines()
+    start = np.datetime64("2012-01-01T00:00:00")
+    dated = [lines[0]] + [
+        f"{start + np.timedelta64(int(float(line.split(',')[0])), 's')},{line.split(',', 1)[1]}" for line in lines[1:]
+    ]
+    path = tmp_path / "dated.csv"
+    path.write_text("\n".join(dated) + "\n")
+    out = tmp_path / "out"
+    assert main(["analyse", str(path), *HEATING_ARGS, "--no-plots", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    parameters = json.loads((out / "summary.json").read_text())["parameters"]
+    for name, entry in parameters.items():
+        for key in ("time_of_max_ic", "time_of_highest_ic"):
+            assert isinstance(entry[key], str) and entry[key].startswith("2012-01-01"), (name, key, entry[key])
+        if entry["time_of_highest_ic"] == entry["time_of_max_ic"]:
+            assert f"{name}: the record's highest IC" not in printed

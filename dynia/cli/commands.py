@@ -636,8 +636,9 @@ def _analyse(options, command_line, caught):
             parameters = result.summary()
             for entry in parameters.values():
                 # The result's clock starts at the first grid point, data.time[0] after time zero.
-                if entry["time_of_max_ic"] is not None:
-                    entry["time_of_max_ic"] = report.file_times(data, [data.time[0] + entry["time_of_max_ic"]])[0]
+                for key in ("time_of_max_ic", "time_of_highest_ic"):
+                    if entry.get(key) is not None:
+                        entry[key] = report.file_times(data, [data.time[0] + entry[key]])[0]
                 if entry["high_ic_span"][0] is not None:
                     entry["high_ic_span"] = report.file_times(data, data.time[0] + np.array(entry["high_ic_span"]))
             settings = dict(
