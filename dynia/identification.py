@@ -205,6 +205,7 @@ def identify(
     quality_options=None,
     n_starts=1,
     rng=None,
+    progress=False,
 ):
     """Select data by ``method``, fit the model there and validate it on held-out data.
 
@@ -255,6 +256,8 @@ def identify(
         then random ones).
     rng : numpy.random.Generator or int, optional
         Every random draw (the DYNIA samples, the extra fit starts).
+    progress : bool, default False
+        Show the DYNIA run's progress bar (tqdm, on stderr), as :func:`dynia.run`.
 
     Returns
     -------
@@ -275,7 +278,7 @@ def identify(
     notes = []
     dynia_result = baseline_result = None
     if method == "dynia":
-        dynia_result = run(u, y_fit, model, bounds, settings=analysis, rng=rng)
+        dynia_result = run(u, y_fit, model, bounds, settings=analysis, rng=rng, progress=progress)
         if timestamps is not None:
             dynia_result = dated(dynia_result, timestamps)
         chosen = intersect_segments(

@@ -33,6 +33,8 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__, models
+from ..engine import kernels
+from ..engine.flavours import compiled_engine
 from ..engine.windows import OverflowedWindowsWarning
 from ..errors import DyniaError, ModelError, OutputError, SettingsError
 from ..identification import identify
@@ -625,7 +627,8 @@ def _analyse(options, command_line, caught):
         def analyse(bounds, directory, narrowed=None):
             # --on-disk: the run writes result.nc itself, block by block, and the result reads it lazily.
             settings = analysis.replace(store=directory / "result.nc") if options["on_disk"] else analysis
-            result = run(u, y, model, bounds, settings=settings, rng=options["seed"], progress=sys.stderr.isatty())
+            _announce_compilation(options, settings)
+            result = run(u, y, model, bounds, settings=settings, rng=options["seed"], progress=_shows_progress(options))
             dropped = _dynia_warnings(caught)
             for line in dropped:
                 print(f"dynia: warning: {line}", file=sys.stderr)
@@ -747,6 +750,8 @@ def _identify(options, command_line, caught):
         notices, _ = _data_warnings(data, u, y, dict(options, quality=False))
         for line in notices:
             print(f"dynia: warning: {line}", file=sys.stderr)
+        if options["method"] == "dynia":
+            _announce_compilation(options, analysis)
         found = identify(
             u,
             y,
@@ -761,6 +766,7 @@ def _identify(options, command_line, caught):
             exclude_flagged=options["exclude_flagged"],
             n_starts=options["starts"],
             rng=options["seed"],
+            progress=_shows_progress(options),
         )
         dropped = _dynia_warnings(caught)
         for line in dropped + found.warnings:
@@ -795,10 +801,12 @@ def _identify(options, command_line, caught):
             **_provenance(options, command_line),
         )
         report.write_identification(staging, found, data, u, y, summary, offset=offset, plots=not options["no_plots"])
-    fitted_steps = sum(stop - start for start, stop in found.segments)
     print(
-        f"--method {options['method']} selected {100 * found.selected_share:.1f} % of the fitting part "
-        f"({fitted_steps} steps in {len(found.segments)} segment(s), the held-out part aside)"
+        report.identification_table(
+            summary,
+            fitted_steps=sum(stop - start for start, stop in found.segments),
+            held_out_steps=sum(stop - start for start, stop in found.validation),
+        )
     )
     return _done(options)
 
@@ -815,6 +823,7 @@ def _suggest(options, command_line, caught):
             f"{entry['reason']}"
             for entry in findings
         ]
+    _announce_compilation(options, AnalysisSettings())  # the pilot runs on the default engine and flavour
     found = suggest(
         u,
         y,
@@ -824,7 +833,7 @@ def _suggest(options, command_line, caught):
         x0=options["x0"],
         max_samples=options["max_samples"],
         max_memory=options["max_memory"],
-        progress=sys.stderr.isatty(),
+        progress=_shows_progress(options),
         rng=options["seed"],
     )
     # Printed once there is a proposal: a record that gets none ends in its one error line, which says why.
@@ -864,9 +873,32 @@ def _suggest(options, command_line, caught):
 
 
 def _done(options):
-    if sys.stderr.isatty():  # quiet in scripts and pipelines
+    if _shows_progress(options):
         print(f"dynia: wrote {options['out']}", file=sys.stderr)
     return 0
+
+
+def _shows_progress(options):
+    """Whether the command shows its progress: bars, the compilation notice and the "wrote DIR" line, on stderr.
+
+    Only on a terminal, so that the stderr of a script or a pipeline holds nothing but warnings and errors; --quiet
+    silences it there too. Progress never goes to stdout, which holds the results (suggest --json's JSON).
+    """
+    return sys.stderr.isatty() and not options["quiet"]
+
+
+def _announce_compilation(options, settings):
+    """Say so before a run that may compile the numba kernels: the first of a process, on the compiled engine.
+
+    numba alone finds out whether its on-disk cache holds them (a second or so) or they compile (seconds to a
+    minute, once after dynia or numba changes), hence "unless cached".
+    """
+    if _shows_progress(options) and not kernels.compiled() and compiled_engine(settings.engine, settings.flavour):
+        print(
+            "dynia: compiling the analysis kernels unless numba cached them "
+            "(once after installing or upgrading dynia: up to a minute)...",
+            file=sys.stderr,
+        )
 
 
 # Values beyond this are no measurement of a process: a logger's overflow or

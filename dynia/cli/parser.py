@@ -217,10 +217,19 @@ _MODEL = (
     setting_option("x0"),
 )
 
+# Progress is shown only on a terminal, so scripts and pipelines need no option to silence it.
+_QUIET = Option(
+    "quiet",
+    "flag",
+    "show no progress on stderr (bars, the compilation notice, the 'wrote DIR' line); the results, warnings and "
+    "errors still print",
+)
+
 _OUTPUT = (
     Option("out", "text", "directory for the results (must not exist; see --overwrite)", metavar="DIR"),
     Option("overwrite", "flag", "replace DIR if it holds the results of an earlier dynia run (never anything else)"),
     Option("no_plots", "flag", "write the tables and the summary, no figures"),
+    _QUIET,
 )
 
 # Read before the other options, so not one of them (a config file does not name another).
@@ -339,6 +348,7 @@ _SUGGEST_PILOT = (
         metavar="SIZE",
     ),
     Option("json", "flag", "print the proposal as JSON"),
+    _QUIET,
 )
 
 # Each command's option groups, in the order of its --help.

@@ -2,7 +2,8 @@
 
 :func:`write_analysis` fills a result directory of ``dynia analyse``,
 :func:`write_identification` one of ``dynia identify``; :func:`verdict_table`
-is the short table ``dynia analyse`` prints on success. Times are written as
+is the short table ``dynia analyse`` prints on success, :func:`identification_table`
+the one ``dynia identify`` prints. Times are written as
 the data file wrote them (:func:`file_times`). Figures are decimated
 (:mod:`dynia.decimation`) so that their memory does not grow with the record.
 """
@@ -23,6 +24,7 @@ __all__ = [
     "write_analysis",
     "write_identification",
     "verdict_table",
+    "identification_table",
     "noise_floor_summary",
     "noise_floor_line",
     "file_times",
@@ -192,6 +194,61 @@ def verdict_table(parameters):
         for reason in entry["reasons"]:
             lines.append(f"  {name} {entry['verdict']}: {reason['text']}")
     return "\n".join(lines)
+
+
+def identification_table(summary, *, fitted_steps, held_out_steps):
+    """What ``dynia identify`` prints: the selection, the estimates with their standard errors, the validation error.
+
+    ``summary`` is the content of ``identified.json`` (its numbers, None for
+    a non-finite one, are the ones printed); ``fitted_steps`` and
+    ``held_out_steps`` count the steps of its ``segments`` and
+    ``validation_segments``. One row per parameter: the estimate, its
+    classical standard error and the one robust to autocorrelated residuals
+    (HAC), and a note where the selected data do not determine it or it
+    lies on a bound of its range.
+    """
+    segments = summary["segments"]
+    lines = [
+        f"--method {summary['method']} selected {100 * summary['selected_share']:.1f} % of the fitting part "
+        f"({fitted_steps} steps in {len(segments)} segment(s), the held-out part aside)"
+    ]
+    header = ("parameter", "estimate", "std error", "HAC std error", "note")
+    rows = []
+    for name, value in summary["parameters"].items():
+        if not summary["identifiable"].get(name, True):
+            note = "not determined by the selected data: the value is no estimate"
+        elif name in summary["at_bound"]:
+            note = "on a bound of its range: the errors do not hold"
+        else:
+            note = ""
+        rows.append(
+            (
+                name,
+                _number(value),
+                _number(summary["std_errors"][name]),
+                _number(summary["std_errors_hac"][name]),
+                note,
+            )
+        )
+    if not any(row[-1] for row in rows):
+        header, rows = header[:-1], [row[:-1] for row in rows]
+    widths = [max(len(row[column]) for row in rows + [header]) for column in range(len(header))]
+    lines += ["  ".join(cell.ljust(width) for cell, width in zip(row, widths)).rstrip() for row in [header] + rows]
+    lines.append(
+        f"  standard errors: classical, and HAC (Newey-West, {summary['hac_lags']} lag(s)) robust to autocorrelated "
+        "residuals; judge the estimates by the HAC ones"
+    )
+    held_out = ", ".join(f"{first} to {last}" for first, last in summary["validation_segments"])
+    lines.append(
+        f"validation error: RMSE {_number(summary['validation_error'])} on the held-out part ({held_out_steps} steps, "
+        f"{held_out}); fit RMSE {_number(summary['fit_rmse'])} on the selected data"
+    )
+    return "\n".join(lines)
+
+
+def _number(value):
+    """A number of identified.json as the table shows it: 6 significant digits, "inf" where JSON holds null."""
+    return "inf" if value is None else f"{value:.6g}"
 
 
 def _plain(value):

@@ -36,11 +36,17 @@ except ImportError:  # the numpy path serves
 
 AVAILABLE = numba is not None
 
-__all__ = ["AVAILABLE", "simulate_errors", "analyse_windows", "analyse_windows_batched"]
+__all__ = ["AVAILABLE", "compiled", "simulate_errors", "analyse_windows", "analyse_windows_batched"]
 
 
 def _jit(function):
-    return numba.njit(nogil=True, cache=True)(function) if AVAILABLE else function
+    if not AVAILABLE:
+        return function
+    try:
+        # Compiled once, then loaded from numba's on-disk cache: next to this module, else the user's cache directory.
+        return numba.njit(nogil=True, cache=True)(function)
+    except RuntimeError:  # neither is writable (a read-only install, no home): compile in every process instead
+        return numba.njit(nogil=True)(function)
 
 
 @_jit
@@ -868,3 +874,15 @@ class CompiledErrors:
     def close(self):
         if self._pool is not None:
             self._pool.shutdown()
+
+
+def compiled():
+    """Whether a kernel of the run has been compiled, or loaded from numba's cache, in this process already.
+
+    False without numba. Before that, the first run either loads the kernels from the on-disk cache that an
+    earlier process left (about a second) or compiles them (seconds to a minute, once after dynia or numba
+    changes); which of the two, only numba finds out.
+    """
+    return AVAILABLE and any(
+        kernel.signatures for kernel in (simulate_errors, analyse_windows, analyse_windows_batched)
+    )
