@@ -1,4 +1,4 @@
-"""What the command line writes: result tables, ``summary.json``, figures and the verdict table.
+"""What the command line writes: result tables, ``summary.json``, figures, ``report.html`` and the verdict table.
 
 :func:`write_analysis` fills a result directory of ``dynia analyse``,
 :func:`write_identification` one of ``dynia identify``; :func:`verdict_table`
@@ -6,6 +6,7 @@ is the short table ``dynia analyse`` prints on success, :func:`identification_ta
 the one ``dynia identify`` prints. Times are written as
 the data file wrote them (:func:`file_times`). Figures are decimated
 (:mod:`dynia.decimation`) so that their memory does not grow with the record.
+Both directories get a ``report.html`` of what they hold (:mod:`dynia.cli.html_report`).
 """
 
 import csv
@@ -19,12 +20,15 @@ import numpy as np
 from .. import segments
 from ..serial import json_ready
 from .figures import write_figures, write_fit_figure
+from .html_report import write_report
 
 __all__ = [
     "write_analysis",
     "write_identification",
     "verdict_table",
+    "verdict_parts",
     "identification_table",
+    "identification_parts",
     "noise_floor_summary",
     "noise_floor_line",
     "file_times",
@@ -58,7 +62,9 @@ def write_json(path, content):
 
 
 def write_analysis(directory, result, data, summary, *, offset=0.0, plots=True, saved=False):
-    """Write one analysis into ``directory``: ic.csv, limits.csv, samples.csv, summary.json, result.nc and figures.
+    """Write one analysis into ``directory``: ic.csv, limits.csv, samples.csv, summary.json, result.nc, figures, report.
+
+    ``report.html`` holds the verdict table, the noise-floor line, the figures and the record of ``summary``.
 
     ``summary`` is the finished content of ``summary.json``; the per-parameter
     times in it are already the file's. ``result.nc`` is the whole result
@@ -94,14 +100,29 @@ def write_analysis(directory, result, data, summary, *, offset=0.0, plots=True, 
         result.save(directory / "result.nc")
     if plots:
         write_figures(directory, result, data, offset)
+    floor = summary.get("noise_floor")
+    write_report(
+        directory,
+        summary,
+        command="analyse",
+        tables=[([], *verdict_parts(summary["parameters"]))],
+        lines=[] if floor is None else [noise_floor_line(floor)],
+        plots=plots,
+    )
 
 
 def write_identification(directory, found, data, u, y, summary, *, offset=0.0, plots=True):
-    """Write ``identified.json`` and, with ``plots``, ``fit.png`` into ``directory``."""
+    """Write ``identified.json``, with ``plots`` ``fit.png``, and ``report.html`` into ``directory``."""
     directory = Path(directory)
     write_json(directory / "identified.json", summary)
     if plots:
         write_fit_figure(directory / "fit.png", found, data, u, y, offset)
+    parts = identification_parts(
+        summary,
+        fitted_steps=sum(stop - start for start, stop in found.segments),
+        held_out_steps=sum(stop - start for start, stop in found.validation),
+    )
+    write_report(directory, summary, command="identify", tables=[parts], plots=plots)
 
 
 def noise_floor_summary(result, data):
@@ -157,6 +178,12 @@ def verdict_table(parameters):
     floor and the times of the first and the last of them ("from", "to").
     ``parameters`` is ``summary["parameters"]`` of :func:`write_analysis`.
     """
+    header, rows, notes = verdict_parts(parameters)
+    return "\n".join(_aligned(header, rows) + notes)
+
+
+def verdict_parts(parameters):
+    """The cells of :func:`verdict_table`: its header, its rows and the lines under it, as printed."""
     header = ("parameter", "max IC", "at", "band", "estimate", "IC>=0.5", "from", "to", "verdict")
     rows = []
     for name, entry in parameters.items():
@@ -182,18 +209,17 @@ def verdict_table(parameters):
                 entry["verdict"],
             )
         )
-    widths = [max(len(row[column]) for row in rows + [header]) for column in range(len(header))]
-    lines = ["  ".join(cell.ljust(width) for cell, width in zip(row, widths)).rstrip() for row in [header] + rows]
+    notes = []
     for name, entry in parameters.items():
         if entry.get("highest_ic") is not None and entry["time_of_highest_ic"] != entry["time_of_max_ic"]:
-            lines.append(
+            notes.append(
                 f"  {name}: the record's highest IC, {entry['highest_ic']:.3f} at {entry['time_of_highest_ic']}, is "
                 "in a window that is no evidence (truncated, below the noise floor or tied within noise); shown: the "
                 "highest IC among the windows that are"
             )
         for reason in entry["reasons"]:
-            lines.append(f"  {name} {entry['verdict']}: {reason['text']}")
-    return "\n".join(lines)
+            notes.append(f"  {name} {entry['verdict']}: {reason['text']}")
+    return header, rows, notes
 
 
 def identification_table(summary, *, fitted_steps, held_out_steps):
@@ -207,8 +233,14 @@ def identification_table(summary, *, fitted_steps, held_out_steps):
     (HAC), and a note where the selected data do not determine it or it
     lies on a bound of its range.
     """
+    lead, header, rows, notes = identification_parts(summary, fitted_steps=fitted_steps, held_out_steps=held_out_steps)
+    return "\n".join(lead + _aligned(header, rows) + notes)
+
+
+def identification_parts(summary, *, fitted_steps, held_out_steps):
+    """The pieces of :func:`identification_table`: the lines above the table, its header and rows, the lines below."""
     segments = summary["segments"]
-    lines = [
+    lead = [
         f"--method {summary['method']} selected {100 * summary['selected_share']:.1f} % of the fitting part "
         f"({fitted_steps} steps in {len(segments)} segment(s), the held-out part aside)"
     ]
@@ -232,18 +264,20 @@ def identification_table(summary, *, fitted_steps, held_out_steps):
         )
     if not any(row[-1] for row in rows):
         header, rows = header[:-1], [row[:-1] for row in rows]
-    widths = [max(len(row[column]) for row in rows + [header]) for column in range(len(header))]
-    lines += ["  ".join(cell.ljust(width) for cell, width in zip(row, widths)).rstrip() for row in [header] + rows]
-    lines.append(
-        f"  standard errors: classical, and HAC (Newey-West, {summary['hac_lags']} lag(s)) robust to autocorrelated "
-        "residuals; judge the estimates by the HAC ones"
-    )
     held_out = ", ".join(f"{first} to {last}" for first, last in summary["validation_segments"])
-    lines.append(
+    notes = [
+        f"  standard errors: classical, and HAC (Newey-West, {summary['hac_lags']} lag(s)) robust to autocorrelated "
+        "residuals; judge the estimates by the HAC ones",
         f"validation error: RMSE {_number(summary['validation_error'])} on the held-out part ({held_out_steps} steps, "
-        f"{held_out}); fit RMSE {_number(summary['fit_rmse'])} on the selected data"
-    )
-    return "\n".join(lines)
+        f"{held_out}); fit RMSE {_number(summary['fit_rmse'])} on the selected data",
+    ]
+    return lead, header, rows, notes
+
+
+def _aligned(header, rows):
+    """The header and rows as lines of left-aligned columns two spaces apart."""
+    widths = [max(len(row[column]) for row in [*rows, header]) for column in range(len(header))]
+    return ["  ".join(cell.ljust(width) for cell, width in zip(row, widths)).rstrip() for row in [header, *rows]]
 
 
 def _number(value):
