@@ -57,14 +57,15 @@ def write_json(path, content):
     Path(path).write_text(json.dumps(json_ready(content), indent=2, default=_plain) + "\n")
 
 
-def write_analysis(directory, result, data, summary, *, offset=0.0, plots=True, saved=False):
+def write_analysis(directory, result, data, summary, *, offset=0.0, plots=True, saved=False, labels=None):
     """Write one analysis into ``directory``: ic.csv, limits.csv, samples.csv, summary.json, result.nc and figures.
 
     ``summary`` is the finished content of ``summary.json``; the per-parameter
     times in it are already the file's. ``result.nc`` is the whole result
     (:meth:`dynia.result.DyniaResult.save`), which ``dynia.load`` reads back;
     with ``saved`` the run already wrote it there (``store=``), and it is
-    not written again.
+    not written again. ``labels`` (:class:`~dynia.cli.figures.Labels`) names
+    the columns in the figures and gives their units and reference lines.
     """
     directory = Path(directory)
     names = list(result.names)
@@ -93,15 +94,15 @@ def write_analysis(directory, result, data, summary, *, offset=0.0, plots=True, 
     if not saved:
         result.save(directory / "result.nc")
     if plots:
-        write_figures(directory, result, data, offset)
+        write_figures(directory, result, data, offset, labels)
 
 
-def write_identification(directory, found, data, u, y, summary, *, offset=0.0, plots=True):
+def write_identification(directory, found, data, u, y, summary, *, offset=0.0, plots=True, labels=None):
     """Write ``identified.json`` and, with ``plots``, ``fit.png`` into ``directory``."""
     directory = Path(directory)
     write_json(directory / "identified.json", summary)
     if plots:
-        write_fit_figure(directory / "fit.png", found, data, u, y, offset)
+        write_fit_figure(directory / "fit.png", found, data, u, y, offset, labels)
 
 
 def noise_floor_summary(result, data):
