@@ -509,7 +509,7 @@ class DyniaResult:
                 fontsize="small",
                 fontweight="bold",
             )
-        ax.legend(loc="lower right", fontsize="small")
+        ax.legend(loc="best", fontsize="small")
         ax.set_ylim(0, 1)
         ax.set_xlim(axis[0], axis[-1])
         ax.set_xlabel("time")
@@ -631,10 +631,12 @@ class DyniaResult:
 
     def _reported(self, p):
         """The reported step of parameter ``p`` (:func:`dynia.verdicts.reported_step`) and its verdict; None
-        without IC."""
+        without IC, or for a result built without settings (which windows are whole is then unknown)."""
         # verdicts reads results: imported here to keep the modules acyclic
         from .verdicts import assess, reported_step
 
+        if self.settings is None:
+            return None
         step = reported_step(self, p)
         if step is None:
             return None
