@@ -469,6 +469,8 @@ class DyniaResult:
         legend names it and the veil): where the shading crosses a
         threshold, more samples could change the verdict. Windows whose IC ranks noise (below the noise floor or
         with the behavioural set tied, never informative: :meth:`informative_windows`) are veiled in grey.
+        A dotted line marks the threshold :data:`~dynia.settings.IC_THRESHOLD` the verdicts use, and a marker
+        the reported window (:meth:`summary`'s ``time_of_max_ic``), labelled with the verdict.
         Returns the matplotlib Axes. A long record is
         drawn through :func:`dynia.decimation.envelope`, so its memory does not
         grow with it.
@@ -493,8 +495,21 @@ class DyniaResult:
             )
         ax.plot(*envelope(axis, self.ic[p]), color="k", linewidth=1)
         self._veil_uninformative(ax, axis, p)
-        if self.ic_se is not None:
-            ax.legend(loc="best", fontsize="small")
+        ax.axhline(IC_THRESHOLD, color="0.3", linestyle=":", linewidth=1, label=f"threshold {IC_THRESHOLD:g}")
+        reported = self._reported(p)
+        if reported is not None:
+            step, verdict = reported
+            ax.plot(axis[step], self.ic[p, step], "o", color="tab:orange", markersize=6, label="reported window")
+            ax.annotate(
+                verdict,
+                (axis[step], self.ic[p, step]),
+                xytext=(0, 8),
+                textcoords="offset points",
+                ha="center",
+                fontsize="small",
+                fontweight="bold",
+            )
+        ax.legend(loc="best", fontsize="small")
         ax.set_ylim(0, 1)
         ax.set_xlim(axis[0], axis[-1])
         ax.set_xlabel("time")
@@ -541,11 +556,14 @@ class DyniaResult:
         counts = [binned_mass(values, 1.0, low, high, n_bins) for values, (low, high) in zip(columns, self.bounds)]
         return np.rint(counts).astype(int)
 
-    def plot_identifiability(self, name, ax=None, true_value=None, per_sample=False):
-        """Confidence band over time with the CLD gradient in grey (darker = larger).
+    def plot_identifiability(self, name, ax=None, true_value=None, per_sample=False, true_label="true value"):
+        """Confidence band over time with the CLD gradient in grey (darker = larger), its scale in a colour bar.
 
         The thesis's parameter identifiability plot (Figures 2.9, 3.4, ...).
-        ``true_value`` draws a dashed line. Windows whose IC ranks noise
+        ``true_value`` draws a dashed line, labelled ``true_label`` (say
+        "calibrated" for a value that is no truth). A marker shows the
+        estimate at the reported window (:meth:`summary`'s ``estimate`` at
+        ``time_of_max_ic``). Windows whose IC ranks noise
         (below the noise floor or with the behavioural set tied, never
         informative: :meth:`informative_windows`) are veiled in grey: their
         band and gradient rank noise. Returns the matplotlib Axes. A long
@@ -585,13 +603,20 @@ class DyniaResult:
             share = counts / counts.sum()
             with np.errstate(divide="ignore", invalid="ignore"):
                 columns = np.where(counts[:, None] > 0, columns / share[:, None], 0.0)
-        ax.pcolormesh(
+        mesh = ax.pcolormesh(
             columns_time, self.bin_centres[p], columns, cmap="Greys", shading="nearest", vmin=0, rasterized=True
         )
         ax.plot(*envelope(axis, self.ci[p, :, 0]), color="tab:blue", linewidth=1, label="lower limit")
         ax.plot(*envelope(axis, self.ci[p, :, 1]), color="tab:red", linewidth=1, label="upper limit")
         if true_value is not None:
-            ax.axhline(true_value, color="k", linestyle="--", linewidth=1, label="true value")
+            ax.axhline(true_value, color="k", linestyle="--", linewidth=1, label=true_label)
+        reported = self._reported(p)
+        if reported is not None:
+            step = reported[0]
+            estimate = self._estimate(p, step)
+            ax.plot(
+                axis[step], estimate, "D", color="tab:orange", markeredgecolor="k", label=f"estimate {estimate:.4g}"
+            )
         self._veil_uninformative(ax, axis, p)
         low, high = self.bounds[p]
         ax.set_ylim(min(low, self.bin_centres[p].min()), max(high, self.bin_centres[p].max()))
@@ -601,7 +626,22 @@ class DyniaResult:
         shading = "CLD gradient per sample" if per_sample else "CLD gradient"
         ax.set_title(f"Uncertainty band and {shading} of {name}")
         ax.legend(loc="upper right", fontsize="small")
+        ax.figure.colorbar(mesh, ax=ax, label=shading, pad=0.01)
         return ax
+
+    def _reported(self, p):
+        """The reported step of parameter ``p`` (:func:`dynia.verdicts.reported_step`) and its verdict; None
+        without IC, or for a result built without settings (which windows are whole is then unknown)."""
+        # verdicts reads results: imported here to keep the modules acyclic
+        from .verdicts import assess, reported_step
+
+        if self.settings is None:
+            return None
+        step = reported_step(self, p)
+        if step is None:
+            return None
+        verdicts = self.verdicts if self.verdicts is not None else assess(self)
+        return step, verdicts[self.names[p]]["verdict"]
 
     def _veil_uninformative(self, ax, axis, p):
         """A translucent grey band over each run of windows whose IC of parameter ``p`` ranks noise.

@@ -189,8 +189,44 @@ def test_plot_data_is_bounded_and_labelled():
     top, bottom = fig.axes
     assert top.lines[0].get_xdata().size <= 4000 and bottom.lines[0].get_xdata().size <= 4000
     assert bottom.lines[0].get_ydata().max() == y.max() and bottom.lines[0].get_ydata().min() == y.min()
-    assert bottom.get_ylabel() == "output (offset 2.5 removed in the analysis)"
+    assert bottom.get_ylabel() == "output\nas measured (offset 2.5)"
     assert bottom.get_xlabel() == "time (s)" and top.get_ylabel() == "input"
     short = plot_data(time[:50], u[:50], y[:50])
     np.testing.assert_array_equal(short.axes[1].lines[0].get_ydata(), y[:50])
     assert short.axes[1].get_ylabel() == "output"
+
+
+def _reported_result():
+    """A short result whose K has one clear highest-IC window at step 700, and its verdicts attached."""
+    result = _result(1500)
+    ic = np.array(result.ic)
+    ic[0, 700] = 1.0
+    return DyniaResult(**{**vars(result), "ic": ic})
+
+
+def test_the_ic_plot_marks_the_threshold_and_the_reported_window_with_its_verdict():
+    result = _reported_result()
+    summary = result.summary()["K"]
+    assert summary["time_of_max_ic"] == 700.0
+    ax = result.plot_information_content("K")
+    threshold = [line for line in ax.lines if line.get_linestyle() == ":"]
+    assert len(threshold) == 1 and set(threshold[0].get_ydata()) == {0.5}
+    (marker,) = [line for line in ax.lines if line.get_marker() == "o"]
+    np.testing.assert_array_equal(marker.get_xdata(), [summary["time_of_max_ic"]])
+    np.testing.assert_array_equal(marker.get_ydata(), [summary["max_ic"]])
+    assert [text.get_text() for text in ax.texts] == [summary["verdict"]]
+
+
+def test_the_identifiability_plot_has_a_colour_bar_the_estimate_and_a_labelled_reference():
+    result = _reported_result()
+    summary = result.summary()["K"]
+    ax = result.plot_identifiability("K", true_value=0.3, true_label="calibrated")
+    (colour_bar,) = [other for other in ax.figure.axes if other is not ax]
+    assert colour_bar.get_ylabel() == "CLD gradient"
+    (marker,) = [line for line in ax.lines if line.get_marker() == "D"]
+    np.testing.assert_array_equal(marker.get_xdata(), [summary["time_of_max_ic"]])
+    np.testing.assert_array_equal(marker.get_ydata(), [summary["estimate"]])
+    (reference,) = [line for line in ax.lines if line.get_linestyle() == "--"]
+    assert set(reference.get_ydata()) == {0.3} and reference.get_label() == "calibrated"
+    default = result.plot_identifiability("K", true_value=0.3)
+    assert [line.get_label() for line in default.lines if line.get_linestyle() == "--"] == ["true value"]

@@ -48,6 +48,7 @@ from ..settings import MAX_PARAMETER, AnalysisSettings
 from ..suggestion import parse_duration, parse_size, suggest, window_half_width
 from ..verdicts import assess
 from . import report
+from .figures import Labels
 from .parser import OPTIONS, WRITING_OPTIONS, UsageError, setting_options, unwritten
 
 __all__ = ["execute"]
@@ -127,7 +128,51 @@ def _options(args):
     if model.n_inputs > 1 and options["quality"]:
         raise UsageError(f"--quality checks one input; the model {model!r} has {model.n_inputs}")
     options["bounds"] = _bounds(options["param"], model)
+    known = [*model.names, *options["input"], options["output"]]
+    options["units"] = _units(options.get("unit") or (), known)
+    options["references"] = _references(options.get("reference") or (), known)
     return options
+
+
+def _named(option, spec, known):
+    """``NAME=REST`` of a repeatable option, NAME a parameter or column of this run; (name, rest)."""
+    name, equals, rest = str(spec).partition("=")
+    name, rest = name.strip(), rest.strip()
+    if not equals or not name or not rest:
+        expected = "UNIT" if option == "--unit" else "VALUE[:LABEL]"
+        raise UsageError(f"{option} {spec!r}: expected NAME={expected}")
+    if name not in known:
+        raise UsageError(f"{option} {name}: not a parameter or column of this run; expected one of {', '.join(known)}")
+    return name, rest
+
+
+def _units(specs, known):
+    """``NAME=UNIT`` strings to {name: unit}, each name a parameter or column of the run, once."""
+    units = {}
+    for spec in specs:
+        name, unit = _named("--unit", spec, known)
+        if name in units:
+            raise UsageError(f"--unit {name} is given twice")
+        units[name] = unit
+    return units
+
+
+def _references(specs, known):
+    """``NAME=VALUE[:LABEL]`` strings to {name: (value, label)}; the label is "reference" unless given."""
+    references = {}
+    for spec in specs:
+        name, rest = _named("--reference", spec, known)
+        number, _, label = rest.partition(":")
+        try:
+            value = float(number)
+        except ValueError:
+            value = math.nan
+        if not math.isfinite(value):
+            raise UsageError(f"--reference {spec!r}: expected NAME=VALUE[:LABEL] with a finite number, e.g. K=18.5")
+        if name in references:
+            raise UsageError(f"--reference {name} is given twice")
+        references[name] = (value, label.strip() or "reference")
+    return references
 
 
 def _merged_options(args, command):
@@ -602,7 +647,7 @@ def _provenance(options, command_line):
 def _recorded(options, analysis, offset, input_offset):
     """Exactly the options of this command as used, and the analysis settings."""
     command_keys = [key for key in OPTIONS[options["command"]] if key in options]
-    recorded = {key: options[key] for key in command_keys if key not in ("param",)}
+    recorded = {key: options[key] for key in command_keys if key not in ("param", "unit", "reference")}
     if len(recorded["input"]) == 1:
         recorded["input"] = recorded["input"][0]
     recorded.update(
@@ -610,6 +655,8 @@ def _recorded(options, analysis, offset, input_offset):
         offset_value=offset,
         input_offset_value=input_offset,
         analysis=analysis.to_dict(),
+        units=options["units"],
+        references={name: dict(value=value, label=label) for name, (value, label) in options["references"].items()},
     )
     return recorded
 
@@ -681,6 +728,7 @@ def _analyse(options, command_line, caught):
                 offset=offset,
                 plots=not options["no_plots"],
                 saved=options["on_disk"],
+                labels=_labels(options),
             )
             table = report.verdict_table(parameters)
             if summary["noise_floor"] is not None:
@@ -724,6 +772,16 @@ def _written_into(out, staging):
             raise
         where = "" if name is None else f"{name[len(folder) :]}: "
         raise OutputError(f"--out {out}: cannot write the results: {where}{error.strerror or error}") from None
+
+
+def _labels(options):
+    """What the figures call the columns, with the units and references of the command line."""
+    return Labels(
+        inputs=tuple(options["input"]),
+        output=options["output"],
+        units=options["units"],
+        references=options["references"],
+    )
 
 
 def _monte_carlo_record(result):
@@ -800,7 +858,9 @@ def _identify(options, command_line, caught):
             ),
             **_provenance(options, command_line),
         )
-        report.write_identification(staging, found, data, u, y, summary, offset=offset, plots=not options["no_plots"])
+        report.write_identification(
+            staging, found, data, u, y, summary, offset=offset, plots=not options["no_plots"], labels=_labels(options)
+        )
     print(
         report.identification_table(
             summary,

@@ -229,6 +229,20 @@ _OUTPUT = (
     Option("out", "text", "directory for the results (must not exist; see --overwrite)", metavar="DIR"),
     Option("overwrite", "flag", "replace DIR if it holds the results of an earlier dynia run (never anything else)"),
     Option("no_plots", "flag", "write the tables and the summary, no figures"),
+    Option(
+        "unit",
+        "names",
+        "the unit of a parameter or a column (--input, --output), e.g. K=degC/V or q=mm/d: shown in the figures' "
+        "axis labels and recorded in the summary; give one per name",
+        metavar="NAME=UNIT",
+    ),
+    Option(
+        "reference",
+        "names",
+        "a horizontal line at VALUE on the figures of the parameter or column NAME (a parameter's identifiability "
+        "plot, a column's panel), labelled 'reference' or LABEL, e.g. K=18.5:calibrated; give one per name",
+        metavar="NAME=VALUE[:LABEL]",
+    ),
     _QUIET,
 )
 
@@ -376,7 +390,7 @@ def setting_options(command):
 
 # Not options of suggest, which writes nothing: known only to say so, instead of argparse's "ambiguous option"
 # (--out abbreviates --output and --output-file).
-WRITING_OPTIONS = ("--out", "--overwrite", "--no-plots")
+WRITING_OPTIONS = ("--out", "--overwrite", "--no-plots", "--unit", "--reference")
 
 
 def unwritten(option):

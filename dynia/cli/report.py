@@ -61,7 +61,7 @@ def write_json(path, content):
     Path(path).write_text(json.dumps(json_ready(content), indent=2, default=_plain) + "\n")
 
 
-def write_analysis(directory, result, data, summary, *, offset=0.0, plots=True, saved=False):
+def write_analysis(directory, result, data, summary, *, offset=0.0, plots=True, saved=False, labels=None):
     """Write one analysis into ``directory``: ic.csv, limits.csv, samples.csv, summary.json, result.nc, figures, report.
 
     ``report.html`` holds the verdict table, the noise-floor line, the figures and the record of ``summary``.
@@ -70,7 +70,8 @@ def write_analysis(directory, result, data, summary, *, offset=0.0, plots=True, 
     times in it are already the file's. ``result.nc`` is the whole result
     (:meth:`dynia.result.DyniaResult.save`), which ``dynia.load`` reads back;
     with ``saved`` the run already wrote it there (``store=``), and it is
-    not written again.
+    not written again. ``labels`` (:class:`~dynia.cli.figures.Labels`) names
+    the columns in the figures and gives their units and reference lines.
     """
     directory = Path(directory)
     names = list(result.names)
@@ -99,7 +100,7 @@ def write_analysis(directory, result, data, summary, *, offset=0.0, plots=True, 
     if not saved:
         result.save(directory / "result.nc")
     if plots:
-        write_figures(directory, result, data, offset)
+        write_figures(directory, result, data, offset, labels)
     floor = summary.get("noise_floor")
     write_report(
         directory,
@@ -111,12 +112,12 @@ def write_analysis(directory, result, data, summary, *, offset=0.0, plots=True, 
     )
 
 
-def write_identification(directory, found, data, u, y, summary, *, offset=0.0, plots=True):
+def write_identification(directory, found, data, u, y, summary, *, offset=0.0, plots=True, labels=None):
     """Write ``identified.json``, with ``plots`` ``fit.png``, and ``report.html`` into ``directory``."""
     directory = Path(directory)
     write_json(directory / "identified.json", summary)
     if plots:
-        write_fit_figure(directory / "fit.png", found, data, u, y, offset)
+        write_fit_figure(directory / "fit.png", found, data, u, y, offset, labels)
     parts = identification_parts(
         summary,
         fitted_steps=sum(stop - start for start, stop in found.segments),
