@@ -193,14 +193,13 @@ import scipy.stats
 from . import _checks
 from .errors import DataError, SettingsError
 from .segments import mask_to_segments
+from .settings import MAD_TO_STD
 
 __all__ = ["find_intervals", "BaselineResult", "CandidateInterval", "REASONS"]
 
 # Why a candidate interval was kept or dropped, in the order the checks run.
 REASONS = ("accepted", "no input excitation", "too short", "ill-conditioned", "no causal relation")
 
-# Median absolute deviation of Gaussian noise times this is its standard deviation.
-_MAD_TO_STD = 1.4826
 
 # Noise floor as a fraction of a signal's range: without it a noise-free signal
 # would count as excited until its EWMA mean had converged to machine precision.
@@ -638,7 +637,7 @@ def _noise_std(x):
     if steps.size == 0:
         return floor
     deviation = np.median(np.abs(steps - np.median(steps)))
-    return max(_MAD_TO_STD * float(deviation) / math.sqrt(2), floor)
+    return max(MAD_TO_STD * float(deviation) / math.sqrt(2), floor)
 
 
 def _noise_pair(noise_std):

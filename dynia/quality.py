@@ -128,14 +128,13 @@ from numpy.lib.stride_tricks import sliding_window_view
 from . import _checks
 from .errors import DataError, SettingsError
 from .segments import mask_to_segments
+from .settings import MAD_TO_STD
 
 __all__ = ["Finding", "QualityReport", "check_quality", "KINDS", "SIGNALS"]
 
 KINDS = ("magnitude", "glitch", "outlier", "stuck")
 SIGNALS = ("u", "y")
 
-# 1.4826 * MAD estimates the standard deviation of Gaussian noise.
-_MAD_TO_STD = 1.4826
 # Scales never fall below this fraction of a signal's size (see the module docstring).
 _RESOLUTION = 1e-6
 # The usual run length of a signal is this quantile of its run lengths.
@@ -520,8 +519,8 @@ def _glitches(x, bulk_width, floor, settings):
     local_mad = np.nanmedian(np.abs(windows - local[:, None]), axis=1)
     # The record's own noise level (from sample-to-sample steps) is a floor for the
     # local scale: in a short window that happens to be smooth the MAD is near 0.
-    noise = _MAD_TO_STD * float(np.median(np.abs(np.diff(x)))) / math.sqrt(2)
-    scale = np.maximum(np.maximum(_MAD_TO_STD * local_mad, noise), floor)
+    noise = MAD_TO_STD * float(np.median(np.abs(np.diff(x)))) / math.sqrt(2)
+    scale = np.maximum(np.maximum(MAD_TO_STD * local_mad, noise), floor)
     departure = np.abs(x - local)
     far = (departure > threshold * scale) & (departure >= settings["glitch_min_size"] * bulk_width)
     found = []

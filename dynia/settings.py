@@ -49,6 +49,7 @@ __all__ = [
     "MAX_PARAMETER",
     "MAX_SAMPLES",
     "DEFAULT_MAX_SAMPLES",
+    "MAD_TO_STD",
     "MAX_HALF_WINDOW",
     "MAX_WORKERS",
     "IC_THRESHOLD",
@@ -82,6 +83,8 @@ MAX_HALF_WINDOW = 100_000_000
 MAX_WORKERS = 1024
 # The default max_samples of dynia.suggest: the most samples its pilot and its proposal use.
 DEFAULT_MAX_SAMPLES = 200_000
+# The median absolute deviation of Gaussian noise times this is its standard deviation (robust noise estimates).
+MAD_TO_STD = 1.4826
 # The information content from which a window is informative (DyniaResult.informative_windows): the one default of
 # every rule that judges windows (verdicts, segments, second run, structure warnings). At 0.5 a window's band spans at
 # most half of the parameter's sampling range.

@@ -515,7 +515,7 @@ def _offset(value, option):
 
 
 def _load(options):
-    """The data (u (n_steps,) or (n_steps, n_inputs)), checked against the window, and the offsets.
+    """The data (u (n_steps,) or (n_steps, n_inputs)), checked against the window, the offsets, and u and y minus them.
 
     A ``--window`` duration becomes the half window n on the data's grid
     here: ``options["n"]`` and ``options["analysis"]`` are updated.
@@ -566,7 +566,7 @@ def _load(options):
             [_offset_value(options["input_offset"], column, options["data"], "--input-offset") for column in data.u.T]
         )
     )
-    return data, offset, input_offset
+    return data, offset, input_offset, data.u - input_offset, data.y - offset
 
 
 def _offset_value(offset, values, path, option):
@@ -664,8 +664,7 @@ def _recorded(options, analysis, offset, input_offset):
 def _analyse(options, command_line, caught):
     model = options["model_object"]
     with options["destination"] as staging, _written_into(options["out"], staging):
-        data, offset, input_offset = _load(options)
-        u, y = data.u - input_offset, data.y - offset
+        data, offset, input_offset, u, y = _load(options)
         analysis = options["analysis"].replace(dt=data.dt)
         notices, quality_findings = _data_warnings(data, u, y, options)
         for line in notices:
@@ -802,8 +801,7 @@ def _monte_carlo_record(result):
 def _identify(options, command_line, caught):
     model = options["model_object"]
     with options["destination"] as staging, _written_into(options["out"], staging):
-        data, offset, input_offset = _load(options)
-        u, y = data.u - input_offset, data.y - offset
+        data, offset, input_offset, u, y = _load(options)
         analysis = options["analysis"].replace(dt=data.dt)
         notices, _ = _data_warnings(data, u, y, dict(options, quality=False))
         for line in notices:
@@ -872,8 +870,7 @@ def _identify(options, command_line, caught):
 
 
 def _suggest(options, command_line, caught):
-    data, offset, input_offset = _load(options)
-    u, y = data.u - input_offset, data.y - offset
+    data, offset, input_offset, u, y = _load(options)
     # suggest writes no summary.json: the findings go with the proposal, as JSON or one warning line each.
     where = "see data_quality in the JSON output" if options["json"] else "listed in the warnings below"
     notices, findings = _data_warnings(data, u, y, options, where)
