@@ -117,6 +117,19 @@ time: it is tried there, the others at their estimates): then the range
 stays and the note says the record asks for a value the model excludes. A
 parameter the record does not determine is named too.
 
+Gaps in the output
+------------------
+A stretch without output (a logger that was off for ten days) holds no
+window to analyse, yet a simulation must run through it step by step: on a
+record sampled every 2 s a 10-day gap is 432 000 steps, a hundred times the
+measured ones. The pilot and the least-squares fit therefore keep only the
+last :data:`GAP_MEMORY` dominant time constants (at least one window) of
+every longer gap, the stretch over which a first-order response to the
+input still remembers its state; across the rest the state has forgotten
+where it started (less than e^-10 of it remains). The reasons say how
+many steps were left out. The analysis the suggestion proposes runs through
+the whole record.
+
 Examples
 --------
 >>> import numpy as np
@@ -144,6 +157,7 @@ from .errors import DataError, ModelError, SettingsError, SuggestionError
 from .fit import fit_segments
 from .io.frames import unpack
 from .pipeline import run
+from .segments import mask_to_segments
 from .serial import json_number
 from .settings import (
     DEFAULT_MAX_SAMPLES,
@@ -176,6 +190,8 @@ IC_SE_TARGET = 0.02
 MEMORY_SHARE = 0.5
 # Below this share of the output's variance explained (R^2) the first-order fit sizes no window.
 MIN_EXPLAINED = 0.5
+#: The pilot and the fit keep this many dominant time constants of a gap without output (see Gaps in the output).
+GAP_MEMORY = 10
 
 _UNITS = {
     "s": 1.0,
@@ -620,8 +636,9 @@ def suggest(
         dt=dt,
         ic_error=True,
     )
-    memory = _pilot_memory(model, pilot_settings, y.size, limit, limit_source)
-    pilot = _pilot(u, y, model, bounds, pilot_settings, progress=progress, rng=rng)
+    short_u, short_y = _shorten_gaps(u, y, max(math.ceil(GAP_MEMORY * scale.time_constant / dt), 2 * n + 1), reasons)
+    memory = _pilot_memory(model, pilot_settings, short_y.size, limit, limit_source)
+    pilot = _pilot(short_u, short_y, model, bounds, pilot_settings, progress=progress, rng=rng)
     n_samples = _sample_count(pilot, target, max_samples, percentage, reasons, notes)
     memory["proposed"] = run_memory(model, n_samples, y.size, n)
     if limit is not None and memory["proposed"] > limit:
@@ -635,7 +652,7 @@ def suggest(
                 f"{name}: the pilot's highest IC is {entry['max_ic']:.2f}; more samples sharpen the IC, they do not "
                 "raise it: this record may hold little information on it"
             )
-    fit = _ranges(u, y, model, bounds, dt, x0, rng, reasons, notes)
+    fit = _ranges(short_u, short_y, model, bounds, dt, x0, rng, reasons, notes)
     return Suggestion(
         n=n,
         window=(2 * n + 1) * dt,
@@ -700,6 +717,33 @@ def _window(u, y, dt, x0):
         notes.append(f"the window is capped at the record's length ({n_steps} steps); a longer record would help")
     notes += _close_changes(u, n, dt)
     return scale, n, reasons, notes
+
+
+def _shorten_gaps(u, y, keep, reasons):
+    """``u`` and ``y`` with every run of missing output longer than ``keep`` steps cut to its last ``keep``.
+
+    What the pilot and the fit need of a gap is the state it leaves; see Gaps in the output. A reason is appended
+    when steps were left out.
+    """
+    missing = np.isnan(y)
+    drop = np.zeros(y.size, dtype=bool)
+    gaps = 0
+    for start, stop in mask_to_segments(missing):
+        if stop - start > keep:
+            # A gap that ends the record leaves no state to carry on: its first steps stay instead of its last.
+            if stop == y.size:
+                drop[start + keep : stop] = True
+            else:
+                drop[start : stop - keep] = True
+            gaps += 1
+    if not gaps:
+        return u, y
+    reasons.append(
+        f"gaps: {gaps} stretch(es) without output, {int(drop.sum())} steps in all, left out of the pilot and the "
+        f"least-squares fit but {keep} steps each (at least {GAP_MEMORY} time constants, across which the state is "
+        "carried); the analysis runs through the whole record"
+    )
+    return u[~drop], y[~drop]
 
 
 def _share(d, max_samples, reasons, notes):

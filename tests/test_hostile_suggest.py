@@ -115,3 +115,30 @@ def test_quality_findings_come_with_the_proposal_not_in_a_summary_it_does_not_wr
     assert status == 0 and "summary.json" not in captured.out + captured.err
     assert proposal["warnings"] == ["data quality: 1 finding(s) (glitch); see data_quality in the JSON output"]
     assert [(entry["signal"], entry["kind"]) for entry in proposal["data_quality"]] == [("y", "glitch")]
+
+
+def _gappy_record(gap_steps):
+    rng = np.random.default_rng(5)
+    u = np.repeat([0.0, 2.0, 1.0, 3.0, 1.5, 2.5], 120)
+    y = FirstOrder().simulate([[2.0, 12.0]], u)[0] + rng.normal(0, 0.05, u.size)
+    # A logger off for gap_steps steps after the third step of the input: the input is known (held), the output not.
+    u = np.concatenate([u[:360], np.full(gap_steps, u[359]), u[360:]])
+    y = np.concatenate([y[:360], np.full(gap_steps, np.nan), y[360:]])
+    return u, y
+
+
+def test_a_long_gap_in_the_output_is_left_out_of_the_pilot_and_the_fit():
+    # The case: a 10-day gap at 2 s made suggest simulate 432 000 empty steps, once per sample of the pilot and
+    # once per least-squares evaluation (147 s and 630 MB against 3.5 s). The memory of the pilot is what its record
+    # holds, so a pilot that ran through the gap estimates hundreds of times the memory of one that did not.
+    bounds = {"K": (0.0, 5.0), "T": (1.0, 40.0)}
+    short = suggest(*_gappy_record(100), FirstOrder(), bounds, max_samples=600, rng=1)
+    long = suggest(*_gappy_record(100_000), FirstOrder(), bounds, max_samples=600, rng=1)
+    assert long.memory["pilot"] < 1.2 * short.memory["pilot"]
+    assert any(reason.startswith("gaps: 1 stretch(es) without output") for reason in long.reasons)
+    assert not any(reason.startswith("gaps:") for reason in short.reasons)  # 100 steps: under 10 time constants (120)
+    # What the state remembers of the gap is kept: the fit equals the one on a gap the pilot runs through.
+    for name in bounds:
+        assert long.fit[name]["estimate"] == pytest.approx(short.fit[name]["estimate"], rel=1e-6)
+    # The proposal is for the whole record: its memory estimate counts every step.
+    assert long.memory["proposed"] > 5 * short.memory["proposed"]
