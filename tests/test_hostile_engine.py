@@ -294,3 +294,20 @@ def test_a_worker_lost_at_its_memory_limit_is_named_with_the_limit():
         with pytest.raises(SettingsError, match=lost + ".*time_chunks") as raised:
             run(U, Y, FunctionModel(_hog, ["K", "T"]), BOUNDS, client=client, rng=1, **SETTINGS)
     assert raised.value.setting == "time_chunks"
+
+
+def test_a_transfer_function_whose_factory_ignores_its_parameters_is_refused():
+    # The case: dynia.run went ahead and read IC from ties of identical simulations. The check is on the systems the
+    # factory builds, so a linear model on an input that never excites it (all zeros) still runs.
+    import control
+
+    from dynia.models import TransferFunction
+
+    constant = TransferFunction(lambda p: control.tf([2.0], [3.0, 1.0]), names=("K", "T"))
+    with pytest.raises(ModelError, match=r"factory\(p\) returned the same system for all 300 parameter sets"):
+        dynia.run(U, Y, constant, BOUNDS, rng=1, **SETTINGS)
+    # Sets that differ only in the dead time, which the model simulates itself, are one system by design.
+    delayed = TransferFunction(lambda p: control.tf([2.0], [3.0, 1.0]), names=("theta",), delay="theta")
+    assert np.isfinite(dynia.run(U, Y, delayed, {"theta": (0.0, 5.0)}, rng=1, **SETTINGS).ic).any()
+    using = TransferFunction(lambda p: control.tf([p[0]], [p[1], 1.0]), names=("K", "T"))
+    assert dynia.run(np.zeros_like(U), Y, using, BOUNDS, rng=1, **SETTINGS).ic.shape == (2, U.size)

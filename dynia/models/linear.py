@@ -599,7 +599,23 @@ class TransferFunction(LinearModel):
                 )
             matrices.append(realised)
         a, b, c, d = (np.array(stack, dtype=float) for stack in zip(*matrices))
+        self._refuse_one_system(params, (a, b, c, d))
         return a, b, c, d
+
+    def _refuse_one_system(self, params, matrices):
+        """A ModelError when the factory built one system for parameter sets that differ in what it receives.
+
+        Such a factory ignores ``p``: every set would simulate alike and rank by ties. The dead time is
+        simulated here, not by the factory, so sets that differ only in it may well give one system.
+        """
+        built = [name != self._delay for name in self.names]
+        if np.unique(params[:, built], axis=0).shape[0] < 2:
+            return
+        if all(np.array_equal(stack, np.broadcast_to(stack[:1], stack.shape)) for stack in matrices):
+            raise ModelError(
+                f"{self!r}: factory(p) returned the same system for all {params.shape[0]} parameter sets; it must "
+                "build the system from p (one sample's parameters as a 1-D array, in the order of names)"
+            )
 
 
 def _realisation(system, sample):
