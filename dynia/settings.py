@@ -215,8 +215,11 @@ class AnalysisSettings:
     workers : int or None, default None
         Threads (None: every core), at most :data:`MAX_WORKERS`. Results do
         not depend on it.
-    dt : float, default 1.0
-        Sample time of the record.
+    dt : float or None, default None
+        Sample time of the record (None: a time index's spacing, else 1).
+        Every front-end resolves None when it reads the record, so a
+        result's settings hold the number the run used, and settings made
+        without a dt agree with any pandas index.
     ic_error : bool, default False
         Also estimate the Monte Carlo standard error of IC and limits (batch
         means): ``result.ic_se``, ``result.ci_se`` (see
@@ -283,7 +286,10 @@ class AnalysisSettings:
         metadata=dict(help="the compiled kernels (numba), plain numpy, or numba where it can", choices=ENGINES),
     )
     workers: int | None = dataclasses.field(default=None, metadata=dict(help="threads (None: every core)", metavar="N"))
-    dt: float = dataclasses.field(default=1.0, metadata=dict(help="sample time of the record", metavar="SECONDS"))
+    dt: float | None = dataclasses.field(
+        default=None,
+        metadata=dict(help="sample time of the record (None: a time index's spacing, else 1)", metavar="SECONDS"),
+    )
     ic_error: bool = dataclasses.field(
         default=False,
         metadata=dict(help="also estimate the Monte Carlo standard error of IC and limits (batch means)"),
@@ -361,7 +367,7 @@ class AnalysisSettings:
         store("engine", _choice(self.engine, "engine", ENGINES))
         if self.workers is not None:
             store("workers", _whole(self.workers, "workers", 1, MAX_WORKERS, " threads"))
-        store("dt", check_dt(self.dt))
+        store("dt", None if self.dt is None else check_dt(self.dt))
 
     def _check_errors_and_storage(self):
         """The Monte Carlo error, its target, and where the result arrays go."""
@@ -738,7 +744,9 @@ def merged_settings(settings, keywords, default=None):
     5
     """
     given = {name: keywords[name] for name in _FIELDS if keywords.get(name) is not None}
-    return AnalysisSettings.build(default if settings is None else settings, **given)
+    merged = AnalysisSettings.build(default if settings is None else settings, **given)
+    # A record without a time index, and no dt given anywhere: the unit step.
+    return merged if merged.dt is not None else merged.replace(dt=1.0)
 
 
 _FIELDS = tuple(field.name for field in dataclasses.fields(AnalysisSettings))

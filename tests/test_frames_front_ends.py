@@ -199,3 +199,20 @@ def test_replay_on_a_2s_index_equals_replay_of_arrays(record):
     batch = dynia.run(u_frame, y_frame, FirstOrder(), BOUNDS, n=3, n_samples=300, rng=1, window="trailing")
     assert_array_equal(dated.ic, batch.ic)
     assert_array_equal(dated.timestamps, batch.timestamps)
+
+
+def test_settings_without_a_dt_take_the_index_spacing_and_keep_the_unit_step_without_one():
+    # The case: AnalysisSettings.dt defaulted to 1.0, so settings=AnalysisSettings(n=5) with a 2 s index was refused
+    # as a disagreeing dt. None now means "not given", resolved by the front-end as it reads the record.
+    from dynia.settings import AnalysisSettings
+
+    index = pd.date_range("2020-01-01", periods=120, freq="2s")
+    u = pd.Series(np.r_[np.zeros(20), np.ones(100)], index)
+    y = pd.Series(FirstOrder().simulate([[2.0, 6.0]], u.to_numpy(), dt=2.0)[0], index)
+    bounds = {"K": (0.0, 5.0), "T": (1.0, 10.0)}
+    settings = AnalysisSettings(n=5, n_samples=200)
+    assert AnalysisSettings().dt is None
+    assert dynia.run(u, y, FirstOrder(), bounds, settings=settings, rng=1).settings.dt == 2.0
+    assert dynia.run(u.to_numpy(), y.to_numpy(), FirstOrder(), bounds, settings=settings, rng=1).settings.dt == 1.0
+    with pytest.raises(SettingsError, match="dt = 1 s disagrees with the 2 s spacing"):
+        dynia.run(u, y, FirstOrder(), bounds, settings=settings.replace(dt=1.0), rng=1)

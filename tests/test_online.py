@@ -377,17 +377,17 @@ def test_online_blanks_windows_whose_model_output_overflows_as_the_batch_run_doe
 
 def test_replay_refuses_a_model_that_ignores_its_parameters():
     """Before: the linear model's windows all tied (IC from ties); the state-space model's refusal named 5 sets."""
-    ignoring = [
-        StateSpaceModel(
-            lambda x, u_k, p, dt: x + dt * (u_k - x), lambda x, u_k, p: x[:, 0], [0.0], ["K", "T"], n_states=1
-        ),  # fmt: skip
-        TransferFunction(lambda p: control.tf([1.0], [1.0, 1.0]), names=("K", "T")),
-    ]
-    for model, functions in zip(ignoring, ["step and output", "the simulation"]):
-        online = OnlineDynia(model, MAGNITUDE_BOUNDS, n_samples=300, n=5, rng=1)
-        with pytest.raises(dynia.errors.ModelError, match=f"{functions} returned the same output for all 300 "):
-            online.replay(MAGNITUDE_U, MAGNITUDE_Y)
-        online.reset()
-        for u_t, y_t in zip(MAGNITUDE_U, MAGNITUDE_Y):  # an update cannot know that no later input excites it
-            online.update(u_t, y_t)
-        assert online.steps == MAGNITUDE_U.size
+    ignoring = StateSpaceModel(
+        lambda x, u_k, p, dt: x + dt * (u_k - x), lambda x, u_k, p: x[:, 0], [0.0], ["K", "T"], n_states=1
+    )
+    online = OnlineDynia(ignoring, MAGNITUDE_BOUNDS, n_samples=300, n=5, rng=1)
+    with pytest.raises(dynia.errors.ModelError, match="step and output returned the same output for all 300 "):
+        online.replay(MAGNITUDE_U, MAGNITUDE_Y)
+    online.reset()
+    for u_t, y_t in zip(MAGNITUDE_U, MAGNITUDE_Y):  # an update cannot know that no later input excites it
+        online.update(u_t, y_t)
+    assert online.steps == MAGNITUDE_U.size
+    # A transfer function's factory shows it at once: one system for every set, refused as the stepper is made.
+    constant = TransferFunction(lambda p: control.tf([1.0], [1.0, 1.0]), names=("K", "T"))
+    with pytest.raises(dynia.errors.ModelError, match=r"factory\(p\) returned the same system for all 300 "):
+        OnlineDynia(constant, MAGNITUDE_BOUNDS, n_samples=300, n=5, rng=1)
