@@ -192,8 +192,9 @@ import scipy.stats
 
 from . import _checks
 from .errors import DataError, SettingsError
+from .io.frames import unpack
 from .segments import mask_to_segments
-from .settings import MAD_TO_STD
+from .settings import MAD_TO_STD, check_dt
 
 __all__ = ["find_intervals", "BaselineResult", "CandidateInterval", "REASONS"]
 
@@ -361,7 +362,7 @@ def find_intervals(
     u,
     y,
     *,
-    dt=1.0,
+    dt=None,
     setpoint=None,
     mean_forgetting=0.95,
     variance_forgetting=0.9,
@@ -386,13 +387,16 @@ def find_intervals(
 
     Parameters
     ----------
-    u : array_like, shape (n_steps,)
+    u : array_like, shape (n_steps,), or pandas Series
         Input (manipulated variable). NaN breaks the record.
-    y : array_like, shape (n_steps,)
-        Measured output. NaN breaks the record.
-    dt : float, default 1.0
-        Sample time; only used to give intervals in time units.
-    setpoint : array_like, shape (n_steps,), optional
+    y : array_like, shape (n_steps,), or pandas Series
+        Measured output. NaN breaks the record. Two pandas objects must
+        share one index, and a time index gives ``dt``
+        (:func:`dynia.io.frames.unpack`); intervals count steps by position.
+    dt : float, optional
+        Sample time, only used to give intervals in time units; default the
+        spacing of a time index, else 1.0.
+    setpoint : array_like, shape (n_steps,), or pandas Series, optional
         Setpoint of a closed loop: then it is the excitation signal (for
         the excitation detection and the condition number) and ``u`` enters
         the chi-square test only.
@@ -439,8 +443,11 @@ def find_intervals(
     >>> result.accepted.shape, result.candidates[0].reason
     ((0, 2), 'no causal relation')
     """
+    if setpoint is not None:
+        setpoint = unpack(setpoint, y)[0]  # a pandas setpoint on the output's index
+    u, y, dt, _ = unpack(u, y, dt)
     u, y, setpoint = _checked_record(u, y, setpoint)
-    dt = _positive(dt, "dt")
+    dt = check_dt(1.0 if dt is None else dt)
     mean_forgetting = _checks.open_interval(mean_forgetting, "mean_forgetting", 0, 1)
     variance_forgetting = _checks.open_interval(variance_forgetting, "variance_forgetting", 0, 1)
     excitation_threshold = _positive(excitation_threshold, "excitation_threshold", above=1.0)

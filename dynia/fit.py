@@ -79,9 +79,11 @@ from scipy.optimize import least_squares
 
 from . import _checks
 from .errors import DataError, ModelError, SettingsError
+from .io.frames import unpack
 from .models import Model
 from .segments import check_segments, mask_to_segments
 from .serial import json_number, json_ready
+from .settings import check_dt
 
 __all__ = ["FitResult", "fit_segments", "validation_error", "OFFSETS", "X0_CHOICES"]
 
@@ -373,7 +375,7 @@ def fit_segments(
     segments,
     *,
     bounds=None,
-    dt=1.0,
+    dt=None,
     initial=None,
     fixed=None,
     x0="steady",
@@ -397,9 +399,11 @@ def fit_segments(
 
     Parameters
     ----------
-    u, y : array_like, shape (n_steps,)
+    u, y : array_like, shape (n_steps,), or pandas Series
         Input and measured output. NaN in ``y`` marks a missing point; blank
-        the held-out part this way.
+        the held-out part this way. Two pandas objects must share one
+        index, and a time index gives ``dt`` (:func:`dynia.io.frames.unpack`);
+        segments count steps, by position, either way.
     model : dynia.models.Model
         For example ``dynia.models.FOPDT()``.
     segments : list of (start, stop)
@@ -409,8 +413,8 @@ def fit_segments(
         Range of each fitted parameter (infinite ends allowed). Required for
         every fitted parameter without an ``initial`` value; parameters
         without bounds are unbounded.
-    dt : float, default 1.0
-        Sample time.
+    dt : float, optional
+        Sample time; default the spacing of a time index, else 1.0.
     initial : mapping of str to float, optional
         Start values; by default the middle of the bounds.
     fixed : mapping of str to float, optional
@@ -453,6 +457,7 @@ def fit_segments(
     """
     if not isinstance(model, Model):
         raise TypeError(f"model must be a dynia.models.Model, e.g. FirstOrder(); got {type(model).__name__}")
+    u, y, dt, _ = unpack(u, y, dt)
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
     segments = check_segments(segments, u.shape[0])
     if not segments:
@@ -559,8 +564,7 @@ def _best_solution(residuals, starts, lower, upper, typical, free_names):
 
 
 def _scheme(dt, x0, warmup, offset):
-    if isinstance(dt, bool) or not isinstance(dt, numbers.Real) or not math.isfinite(dt) or dt <= 0:
-        raise SettingsError(f"dt must be a finite number > 0; got {dt!r}")
+    dt = check_dt(1.0 if dt is None else dt)
     if x0 not in X0_CHOICES:
         raise SettingsError(f"x0 must be one of {X0_CHOICES}; got {x0!r}")
     if warmup is not None:
@@ -782,7 +786,7 @@ def _bartlett_lags(series):
 # -------------------------------------------------------------- validation
 
 
-def validation_error(u, y, model, parameters, segments, *, dt=1.0, x0="steady", warmup=None, offset="none"):
+def validation_error(u, y, model, parameters, segments, *, dt=None, x0="steady", warmup=None, offset="none"):
     """Root mean square error of a model on held-out data.
 
     The model is simulated on ``segments`` by the same initial-state scheme
@@ -794,8 +798,9 @@ def validation_error(u, y, model, parameters, segments, *, dt=1.0, x0="steady", 
 
     Parameters
     ----------
-    u, y : array_like, shape (n_steps,)
-        The full record, held-out output included.
+    u, y : array_like, shape (n_steps,), or pandas Series
+        The full record, held-out output included (pandas as in
+        :func:`fit_segments`).
     model : dynia.models.Model
     parameters : mapping of str to float
         A value for every model parameter, e.g. ``fit.parameters``.
@@ -819,6 +824,7 @@ def validation_error(u, y, model, parameters, segments, *, dt=1.0, x0="steady", 
     """
     if not isinstance(model, Model):
         raise TypeError(f"model must be a dynia.models.Model, e.g. FirstOrder(); got {type(model).__name__}")
+    u, y, dt, _ = unpack(u, y, dt)
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
     mask = np.asarray(segments) if isinstance(segments, np.ndarray) else None
     if mask is not None and mask.dtype == bool:

@@ -127,6 +127,7 @@ from numpy.lib.stride_tricks import sliding_window_view
 
 from . import _checks
 from .errors import DataError, SettingsError
+from .io.frames import unpack
 from .segments import mask_to_segments
 from .settings import MAD_TO_STD
 
@@ -375,9 +376,11 @@ def check_quality(
     Parameters
     ----------
     time : array_like, shape (n_steps,), or None
-        Time of each sample, strictly increasing (default 0, 1, ...).
-    u, y : array_like, shape (n_steps,)
-        Input and output. NaN marks a missing sample.
+        Time of each sample, strictly increasing (default: seconds from a
+        time index of pandas ``u`` and ``y``, else 0, 1, ...).
+    u, y : array_like, shape (n_steps,), or pandas Series
+        Input and output. NaN marks a missing sample. Two pandas objects
+        must share one index (:func:`dynia.io.frames.unpack`).
     half_window : int, default 3
         Half width of the Hampel window, at least ``max_glitch_length``.
     glitch_threshold : float, default 6.0
@@ -421,10 +424,13 @@ def check_quality(
     >>> [(f.kind, f.start, f.stop) for f in report.findings], report.findings[0].value
     ([('magnitude', 150, 151), ('stuck', 80, 120)], 1e+308)
     """
+    u, y, spacing, _ = unpack(u, y)
     u = _checks.as_1d_float(u, "u", allow_nan=True)
     y = _checks.as_1d_float(y, "y", allow_nan=True)
     if u.size != y.size:
         raise DataError(f"u has {u.size} samples but y has {y.size}; they must be logged on the same steps")
+    if time is None and spacing is not None:
+        time = np.arange(y.size) * spacing  # seconds from the first row, from the time index
     time = _time_axis(time, y.size)
     max_glitch_length = _checks.whole_number(max_glitch_length, "max_glitch_length", minimum=0)
     half_window = _checks.whole_number(half_window, "half_window", minimum=1)

@@ -221,7 +221,7 @@ def test_intervals_in_time_units_and_the_table():
         (dict(y=np.zeros(49)), "u has 50 samples but y has 49"),
         (dict(y=np.r_[np.zeros(49), np.inf]), "y holds a non-finite value at index 49"),
         (dict(setpoint=np.zeros(10)), "setpoint has 10 samples but u has 50"),
-        (dict(dt=0), "dt must be greater than 0.0; got 0"),
+        (dict(dt=0), "dt must be a finite number > 0; got 0"),
         (dict(mean_forgetting=1.0), "mean_forgetting must lie strictly between 0 and 1"),
         (dict(variance_forgetting="0.9"), "variance_forgetting must be a finite number"),
         (dict(excitation_threshold=1.0), "excitation_threshold must be greater than 1.0"),

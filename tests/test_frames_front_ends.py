@@ -216,3 +216,31 @@ def test_settings_without_a_dt_take_the_index_spacing_and_keep_the_unit_step_wit
     assert dynia.run(u.to_numpy(), y.to_numpy(), FirstOrder(), bounds, settings=settings, rng=1).settings.dt == 1.0
     with pytest.raises(SettingsError, match="dt = 1 s disagrees with the 2 s spacing"):
         dynia.run(u, y, FirstOrder(), bounds, settings=settings.replace(dt=1.0), rng=1)
+
+
+def test_fit_baseline_and_quality_align_pandas_records_and_take_dt_from_the_index():
+    # The case: fit_segments, validation_error, find_intervals and check_quality took arrays only, so pandas objects
+    # were paired by position and a 2 s index gave T in steps (5 instead of 10).
+    from dynia.baseline import find_intervals
+    from dynia.fit import fit_segments, validation_error
+    from dynia.quality import check_quality
+
+    index = pd.date_range("2020-01-01", periods=300, freq="2s")
+    u = pd.Series(np.repeat([0.0, 1.0, 0.5], 100), index)
+    y = pd.Series(FirstOrder().simulate([[2.0, 10.0]], u.to_numpy(), dt=2.0)[0], index)
+    bounds = {"K": (0.0, 5.0), "T": (1.0, 30.0)}
+    fitted = fit_segments(u, y, FirstOrder(), [(0, 300)], bounds=bounds)
+    assert fitted.parameters["T"] == pytest.approx(10.0, rel=1e-6)
+    assert validation_error(u, y, FirstOrder(), fitted.parameters, [(200, 300)]) == pytest.approx(0.0, abs=1e-9)
+    assert find_intervals(u, y).dt == 2.0
+    stuck = check_quality(None, u, y).findings[0]
+    assert (stuck.kind, stuck.end_time) == ("stuck", 200.0)  # seconds from the first row, not steps
+    shifted = y.shift(1, freq="2s")
+    for call in (
+        lambda: fit_segments(u, shifted, FirstOrder(), [(0, 300)], bounds=bounds),
+        lambda: validation_error(u, shifted, FirstOrder(), fitted.parameters, [(200, 300)]),
+        lambda: find_intervals(u, shifted),
+        lambda: check_quality(None, u, shifted),
+    ):
+        with pytest.raises(DataError, match="u and y must share one index"):
+            call()
