@@ -70,6 +70,7 @@ variable to 2 GB, which the gradient of a long record passes.
 """
 
 import json
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -196,7 +197,7 @@ def encoded(value, where, setting):
     if isinstance(value, (list, tuple)):
         items = [encoded(item, f"{where}[{index}]", setting) for index, item in enumerate(value)]
         return {_TUPLE: items} if isinstance(value, tuple) else items
-    if isinstance(value, dict):
+    if isinstance(value, Mapping):  # a dict, or a lazily loaded result's DeferredVerdicts
         keys = [key for key in value if not isinstance(key, str)]
         if keys:
             raise SettingsError(f"{where} has the key {keys[0]!r}; only str keys can be saved", setting)

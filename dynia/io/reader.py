@@ -31,6 +31,7 @@ import json
 import numbers
 import os
 import warnings
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -54,6 +55,7 @@ from .layout import (
 __all__ = [
     "load",
     "check_time_block",
+    "DeferredVerdicts",
     "StoredVerdictsWarning",
     "StoredSettingsWarning",
 ]
@@ -84,8 +86,9 @@ def load(path, *, lazy=False):
     (forged, or written by a dynia whose rules differed) is replaced by the
     derived one, with a :class:`StoredVerdictsWarning`. A lazy load checks the fixed arrays at once and the arrays
     along time one on-disk block at a time, when a read first touches the
-    block, so it stays as fast as the reads it is asked for; checking the
-    verdicts reads IC (all of it) and some limits, once.
+    block, so it stays as fast as the reads it is asked for; its verdicts
+    (:class:`DeferredVerdicts`) are checked when first used, which reads IC
+    (all of it) and some limits, once.
 
     Raises
     ------
@@ -159,6 +162,9 @@ def _result(name, dataset, lazy):
     result = DyniaResult(names=names, time=time, settings=settings, run=run, timestamps=timestamps, **arrays)
     if stored_verdicts is None:
         return result
+    _check_verdict_form(name, result, stored_verdicts)
+    if lazy:
+        return dataclasses.replace(result, verdicts=DeferredVerdicts(name, result, stored_verdicts))
     return dataclasses.replace(result, verdicts=_checked_verdicts(name, result, stored_verdicts))
 
 
@@ -423,13 +429,38 @@ def _check_stored_block(name, names, bounds, spans, key, file, start, stop):
     check_time_block(name, names, bounds, spans, key, read_block(file, key, start, stop), companions)
 
 
-def _checked_verdicts(name, result, stored):
-    """The verdicts of ``stored`` that agree with those the arrays give; the arrays' own in place of the others.
+class DeferredVerdicts(Mapping):
+    """The verdicts of a lazily loaded result: checked against its arrays (as :func:`load` says) on first use.
 
-    A DataError when ``stored`` has not the form of verdicts. Agreeing means the same verdict and reason codes
-    (the texts may write times as the data file did); a stored ``noise_only`` of a result without the floor is
-    taken on trust, as it came from the data and the model.
+    Deriving them reads IC along the whole record, which for a result larger than memory is what ``lazy=True``
+    is there to avoid until it is asked for; a :class:`StoredVerdictsWarning` comes then. It reads like the dict
+    of verdicts an eager load gives, and compares equal to it.
     """
+
+    def __init__(self, name, result, stored):
+        self._name, self._result, self._stored = name, result, stored
+        self._checked = None
+
+    def _verdicts(self):
+        if self._checked is None:
+            self._checked = _checked_verdicts(self._name, self._result, self._stored, stacklevel=5)
+        return self._checked
+
+    def __getitem__(self, parameter):
+        return self._verdicts()[parameter]
+
+    def __iter__(self):
+        return iter(self._stored)  # the parameters, known without deriving anything
+
+    def __len__(self):
+        return len(self._stored)
+
+    def __repr__(self):
+        return repr(self._verdicts())
+
+
+def _check_verdict_form(name, result, stored):
+    """A DataError naming the part when ``stored`` has not the form of verdicts of ``result``'s parameters."""
     if list(stored) != list(result.names):
         raise DataError(f"{name}: verdicts name {list(stored)}; expected the parameters {list(result.names)}")
     for parameter, entry in stored.items():
@@ -450,6 +481,14 @@ def _checked_verdicts(name, result, stored):
                 f"{name}: verdicts[{parameter!r}] is {entry!r}; expected {{'verdict': one of {list(VERDICTS)}, "
                 "'reasons': [{'code': ..., 'text': ...}, ...]}"
             )
+
+
+def _checked_verdicts(name, result, stored, stacklevel=4):
+    """The verdicts of ``stored`` (well formed) that agree with those the arrays give; the arrays' own for the others.
+
+    Agreeing means the same verdict and reason codes (the texts may write times as the data file did); a stored
+    ``noise_only`` of a result without the floor is taken on trust, as it came from the data and the model.
+    """
     derived = assess(result)
     checked = {}
     for parameter, entry in stored.items():
@@ -467,7 +506,7 @@ def _checked_verdicts(name, result, stored):
                 f"({', '.join(expected) or 'no reasons'}); loaded with the verdict the arrays give (the file was "
                 "altered, or written by a dynia whose verdict rules differ, or with other settings of assess)",
                 StoredVerdictsWarning,
-                stacklevel=4,
+                stacklevel=stacklevel,
             )
             checked[parameter] = derived[parameter]
     return checked
