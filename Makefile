@@ -68,14 +68,14 @@ figures: $(REPORTS) $(THESIS_CODE_REPORTS)
 reports/%.html: notebooks/%.py $(PACKAGE) reports/.params $(INSTALLED)
 	mkdir -p reports/figures
 	$(PY) -m jupytext --to ipynb --output reports/$*.source.ipynb $<
-	$(PY) -m papermill --cwd reports --kernel python3 $(PARAMS_FLAG) reports/$*.source.ipynb reports/$*.ipynb
+	TQDM_DISABLE=1 $(PY) -m papermill --cwd reports --kernel python3 $(PARAMS_FLAG) reports/$*.source.ipynb reports/$*.ipynb
 	rm reports/$*.source.ipynb
 	$(PY) -m jupyter nbconvert --to html --no-input --output $*.html reports/$*.ipynb
 
 $(THESIS_CODE_REPORTS): reports/%_thesis_code.html: notebooks/%.py $(PACKAGE) reports/.params $(INSTALLED)
 	mkdir -p reports/figures/thesis_code
 	$(PY) -m jupytext --to ipynb --output reports/$*_thesis_code.source.ipynb $<
-	$(PY) -m papermill --cwd reports --kernel python3 $(PARAMS_FLAG) -p code_path thesis -p figure_dir figures/thesis_code \
+	TQDM_DISABLE=1 $(PY) -m papermill --cwd reports --kernel python3 $(PARAMS_FLAG) -p code_path thesis -p figure_dir figures/thesis_code \
 		reports/$*_thesis_code.source.ipynb reports/$*_thesis_code.ipynb
 	rm reports/$*_thesis_code.source.ipynb
 	$(PY) -m jupyter nbconvert --to html --no-input --output $*_thesis_code.html reports/$*_thesis_code.ipynb
@@ -85,7 +85,7 @@ references: $(REFERENCES)
 tests/notebooks/%.ipynb: notebooks/%.py tests/notebook_params/%.yaml $(PACKAGE) $(INSTALLED)
 	mkdir -p tests/notebooks
 	$(PY) -m jupytext --to ipynb --output tests/notebooks/$*.source.ipynb $<
-	$(PY) -m papermill --cwd tests/notebooks --kernel python3 -f tests/notebook_params/$*.yaml tests/notebooks/$*.source.ipynb $@
+	TQDM_DISABLE=1 $(PY) -m papermill --cwd tests/notebooks --kernel python3 -f tests/notebook_params/$*.yaml tests/notebooks/$*.source.ipynb $@
 	rm tests/notebooks/$*.source.ipynb
 	$(PY) tests/keep_checked_outputs.py $@
 

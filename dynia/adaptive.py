@@ -62,6 +62,7 @@ from .engine.selection import lowest_weighted
 from .engine.windows import ArrayErrors, analyse_errors, window_costs
 from .errors import SettingsError
 from .io.frames import unpack
+from .progress import shows_progress
 from .settings import ADAPTIVE_SAMPLERS as SCHEMES
 from .settings import AnalysisSettings, RunRecord, merged_settings, parameter_box
 from .verdicts import assess
@@ -144,7 +145,7 @@ def adaptive_run(
     engine=None,
     workers=None,
     ic_error=None,
-    progress=False,
+    progress="auto",
 ):
     """DYNIA with evaluations concentrated in the windows' low-cost regions.
 
@@ -203,6 +204,7 @@ def adaptive_run(
     )
     if settings.sampler not in SCHEMES:
         raise SettingsError(f"adaptive_run takes sampler (scheme) 'iis' or 'de'; got {settings.sampler!r}")
+    progress = shows_progress(progress)
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
     names, prior = parameter_box(bounds, model.names, type(model).__name__)
     order = [names.index(name) for name in model.names]

@@ -116,6 +116,7 @@ from .engine.windows import (
 from .errors import DataError, DyniaError, ModelError, SettingsError
 from .io.frames import unpack
 from .pipeline import warn_dropped
+from .progress import progress_bar, shows_progress
 from .result import DyniaResult
 from .sampling import sample
 from .settings import SAMPLERS, RunRecord, merged_settings, parameter_box
@@ -155,7 +156,7 @@ def run(
     flavour=None,
     x0=None,
     rng=None,
-    progress=False,
+    progress="auto",
     min_points=None,
     window=None,
     engine=None,
@@ -245,6 +246,7 @@ def run(
     u, y, dt, timestamps = unpack(u, y, dt if dt is not None else getattr(settings, "dt", None))
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
     settings = merged_settings(settings, locals())
+    progress = shows_progress(progress)
     settings.require(
         "dynia.distributed.run",
         sampler=SAMPLERS,
@@ -463,11 +465,7 @@ def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, pr
     waiting = iter(spans)
     for start, stop in itertools.islice(waiting, ahead):
         submit(start, stop)
-    bar = None
-    if progress:
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=len(spans), desc="DYNIA windows", unit="chunk")
+    bar = progress_bar(progress, total=len(spans), desc="DYNIA windows", unit="chunk")
     for future in finished:
         start, stop = chunk_spans.pop(future)
         results = future.result()

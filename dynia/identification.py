@@ -71,6 +71,7 @@ from .errors import NothingSelected, SettingsError
 from .fit import fit_segments
 from .io.frames import unpack
 from .pipeline import dated, run
+from .progress import shows_progress
 from .quality import check_quality
 from .segments import (
     check_segments,
@@ -205,7 +206,7 @@ def identify(
     quality_options=None,
     n_starts=1,
     rng=None,
-    progress=False,
+    progress="auto",
 ):
     """Select data by ``method``, fit the model there and validate it on held-out data.
 
@@ -256,7 +257,7 @@ def identify(
         then random ones).
     rng : numpy.random.Generator or int, optional
         Every random draw (the DYNIA samples, the extra fit starts).
-    progress : bool, default False
+    progress : bool or "auto", default "auto"
         Show the DYNIA run's progress bar (tqdm, on stderr), as :func:`dynia.run`.
 
     Returns
@@ -268,6 +269,7 @@ def identify(
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
     _check_method(model, method, segments, quality or exclude_flagged)
     analysis = merged_settings(settings, locals())
+    progress = shows_progress(progress)
     dt, x0 = analysis.dt, analysis.x0
     names, box = parameter_box(bounds, model.names, type(model).__name__)
     bounds = {name: tuple(map(float, row)) for name, row in zip(names, box)}

@@ -17,6 +17,7 @@ from .io.arrays import result_arrays
 from .io.frames import unpack
 from .models import LinearModel, Model, StateSpaceModel
 from .models.custom import StateErrors
+from .progress import shows_progress
 from .sampling import sample
 from .settings import ADAPTIVE_SAMPLERS, IC_THRESHOLD, MAX_PARAMETER, RunRecord, merged_settings, parameter_box
 from .verdicts import assess
@@ -79,7 +80,7 @@ def run(
     dtype=None,
     store=None,
     rng=None,
-    progress=False,
+    progress="auto",
 ):
     """Dynamic identifiability analysis of a model against measured data.
 
@@ -125,8 +126,9 @@ def run(
         Initial state of every simulation.
     rng : numpy.random.Generator or int, optional
         Source of every random draw; the same seed gives identical results.
-    progress : bool, default False
-        Show a tqdm progress bar.
+    progress : bool or "auto", default "auto"
+        Show a tqdm progress bar on stderr; "auto" shows one when stderr is
+        a terminal or in a Jupyter notebook (:mod:`dynia.progress`).
     min_points : int, default 1
         Windows with fewer measured points get NaN results.
     window : {"centred", "trailing"}, default "centred"
@@ -190,6 +192,7 @@ def run(
     # pandas in: a time index (dates, durations, seconds) gives dt; dates become the result's time axis.
     u, y, dt, timestamps = unpack(u, y, dt if dt is not None else getattr(settings, "dt", None))
     settings = merged_settings(settings, locals())
+    progress = shows_progress(progress)
     if not isinstance(model, Model):
         raise ModelError(
             f"model must be a dynia.models.Model (e.g. FirstOrder(), FunctionModel(fn, names) or "

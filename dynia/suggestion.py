@@ -103,7 +103,7 @@ engine on first use adds about 150 MB), and a pilot above ``max_memory`` (defaul
 available when suggest starts, :data:`MEMORY_SHARE`) is refused with a
 :class:`~dynia.errors.SettingsError` saying what it would need. The
 proposed run's estimate is reported too, with a note when it is above the
-limit. ``progress=True`` shows the pilot's progress bar (tqdm, on stderr).
+limit. The pilot shows its progress bar as :func:`dynia.run` does (``progress``).
 
 The parameter ranges
 --------------------
@@ -157,6 +157,7 @@ from .errors import DataError, ModelError, SettingsError, SuggestionError
 from .fit import fit_segments
 from .io.frames import unpack
 from .pipeline import run
+from .progress import shows_progress
 from .segments import mask_to_segments
 from .serial import json_number
 from .settings import (
@@ -558,7 +559,7 @@ def suggest(
     ic_se_target=IC_SE_TARGET,
     max_samples=DEFAULT_MAX_SAMPLES,
     max_memory=None,
-    progress=False,
+    progress="auto",
     rng=None,
 ):
     """Propose a window, a behavioural share and a number of samples for this record and model.
@@ -592,8 +593,8 @@ def suggest(
     max_memory : float, optional
         Bytes the pilot may take (:func:`parse_size` reads "4GB");
         default: :data:`MEMORY_SHARE` of the memory available now.
-    progress : bool, default False
-        Show the pilot's progress bar (tqdm, on stderr).
+    progress : bool or "auto", default "auto"
+        Show the pilot's progress bar (tqdm, on stderr), as :func:`dynia.run`.
     rng : numpy.random.Generator or int, optional
         Seeds of the pilot runs and of the fit's extra starts.
 
@@ -625,6 +626,7 @@ def suggest(
     max_samples = _checks.whole_number(max_samples, "max_samples", minimum=_PILOT_MIN)
     limit, limit_source = _memory_limit(max_memory)
     rng = _checks.generator(rng)
+    progress = shows_progress(progress)
 
     scale, n, reasons, notes = _window(u, y, dt, x0)
     percentage = _share(len(names), max_samples, reasons, notes)

@@ -1,9 +1,35 @@
-"""Shared test data: the thesis's example 1, simulated independently of dynia.models."""
+"""Shared test data: the thesis's example 1, simulated independently of dynia.models; the notebooks' environment."""
+
+import os
 
 import numpy as np
 import pytest
 
 import dynia
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_runtest_setup(item):
+    """Notebook kernels start without progress bars: ``progress="auto"`` would show one in a kernel (dynia.progress).
+
+    nbval starts a notebook's kernel as its first cell is set up, with the environment of that moment; the variable is
+    put back as it was at teardown, so that nothing else in the suite sees it.
+    """
+    if type(item).__module__.startswith("nbval"):
+        item.stash[_TQDM_DISABLE] = os.environ.get("TQDM_DISABLE")
+        os.environ["TQDM_DISABLE"] = "1"
+
+
+def pytest_runtest_teardown(item):
+    if _TQDM_DISABLE in item.stash:
+        before = item.stash[_TQDM_DISABLE]
+        if before is None:
+            os.environ.pop("TQDM_DISABLE", None)
+        else:
+            os.environ["TQDM_DISABLE"] = before
+
+
+_TQDM_DISABLE = pytest.StashKey()
 
 
 def first_order_response(gain, time_constant, u):

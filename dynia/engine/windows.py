@@ -109,6 +109,7 @@ import numpy as np
 from .. import _checks
 from ..errors import DataError, SettingsError
 from ..io.arrays import ResultArrays, result_arrays
+from ..progress import progress_bar
 from ..result import DyniaResult
 from ..settings import FLAVOURS, WINDOWS, AnalysisSettings, RunRecord
 from .flavours import compiled_engine, flavour_analysis, monte_carlo_errors
@@ -203,8 +204,8 @@ def moving_window(
     workers : int, optional
         Threads analysing chunks in parallel (default: every core). Results
         do not depend on it.
-    progress : bool, default False
-        Show a tqdm progress bar.
+    progress : bool or "auto", default False
+        Show a tqdm progress bar (:mod:`dynia.progress`).
     weights : array_like, shape (n_samples,), optional
         Importance weights against the uniform prior (prior density over the
         density the samples were drawn from), for samples not drawn
@@ -603,10 +604,8 @@ def _windows_pass(errors, flavour_impl, compiled, output, settings, halos, chunk
         best[start:stop], threshold[start:stop], upper[start:stop] = results.best, results.threshold, results.upper
 
     starts = range(0, n_steps, chunk_steps)
-    if progress:
-        from tqdm.auto import tqdm
-
-        starts = tqdm(starts, desc="DYNIA windows", unit="chunk")
+    bar = progress_bar(progress, starts, desc="DYNIA windows", unit="chunk")
+    starts = starts if bar is None else bar
     # Errors are pulled in time order (a simulation stream is sequential); the
     # windows of each chunk are then analysed on a worker. MCAT's likelihood
     # carries state from window to window, so it stays on one worker.
