@@ -20,7 +20,7 @@ from .engine.cld import binned_mass
 from .errors import SettingsError
 from .settings import IC_THRESHOLD, AnalysisSettings, RunRecord
 
-__all__ = ["DyniaResult"]
+__all__ = ["DyniaResult", "date_axis"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -681,7 +681,7 @@ class DyniaResult:
             return self.time
         from matplotlib import dates
 
-        ax.xaxis_date()
+        date_axis(ax)
         return dates.date2num(self.timestamps)
 
     def to_xarray(self):
@@ -709,3 +709,17 @@ class DyniaResult:
         from .io.writer import save
 
         save(self, path)
+
+
+def date_axis(ax):
+    """Make ``ax``'s x axis a date axis with concise ticks: the date once at the axis' end, the times at the ticks.
+
+    The x values are matplotlib's date numbers. Every dated plot of dynia, the result's and the command line's,
+    has this axis.
+    """
+    from matplotlib import dates
+
+    ax.xaxis_date()
+    locator = dates.AutoDateLocator()
+    ax.xaxis.set_major_locator(locator)
+    ax.xaxis.set_major_formatter(dates.ConciseDateFormatter(locator))

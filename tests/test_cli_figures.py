@@ -57,7 +57,9 @@ def test_data_figure_names_each_input_and_the_output_with_units_on_a_date_axis(d
     _, saved = dated_run
     for figure in (saved["analysed/data.png"], saved["fitted/fit.png"]):
         top, bottom = figure.axes
-        assert top.get_ylabel() == "u" and bottom.get_ylabel() == "y [degC]\nas measured (offset 129.32)"
+        # Every signal as measured, the offset the analysis removed named on its axis (the input's was not before).
+        assert top.get_ylabel() == "u\nas measured (offset 6)"
+        assert bottom.get_ylabel() == "y [degC]\nas measured (offset 129.32)"
         assert bottom.get_xlabel() == "time"
         assert isinstance(bottom.xaxis.get_major_formatter(), dates.ConciseDateFormatter)
         first = dates.num2date(bottom.lines[0].get_xdata()[0]).replace(tzinfo=None)

@@ -725,6 +725,7 @@ def _analyse(options, command_line, caught):
                 data,
                 summary,
                 offset=offset,
+                input_offset=input_offset,
                 plots=not options["no_plots"],
                 saved=options["on_disk"],
                 labels=_labels(options),

@@ -17,6 +17,7 @@ import datetime
 import numpy as np
 
 from ..decimation import envelope
+from ..result import date_axis
 
 __all__ = ["Labels", "plot_data", "plot_inputs", "time_axis", "write_figures", "write_fit_figure"]
 
@@ -85,16 +86,7 @@ def _utc_offset(zone):
     return f"{sign}{abs(minutes) // 60:02d}:{abs(minutes) % 60:02d}"
 
 
-def _date_ticks(ax):
-    """Concise date ticks: the date once at the axis' end, the times at the ticks."""
-    from matplotlib import dates
-
-    locator = dates.AutoDateLocator()
-    ax.xaxis.set_major_locator(locator)
-    ax.xaxis.set_major_formatter(dates.ConciseDateFormatter(locator))
-
-
-def plot_data(time, u, y, *, offset=0.0, xlabel="time", labels=None, dated=False):
+def plot_data(time, u, y, *, offset=0.0, input_offset=0.0, xlabel="time", labels=None, dated=False):
     """The record's inputs (one panel each, top) and output (bottom) over time, thinned by
     :func:`~dynia.decimation.envelope`.
 
@@ -106,6 +98,9 @@ def plot_data(time, u, y, *, offset=0.0, xlabel="time", labels=None, dated=False
     offset : float, default 0.0
         The output offset the analysis removed; when not 0 the output's
         axis label says that it is drawn as measured.
+    input_offset : float or array_like (n_inputs,), default 0.0
+        The input offsets the analysis removed, said the same way on each
+        input's axis: every signal is drawn as measured.
     xlabel : str, default "time"
         Label of the shared time axis.
     labels : Labels, optional
@@ -134,7 +129,7 @@ def plot_data(time, u, y, *, offset=0.0, xlabel="time", labels=None, dated=False
     n_inputs = len(labels.inputs)
     fig, axes = plt.subplots(n_inputs + 1, 1, sharex=True, figsize=(9, 2 + 1.6 * (n_inputs + 1)), squeeze=False)
     axes = axes[:, 0]
-    plot_inputs(axes[:n_inputs], time, u, labels)
+    plot_inputs(axes[:n_inputs], time, u, labels, input_offset)
     axes[-1].plot(*envelope(time, y), color="tab:orange")
     _label_output(axes[-1], labels, offset)
     _finish_time_axis(axes[-1], xlabel, dated)
@@ -142,20 +137,27 @@ def plot_data(time, u, y, *, offset=0.0, xlabel="time", labels=None, dated=False
     return fig
 
 
-def plot_inputs(axes, time, u, labels):
-    """Draw each input column in its own axis of ``axes``, thinned, with its name, unit and reference line."""
+def plot_inputs(axes, time, u, labels, input_offset=0.0):
+    """Draw each input column, as measured, in its own axis of ``axes``, thinned, with its name, unit, the offset
+    the analysis removed from it (``input_offset``, one or one per input) and its reference line."""
     u = np.asarray(u, dtype=float)
-    for ax, name, column in zip(axes, labels.inputs, u.reshape(u.shape[0], -1).T):
+    columns = u.reshape(u.shape[0], -1).T
+    offsets = np.broadcast_to(np.asarray(input_offset, dtype=float), (columns.shape[0],))
+    for ax, name, column, offset in zip(axes, labels.inputs, columns, offsets):
         ax.plot(*envelope(time, column), color="tab:blue")
-        ax.set_ylabel(labels.of(name))
+        ax.set_ylabel(_as_measured(labels.of(name), offset))
         _reference(ax, name, labels)
 
 
 def _label_output(ax, labels, offset):
     """The output axis' label and reference line, once the caller has drawn the output as measured."""
-    # The analysis saw the output minus the offset; the figures show what the file holds, and say so.
-    ax.set_ylabel(labels.of(labels.output) + (f"\nas measured (offset {offset:g})" if offset else ""))
+    ax.set_ylabel(_as_measured(labels.of(labels.output), offset))
     _reference(ax, labels.output, labels)
+
+
+def _as_measured(label, offset):
+    # The analysis saw the signal minus its offset; the figures show what the file holds, and say so.
+    return label + (f"\nas measured (offset {offset:g})" if offset else "")
 
 
 def _reference(ax, name, labels):
@@ -168,7 +170,7 @@ def _reference(ax, name, labels):
 def _finish_time_axis(ax, xlabel, dated):
     ax.set_xlabel(xlabel)
     if dated:
-        _date_ticks(ax)
+        date_axis(ax)
 
 
 def _figure_module():
@@ -180,7 +182,7 @@ def _figure_module():
     return plt
 
 
-def write_figures(directory, result, data, offset, labels=None):
+def write_figures(directory, result, data, offset, labels=None, input_offset=0.0):
     """data.png, ic_NAME.png and identifiability_NAME.png of an analysis in ``directory``.
 
     ``labels`` (:class:`Labels`) names the columns and gives the units and
@@ -189,7 +191,9 @@ def write_figures(directory, result, data, offset, labels=None):
     plt = _figure_module()
     labels = labels if labels is not None else Labels.unnamed(data.u.reshape(data.u.shape[0], -1).shape[1])
     x, dated, xlabel = time_axis(data)
-    fig = plot_data(x, data.u, data.y, offset=offset, xlabel=xlabel, labels=labels, dated=dated)
+    fig = plot_data(
+        x, data.u, data.y, offset=offset, input_offset=input_offset, xlabel=xlabel, labels=labels, dated=dated
+    )
     fig.savefig(directory / "data.png", dpi=110, bbox_inches="tight")
     plt.close(fig)
     if dated:
@@ -223,7 +227,8 @@ def write_fit_figure(path, found, data, u, y, offset, labels=None):
 
     ``u`` and ``y`` are the input and output as analysed (offsets removed):
     the model is simulated on ``u`` and drawn, like ``y``, with the output
-    offset added back.
+    offset added back; the inputs are drawn as measured, their offsets
+    (``data.u - u``) named on their axes.
     """
     plt = _figure_module()
     labels = labels if labels is not None else Labels.unnamed(data.u.reshape(data.u.shape[0], -1).shape[1])
@@ -232,7 +237,7 @@ def write_fit_figure(path, found, data, u, y, offset, labels=None):
     fig, axes = plt.subplots(n_inputs + 1, 1, sharex=True, figsize=(9, 2 + 1.6 * (n_inputs + 1)), squeeze=False)
     axes = axes[:, 0]
     bottom = axes[-1]
-    plot_inputs(axes[:n_inputs], x, data.u, labels)
+    plot_inputs(axes[:n_inputs], x, data.u, labels, (np.asarray(data.u) - u)[0])
     bottom.plot(*envelope(x, y + offset), color="tab:orange", label="measured")
     fitted = found.fit.simulate(u) + offset
     bottom.plot(*envelope(x, fitted), color="k", linewidth=1, label="fitted model" + (" + offset" if offset else ""))

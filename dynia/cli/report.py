@@ -61,7 +61,9 @@ def write_json(path, content):
     Path(path).write_text(json.dumps(json_ready(content), indent=2, default=_plain) + "\n")
 
 
-def write_analysis(directory, result, data, summary, *, offset=0.0, plots=True, saved=False, labels=None):
+def write_analysis(
+    directory, result, data, summary, *, offset=0.0, input_offset=0.0, plots=True, saved=False, labels=None
+):
     """Write one analysis into ``directory``: ic.csv, limits.csv, samples.csv, summary.json, result.nc, figures, report.
 
     ``report.html`` holds the verdict table, the noise-floor line, the figures and the record of ``summary``.
@@ -100,7 +102,7 @@ def write_analysis(directory, result, data, summary, *, offset=0.0, plots=True, 
     if not saved:
         result.save(directory / "result.nc")
     if plots:
-        write_figures(directory, result, data, offset, labels)
+        write_figures(directory, result, data, offset, labels, input_offset)
     floor = summary.get("noise_floor")
     write_report(
         directory,
