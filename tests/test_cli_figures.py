@@ -6,12 +6,14 @@ import json
 import matplotlib
 import numpy as np
 import pytest
+import xarray
 from cli_cases import HEATING
 
 matplotlib.use("Agg")
 from matplotlib import dates  # noqa: E402  (after choosing the backend)
 from matplotlib.figure import Figure  # noqa: E402
 
+import dynia  # noqa: E402
 from dynia.cli import main  # noqa: E402
 from dynia.cli.figures import Labels, plot_data, time_axis  # noqa: E402
 from dynia.io.csv import ProcessData  # noqa: E402
@@ -78,6 +80,11 @@ def test_result_figures_are_dated_and_marked(dated_run):
     summary = json.loads((folder / "analysed" / "summary.json").read_text())
     assert summary["settings"]["units"] == {"K": "degC/V", "y": "degC"}
     assert summary["settings"]["references"]["K"] == {"value": 20.0, "label": "calibrated"}
+    # result.nc carries them too (it did not): JSON attributes beside the result, which dynia.load leaves alone.
+    attributes = xarray.open_dataset(folder / "analysed" / "result.nc").attrs
+    assert json.loads(attributes["units"]) == summary["settings"]["units"]
+    assert json.loads(attributes["references"]) == summary["settings"]["references"]
+    assert dynia.load(folder / "analysed" / "result.nc").names == ("K", "T")
     entry = summary["parameters"]["K"]
     when = dates.date2num(datetime.datetime.fromisoformat(entry["time_of_max_ic"]))
     ic = saved["analysed/ic_K.png"].axes[0]

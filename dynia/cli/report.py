@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import segments
+from ..io.writer import add_attributes
 from ..serial import json_ready
 from .figures import write_figures, write_fit_figure
 from .html_report import write_report
@@ -101,6 +102,14 @@ def write_analysis(
     write_json(directory / "summary.json", summary)
     if not saved:
         result.save(directory / "result.nc")
+    if labels is not None and (labels.units or labels.references):
+        add_attributes(
+            directory / "result.nc",
+            dict(
+                units=labels.units,
+                references={name: dict(value=value, label=text) for name, (value, text) in labels.references.items()},
+            ),
+        )
     if plots:
         write_figures(directory, result, data, offset, labels, input_offset)
     floor = summary.get("noise_floor")

@@ -10,10 +10,11 @@ the file back. A result whose arrays are on disk is copied block by block
 
 import numpy as np
 
+from ..errors import OutputError
 from .arrays import DiskArray, write_netcdf, write_result
 from .layout import ARRAYS, COORDINATES, OPTIONAL_ARRAYS, SECONDS_ATTRIBUTES, SIDES, TIMESTAMP_ATTRIBUTES, metadata
 
-__all__ = ["to_xarray", "save"]
+__all__ = ["to_xarray", "save", "add_attributes"]
 
 
 def to_xarray(result):
@@ -87,3 +88,26 @@ def save(result, path):
     if result.timestamps is not None:
         encoding["time"].update(TIMESTAMP_ATTRIBUTES, dtype="int64")
     write_netcdf(lambda partial: dataset.to_netcdf(partial, engine="h5netcdf", encoding=encoding), path)
+
+
+def add_attributes(path, attributes):
+    """Add ``attributes`` (str name -> JSON-ready value) to the result file ``path`` as JSON text attributes.
+
+    What the command line knows beyond the result, its units and reference values, travels with ``result.nc`` this
+    way; :func:`dynia.load` ignores attributes it does not know, and ``xarray.open_dataset(path).attrs`` shows them.
+
+    Raises
+    ------
+    OutputError
+        ``path`` cannot be opened for writing.
+    """
+    import json
+
+    import h5netcdf
+
+    try:
+        with h5netcdf.File(path, "a") as file:
+            for name, value in attributes.items():
+                file.attrs[name] = json.dumps(value)
+    except OSError as error:
+        raise OutputError(f"{path}: cannot be written ({error.strerror or error})") from None
