@@ -45,6 +45,14 @@ def first_order_response(gain, time_constant, u):
     return out
 
 
+def stored_record(steps=120, seed=3):
+    """The small first-order record the result-file tests save and load: a step up, a step down, noise 0.05."""
+    rng = np.random.default_rng(seed)
+    u = np.r_[np.zeros(20), np.full(40, 1.0), np.full(steps - 60, 0.3)]
+    y = dynia.models.FirstOrder().simulate([[2.0, 3.0]], u)[0] + rng.normal(0, 0.05, steps)
+    return u, y
+
+
 def example_firstorder_input(steps=500):
     """The input of example_firstorder.m, 0-based: 35, with two dips to 10 and a final 0."""
     return dynia.synthetic.example_firstorder_input(steps)

@@ -31,6 +31,7 @@ from cli_cases import (
     cli_one_error,
     write_text_file,
 )
+from conftest import stored_record
 
 import dynia
 import dynia.cli.report
@@ -44,16 +45,9 @@ BOUNDS = {"K": (0, 7), "T": (0, 7)}
 ARRAYS = ("samples", "bounds", "time", "ic", "ci", "median", "gradient", "bin_centres")
 
 
-def _record(steps=120, seed=3):
-    rng = np.random.default_rng(seed)
-    u = np.r_[np.zeros(20), np.full(40, 1.0), np.full(steps - 60, 0.3)]
-    y = FirstOrder().simulate([[2.0, 3.0]], u)[0] + rng.normal(0, 0.05, steps)
-    return u, y
-
-
 @pytest.fixture(scope="module")
 def result():
-    u, y = _record()
+    u, y = stored_record()
     return dynia.run(u, y, FirstOrder(), BOUNDS, n=6, n_samples=400, rng=1)
 
 
@@ -146,7 +140,7 @@ def _flip_bytes(path, variable, count, seed=0):
 def test_a_file_is_written_with_checksums(saved, result, tmp_path):
     with h5py.File(saved, "r") as file:
         assert _unchecked(file) == []
-    stored = dynia.run(*_record(), FirstOrder(), BOUNDS, n=6, n_samples=400, rng=1, store=tmp_path / "disk.nc")
+    stored = dynia.run(*stored_record(), FirstOrder(), BOUNDS, n=6, n_samples=400, rng=1, store=tmp_path / "disk.nc")
     with h5py.File(stored.ic.filename, "r") as file:
         assert _unchecked(file) == []
 
@@ -171,7 +165,7 @@ def test_flipped_bytes_fail_their_checksum(saved, lazy):
 
 def test_flipped_bytes_in_the_on_disk_store_fail_their_checksum(tmp_path):
     path = tmp_path / "disk.nc"
-    dynia.run(*_record(), FirstOrder(), BOUNDS, n=6, n_samples=400, rng=1, dtype="float32", store=path)
+    dynia.run(*stored_record(), FirstOrder(), BOUNDS, n=6, n_samples=400, rng=1, dtype="float32", store=path)
     _flip_bytes(path, "ic", 40)
     _refused(path, "ic cannot be read")
     _refused(path, "ic cannot be read", lazy=True)
@@ -279,7 +273,7 @@ def test_verdicts_whose_texts_name_times_otherwise_still_load(result, tmp_path):
 
 @pytest.mark.parametrize("dtype", ["float64", "float32"])
 def test_a_file_written_today_loads_bit_for_bit_eager_and_lazy(tmp_path, dtype):
-    u, y = _record()
+    u, y = stored_record()
     dynia.run(u, y, FirstOrder(), BOUNDS, n=6, n_samples=400, rng=1, dtype=dtype, store=tmp_path / "d.nc")
     memory = dynia.run(u, y, FirstOrder(), BOUNDS, n=6, n_samples=400, rng=1, dtype=dtype)
     memory.save(tmp_path / "m.nc")
@@ -292,7 +286,7 @@ def test_a_lazy_load_checks_only_the_blocks_it_reads(tmp_path, monkeypatch):
     """A forged gradient in a late block: loading and reading early steps pass, reading the block refuses it."""
     monkeypatch.setattr(dynia.io.arrays, "_CHUNK_BYTES", 40 * 4 * 16)  # blocks of 16 steps
     path = tmp_path / "disk.nc"
-    dynia.run(*_record(), FirstOrder(), BOUNDS, n=6, n_samples=400, rng=1, dtype="float32", store=path)
+    dynia.run(*stored_record(), FirstOrder(), BOUNDS, n=6, n_samples=400, rng=1, dtype="float32", store=path)
     _forge(path, "gradient", (0, 3, 100), -1.0)
     back = dynia.load(path, lazy=True)
     assert np.isfinite(back.gradient[0][:, 20:40]).all()
@@ -332,7 +326,7 @@ def test_a_full_disk_in_the_store_is_one_output_error_and_no_file(tmp_path, monk
 
     def run():
         monkeypatch.setattr(dynia.io.arrays, "_CHUNK_BYTES", 40 * 4 * 16)  # several blocks, as a long record has
-        return dynia.run(*_record(), FirstOrder(), BOUNDS, n=6, n_samples=400, rng=1, dtype="float32", store=path)
+        return dynia.run(*stored_record(), FirstOrder(), BOUNDS, n=6, n_samples=400, rng=1, dtype="float32", store=path)
 
     total = _count_writes(monkeypatch, run)
     shutil.rmtree(path.parent)

@@ -7,6 +7,7 @@ import h5py
 import matplotlib
 import numpy as np
 import pytest
+from conftest import stored_record
 
 import dynia
 from dynia.cli.report import write_analysis
@@ -26,28 +27,21 @@ ARRAYS = ("samples", "bounds", "time", "ic", "ci", "median", "gradient", "bin_ce
 BOUNDS = {"K": (0, 7), "T": (0, 7)}
 
 
-def _record(steps=120, seed=3):
-    rng = np.random.default_rng(seed)
-    u = np.r_[np.zeros(20), np.full(40, 1.0), np.full(steps - 60, 0.3)]
-    y = FirstOrder().simulate([[2.0, 3.0]], u)[0] + rng.normal(0, 0.05, steps)
-    return u, y
-
-
 @pytest.fixture(scope="module")
 def thesis_result():
-    u, y = _record()
+    u, y = stored_record()
     return dynia.run(u, y, FirstOrder(), BOUNDS, n=6, n_samples=400, flavour="thesis", rng=1)
 
 
 @pytest.fixture(scope="module")
 def adaptive_result():
-    u, y = _record()
+    u, y = stored_record()
     return dynia.run(u, y, FirstOrder(), BOUNDS, n=6, n_samples=600, sampler="iis", percentage=5, rng=2)
 
 
 @pytest.fixture(scope="module")
 def nan_result():
-    u, y = _record()
+    u, y = stored_record()
     y = y.copy()
     y[50:80] = np.nan
     return dynia.run(u, y, FirstOrder(), BOUNDS, n=4, n_samples=300, min_points=5, rng=4)
@@ -123,7 +117,7 @@ def test_timestamps_come_back_to_the_nanosecond(thesis_result, tmp_path):
 
 def test_a_run_fed_from_pandas_keeps_its_timestamps(tmp_path):
     pd = pytest.importorskip("pandas")
-    u, y = _record(80)
+    u, y = stored_record(80)
     index = pd.date_range("2024-10-27 00:30", periods=80, freq="1min", tz="Europe/Berlin")
     u, y, dt, stamps = unpack(pd.Series(u, index), pd.DataFrame({"y": y}, index))
     result = dynia.run(u, y, FirstOrder(), BOUNDS, n=4, n_samples=200, dt=dt, rng=5)
@@ -206,7 +200,7 @@ def test_settings_are_the_frozen_analysis_settings_and_the_record_is_frozen(thes
         hash(adaptive_result.run)
 
 
-def test_a_hand_built_result_takes_a_mapping_of_settings_and_of_the_record(thesis_result):
+def test_a_hand_built_result_takes_a_mapping_of_settings_and_of_thestored_record(thesis_result):
     built = dataclasses.replace(thesis_result, settings=dict(n=5, window="trailing"), run=dict(n_sampled=3))
     assert built.settings == AnalysisSettings(n=5, window="trailing") and built.run == RunRecord(n_sampled=3)
     assert dataclasses.replace(thesis_result, settings=None).settings is None
@@ -324,14 +318,14 @@ def test_plots_draw_against_the_timestamps(thesis_result, kind):
         numbers = dates.date2num(stamps)
         assert ax.get_xlim() == (numbers[0], numbers[-1])
         assert np.array_equal(ax.lines[0].get_xdata(), numbers)
-        assert isinstance(ax.xaxis.get_major_formatter(), dates.AutoDateFormatter)
+        assert isinstance(ax.xaxis.get_major_formatter(), dates.ConciseDateFormatter)
     finally:
         plt.close(fig)
     fig, ax = plt.subplots()
     try:
         getattr(thesis_result, kind)("K", ax=ax)
         assert ax.get_xlim() == (thesis_result.time[0], thesis_result.time[-1])
-        assert not isinstance(ax.xaxis.get_major_formatter(), dates.AutoDateFormatter)
+        assert not isinstance(ax.xaxis.get_major_formatter(), (dates.AutoDateFormatter, dates.ConciseDateFormatter))
     finally:
         plt.close(fig)
 
@@ -345,7 +339,7 @@ TIME_KEYS = ("time_of_max_ic", "time_of_highest_ic", "high_ic_span")
 
 def _dated_series(steps=120):
     pd = pytest.importorskip("pandas")
-    u, y = _record(steps)
+    u, y = stored_record(steps)
     index = pd.date_range("2015-01-31 23:59", periods=steps, freq="1s")
     return pd.Series(u, index), pd.Series(y, index)
 
