@@ -1,7 +1,5 @@
 """Plot decimation: extremes and gaps survive, sizes are bounded, short records are untouched."""
 
-import dataclasses
-
 import matplotlib
 import numpy as np
 import pytest
@@ -232,19 +230,3 @@ def test_the_identifiability_plot_has_a_colour_bar_the_estimate_and_a_labelled_r
     assert set(reference.get_ydata()) == {0.3} and reference.get_label() == "calibrated"
     default = result.plot_identifiability("K", true_value=0.3)
     assert [line.get_label() for line in default.lines if line.get_linestyle() == "--"] == ["true value"]
-
-
-def test_a_dated_result_plots_on_a_concise_date_axis_like_the_command_line():
-    # The case: the library's own plots of a dated result had matplotlib's default date ticks, which crowd and repeat
-    # the date on every tick, where the command's figures showed it once.
-    from matplotlib.dates import ConciseDateFormatter, num2date
-
-    result = dataclasses.replace(
-        _result(300), timestamps=np.datetime64("2015-01-01", "ns") + np.arange(300) * np.timedelta64(1, "h")
-    )
-    for plot in (result.plot_information_content, result.plot_identifiability):
-        fig, ax = plt.subplots()
-        plot("K", ax=ax)
-        assert isinstance(ax.xaxis.get_major_formatter(), ConciseDateFormatter)
-        first, last = (num2date(x).replace(tzinfo=None) for x in ax.get_xlim())
-        assert first.year == 2015 and (last - first).days >= 12  # 300 hours drawn in dates, not seconds
