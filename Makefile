@@ -26,6 +26,9 @@ PARAMS_FLAG := $(if $(PARAMS),-f $(PARAMS),)
 PARAMS_ID := $(PARAMS) $(if $(PARAMS),$(shell md5sum < $(PARAMS)),defaults)
 $(shell mkdir -p reports && echo '$(PARAMS_ID)' | cmp -s - reports/.params || echo '$(PARAMS_ID)' > reports/.params)
 
+# The environment of every executed notebook (no progress bars; results independent of the CPU): see the file.
+NOTEBOOK_ENV := $(shell sed -e '/^\#/d' -e '/^$$/d' tests/notebook.env)
+
 # Reference runs of every notebook with the small CI parameters: committed, and
 # re-executed by `make test` (nbval), which compares the cells marked
 # NBVAL_CHECK_OUTPUT and checks that their code matches notebooks/.
@@ -65,27 +68,27 @@ figures: $(REPORTS) $(THESIS_CODE_REPORTS)
 
 # Executed notebook and its HTML (input cells hidden) are redone only when the
 # notebook, the package or the parameter file changed.
-reports/%.html: notebooks/%.py $(PACKAGE) reports/.params $(INSTALLED)
+reports/%.html: notebooks/%.py $(PACKAGE) reports/.params $(INSTALLED) tests/notebook.env
 	mkdir -p reports/figures
 	$(PY) -m jupytext --to ipynb --output reports/$*.source.ipynb $<
-	TQDM_DISABLE=1 $(PY) -m papermill --cwd reports --kernel python3 $(PARAMS_FLAG) reports/$*.source.ipynb reports/$*.ipynb
+	env $(NOTEBOOK_ENV) $(PY) -m papermill --cwd reports --kernel python3 $(PARAMS_FLAG) reports/$*.source.ipynb reports/$*.ipynb
 	rm reports/$*.source.ipynb
 	$(PY) -m jupyter nbconvert --to html --no-input --output $*.html reports/$*.ipynb
 
-$(THESIS_CODE_REPORTS): reports/%_thesis_code.html: notebooks/%.py $(PACKAGE) reports/.params $(INSTALLED)
+$(THESIS_CODE_REPORTS): reports/%_thesis_code.html: notebooks/%.py $(PACKAGE) reports/.params $(INSTALLED) tests/notebook.env
 	mkdir -p reports/figures/thesis_code
 	$(PY) -m jupytext --to ipynb --output reports/$*_thesis_code.source.ipynb $<
-	TQDM_DISABLE=1 $(PY) -m papermill --cwd reports --kernel python3 $(PARAMS_FLAG) -p code_path thesis -p figure_dir figures/thesis_code \
+	env $(NOTEBOOK_ENV) $(PY) -m papermill --cwd reports --kernel python3 $(PARAMS_FLAG) -p code_path thesis -p figure_dir figures/thesis_code \
 		reports/$*_thesis_code.source.ipynb reports/$*_thesis_code.ipynb
 	rm reports/$*_thesis_code.source.ipynb
 	$(PY) -m jupyter nbconvert --to html --no-input --output $*_thesis_code.html reports/$*_thesis_code.ipynb
 
 references: $(REFERENCES)
 
-tests/notebooks/%.ipynb: notebooks/%.py tests/notebook_params/%.yaml $(PACKAGE) $(INSTALLED)
+tests/notebooks/%.ipynb: notebooks/%.py tests/notebook_params/%.yaml $(PACKAGE) $(INSTALLED) tests/notebook.env
 	mkdir -p tests/notebooks
 	$(PY) -m jupytext --to ipynb --output tests/notebooks/$*.source.ipynb $<
-	TQDM_DISABLE=1 $(PY) -m papermill --cwd tests/notebooks --kernel python3 -f tests/notebook_params/$*.yaml tests/notebooks/$*.source.ipynb $@
+	env $(NOTEBOOK_ENV) $(PY) -m papermill --cwd tests/notebooks --kernel python3 -f tests/notebook_params/$*.yaml tests/notebooks/$*.source.ipynb $@
 	rm tests/notebooks/$*.source.ipynb
 	$(PY) tests/keep_checked_outputs.py $@
 

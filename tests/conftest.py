@@ -1,6 +1,7 @@
 """Shared test data: the thesis's example 1, simulated independently of dynia.models; the notebooks' environment."""
 
 import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,26 +11,31 @@ import dynia
 
 @pytest.hookimpl(tryfirst=True)
 def pytest_runtest_setup(item):
-    """Notebook kernels start without progress bars: ``progress="auto"`` would show one in a kernel (dynia.progress).
+    """Notebook kernels start in the environment of tests/notebook.env, as make's notebooks do.
 
-    nbval starts a notebook's kernel as its first cell is set up, with the environment of that moment; the variable is
-    put back as it was at teardown, so that nothing else in the suite sees it.
+    nbval starts a notebook's kernel as its first cell is set up, with the environment of that moment; the variables
+    are put back as they were at teardown, so that nothing else in the suite sees them.
     """
     if type(item).__module__.startswith("nbval"):
-        item.stash[_TQDM_DISABLE] = os.environ.get("TQDM_DISABLE")
-        os.environ["TQDM_DISABLE"] = "1"
+        item.stash[_BEFORE] = {name: os.environ.get(name) for name in NOTEBOOK_ENV}
+        os.environ.update(NOTEBOOK_ENV)
 
 
 def pytest_runtest_teardown(item):
-    if _TQDM_DISABLE in item.stash:
-        before = item.stash[_TQDM_DISABLE]
-        if before is None:
-            os.environ.pop("TQDM_DISABLE", None)
+    for name, value in item.stash.get(_BEFORE, {}).items():
+        if value is None:
+            os.environ.pop(name, None)
         else:
-            os.environ["TQDM_DISABLE"] = before
+            os.environ[name] = value
 
 
-_TQDM_DISABLE = pytest.StashKey()
+def _notebook_env():
+    lines = (Path(__file__).with_name("notebook.env")).read_text().splitlines()
+    return dict(line.split("=", 1) for line in lines if line.strip() and not line.startswith("#"))
+
+
+NOTEBOOK_ENV = _notebook_env()
+_BEFORE = pytest.StashKey()
 
 
 def first_order_response(gain, time_constant, u):
