@@ -21,6 +21,8 @@ import importlib.util
 import os
 import sys
 
+import numpy as np
+
 from .errors import SettingsError
 
 __all__ = ["PROGRESS_CHOICES", "shows_progress", "progress_bar"]
@@ -39,8 +41,8 @@ def shows_progress(progress):
     >>> shows_progress("auto")  # pytest's stderr is no terminal, and this is no notebook
     False
     """
-    if progress is True or progress is False:
-        return progress
+    if isinstance(progress, (bool, np.bool_)):
+        return bool(progress)
     if isinstance(progress, str) and progress == "auto":
         if os.environ.get("TQDM_DISABLE", "") not in ("", "0"):
             return False

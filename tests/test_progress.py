@@ -25,6 +25,7 @@ def _notebook(monkeypatch):
 
 def test_true_and_false_are_taken_as_given_and_anything_else_is_named():
     assert shows_progress(True) is True and shows_progress(False) is False
+    assert shows_progress(np.True_) is True  # a flag taken from an array
     for wrong in (1, 0, None, "yes", "Auto"):
         with pytest.raises(SettingsError, match=r"progress must be True, False or 'auto'"):
             shows_progress(wrong)
