@@ -304,6 +304,19 @@ class CompiledFlavour:
         )
 
     def analyse_rows(self, window_errors, measured, m, slots):
+        """The :class:`WindowResults` of m windows from their error rows and measured flags (see the kernel)."""
+        return self._analyse(window_errors, measured, m, slots)
+
+    def analyse_sums(self, sums, present):
+        """The :class:`WindowResults` of the windows whose error sums are ``sums`` (m, n_samples), time-major.
+
+        ``present`` (m,) holds each window's measured points; the sums come
+        from :meth:`dynia.engine.kernels.CompiledErrors.window_sums` and are
+        overwritten.
+        """
+        return self._analyse(sums, present, sums.shape[0], 0)
+
+    def _analyse(self, window_errors, measured, m, slots):
         n_params = self.columns.shape[0]
         ic, ci, median, gradient = _chunk_arrays(n_params, self.n_bins, m)
         extreme_costs = np.empty((3, m))

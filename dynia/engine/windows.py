@@ -587,7 +587,12 @@ def _windows_pass(errors, flavour_impl, compiled, output, settings, halos, chunk
     overflowed = np.zeros(n_steps, dtype=bool)
     workers = 1 if settings.flavour == "mcat" else settings.workers or _checks.default_workers()
 
+    # A source that forms the window sums itself (the built-in linear models, compiled) hands over no error rows.
+    fused = compiled and getattr(errors, "fused", False)
+
     def analyse_chunk(start, stop, window_errors, measured):
+        if fused:
+            return start, stop, flavour_impl.analyse_sums(window_errors, measured)
         if compiled:
             return start, stop, flavour_impl.analyse_rows(window_errors, measured, stop - start, slots)
         mae, present = window_mean(window_errors, measured, stop - start, slots)
@@ -615,13 +620,16 @@ def _windows_pass(errors, flavour_impl, compiled, output, settings, halos, chunk
         pending = deque()
         for start in starts:
             stop = min(start + chunk_steps, n_steps)
-            inputs = window_inputs(errors, start, stop, before, after, n_steps, time_major=compiled)
-            own = (
-                inputs[0][before : before + stop - start]
-                if compiled
-                else inputs[0][:, before : before + stop - start].T
-            )
-            add_record_errors(totals, own)
+            if fused:
+                inputs = errors.window_sums(start, stop, (before, after), totals)
+            else:
+                inputs = window_inputs(errors, start, stop, before, after, n_steps, time_major=compiled)
+                own = (
+                    inputs[0][before : before + stop - start]
+                    if compiled
+                    else inputs[0][:, before : before + stop - start].T
+                )
+                add_record_errors(totals, own)
             pending.append(pool.submit(analyse_chunk, start, stop, *inputs))
             while len(pending) > workers:  # bounds the chunks held in memory
                 write(pending.popleft())
@@ -724,15 +732,20 @@ def error_scale(y):
 
 
 class ScaledErrors:
-    """An error source (``rows``, and ``columns`` where it has them) whose errors are multiplied by ``scale``."""
+    """An error source (``rows``; ``columns`` or ``window_sums`` where it has them), errors times ``scale``."""
 
     def __init__(self, errors, scale):
         self.y = errors.y
         self.scale = scale
         self._errors = errors
+        self.fused = getattr(errors, "fused", False)
 
     def rows(self, start, stop):
         return self._errors.rows(start, stop) * self.scale
+
+    def window_sums(self, start, stop, halos, totals, scale=1.0):
+        """The fused source's window sums (see ``CompiledErrors.window_sums``), its errors scaled."""
+        return self._errors.window_sums(start, stop, halos, totals, scale * self.scale)
 
     def columns(self, start, stop):
         return self._errors.columns(start, stop) * self.scale
