@@ -162,8 +162,8 @@ def simulate_errors(
 
 
 # Samples a block of the fused kernel holds: its states, coefficients and sums (a dozen arrays of this length for one
-# state) stay in the 32 kB L1 cache while the block runs through every step of a chunk.
-FUSED_BLOCK = 128
+# state, 24 kB) stay in the L1 cache while the block runs through every step of a chunk.
+FUSED_BLOCK = 256
 
 
 @_jit
@@ -211,6 +211,27 @@ def simulate_window_sums(
     bad_step, bad_sample = -1, -1
     for block_start in range(sample_start, sample_stop, FUSED_BLOCK):
         block_stop = min(block_start + FUSED_BLOCK, sample_stop)
+        if n_states == 1 and delays.shape[0] == 1 and state_terms[0, 0] and output_terms[0]:
+            step, sample = _fused_lag_block(
+                (phi[0, 0], gamma_now[0], gamma_prev[0], c[0], feed_now, feed_prev),
+                delays[0],
+                state_terms[0],
+                output_terms,
+                padded_input,
+                y,
+                scale,
+                steps,
+                first_end,
+                state[0],
+                ring,
+                sums,
+                totals,
+                block_start,
+                block_stop,
+            )
+            if step >= 0 and (bad_step < 0 or step < bad_step):
+                bad_step, bad_sample = step, sample
+            continue
         step, sample = _fused_block(
             phi,
             gamma_now,
@@ -292,6 +313,110 @@ def _fused_block(
         state[i, lo:hi] = sources[i]
     totals[lo:hi] = total
     return bad_step, bad_sample
+
+
+@_jit
+def _fused_lag_block(
+    coefficients,
+    delay,
+    state_terms,
+    output_terms,
+    padded_input,
+    y,
+    scale,
+    steps,
+    first_end,
+    state,
+    ring,
+    sums,
+    totals,
+    lo,
+    hi,
+):
+    """:func:`_fused_block` for one state and one common dead time (the lag models): one loop per step.
+
+    The recursion's arithmetic is :func:`_simulate_lag`'s, the sums'
+    :func:`_fused_sums`'; each step's samples run through one loop that
+    simulates, errs, slides the window sum and writes it, except at the
+    block's first window and past the record, which take :func:`_fused_sums`.
+    """
+    flags = (output_terms[1], output_terms[2], state_terms[1], state_terms[2])
+    width = hi - lo
+    slots = ring.shape[0]
+    last_step = y.shape[0] - 1
+    x_block, total = state[lo:hi].copy(), totals[lo:hi].copy()
+    error, high, low = np.zeros(width), np.zeros(width), np.zeros(width)
+    bad_step, bad_sample = -1, -1
+    for e in range(steps[0], steps[1]):
+        if e > last_step:
+            error[:] = 0.0
+            _fused_sums(ring, lo, hi, e, first_end, error, high, low, sums)
+            continue
+        now = padded_input[max(e - delay, -1) + 1]
+        previous = padded_input[max(e - delay - 1, -1) + 1]
+        y_e = y[e]
+        missing = np.isnan(y_e)
+        advance = e != last_step
+        sliding = e > first_end
+        leaving = ring[e % slots, lo:hi]
+        window = sums[e - first_end, lo:hi] if sliding else error
+        inputs = (now, previous, y_e, missing, advance, sliding, scale)
+        finite, bad = _lag_samples(coefficients, flags, inputs, lo, x_block, total, error, high, low, leaving, window)
+        if not finite and bad_step < 0:
+            bad_step = e
+            for i in range(width):  # as in _simulate_lag: the sample is not known where y is missing
+                if not np.isfinite(error[i]):
+                    bad_sample = lo + i
+                    break
+        if not sliding:
+            _fused_sums(ring, lo, hi, e, first_end, error, high, low, sums)
+        elif bad:
+            block_ring = ring[:, lo:hi]
+            for i in range(width):
+                if not np.isfinite(window[i]):
+                    high[i], low[i] = _window_sum(block_ring, (e + 1) % slots, slots, slots, i)
+                    window[i] = high[i] + low[i]
+    state[lo:hi] = x_block
+    totals[lo:hi] = total
+    return bad_step, bad_sample
+
+
+@_jit
+def _lag_samples(coefficients, flags, inputs, lo, x_block, total, error, high, low, leaving, window):
+    """One step of :func:`_fused_lag_block` for its samples: simulate, err, advance and, when sliding, slide.
+
+    Returns whether every output was finite and how many window sums were not.
+    """
+    phi, gamma_now, gamma_prev, c, feed_now, feed_prev = coefficients
+    now_out, prev_out, now_state, prev_state = flags
+    now, previous, y_e, missing, advance, sliding, scale = inputs
+    finite = True
+    bad = 0
+    for i in range(x_block.shape[0]):
+        s = lo + i
+        x = x_block[i]
+        output = c[s] * x
+        if now_out:
+            output = output + feed_now[s] * now
+        if prev_out:
+            output = output + feed_prev[s] * previous
+        finite &= np.isfinite(output)
+        value = (0.0 if missing else abs(output - y_e)) * scale
+        error[i] = value
+        total[i] = total[i] + value
+        if advance:
+            x = phi[s] * x
+            if now_state:
+                x = x + gamma_now[s] * now
+            if prev_state:
+                x = x + gamma_prev[s] * previous
+            x_block[i] = x if abs(x) >= FLUSH_BELOW else 0.0
+        if sliding:
+            high[i], low[i] = _slide(high[i], low[i], value, leaving[i])
+            leaving[i] = value
+            window[i] = high[i] + low[i]
+            bad += not np.isfinite(window[i])
+    return finite, bad
 
 
 @_jit
