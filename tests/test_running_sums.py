@@ -165,9 +165,9 @@ def test_the_cost_of_a_window_does_not_depend_on_its_length():
     for slots in (3, 201):
         high, low, total = np.empty(3), np.empty(3), np.empty(3)
         kernels._first_window(rows, measured, slots, high, low, total)
-        rows_copy = rows.copy()
-        rows_copy[slots:] = np.nan  # rows after the second window's entering one are never read
-        rows_copy[0] = rows[0]
+        # Window 1 reads row 0 (leaving) and row ``slots`` (entering) only: every other row is poisoned.
+        rows_copy = np.full_like(rows, np.nan)
+        rows_copy[[0, slots]] = rows[[0, slots]]
         present = kernels._next_window(rows_copy, measured, 1, slots, float(slots), high, low, total)
         assert present == slots
         np.testing.assert_allclose(total, rows[1 : slots + 1].sum(axis=0), rtol=4 * slots * 2.0**-53)
