@@ -21,10 +21,15 @@ below:
    "weighted", their CLD whose weights differ in the last bits), IC, limits
    and median are identical (``assert_array_equal``) and the gradient agrees
    to 1e-15 absolute (its weights are ``1 - cost`` normalised).
-3. The ranking is the same in at least 99 % of the windows; the share is
-   printed (``pytest -s``). Costs that tie exactly (the samples' errors
-   agree over the whole window and what came before it in the chunk, as in
-   the zero-input start below) stay tied, and ties rank by sample index.
+3. The ranking is the same in at least 99 % of the windows of the records
+   below (100 % on each, in fact) and 97 % on thesis example 1 (98 %: its
+   tail holds hundreds of near-tied sets); the share is printed
+   (``pytest -s``). Where it is not, only samples whose costs lie within
+   twice the tolerance of the set's edge changed sides: near-ties, which a
+   different rounding may order differently. Costs that tie exactly because
+   the samples' errors agree over the window stay tied on both engines
+   (each sums the same numbers; the compiled one rounds the exact sum once,
+   whatever came before), and ties rank by sample index.
 
 Compiled against compiled (workers, the fused linear-model kernel against
 the error rows) stays bit for bit: tests/test_running_sums.py.
@@ -66,7 +71,7 @@ def _windows(array, axis, mask):
     return np.compress(mask, array, axis=axis)
 
 
-def _assert_contract(numpy_result, compiled, y, sims, n, window, chunk_steps):
+def _assert_contract(numpy_result, compiled, y, sims, n, window, chunk_steps, least_share=UNCHANGED_SHARE):
     """The module's contract for one analysis; returns the share of windows whose ranking is unchanged."""
     reference = window_costs(y, sims, n, 0, y.size, window)
     costs = compiled_window_costs(y, sims, n, window, chunk_steps)
@@ -87,9 +92,17 @@ def _assert_contract(numpy_result, compiled, y, sims, n, window, chunk_steps):
             np.testing.assert_allclose(_windows(ours, at, same), _windows(theirs, at, same), rtol=0, atol=1e-15)
         else:
             np.testing.assert_array_equal(_windows(ours, at, same), _windows(theirs, at, same))
+    # Where the set changed, it changed among near-ties only: every sample that moved across its edge has a
+    # cost within the tolerance of the edge (the count-th smallest), on either engine.
+    for t in np.flatnonzero(usable & ~same):
+        edge = np.sort(reference[t])[count - 1]
+        ours = set(np.argsort(costs[t], kind="stable")[:count])
+        theirs = set(np.argsort(reference[t], kind="stable")[:count])
+        moved = np.array(sorted(ours ^ theirs))
+        np.testing.assert_allclose(reference[t, moved], edge, rtol=2 * tolerance, atol=0)
     share = same[usable].mean()
     print(f"ranking unchanged in {share:.2%} of {usable.sum()} windows (n={n}, {window})")
-    assert share >= UNCHANGED_SHARE
+    assert share >= least_share
     return share
 
 
@@ -116,6 +129,24 @@ def test_windows_keep_the_contract_with_the_numpy_path(flavour, window, n, perce
     compiled = moving_window(y, sims, params, [[0, 7], [0, 7]], engine="numba", chunk_steps=37, **options)
     _assert_contract(numpy_result, compiled, y, sims, n, window, 37)
     assert compiled.settings.engine == "numba" and numpy_result.settings.engine == "numpy"
+
+
+def test_thesis_example1_keeps_the_contract(example1):
+    """After the input's step to 0 (step 399) hundreds of sets predict about 0 and their costs nearly tie.
+
+    There, 10 of the 500 windows' behavioural sets differ (98 %): each time a
+    set whose left-to-right sum rounds to the same value as another's
+    (a tie for the numpy path, ranked by index) has a compensated sum a few
+    units in the last place apart, or the reverse; sets whose errors agree
+    over the window still tie on both. The numpy path keeps the thesis
+    port's numbers bit for bit (tests/test_analysis.py).
+    """
+    e = example1
+    args = (e["y"], e["sims"], e["params"], e["bounds"])
+    numpy_result = moving_window(*args, n=10, engine="numpy")
+    compiled = moving_window(*args, n=10, engine="numba")
+    share = _assert_contract(numpy_result, compiled, e["y"], e["sims"], 10, "centred", None, least_share=0.97)
+    assert share < 1  # the record does exercise the near-ties
 
 
 def test_every_cost_tied_selects_the_lowest_indices():

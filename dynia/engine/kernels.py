@@ -1,23 +1,44 @@
-"""Compiled (numba) kernels of the engine: the same arithmetic as the numpy path, faster.
+"""Compiled (numba) kernels of the engine: the numpy path's method, with running window sums, faster.
 
-Two kernels cover the work of a :func:`dynia.run` with the ``"thesis"`` or
+Three kernels cover the work of a :func:`dynia.run` with the ``"thesis"`` or
 ``"weighted"`` flavour:
 
 - :func:`simulate_errors` advances every sample's discretised model (the
   recursion of the linear models, ``dynia.models.linear``) through a block of
   steps and writes the absolute errors against the measurement, time-major;
-- :func:`analyse_windows` forms each window's costs, selects its behavioural
-  set and reads off limits, IC and gradient.
+- :func:`simulate_window_sums` does the same fused with the window sums, a
+  block of samples at a time through every step of a chunk, and writes only
+  the sums: no error matrix goes through memory (the built-in linear models;
+  other models hand their error rows to the next kernel);
+- :func:`analyse_windows` forms each window's costs (from error rows by the
+  same running sums, or from the sums given), selects its behavioural set
+  and reads off limits, IC and gradient.
 
-Each floating-point operation is the one the numpy path performs, in the same
-order, so the results are bit-identical (tests compare with tolerance 0):
-products and sums of the recursion term by term (LLVM does not fuse them
-into FMAs without fast-math, which stays off), window sums left to right,
-the behavioural set as the first ``count`` of a stable sort, the likelihood
-total summed in index order (as :func:`dynia.engine.cld.likelihood` does with
-``cumsum``) and the gradient accumulated in index order (as ``bincount``).
-Only the order statistics are found differently (selection instead of
-sorting), which cannot change their value.
+The window sums run: each window adds the step entering it and subtracts
+the one leaving, so a window costs the same whatever its length. A plain
+running sum would drift, and lose the small errors to cancellation when a
+huge one leaves; this one is compensated (TwoSum, a double-double high/low
+per sample, rounded once as high + low), summed afresh from its rows at
+every chunk's first window, and summed afresh from the rows, for one
+sample, while an infinite error is in its window. It is therefore within
+about one rounding of the exact sum, where the numpy path's left-to-right
+sum (the readable reference, equal to the thesis port) is within 2n
+roundings: the two agree to a relative ``2 (2n + 2) 2^-53`` on the costs,
+not bit for bit, and give identical IC, limits and median wherever the
+window's behavioural set is the same (tests/test_fast.py states and checks
+that contract, and how often it holds). The fused kernel and the error-row
+kernel perform the same operations in the same order, so they agree bit for
+bit, and so do any worker counts (workers split samples, never a sum).
+
+Everything else is the numpy path's arithmetic in the same order: products
+and sums of the recursion term by term (LLVM does not fuse them into FMAs
+without fast-math, which stays off), the behavioural set as the first
+``count`` of a stable sort, the likelihood total summed in index order (as
+:func:`dynia.engine.cld.likelihood` does with ``cumsum``) and the gradient
+accumulated in index order (as ``bincount``). The order statistics are
+found by selection instead of sorting, which cannot change their value, and
+one pass over a window's costs finds the candidates of the behavioural set
+(and of every Monte Carlo batch's) and of the noise floor's quantile.
 
 The kernels release the GIL, so the engine's thread pool runs them on every
 core. This module needs numba; :data:`AVAILABLE` says whether it imported.
@@ -36,7 +57,15 @@ except ImportError:  # the numpy path serves
 
 AVAILABLE = numba is not None
 
-__all__ = ["AVAILABLE", "compiled", "simulate_errors", "analyse_windows", "analyse_windows_batched"]
+__all__ = [
+    "AVAILABLE",
+    "compiled",
+    "simulate_errors",
+    "simulate_window_sums",
+    "analyse_windows",
+    "analyse_windows_batched",
+    "CompiledErrors",
+]
 
 
 def _jit(function):
@@ -1378,5 +1407,6 @@ def compiled():
     changes); which of the two, only numba finds out.
     """
     return AVAILABLE and any(
-        kernel.signatures for kernel in (simulate_errors, analyse_windows, analyse_windows_batched)
+        kernel.signatures
+        for kernel in (simulate_errors, simulate_window_sums, analyse_windows, analyse_windows_batched)
     )

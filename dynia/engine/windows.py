@@ -25,10 +25,14 @@ Time is processed in chunks, so memory grows with n_samples x chunk, never
 with n_samples x n_steps; :func:`dynia.run` streams the simulation into the
 same chunks, so the (n_samples, n_steps) matrix is never built.
 
-Window sums are accumulated left to right over the window's points, so two
-parameter sets whose errors agree inside a window get bit-identical costs
-(ties stay ties, whatever came before the window), and ties are ranked by
-sample index, exactly as the thesis's stable sort does.
+On numpy (:func:`window_mean`) window sums are accumulated left to right
+over the window's points, so two parameter sets whose errors agree inside a
+window get bit-identical costs (ties stay ties, whatever came before the
+window), and ties are ranked by sample index, exactly as the thesis's
+stable sort does. The compiled engine keeps compensated running sums
+instead, which cost the same for any n and are within rounding of these;
+see :mod:`dynia.engine.kernels` for how close, and the contract between
+the two engines.
 
 Flavours
 --------
@@ -218,8 +222,10 @@ def moving_window(
         trailing result at t equals the centred one at t-n wherever the
         centred window is not truncated by the end of the record.
     engine : {"auto", "numba", "numpy"}, default "auto"
-        The compiled kernels of :mod:`dynia.engine.kernels` or plain numpy; both give
-        bit-identical results. "auto" takes numba when it is installed and
+        The compiled kernels of :mod:`dynia.engine.kernels` or plain numpy; their
+        costs agree to rounding and their IC, limits and median are identical
+        wherever a window's behavioural set is (see that module).
+        "auto" takes numba when it is installed and
         the flavour is "thesis" or "weighted" without ``weights`` (the
         other cases always run on numpy).
     ic_error : bool, default False
