@@ -884,7 +884,8 @@ def _read_off(cost, count, candidates, found, rules, positions, t, ic, ci, media
     scratch, selected, weights, values, order, buffer = work
     n_params = columns.shape[0]
     threshold = _behavioural(cost, count, candidates, found, scratch, selected)
-    smallest = _likelihood_weights(cost, count, selected, weights)
+    # A batch's thesis limits are order statistics alone: its likelihoods are never used.
+    smallest = _likelihood_weights(cost, count, selected, weights) if whole or weighted else np.nan
     for p in range(n_params):
         low, high = lows[p], highs[p]
         for i in range(count):
@@ -898,10 +899,9 @@ def _read_off(cost, count, candidates, found, rules, positions, t, ic, ci, media
             if whole:
                 median[p, t] = _cld_read_off(values, weights, order, count, 0.5)
         else:
-            for side in range(2):
-                ci[p, t, side] = _order_statistic(values, count, positions[side], scratch)
+            ci[p, t, 0], ci[p, t, 1], middle = _order_statistics(values, count, positions, whole, scratch)
             if whole:
-                median[p, t] = _order_statistic(values, count, (count - 1) // 2, scratch)
+                median[p, t] = middle
         ic[p, t] = 1 - (ci[p, t, 1] - ci[p, t, 0]) / (high - low)
     return threshold, smallest
 
@@ -959,11 +959,30 @@ def _cld_read_off(values, weights, order, count, level):
 
 
 @_jit
-def _order_statistic(values, count, k, scratch):
-    """The k-th smallest of ``values[:count]`` (0-based), found in ``scratch`` so that ``values`` stays as it is."""
+def _order_statistics(values, count, positions, with_median, scratch):
+    """The ``positions[0]``-th and ``positions[1]``-th smallest of ``values[:count]``, and the median's if asked.
+
+    The median's position is ``(count - 1) // 2``, between the two (NaN when
+    not asked). Found in one copy, ``scratch``, so that ``values`` stays as
+    it is: :func:`_select` leaves nothing larger before its answer and
+    nothing smaller after, so the upper is searched after the lower only, and
+    the median between the two.
+    """
     for i in range(count):
         scratch[i] = values[i]
-    return _select(scratch, count, k)
+    first, last = positions[0], positions[1]
+    lower = _select(scratch, count, first)
+    upper = lower if last == first else _select(scratch[first + 1 :], count - first - 1, last - first - 1)
+    middle = np.nan
+    if with_median:
+        k = (count - 1) // 2
+        if k == first:
+            middle = lower
+        elif k == last:
+            middle = upper
+        else:
+            middle = _select(scratch[first + 1 : last], last - first - 1, k - first - 1)
+    return lower, upper, middle
 
 
 @_jit
