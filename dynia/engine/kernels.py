@@ -652,48 +652,57 @@ def _select(values, length, k):
 def _candidates(cost, first, stride, count, bound, candidates):
     """Indices (ascending) of the samples first, first + stride, ... whose cost is at or below ``bound``.
 
-    Written into ``candidates``; returns how many. ``bound`` is a guess of
+    Written into ``candidates`` = (indices, their costs); returns how many. ``bound`` is a guess of
     the count-th smallest of these costs (the previous window's): when at
     least ``count`` costs lie at or below it, the behavioural set is among
     them; otherwise (or when ``bound`` is NaN) every one of the samples is
     a candidate.
     """
     n = cost.shape[0]
+    indices, costs = candidates
     found = 0
     if bound == bound:  # not NaN
         # Branch-free: every index is written, and kept (by counting it) when its cost is at or below the bound.
         for s in range(first, n, stride):
-            candidates[found] = s
+            indices[found] = s
+            costs[found] = cost[s]
             found += cost[s] <= bound
     if found < count:
         found = 0
         for s in range(first, n, stride):
-            candidates[found] = s
+            indices[found] = s
+            costs[found] = cost[s]
             found += 1
     return found
 
 
 @_jit
-def _behavioural(cost, count, candidates, found, scratch, selected):
-    """Indices (ascending) of the first ``count`` of a stable ascending sort of ``cost``, into ``selected``.
+def _behavioural(count, candidates, found, scratch, selected):
+    """Indices (ascending) of the first ``count`` of a stable ascending sort of the costs, into ``selected``.
 
-    ``candidates[:found]`` (ascending) hold every index of the count
-    lowest costs and of any cost tied with the count-th (what
-    :func:`_candidates` gives); only they are searched. Returns the
+    ``candidates`` = (indices, costs): ``indices[:found]`` (ascending) hold
+    every index of the count lowest costs and of any cost tied with the
+    count-th (what :func:`_candidates` gives), ``costs`` theirs, side by side
+    so that they are read in order; only they are searched. Returns the
     count-th smallest cost.
     """
-    for i in range(found):
-        scratch[i] = cost[candidates[i]]
-    threshold = _select(scratch, found, count - 1)
+    indices, costs = candidates
+    if found - count < _FEW:  # a batch's few spare candidates: the threshold is among their largest costs
+        for i in range(found):
+            _keep(scratch, found - count + 1, i, costs[i], True)
+        threshold = scratch[found - count]
+    else:
+        for i in range(found):
+            scratch[i] = costs[i]
+        threshold = _select(scratch, found, count - 1)
     below = 0
     for i in range(found):
-        if cost[candidates[i]] < threshold:
-            below += 1
+        below += costs[i] < threshold
     ties = count - below
     taken = 0
     for i in range(found):
-        s = candidates[i]
-        value = cost[s]
+        s = indices[i]
+        value = costs[i]
         if value < threshold or (value == threshold and ties > 0):
             if value == threshold:
                 ties -= 1
@@ -707,10 +716,11 @@ def _scan_costs(sums, present, cost, bound, upper_bound, candidates, upper_value
     """The window's costs from its sums, and in the same pass the candidates of its behavioural set and quantile.
 
     ``cost`` = (sums / present)^2. ``candidates`` receives the indices
-    (ascending) of the costs at or below ``bound`` (see :func:`_candidates`)
+    (ascending) and costs of those at or below ``bound`` (see :func:`_candidates`)
     and ``upper_values`` the costs at or above ``upper_bound`` (see
     :func:`_quantile_cost`); returns how many of each. A NaN bound keeps none.
     """
+    indices, costs = candidates
     found = 0
     above = 0
     # Branch-free: every slot is written, and kept (by counting it) when it qualifies.
@@ -718,7 +728,8 @@ def _scan_costs(sums, present, cost, bound, upper_bound, candidates, upper_value
         mae = sums[s] / present
         value = mae * mae
         cost[s] = value
-        candidates[found] = s
+        indices[found] = s
+        costs[found] = value
         found += value <= bound
         upper_values[above] = value
         above += value >= upper_bound
@@ -867,11 +878,12 @@ def _round_sums(rows, first, period, slots, high, low, total):
 def _read_off(cost, count, candidates, found, rules, positions, t, ic, ci, median, gradient, whole, work):
     """Behavioural set of one window's ``cost`` and what it gives: ``ic``, ``ci``, ``median`` and ``gradient`` at t.
 
-    The set is searched among ``candidates[:found]`` (see
-    :func:`_behavioural`), indices of ``cost`` and of the columns of
-    ``columns``: a batch of samples is read off through candidates that are
-    its members only. Without ``whole`` (a batch's read-off, whose IC and
-    limits alone are used) the gradient and the median are left alone. The
+    The set is searched among the first ``found`` of ``candidates`` =
+    (indices, costs) (see :func:`_behavioural`), indices of ``cost`` and of
+    the columns of ``columns``: a batch of samples is read off through
+    candidates that are its members only. Without ``whole`` (a batch's
+    read-off, whose IC and limits alone are used) the gradient, the median
+    and, for the thesis limits, the likelihoods are left alone. The
     median is read off as the limits are: the first sorted value whose CLD
     reaches 0.5 (``weighted``), or the value at sorted position
     ``(count - 1) // 2``, which is ``floor(0.5 (count - 1))``.
@@ -883,7 +895,7 @@ def _read_off(cost, count, candidates, found, rules, positions, t, ic, ci, media
     columns, lows, highs, bins, levels, weighted = rules
     scratch, selected, weights, values, order, buffer = work
     n_params = columns.shape[0]
-    threshold = _behavioural(cost, count, candidates, found, scratch, selected)
+    threshold = _behavioural(count, candidates, found, scratch, selected)
     # A batch's thesis limits are order statistics alone: its likelihoods are never used.
     smallest = _likelihood_weights(cost, count, selected, weights) if whole or weighted else np.nan
     for p in range(n_params):
@@ -958,6 +970,43 @@ def _cld_read_off(values, weights, order, count, level):
     return values[order[min(reached, count - 1)]]
 
 
+# Order statistics this close to either end (a batch's limits: the 3rd smallest and 4th largest of 50 at 90 %)
+# are kept in a short sorted buffer in one pass, cheaper than a selection's unpredictable branches.
+_FEW = 12
+
+
+@_jit
+def _keep(buffer, size, seen, value, larger):
+    """Insert ``value``, the ``seen``-th value met, into ``buffer[:size]``: the smallest met so far, ascending.
+
+    With ``larger`` the largest met so far, descending. Returns nothing; the
+    value is dropped when the buffer is full and it would come last.
+    """
+    if seen < size or (value > buffer[size - 1] if larger else value < buffer[size - 1]):
+        j = min(seen, size - 1) - 1
+        while j >= 0 and (buffer[j] < value if larger else buffer[j] > value):
+            buffer[j + 1] = buffer[j]
+            j -= 1
+        buffer[j + 1] = value
+
+
+@_jit
+def _extreme_order_statistics(values, count, first, last, scratch):
+    """The ``first``-th smallest and ``last``-th smallest of ``values[:count]``, both within ``_FEW`` of an end.
+
+    One pass keeps the first + 1 smallest values (ascending, in
+    ``scratch[:first + 1]``) and the count - last largest (descending, after
+    them); returns (lower, upper, NaN) as :func:`_order_statistics` does.
+    """
+    small, large = first + 1, count - last
+    low = scratch[:small]
+    high = scratch[small : small + large]
+    for i in range(count):
+        _keep(low, small, i, values[i], False)
+        _keep(high, large, i, values[i], True)
+    return low[small - 1], high[large - 1], np.nan
+
+
 @_jit
 def _order_statistics(values, count, positions, with_median, scratch):
     """The ``positions[0]``-th and ``positions[1]``-th smallest of ``values[:count]``, and the median's if asked.
@@ -968,9 +1017,11 @@ def _order_statistics(values, count, positions, with_median, scratch):
     nothing smaller after, so the upper is searched after the lower only, and
     the median between the two.
     """
+    first, last = positions[0], positions[1]
+    if not with_median and first < _FEW and count - 1 - last < _FEW:
+        return _extreme_order_statistics(values, count, first, last, scratch)
     for i in range(count):
         scratch[i] = values[i]
-    first, last = positions[0], positions[1]
     lower = _select(scratch, count, first)
     upper = lower if last == first else _select(scratch[first + 1 :], count - first - 1, last - first - 1)
     middle = np.nan
@@ -1048,14 +1099,15 @@ def analyse_windows_batched(
     n_batches = batch_counts.shape[0]
     total, cost, upper_values = np.empty(n_samples), np.empty(n_samples), np.empty(n_samples)
     high, low = np.empty(n_samples), np.empty(n_samples)
-    candidates = np.empty(n_samples, dtype=np.int64)
+    candidates = (np.empty(n_samples, dtype=np.int64), np.empty(n_samples))
     rules = (columns, lows, highs, bins, levels, weighted)
     work = _workspace(n_samples, count)
     bound = np.nan
     upper_bound = np.nan
     batch_bounds = np.full(n_batches, np.nan)
     batch_of = _batch_of(n_samples, n_batches)
-    batch_candidates = np.empty((n_batches, (n_samples + n_batches - 1) // max(n_batches, 1)), dtype=np.int64)
+    batch_size = (n_samples + n_batches - 1) // max(n_batches, 1)
+    batch_candidates = (np.empty((n_batches, batch_size), dtype=np.int64), np.empty((n_batches, batch_size)))
     batch_found = np.empty(n_batches, dtype=np.int64)
     present = 0.0
     for t in range(m):
@@ -1086,7 +1138,7 @@ def analyse_windows_batched(
             continue
         _deal_candidates(candidates, found, batch_of, batch_candidates, batch_found)
         for b in range(n_batches):
-            members = batch_candidates[b]
+            members = (batch_candidates[0][b], batch_candidates[1][b])
             if batch_found[b] < batch_counts[b]:
                 batch_found[b] = _candidates(cost, b, n_batches, batch_counts[b], batch_bounds[b], members)
             threshold, _ = _read_off(
@@ -1150,18 +1202,21 @@ def _blank_window(t, ic, ci, median, gradient, extreme_costs, batch_ic, batch_ci
 
 @_jit
 def _deal_candidates(candidates, found, batch_of, batch_candidates, batch_found):
-    """Deal the population's ``candidates[:found]`` to their batches: row b of ``batch_candidates``, ascending.
+    """Deal the population's ``candidates`` (indices, costs) to their batches: row b of ``batch_candidates``'s.
 
     The population's candidates are every cost at or below its bound: a batch
     with at least its count among them has its behavioural set and every tie
     there; one with fewer searches its members against its own bound, and all
     of them if that finds too few.
     """
+    indices, costs = candidates
+    batch_indices, batch_costs = batch_candidates
     batch_found[:] = 0
     for i in range(found):
-        s = candidates[i]
+        s = indices[i]
         b = batch_of[s]
-        batch_candidates[b, batch_found[b]] = s
+        batch_indices[b, batch_found[b]] = s
+        batch_costs[b, batch_found[b]] = costs[i]
         batch_found[b] += 1
 
 
