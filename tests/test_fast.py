@@ -28,8 +28,9 @@ below:
    twice the tolerance of the set's edge changed sides: near-ties, which a
    different rounding may order differently. Costs that tie exactly because
    the samples' errors agree over the window stay tied on both engines
-   (each sums the same numbers; the compiled one rounds the exact sum once,
-   whatever came before), and ties rank by sample index.
+   (each sums the same numbers; the compiled one, in practice, rounds their
+   exact sum once whatever came before: tests/test_running_sums.py), and
+   ties rank by sample index.
 
 Compiled against compiled (workers, the fused linear-model kernel against
 the error rows) stays bit for bit: tests/test_running_sums.py.

@@ -10,6 +10,8 @@ hence the same results, for every built-in linear model, dead time, missing
 measurement, error scale, half window and worker count.
 """
 
+from fractions import Fraction
+
 import control
 import numpy as np
 import pytest
@@ -171,3 +173,25 @@ def test_the_cost_of_a_window_does_not_depend_on_its_length():
         present = kernels._next_window(rows_copy, measured, 1, slots, float(slots), high, low, total)
         assert present == slots
         np.testing.assert_allclose(total, rows[1 : slots + 1].sum(axis=0), rtol=4 * slots * 2.0**-53)
+
+
+def test_the_sums_are_the_exact_sums_rounded_once_whatever_the_chunks(example1):
+    """Known answers on thesis example 1: the compensation leaves no trace of the window's history.
+
+    The high/low pair holds the exact sum unless its low part itself rounds,
+    which these errors never make it do: each cost is the one of the exact
+    window sum rounded once, the same bits whatever the chunk it starts
+    afresh in, so the compiled engine's results do not depend on its chunks
+    (nor on the distributed engine's time chunks).
+    """
+    y, sims = example1["y"], example1["sims"]
+    for n in (100, 10):
+        costs = compiled_window_costs(y, sims, n, chunk_steps=37)
+        np.testing.assert_array_equal(costs, compiled_window_costs(y, sims, n, chunk_steps=500))
+    errors = np.abs(sims - y)
+    for t in range(0, 500, 7):
+        first, stop = max(t - n, 0), min(t + n + 1, 500)
+        for s in range(0, 2000, 97):
+            exact = sum(Fraction(float(value)) for value in errors[s, first:stop])
+            mae = float(exact) / (stop - first)  # float() of a Fraction rounds once, to nearest
+            assert mae * mae == costs[t, s], (t, s)

@@ -20,8 +20,11 @@ running sum would drift, and lose the small errors to cancellation when a
 huge one leaves; this one is compensated (TwoSum, a double-double high/low
 per sample, rounded once as high + low), summed afresh from its rows at
 every chunk's first window, and summed afresh from the rows, for one
-sample, while an infinite error is in its window. It is therefore within
-about one rounding of the exact sum, where the numpy path's left-to-right
+sample, while an infinite error is in its window. The pair holds the exact
+sum unless its low part itself rounds, so high + low is in practice the
+exact sum rounded once (every one checked on thesis example 1, and no bit
+changes with the chunks: tests/test_running_sums.py), and it is always
+within about one rounding of it, where the numpy path's left-to-right
 sum (the readable reference, equal to the thesis port) is within 2n
 roundings: the two agree to a relative ``2 (2n + 2) 2^-53`` on the costs,
 not bit for bit, and give identical IC, limits and median wherever the
