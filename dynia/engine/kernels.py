@@ -829,6 +829,21 @@ def _window_sum(rows, first, period, slots, s):
 
 
 @_jit
+def _window_sums(rows, measured, t, slots, present, running):
+    """Window t's error sums and measured points: row t of given sums (``slots`` = 0), or the running sums.
+
+    ``running`` = (high, low, total) carries the running sums from window
+    t - 1 (``present`` its measured points); ``total`` receives window t's.
+    """
+    high, low, total = running
+    if slots == 0:
+        return rows[t], measured[t]
+    if t == 0:
+        return total, _first_window(rows, measured, slots, high, low, total)
+    return total, _next_window(rows, measured, t, slots, present, high, low, total)
+
+
+@_jit
 def _first_window(errors, measured, slots, high, low, total):
     """Window 0's sums from its rows: ``total`` = high + low, each a compensated sum; returns its measured points."""
     n_samples = errors.shape[1]
@@ -1114,14 +1129,7 @@ def analyse_windows_batched(
     batch_found = np.empty(n_batches, dtype=np.int64)
     present = 0.0
     for t in range(m):
-        if slots == 0:
-            sums, present = rows[t], measured[t]
-        else:
-            if t == 0:
-                present = _first_window(rows, measured, slots, high, low, total)
-            else:
-                present = _next_window(rows, measured, t, slots, present, high, low, total)
-            sums = total
+        sums, present = _window_sums(rows, measured, t, slots, present, (high, low, total))
         if present < min_points:
             _blank_window(t, ic, ci, median, gradient, extreme_costs, batch_ic, batch_ci)
             continue
