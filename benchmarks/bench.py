@@ -589,12 +589,21 @@ def main(argv=None):
     parser.add_argument("--distributed-time-chunks", type=int, help="time_chunks of the distributed case")
     parser.add_argument("--long-samples", type=int, default=10_000, help="samples of the long-record case")
     parser.add_argument("--long-steps", type=int, default=30_000_000, help="steps of the long-record case")
+    parser.add_argument("--yardstick-samples", type=int, default=20_000, help="samples of the yardstick case")
+    parser.add_argument("--yardstick-steps", type=int, default=20_000, help="steps of the yardstick case")
+    parser.add_argument("--ic-error-samples", type=int, default=20_000, help="samples of the ic-error-cost case")
+    parser.add_argument("--ic-error-steps", type=int, default=20_000, help="steps of the ic-error-cost case")
     args = parser.parse_args(argv)
     if args.case:
         sizes = dict(
             n_samples=args.distributed_samples, n_steps=args.distributed_steps, time_chunks=args.distributed_time_chunks
         )
-        options = dict(distributed=sizes, **{"long-record": dict(n_samples=args.long_samples, n_steps=args.long_steps)})
+        options = {
+            "distributed": sizes,
+            "long-record": dict(n_samples=args.long_samples, n_steps=args.long_steps),
+            "yardstick": dict(n_samples=args.yardstick_samples, n_steps=args.yardstick_steps),
+            "ic-error-cost": dict(n_samples=args.ic_error_samples, n_steps=args.ic_error_steps),
+        }
         _run_case(args.case, **options.get(args.case, {}))
         return
     for name in CASES:

@@ -73,3 +73,31 @@ def example1():
     params = rng.uniform(0, 7, (2000, 2))  # columns: gain, time constant
     sims = first_order_response(params[:, 0], params[:, 1], u)
     return dict(u=u, y=y, params=params, sims=sims, bounds=np.array([[0.0, 7.0], [0.0, 7.0]]))
+
+
+def compiled_window_costs(y, sims, n, window="centred", chunk_steps=None):
+    """The window costs the compiled engine ranks (m, n_samples): its running sums over the same chunks, squared MAE.
+
+    Formed with the compiled kernel's own helpers, chunk by chunk as the windows pass cuts the record, so that they
+    are the bits the engine used (the fused linear-model path gives the same, tests/test_running_sums.py).
+    """
+    from dynia.engine import kernels
+    from dynia.engine.windows import ArrayErrors, default_chunk_steps, window_halos, window_inputs
+
+    y, sims = np.asarray(y, dtype=float), np.asarray(sims, dtype=float)
+    errors = ArrayErrors(y, sims)
+    before, after = window_halos(n, window)
+    slots = before + after + 1
+    chunk_steps = chunk_steps or default_chunk_steps(sims.shape[0], 2 * n)
+    high, low, total = (np.empty(sims.shape[0]) for _ in range(3))
+    costs = []
+    for start in range(0, y.size, chunk_steps):
+        stop = min(start + chunk_steps, y.size)
+        rows, measured = window_inputs(errors, start, stop, before, after, y.size, time_major=True)
+        present = kernels._first_window(rows, measured, slots, high, low, total)
+        for t in range(stop - start):
+            if t:
+                present = kernels._next_window(rows, measured, t, slots, present, high, low, total)
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                costs.append((total / present) ** 2)
+    return np.array(costs)

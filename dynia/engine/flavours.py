@@ -2,7 +2,7 @@
 
 ``"thesis"`` and ``"weighted"`` run on numpy (:class:`ThesisFlavour`,
 :class:`WeightedFlavour`) or on the compiled kernels of
-:mod:`dynia.engine.kernels` (:class:`CompiledFlavour`), bit for bit alike;
+:mod:`dynia.engine.kernels` (:class:`CompiledFlavour`), alike to rounding (see there);
 importance-weighted samples take :class:`ImportanceFlavour`; ``"mcat"`` is
 :class:`McatFlavour`. See :mod:`dynia.engine.windows` for what each computes.
 
@@ -52,8 +52,8 @@ class WindowResults(NamedTuple):
     the largest MAE of the behavioural set and the MAE at the population
     quantile of :func:`dynia.engine.noise.quantile_position`, what
     :mod:`dynia.engine.noise` tests (each the square root of a window cost
-    for "thesis" and "weighted", so that both engines give them bit for
-    bit; the population's, unweighted, with importance weights); with ``ic_error``
+    for "thesis" and "weighted", taken as both engines take it; the
+    population's, unweighted, with importance weights); with ``ic_error``
     ``batch_ic`` (batches, n_params, m) and ``batch_ci`` (batches, n_params,
     m, 2), else None. Every array is NaN where a window had too few
     measured points.
@@ -304,6 +304,19 @@ class CompiledFlavour:
         )
 
     def analyse_rows(self, window_errors, measured, m, slots):
+        """The :class:`WindowResults` of m windows from their error rows and measured flags (see the kernel)."""
+        return self._analyse(window_errors, measured, m, slots)
+
+    def analyse_sums(self, sums, present):
+        """The :class:`WindowResults` of the windows whose error sums are ``sums`` (m, n_samples), time-major.
+
+        ``present`` (m,) holds each window's measured points; the sums come
+        from :meth:`dynia.engine.kernels.CompiledErrors.window_sums` and are
+        overwritten.
+        """
+        return self._analyse(sums, present, sums.shape[0], 0)
+
+    def _analyse(self, window_errors, measured, m, slots):
         n_params = self.columns.shape[0]
         ic, ci, median, gradient = _chunk_arrays(n_params, self.n_bins, m)
         extreme_costs = np.empty((3, m))
@@ -328,7 +341,7 @@ class CompiledFlavour:
             gradient,
             extreme_costs,
         )
-        # The square roots are taken here, as the numpy flavours take them, so both give the same bits.
+        # The square roots are taken here, as the numpy flavours take them.
         if not self.batches:
             kernels.analyse_windows(*common)
             return WindowResults(ic, ci, median, gradient, *np.sqrt(extreme_costs))

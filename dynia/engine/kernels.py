@@ -1,23 +1,47 @@
-"""Compiled (numba) kernels of the engine: the same arithmetic as the numpy path, faster.
+"""Compiled (numba) kernels of the engine: the numpy path's method, with running window sums, faster.
 
-Two kernels cover the work of a :func:`dynia.run` with the ``"thesis"`` or
+Three kernels cover the work of a :func:`dynia.run` with the ``"thesis"`` or
 ``"weighted"`` flavour:
 
 - :func:`simulate_errors` advances every sample's discretised model (the
   recursion of the linear models, ``dynia.models.linear``) through a block of
   steps and writes the absolute errors against the measurement, time-major;
-- :func:`analyse_windows` forms each window's costs, selects its behavioural
-  set and reads off limits, IC and gradient.
+- :func:`simulate_window_sums` does the same fused with the window sums, a
+  block of samples at a time through every step of a chunk, and writes only
+  the sums: no error matrix goes through memory (the built-in linear models;
+  other models hand their error rows to the next kernel);
+- :func:`analyse_windows` forms each window's costs (from error rows by the
+  same running sums, or from the sums given), selects its behavioural set
+  and reads off limits, IC and gradient.
 
-Each floating-point operation is the one the numpy path performs, in the same
-order, so the results are bit-identical (tests compare with tolerance 0):
-products and sums of the recursion term by term (LLVM does not fuse them
-into FMAs without fast-math, which stays off), window sums left to right,
-the behavioural set as the first ``count`` of a stable sort, the likelihood
-total summed in index order (as :func:`dynia.engine.cld.likelihood` does with
-``cumsum``) and the gradient accumulated in index order (as ``bincount``).
-Only the order statistics are found differently (selection instead of
-sorting), which cannot change their value.
+The window sums run: each window adds the step entering it and subtracts
+the one leaving, so a window costs the same whatever its length. A plain
+running sum would drift, and lose the small errors to cancellation when a
+huge one leaves; this one is compensated (TwoSum, a double-double high/low
+per sample, rounded once as high + low), summed afresh from its rows at
+every chunk's first window, and summed afresh from the rows, for one
+sample, while an infinite error is in its window. The pair holds the exact
+sum unless its low part itself rounds, so high + low is in practice the
+exact sum rounded once (every one checked on thesis example 1, and no bit
+changes with the chunks: tests/test_running_sums.py), and it is always
+within about one rounding of it, where the numpy path's left-to-right
+sum (the readable reference, equal to the thesis port) is within 2n
+roundings: the two agree to a relative ``2 (2n + 2) 2^-53`` on the costs,
+not bit for bit, and give identical IC, limits and median wherever the
+window's behavioural set is the same (tests/test_fast.py states and checks
+that contract, and how often it holds). The fused kernel and the error-row
+kernel perform the same operations in the same order, so they agree bit for
+bit, and so do any worker counts (workers split samples, never a sum).
+
+Everything else is the numpy path's arithmetic in the same order: products
+and sums of the recursion term by term (LLVM does not fuse them into FMAs
+without fast-math, which stays off), the behavioural set as the first
+``count`` of a stable sort, the likelihood total summed in index order (as
+:func:`dynia.engine.cld.likelihood` does with ``cumsum``) and the gradient
+accumulated in index order (as ``bincount``). The order statistics are
+found by selection instead of sorting, which cannot change their value, and
+one pass over a window's costs finds the candidates of the behavioural set
+(and of every Monte Carlo batch's) and of the noise floor's quantile.
 
 The kernels release the GIL, so the engine's thread pool runs them on every
 core. This module needs numba; :data:`AVAILABLE` says whether it imported.
@@ -36,7 +60,15 @@ except ImportError:  # the numpy path serves
 
 AVAILABLE = numba is not None
 
-__all__ = ["AVAILABLE", "compiled", "simulate_errors", "analyse_windows", "analyse_windows_batched"]
+__all__ = [
+    "AVAILABLE",
+    "compiled",
+    "simulate_errors",
+    "simulate_window_sums",
+    "analyse_windows",
+    "analyse_windows_batched",
+    "CompiledErrors",
+]
 
 
 def _jit(function):
@@ -159,6 +191,321 @@ def simulate_errors(
     for i in range(n_states):
         state[i, lo:hi] = sources[i, lo:hi]
     return bad_step, bad_sample
+
+
+# Samples a block of the fused kernel holds: its states, coefficients and sums (a dozen arrays of this length for one
+# state, 24 kB) stay in the L1 cache while the block runs through every step of a chunk.
+FUSED_BLOCK = 256
+
+
+@_jit
+def simulate_window_sums(
+    phi,
+    gamma_now,
+    gamma_prev,
+    c,
+    feed_now,
+    feed_prev,
+    delays,
+    state_terms,
+    output_terms,
+    padded_input,
+    y,
+    scale,
+    steps,
+    first_end,
+    state,
+    ring,
+    sums,
+    totals,
+    sample_start,
+    sample_stop,
+):
+    """Simulate, error and window-sum samples [sample_start, sample_stop) in blocks, fused: no error matrix.
+
+    Runs the window ends e in ``steps`` = (from, to): step e (while inside
+    the record) is simulated as :func:`simulate_errors` does, term by term,
+    and its absolute error (0 where ``y`` is NaN) times ``scale`` enters the
+    sum of the window of ``slots = ring.shape[0]`` steps ending at e, while
+    the error of step e - slots, kept in ``ring[(e - slots) % slots]``,
+    leaves it; steps outside the record count 0. The sum of the window
+    ending at e >= ``first_end`` goes to ``sums[e - first_end]``; the one
+    ending at ``first_end`` is summed afresh from the ring, step by step, as
+    :func:`_first_window` sums a block's first window, and the next ones
+    slide as :func:`_next_window` slides, so the sums equal that kernel's on
+    the same error rows bit for bit. ``state`` (n_states, n_samples) and
+    ``ring`` (slots, n_samples) carry over between calls; ``totals``
+    (n_samples,) adds every simulated step's error in time order, as
+    :func:`dynia.engine.noise.add_record_errors` does. Returns the first
+    (step, sample) whose output is not finite, or (-1, -1).
+    """
+    n_states = c.shape[0]
+    bad_step, bad_sample = -1, -1
+    for block_start in range(sample_start, sample_stop, FUSED_BLOCK):
+        block_stop = min(block_start + FUSED_BLOCK, sample_stop)
+        if n_states == 1 and delays.shape[0] == 1 and state_terms[0, 0] and output_terms[0]:
+            step, sample = _fused_lag_block(
+                (phi[0, 0], gamma_now[0], gamma_prev[0], c[0], feed_now, feed_prev),
+                delays[0],
+                state_terms[0],
+                output_terms,
+                padded_input,
+                y,
+                scale,
+                steps,
+                first_end,
+                state[0],
+                ring,
+                sums,
+                totals,
+                block_start,
+                block_stop,
+            )
+            if step >= 0 and (bad_step < 0 or step < bad_step):
+                bad_step, bad_sample = step, sample
+            continue
+        step, sample = _fused_block(
+            phi,
+            gamma_now,
+            gamma_prev,
+            c,
+            feed_now,
+            feed_prev,
+            delays,
+            state_terms,
+            output_terms,
+            padded_input,
+            y,
+            scale,
+            steps,
+            first_end,
+            state,
+            ring,
+            sums,
+            totals,
+            block_start,
+            block_stop,
+            n_states,
+        )
+        if step >= 0 and (bad_step < 0 or step < bad_step):
+            bad_step, bad_sample = step, sample
+    return bad_step, bad_sample
+
+
+@_jit
+def _fused_block(
+    phi,
+    gamma_now,
+    gamma_prev,
+    c,
+    feed_now,
+    feed_prev,
+    delays,
+    state_terms,
+    output_terms,
+    padded_input,
+    y,
+    scale,
+    steps,
+    first_end,
+    state,
+    ring,
+    sums,
+    totals,
+    lo,
+    hi,
+    n_states,
+):
+    """:func:`simulate_window_sums` for one block of samples [lo, hi), held in block-local arrays."""
+    width = hi - lo
+    last_step = y.shape[0] - 1
+    output_coefficients, state_coefficients = _coefficient_tables(
+        phi[:, :, lo:hi], gamma_now[:, lo:hi], gamma_prev[:, lo:hi], c[:, lo:hi], feed_now[lo:hi], feed_prev[lo:hi]
+    )
+    block_delays = delays if delays.shape[0] == 1 else delays[lo:hi]
+    sources = np.empty((n_states + 2, width))
+    upcoming = np.empty((n_states, width))
+    output = np.empty(width)
+    error = np.empty(width)
+    high, low = np.zeros(width), np.zeros(width)
+    total = totals[lo:hi].copy()
+    for i in range(n_states):
+        sources[i] = state[i, lo:hi]
+    bad_step, bad_sample = -1, -1
+    for e in range(steps[0], steps[1]):
+        if e <= last_step:
+            tables = (output_coefficients, state_coefficients, output_terms, state_terms)
+            bad = _fused_step(tables, sources, upcoming, output, error, padded_input, block_delays, y, e, scale, total)
+            if bad >= 0 and bad_step < 0:
+                bad_step, bad_sample = e, lo + bad
+        else:
+            error[:] = 0.0
+        _fused_sums(ring, lo, hi, e, first_end, error, high, low, sums)
+    for i in range(n_states):
+        state[i, lo:hi] = sources[i]
+    totals[lo:hi] = total
+    return bad_step, bad_sample
+
+
+@_jit
+def _fused_lag_block(
+    coefficients,
+    delay,
+    state_terms,
+    output_terms,
+    padded_input,
+    y,
+    scale,
+    steps,
+    first_end,
+    state,
+    ring,
+    sums,
+    totals,
+    lo,
+    hi,
+):
+    """:func:`_fused_block` for one state and one common dead time (the lag models): one loop per step.
+
+    The recursion's arithmetic is :func:`_simulate_lag`'s, the sums'
+    :func:`_fused_sums`'; each step's samples run through one loop that
+    simulates, errs, slides the window sum and writes it, except at the
+    block's first window and past the record, which take :func:`_fused_sums`.
+    """
+    flags = (output_terms[1], output_terms[2], state_terms[1], state_terms[2])
+    width = hi - lo
+    slots = ring.shape[0]
+    last_step = y.shape[0] - 1
+    x_block, total = state[lo:hi].copy(), totals[lo:hi].copy()
+    error, high, low = np.zeros(width), np.zeros(width), np.zeros(width)
+    bad_step, bad_sample = -1, -1
+    for e in range(steps[0], steps[1]):
+        if e > last_step:
+            error[:] = 0.0
+            _fused_sums(ring, lo, hi, e, first_end, error, high, low, sums)
+            continue
+        now = padded_input[max(e - delay, -1) + 1]
+        previous = padded_input[max(e - delay - 1, -1) + 1]
+        y_e = y[e]
+        missing = np.isnan(y_e)
+        advance = e != last_step
+        sliding = e > first_end
+        leaving = ring[e % slots, lo:hi]
+        window = sums[e - first_end, lo:hi] if sliding else error
+        inputs = (now, previous, y_e, missing, advance, sliding, scale)
+        finite, bad = _lag_samples(coefficients, flags, inputs, lo, x_block, total, error, high, low, leaving, window)
+        if not finite and bad_step < 0:
+            bad_step = e
+            for i in range(width):  # as in _simulate_lag: the sample is not known where y is missing
+                if not np.isfinite(error[i]):
+                    bad_sample = lo + i
+                    break
+        if not sliding:
+            _fused_sums(ring, lo, hi, e, first_end, error, high, low, sums)
+        elif bad:
+            block_ring = ring[:, lo:hi]
+            for i in range(width):
+                if not np.isfinite(window[i]):
+                    high[i], low[i] = _window_sum(block_ring, (e + 1) % slots, slots, slots, i)
+                    window[i] = high[i] + low[i]
+    state[lo:hi] = x_block
+    totals[lo:hi] = total
+    return bad_step, bad_sample
+
+
+@_jit
+def _lag_samples(coefficients, flags, inputs, lo, x_block, total, error, high, low, leaving, window):
+    """One step of :func:`_fused_lag_block` for its samples: simulate, err, advance and, when sliding, slide.
+
+    Returns whether every output was finite and how many window sums were not.
+    """
+    phi, gamma_now, gamma_prev, c, feed_now, feed_prev = coefficients
+    now_out, prev_out, now_state, prev_state = flags
+    now, previous, y_e, missing, advance, sliding, scale = inputs
+    finite = True
+    bad = 0
+    for i in range(x_block.shape[0]):
+        s = lo + i
+        x = x_block[i]
+        output = c[s] * x
+        if now_out:
+            output = output + feed_now[s] * now
+        if prev_out:
+            output = output + feed_prev[s] * previous
+        finite &= np.isfinite(output)
+        value = (0.0 if missing else abs(output - y_e)) * scale
+        error[i] = value
+        total[i] = total[i] + value
+        if advance:
+            x = phi[s] * x
+            if now_state:
+                x = x + gamma_now[s] * now
+            if prev_state:
+                x = x + gamma_prev[s] * previous
+            x_block[i] = x if abs(x) >= FLUSH_BELOW else 0.0
+        if sliding:
+            high[i], low[i] = _slide(high[i], low[i], value, leaving[i])
+            leaving[i] = value
+            window[i] = high[i] + low[i]
+            bad += not np.isfinite(window[i])
+    return finite, bad
+
+
+@_jit
+def _fused_step(tables, sources, upcoming, output, error, padded_input, delays, y, e, scale, total):
+    """Step e of a fused block: its scaled errors into ``error``, added to ``total``; the states advanced.
+
+    The arithmetic of :func:`simulate_errors`, on block-local arrays.
+    Returns the first sample (in the block) whose output is not finite, or -1.
+    """
+    output_coefficients, state_coefficients, output_terms, state_terms = tables
+    n_states, width = upcoming.shape
+    _delayed_inputs(sources[n_states], sources[n_states + 1], padded_input, delays, e, 0, width)
+    _combine(output, output_coefficients, output_terms, sources, 0, width)
+    _absolute_errors(error, output, y[e], 0, width)
+    bad = -1
+    for s in range(width):
+        if not np.isfinite(output[s]):
+            bad = s
+            break
+    if e != y.shape[0] - 1:  # not advanced past the record's last step, where it could only overflow
+        for i in range(n_states):
+            _combine(upcoming[i], state_coefficients[i], state_terms[i], sources, 0, width)
+        for i in range(n_states):
+            for s in range(width):
+                x = upcoming[i, s]
+                sources[i, s] = x if abs(x) >= FLUSH_BELOW else 0.0
+    for s in range(width):
+        error[s] = error[s] * scale
+        total[s] = total[s] + error[s]
+    return bad
+
+
+@_jit
+def _fused_sums(ring, lo, hi, e, first_end, error, high, low, sums):
+    """Step e's ``error`` of samples [lo, hi) into the ring and the window sums ending at e (see the caller)."""
+    width = hi - lo
+    slots = ring.shape[0]
+    leaving = ring[e % slots, lo:hi]
+    if e == first_end:
+        # The first window is summed afresh, step by step from the oldest, as _first_window sums it.
+        high[:] = 0.0
+        low[:] = 0.0
+        for j in range(1, slots):
+            row = ring[(e + j) % slots, lo:hi]
+            for s in range(width):
+                high[s], carried = _two_sum(high[s], row[s])
+                low[s] += carried
+        for s in range(width):
+            high[s], carried = _two_sum(high[s], error[s])
+            low[s] += carried
+    elif e > first_end:
+        for s in range(width):
+            high[s], low[s] = _slide(high[s], low[s], error[s], leaving[s])
+    for s in range(width):
+        leaving[s] = error[s]  # the ring now holds the window ending at e
+    if e >= first_end:
+        _round_sums(ring[:, lo:hi], (e + 1) % slots, slots, slots, high, low, sums[e - first_end, lo:hi])
 
 
 @_jit
@@ -308,48 +655,57 @@ def _select(values, length, k):
 def _candidates(cost, first, stride, count, bound, candidates):
     """Indices (ascending) of the samples first, first + stride, ... whose cost is at or below ``bound``.
 
-    Written into ``candidates``; returns how many. ``bound`` is a guess of
+    Written into ``candidates`` = (indices, their costs); returns how many. ``bound`` is a guess of
     the count-th smallest of these costs (the previous window's): when at
     least ``count`` costs lie at or below it, the behavioural set is among
     them; otherwise (or when ``bound`` is NaN) every one of the samples is
     a candidate.
     """
     n = cost.shape[0]
+    indices, costs = candidates
     found = 0
     if bound == bound:  # not NaN
         # Branch-free: every index is written, and kept (by counting it) when its cost is at or below the bound.
         for s in range(first, n, stride):
-            candidates[found] = s
+            indices[found] = s
+            costs[found] = cost[s]
             found += cost[s] <= bound
     if found < count:
         found = 0
         for s in range(first, n, stride):
-            candidates[found] = s
+            indices[found] = s
+            costs[found] = cost[s]
             found += 1
     return found
 
 
 @_jit
-def _behavioural(cost, count, candidates, found, scratch, selected):
-    """Indices (ascending) of the first ``count`` of a stable ascending sort of ``cost``, into ``selected``.
+def _behavioural(count, candidates, found, scratch, selected):
+    """Indices (ascending) of the first ``count`` of a stable ascending sort of the costs, into ``selected``.
 
-    ``candidates[:found]`` (ascending) hold every index of the count
-    lowest costs and of any cost tied with the count-th (what
-    :func:`_candidates` gives); only they are searched. Returns the
+    ``candidates`` = (indices, costs): ``indices[:found]`` (ascending) hold
+    every index of the count lowest costs and of any cost tied with the
+    count-th (what :func:`_candidates` gives), ``costs`` theirs, side by side
+    so that they are read in order; only they are searched. Returns the
     count-th smallest cost.
     """
-    for i in range(found):
-        scratch[i] = cost[candidates[i]]
-    threshold = _select(scratch, found, count - 1)
+    indices, costs = candidates
+    if found - count < _FEW:  # a batch's few spare candidates: the threshold is among their largest costs
+        for i in range(found):
+            _keep(scratch, found - count + 1, i, costs[i], True)
+        threshold = scratch[found - count]
+    else:
+        for i in range(found):
+            scratch[i] = costs[i]
+        threshold = _select(scratch, found, count - 1)
     below = 0
     for i in range(found):
-        if cost[candidates[i]] < threshold:
-            below += 1
+        below += costs[i] < threshold
     ties = count - below
     taken = 0
     for i in range(found):
-        s = candidates[i]
-        value = cost[s]
+        s = indices[i]
+        value = costs[i]
         if value < threshold or (value == threshold and ties > 0):
             if value == threshold:
                 ties -= 1
@@ -359,26 +715,46 @@ def _behavioural(cost, count, candidates, found, scratch, selected):
 
 
 @_jit
-def _quantile_cost(cost, position, bound, scratch):
-    """The ``position``-th smallest of ``cost`` (0-based), searched among the costs at or above ``bound``.
+def _scan_costs(sums, present, cost, bound, upper_bound, candidates, upper_values):
+    """The window's costs from its sums, and in the same pass the candidates of its behavioural set and quantile.
 
-    ``bound`` is a guess a little below it (from the previous window): when
-    at most ``position`` costs lie below it, the answer is the
-    (position - below)-th smallest of the others; otherwise, or when
-    ``bound`` is NaN, all costs are searched. ``scratch`` is overwritten.
+    ``cost`` = (sums / present)^2. ``candidates`` receives the indices
+    (ascending) and costs of those at or below ``bound`` (see :func:`_candidates`)
+    and ``upper_values`` the costs at or above ``upper_bound`` (see
+    :func:`_quantile_cost`); returns how many of each. A NaN bound keeps none.
+    """
+    indices, costs = candidates
+    found = 0
+    above = 0
+    # Branch-free: every slot is written, and kept (by counting it) when it qualifies.
+    for s in range(cost.shape[0]):
+        mae = sums[s] / present
+        value = mae * mae
+        cost[s] = value
+        indices[found] = s
+        costs[found] = value
+        found += value <= bound
+        upper_values[above] = value
+        above += value >= upper_bound
+    return found, above
+
+
+@_jit
+def _quantile_cost(cost, position, upper_values, above):
+    """The ``position``-th smallest of ``cost`` (0-based), from the ``above`` costs :func:`_scan_costs` kept.
+
+    Those are the costs at or above a guess a little below the answer (from
+    the previous window): when at most ``position`` costs lie below it, the
+    answer is the (position - below)-th smallest of them; otherwise, or when
+    none was kept, all costs are searched. ``upper_values`` is overwritten.
     """
     n = cost.shape[0]
-    found = 0
-    if bound == bound:  # not NaN
-        for s in range(n):  # branch-free, as in _candidates
-            scratch[found] = cost[s]
-            found += cost[s] >= bound
-    below = n - found
-    if below > position or found == 0:
+    below = n - above
+    if below > position or above == 0:
         for s in range(n):
-            scratch[s] = cost[s]
-        return _select(scratch, n, position)
-    return _select(scratch, found, position - below)
+            upper_values[s] = cost[s]
+        return _select(upper_values, n, position)
+    return _select(upper_values, above, position - below)
 
 
 @_jit
@@ -417,29 +793,115 @@ def _stable_argsort(values, length, order, buffer):
 
 
 @_jit
-def _window_sums(errors, measured, t, slots, total):
-    """``total[s]`` = the errors of sample s over window t, summed left to right; returns its measured points."""
+def _two_sum(a, b):
+    """``a + b`` rounded, and its rounding error exactly (Knuth's TwoSum): the two add up to a + b exactly."""
+    total = a + b
+    virtual = total - a
+    return total, (a - (total - virtual)) + (b - virtual)
+
+
+@_jit
+def _slide(high, low, entering, leaving):
+    """The compensated window sum (``high``, ``low``) with one step entering and one leaving."""
+    high, first = _two_sum(high, entering)
+    high, second = _two_sum(high, -leaving)
+    return high, low + (first + second)
+
+
+@_jit
+def _window_sum(rows, first, period, slots, s):
+    """Sample s's compensated sum of ``slots`` rows from ``first`` (row indices modulo ``period``), as (high, low).
+
+    Left to right, each step as :func:`_first_window` adds it. A window
+    holding an infinite (or NaN) error has no compensated sum: its plain sum
+    is returned, as (inf or NaN, 0), which is what a left-to-right sum gives.
+    """
+    high, low = 0.0, 0.0
+    for j in range(slots):
+        high, error = _two_sum(high, rows[(first + j) % period, s])
+        low += error
+    if np.isfinite(high + low):
+        return high, low
+    plain = 0.0
+    for j in range(slots):
+        plain += rows[(first + j) % period, s]
+    return plain, 0.0
+
+
+@_jit
+def _window_sums(rows, measured, t, slots, present, running):
+    """Window t's error sums and measured points: row t of given sums (``slots`` = 0), or the running sums.
+
+    ``running`` = (high, low, total) carries the running sums from window
+    t - 1 (``present`` its measured points); ``total`` receives window t's.
+    """
+    high, low, total = running
+    if slots == 0:
+        return rows[t], measured[t]
+    if t == 0:
+        return total, _first_window(rows, measured, slots, high, low, total)
+    return total, _next_window(rows, measured, t, slots, present, high, low, total)
+
+
+@_jit
+def _first_window(errors, measured, slots, high, low, total):
+    """Window 0's sums from its rows: ``total`` = high + low, each a compensated sum; returns its measured points."""
     n_samples = errors.shape[1]
-    present = measured[t]
-    for s in range(n_samples):
-        total[s] = errors[t, s]
-    for shift in range(1, slots):
-        present += measured[t + shift]
-        row = errors[t + shift]
+    present = 0.0
+    high[:] = 0.0
+    low[:] = 0.0
+    for j in range(slots):
+        present += measured[j]
+        row = errors[j]
         for s in range(n_samples):
-            total[s] += row[s]
+            high[s], error = _two_sum(high[s], row[s])
+            low[s] += error
+    _round_sums(errors, 0, errors.shape[0], slots, high, low, total)
     return present
+
+
+@_jit
+def _next_window(errors, measured, t, slots, present, high, low, total):
+    """Window t's sums from window t - 1's: its last row enters, row t - 1 leaves; returns its measured points."""
+    n_samples = errors.shape[1]
+    entering, leaving = errors[t + slots - 1], errors[t - 1]
+    for s in range(n_samples):
+        high[s], low[s] = _slide(high[s], low[s], entering[s], leaving[s])
+    _round_sums(errors, t, errors.shape[0], slots, high, low, total)
+    return present + measured[t + slots - 1] - measured[t - 1]
+
+
+@_jit
+def _round_sums(rows, first, period, slots, high, low, total):
+    """``total`` = high + low, rounded once; a sum gone non-finite is redone from the window's rows.
+
+    An infinite error entering makes the compensation NaN, and one leaving
+    would leave inf - inf: such a sample's window (rows ``first`` ..
+    ``first + slots - 1`` modulo ``period``) is summed afresh by
+    :func:`_window_sum`, every window until the infinity has left.
+    """
+    n_samples = total.shape[0]
+    bad = 0
+    for s in range(n_samples):
+        total[s] = high[s] + low[s]
+        bad += not np.isfinite(total[s])
+    if bad:
+        for s in range(n_samples):
+            if not np.isfinite(total[s]):
+                high[s], low[s] = _window_sum(rows, first, period, slots, s)
+                total[s] = high[s] + low[s]
 
 
 @_jit
 def _read_off(cost, count, candidates, found, rules, positions, t, ic, ci, median, gradient, whole, work):
     """Behavioural set of one window's ``cost`` and what it gives: ``ic``, ``ci``, ``median`` and ``gradient`` at t.
 
-    The set is searched among ``candidates[:found]`` (see
-    :func:`_behavioural`), indices of ``cost`` and of the columns of
-    ``columns``: a batch of samples is read off through candidates that are
-    its members only. Without ``whole`` (a batch's read-off, whose IC and
-    limits alone are used) the gradient and the median are left alone. The
+    The set is searched among the first ``found`` of ``candidates`` =
+    (indices, costs) (see :func:`_behavioural`), indices of ``cost`` and of
+    the columns of ``columns``: a batch of samples is read off through
+    candidates that are its members only. Without ``whole`` (a batch's
+    read-off, whose IC and limits alone are used) the gradient, the median
+    and, for the thesis limits, the likelihoods are left alone. The
     median is read off as the limits are: the first sorted value whose CLD
     reaches 0.5 (``weighted``), or the value at sorted position
     ``(count - 1) // 2``, which is ``floor(0.5 (count - 1))``.
@@ -451,8 +913,9 @@ def _read_off(cost, count, candidates, found, rules, positions, t, ic, ci, media
     columns, lows, highs, bins, levels, weighted = rules
     scratch, selected, weights, values, order, buffer = work
     n_params = columns.shape[0]
-    threshold = _behavioural(cost, count, candidates, found, scratch, selected)
-    smallest = _likelihood_weights(cost, count, selected, weights)
+    threshold = _behavioural(count, candidates, found, scratch, selected)
+    # A batch's thesis limits are order statistics alone: its likelihoods are never used.
+    smallest = _likelihood_weights(cost, count, selected, weights) if whole or weighted else np.nan
     for p in range(n_params):
         low, high = lows[p], highs[p]
         for i in range(count):
@@ -466,10 +929,9 @@ def _read_off(cost, count, candidates, found, rules, positions, t, ic, ci, media
             if whole:
                 median[p, t] = _cld_read_off(values, weights, order, count, 0.5)
         else:
-            for side in range(2):
-                ci[p, t, side] = _order_statistic(values, count, positions[side], scratch)
+            ci[p, t, 0], ci[p, t, 1], middle = _order_statistics(values, count, positions, whole, scratch)
             if whole:
-                median[p, t] = _order_statistic(values, count, (count - 1) // 2, scratch)
+                median[p, t] = middle
         ic[p, t] = 1 - (ci[p, t, 1] - ci[p, t, 0]) / (high - low)
     return threshold, smallest
 
@@ -526,12 +988,70 @@ def _cld_read_off(values, weights, order, count, level):
     return values[order[min(reached, count - 1)]]
 
 
+# Order statistics this close to either end (a batch's limits: the 3rd smallest and 4th largest of 50 at 90 %)
+# are kept in a short sorted buffer in one pass, cheaper than a selection's unpredictable branches.
+_FEW = 12
+
+
 @_jit
-def _order_statistic(values, count, k, scratch):
-    """The k-th smallest of ``values[:count]`` (0-based), found in ``scratch`` so that ``values`` stays as it is."""
+def _keep(buffer, size, seen, value, larger):
+    """Insert ``value``, the ``seen``-th value met, into ``buffer[:size]``: the smallest met so far, ascending.
+
+    With ``larger`` the largest met so far, descending. Returns nothing; the
+    value is dropped when the buffer is full and it would come last.
+    """
+    if seen < size or (value > buffer[size - 1] if larger else value < buffer[size - 1]):
+        j = min(seen, size - 1) - 1
+        while j >= 0 and (buffer[j] < value if larger else buffer[j] > value):
+            buffer[j + 1] = buffer[j]
+            j -= 1
+        buffer[j + 1] = value
+
+
+@_jit
+def _extreme_order_statistics(values, count, first, last, scratch):
+    """The ``first``-th smallest and ``last``-th smallest of ``values[:count]``, both within ``_FEW`` of an end.
+
+    One pass keeps the first + 1 smallest values (ascending, in
+    ``scratch[:first + 1]``) and the count - last largest (descending, after
+    them); returns (lower, upper, NaN) as :func:`_order_statistics` does.
+    """
+    small, large = first + 1, count - last
+    low = scratch[:small]
+    high = scratch[small : small + large]
+    for i in range(count):
+        _keep(low, small, i, values[i], False)
+        _keep(high, large, i, values[i], True)
+    return low[small - 1], high[large - 1], np.nan
+
+
+@_jit
+def _order_statistics(values, count, positions, with_median, scratch):
+    """The ``positions[0]``-th and ``positions[1]``-th smallest of ``values[:count]``, and the median's if asked.
+
+    The median's position is ``(count - 1) // 2``, between the two (NaN when
+    not asked). Found in one copy, ``scratch``, so that ``values`` stays as
+    it is: :func:`_select` leaves nothing larger before its answer and
+    nothing smaller after, so the upper is searched after the lower only, and
+    the median between the two.
+    """
+    first, last = positions[0], positions[1]
+    if not with_median and first < _FEW and count - 1 - last < _FEW:
+        return _extreme_order_statistics(values, count, first, last, scratch)
     for i in range(count):
         scratch[i] = values[i]
-    return _select(scratch, count, k)
+    lower = _select(scratch, count, first)
+    upper = lower if last == first else _select(scratch[first + 1 :], count - first - 1, last - first - 1)
+    middle = np.nan
+    if with_median:
+        k = (count - 1) // 2
+        if k == first:
+            middle = lower
+        elif k == last:
+            middle = upper
+        else:
+            middle = _select(scratch[first + 1 : last], last - first - 1, k - first - 1)
+    return lower, upper, middle
 
 
 @_jit
@@ -557,7 +1077,7 @@ def _next_quantile_bound(cost):
 
 @_jit
 def analyse_windows_batched(
-    errors,
+    rows,
     measured,
     m,
     slots,
@@ -588,35 +1108,39 @@ def analyse_windows_batched(
     and ``batch_positions[b]`` (2,) its thesis limits' positions. Writes
     ``batch_ic`` (B, n_params, m) and ``batch_ci`` (B, n_params, m, 2), each
     batch bit-identical to :func:`analyse_windows` on that batch's samples
-    alone; the window sums are formed once for all.
+    alone (a sample's window sums do not depend on the others'); the window
+    sums are formed once for all, and one pass over each window's costs finds
+    the candidates of the behavioural set (the batches' among them) and of
+    the noise floor's quantile.
     """
-    n_samples = errors.shape[1]
+    n_samples = rows.shape[1]
     n_batches = batch_counts.shape[0]
-    total = np.empty(n_samples)
-    candidates = np.empty(n_samples, dtype=np.int64)
+    total, cost, upper_values = np.empty(n_samples), np.empty(n_samples), np.empty(n_samples)
+    high, low = np.empty(n_samples), np.empty(n_samples)
+    candidates = (np.empty(n_samples, dtype=np.int64), np.empty(n_samples))
     rules = (columns, lows, highs, bins, levels, weighted)
     work = _workspace(n_samples, count)
-    scratch = work[0]
     bound = np.nan
     upper_bound = np.nan
     batch_bounds = np.full(n_batches, np.nan)
     batch_of = _batch_of(n_samples, n_batches)
-    batch_candidates = np.empty((n_batches, (n_samples + n_batches - 1) // max(n_batches, 1)), dtype=np.int64)
+    batch_size = (n_samples + n_batches - 1) // max(n_batches, 1)
+    batch_candidates = (np.empty((n_batches, batch_size), dtype=np.int64), np.empty((n_batches, batch_size)))
     batch_found = np.empty(n_batches, dtype=np.int64)
+    present = 0.0
     for t in range(m):
-        present = _window_sums(errors, measured, t, slots, total)
+        sums, present = _window_sums(rows, measured, t, slots, present, (high, low, total))
         if present < min_points:
             _blank_window(t, ic, ci, median, gradient, extreme_costs, batch_ic, batch_ci)
             continue
-        for s in range(n_samples):
-            mae = total[s] / present
-            total[s] = mae * mae
-        found = _candidates(total, 0, 1, count, bound, candidates)
+        found, above = _scan_costs(sums, present, cost, bound, upper_bound, candidates, upper_values)
+        if found < count:
+            found = _candidates(cost, 0, 1, count, np.nan, candidates)
         threshold, smallest = _read_off(
-            total, count, candidates, found, rules, positions, t, ic, ci, median, gradient, True, work
+            cost, count, candidates, found, rules, positions, t, ic, ci, median, gradient, True, work
         )
         bound = _next_bound(threshold)
-        upper = _quantile_cost(total, upper_position, upper_bound, scratch)
+        upper = _quantile_cost(cost, upper_position, upper_values, above)
         upper_bound = _next_quantile_bound(upper)
         extreme_costs[0, t] = smallest
         extreme_costs[1, t] = threshold
@@ -625,11 +1149,11 @@ def analyse_windows_batched(
             continue
         _deal_candidates(candidates, found, batch_of, batch_candidates, batch_found)
         for b in range(n_batches):
-            members = batch_candidates[b]
+            members = (batch_candidates[0][b], batch_candidates[1][b])
             if batch_found[b] < batch_counts[b]:
-                batch_found[b] = _candidates(total, b, n_batches, batch_counts[b], batch_bounds[b], members)
+                batch_found[b] = _candidates(cost, b, n_batches, batch_counts[b], batch_bounds[b], members)
             threshold, _ = _read_off(
-                total,
+                cost,
                 batch_counts[b],
                 members,
                 batch_found[b],
@@ -689,24 +1213,27 @@ def _blank_window(t, ic, ci, median, gradient, extreme_costs, batch_ic, batch_ci
 
 @_jit
 def _deal_candidates(candidates, found, batch_of, batch_candidates, batch_found):
-    """Deal the population's ``candidates[:found]`` to their batches: row b of ``batch_candidates``, ascending.
+    """Deal the population's ``candidates`` (indices, costs) to their batches: row b of ``batch_candidates``'s.
 
     The population's candidates are every cost at or below its bound: a batch
     with at least its count among them has its behavioural set and every tie
     there; one with fewer searches its members against its own bound, and all
     of them if that finds too few.
     """
+    indices, costs = candidates
+    batch_indices, batch_costs = batch_candidates
     batch_found[:] = 0
     for i in range(found):
-        s = candidates[i]
+        s = indices[i]
         b = batch_of[s]
-        batch_candidates[b, batch_found[b]] = s
+        batch_indices[b, batch_found[b]] = s
+        batch_costs[b, batch_found[b]] = costs[i]
         batch_found[b] += 1
 
 
 @_jit
 def analyse_windows(
-    errors,
+    rows,
     measured,
     m,
     slots,
@@ -728,8 +1255,13 @@ def analyse_windows(
 ):
     """Analyse the m windows of a block; see :mod:`dynia.engine` for the method.
 
-    ``errors`` (m + slots - 1, n_samples) and ``measured`` (m + slots - 1,)
-    come from the window inputs (row j + t belongs to slot j of window t).
+    ``rows`` (m + slots - 1, n_samples) and ``measured`` (m + slots - 1,)
+    are the absolute errors and measured-point flags of the window inputs
+    (row j + t belongs to slot j of window t), whose window sums are formed
+    here by running sums (see the module documentation). With ``slots`` = 0
+    they are the window sums themselves, ``rows`` (m, n_samples) (from
+    :meth:`CompiledErrors.window_sums`), and each window's measured points
+    ``measured`` (m,).
     ``positions`` are the thesis limits' sorted positions, ``levels`` the
     weighted limits' CLD levels. Writes ``ic`` (n_params, m), ``ci``
     (n_params, m, 2), ``median`` (n_params, m), the CLD median read off as
@@ -741,7 +1273,7 @@ def analyse_windows(
     """
     n_params = columns.shape[0]
     analyse_windows_batched(
-        errors,
+        rows,
         measured,
         m,
         slots,
@@ -770,6 +1302,10 @@ def analyse_windows(
 class CompiledErrors:
     """Absolute errors of a model's simulations, computed block by block by :func:`simulate_errors`.
 
+    Or, fused, the window sums the errors make (:meth:`window_sums`, by
+    :func:`simulate_window_sums`): what the engine's windows pass takes
+    (``fused`` is True), so that no error matrix goes through memory.
+
     A source for :func:`dynia.engine.windows.analyse_stream`: ``rows(start,
     stop)`` returns the time-major errors (stop - start, n_samples);
     requests must move forward in time, and the rows before a request are
@@ -786,6 +1322,8 @@ class CompiledErrors:
     x0 : {"zero", "steady"}
     workers : int
     """
+
+    fused = True
 
     def __init__(self, model, params, u, y, *, dt, x0, workers):
         from concurrent.futures import ThreadPoolExecutor
@@ -817,6 +1355,8 @@ class CompiledErrors:
         self._delays = np.ascontiguousarray(delays[:1] if np.all(delays == delays[0]) else delays, dtype=np.int64)
         self._start = 0
         self._buffer = np.zeros((0, n_samples))
+        self._ring = None  # the last window's errors, once window_sums runs
+        self._next = 0
         self._workers = max(1, min(workers, n_samples))
         self._pool = ThreadPoolExecutor(max_workers=self._workers) if self._workers > 1 else None
         edges = np.linspace(0, n_samples, self._workers + 1).astype(int)
@@ -824,6 +1364,8 @@ class CompiledErrors:
 
     def rows(self, start, stop):
         """Errors for times [start, stop), shape (stop - start, n_samples)."""
+        if self._ring is not None:
+            raise SettingsError("rows were requested after window sums; a source gives one or the other")
         if start < self._start:
             raise SettingsError(
                 f"rows from step {start} were requested after rows from step {self._start}; "
@@ -861,15 +1403,81 @@ class CompiledErrors:
                 *sample_range,
             )
 
+        self._raise_on_overflow(self._run(block))
+        return errors
+
+    def window_sums(self, start, stop, halos, totals, scale=1.0):
+        """The sums of the errors over the windows at steps [start, stop), fused with the simulation; no error rows.
+
+        ``halos`` = (before, after), the steps a window reaches back and
+        ahead (:func:`dynia.engine.windows.window_halos`); errors are
+        multiplied by ``scale`` first and each simulated step's added to
+        ``totals`` (n_samples,), in time order. Requests must come chunk
+        after chunk from step 0, and not mixed with :meth:`rows`. Returns the
+        sums (stop - start, n_samples), time-major, equal bit for bit to
+        what :func:`analyse_windows` forms from the error rows, and each
+        window's measured points (stop - start,). Memory: the sums and the
+        last ``before + after + 1`` steps' errors.
+        """
+        before, after = halos
+        n_steps = self.y.shape[0]
+        if self._ring is None:
+            self._ring = np.zeros((before + after + 1, self._n_samples))
+            self._next = 0
+        if start != self._next or self._start or self._buffer.shape[0]:
+            raise SettingsError(
+                f"window sums from step {start} were requested after the windows up to step {self._next}; "
+                "requests must come chunk after chunk, and not after rows"
+            )
+        system = self._system
+        sums = np.empty((stop - start, self._n_samples))
+        steps = np.array([start + after if start else 0, stop + after], dtype=np.int64)
+
+        def block(sample_range):
+            return simulate_window_sums(
+                system.phi,
+                system.gamma_now,
+                system.gamma_prev,
+                system.c,
+                system.feed_now,
+                system.feed_prev,
+                self._delays,
+                self._state_terms,
+                self._output_terms,
+                self._padded_input,
+                self.y,
+                scale,
+                steps,
+                start + after,
+                self._state,
+                self._ring,
+                sums,
+                totals,
+                *sample_range,
+            )
+
+        self._raise_on_overflow(self._run(block))
+        self._next = stop
+        # A window's measured points: differences of the running count of measured steps.
+        lo, hi = max(start - before, 0), min(stop + after, n_steps)
+        counted = np.zeros(stop - start + before + after + 1)
+        counted[lo - (start - before) + 1 : hi - (start - before) + 1] = ~np.isnan(self.y[lo:hi])
+        counted = np.cumsum(counted)
+        slots = before + after + 1
+        return sums, counted[slots : slots + stop - start] - counted[: stop - start]
+
+    def _run(self, block):
+        """``block(sample_range)`` for every worker's range of samples, on the pool; their outcomes."""
         if self._pool is None:
-            outcomes = [block(self._sample_ranges[0])]
-        else:
-            outcomes = list(self._pool.map(block, self._sample_ranges))
+            return [block(self._sample_ranges[0])]
+        return list(self._pool.map(block, self._sample_ranges))
+
+    @staticmethod
+    def _raise_on_overflow(outcomes):
         for step, sample in outcomes:
             if step >= 0:
                 which = f"sample {sample}" if sample >= 0 else "a sample"
                 raise ModelError(f"the simulation of {which} is not finite at step {step}")
-        return errors
 
     def close(self):
         if self._pool is not None:
@@ -884,5 +1492,6 @@ def compiled():
     changes); which of the two, only numba finds out.
     """
     return AVAILABLE and any(
-        kernel.signatures for kernel in (simulate_errors, analyse_windows, analyse_windows_batched)
+        kernel.signatures
+        for kernel in (simulate_errors, simulate_window_sums, analyse_windows, analyse_windows_batched)
     )

@@ -25,10 +25,14 @@ Time is processed in chunks, so memory grows with n_samples x chunk, never
 with n_samples x n_steps; :func:`dynia.run` streams the simulation into the
 same chunks, so the (n_samples, n_steps) matrix is never built.
 
-Window sums are accumulated left to right over the window's points, so two
-parameter sets whose errors agree inside a window get bit-identical costs
-(ties stay ties, whatever came before the window), and ties are ranked by
-sample index, exactly as the thesis's stable sort does.
+On numpy (:func:`window_mean`) window sums are accumulated left to right
+over the window's points, so two parameter sets whose errors agree inside a
+window get bit-identical costs (ties stay ties, whatever came before the
+window), and ties are ranked by sample index, exactly as the thesis's
+stable sort does. The compiled engine keeps compensated running sums
+instead, which cost the same for any n and are within rounding of these;
+see :mod:`dynia.engine.kernels` for how close, and the contract between
+the two engines.
 
 Flavours
 --------
@@ -219,8 +223,10 @@ def moving_window(
         trailing result at t equals the centred one at t-n wherever the
         centred window is not truncated by the end of the record.
     engine : {"auto", "numba", "numpy"}, default "auto"
-        The compiled kernels of :mod:`dynia.engine.kernels` or plain numpy; both give
-        bit-identical results. "auto" takes numba when it is installed and
+        The compiled kernels of :mod:`dynia.engine.kernels` or plain numpy; their
+        costs agree to rounding and their IC, limits and median are identical
+        wherever a window's behavioural set is (see that module).
+        "auto" takes numba when it is installed and
         the flavour is "thesis" or "weighted" without ``weights`` (the
         other cases always run on numpy).
     ic_error : bool, default False
@@ -588,7 +594,12 @@ def _windows_pass(errors, flavour_impl, compiled, output, settings, halos, chunk
     overflowed = np.zeros(n_steps, dtype=bool)
     workers = 1 if settings.flavour == "mcat" else settings.workers or _checks.default_workers()
 
+    # A source that forms the window sums itself (the built-in linear models, compiled) hands over no error rows.
+    fused = compiled and getattr(errors, "fused", False)
+
     def analyse_chunk(start, stop, window_errors, measured):
+        if fused:
+            return start, stop, flavour_impl.analyse_sums(window_errors, measured)
         if compiled:
             return start, stop, flavour_impl.analyse_rows(window_errors, measured, stop - start, slots)
         mae, present = window_mean(window_errors, measured, stop - start, slots)
@@ -614,13 +625,16 @@ def _windows_pass(errors, flavour_impl, compiled, output, settings, halos, chunk
         pending = deque()
         for start in starts:
             stop = min(start + chunk_steps, n_steps)
-            inputs = window_inputs(errors, start, stop, before, after, n_steps, time_major=compiled)
-            own = (
-                inputs[0][before : before + stop - start]
-                if compiled
-                else inputs[0][:, before : before + stop - start].T
-            )
-            add_record_errors(totals, own)
+            if fused:
+                inputs = errors.window_sums(start, stop, (before, after), totals)
+            else:
+                inputs = window_inputs(errors, start, stop, before, after, n_steps, time_major=compiled)
+                own = (
+                    inputs[0][before : before + stop - start]
+                    if compiled
+                    else inputs[0][:, before : before + stop - start].T
+                )
+                add_record_errors(totals, own)
             pending.append(pool.submit(analyse_chunk, start, stop, *inputs))
             while len(pending) > workers:  # bounds the chunks held in memory
                 write(pending.popleft())
@@ -723,15 +737,20 @@ def error_scale(y):
 
 
 class ScaledErrors:
-    """An error source (``rows``, and ``columns`` where it has them) whose errors are multiplied by ``scale``."""
+    """An error source (``rows``; ``columns`` or ``window_sums`` where it has them), errors times ``scale``."""
 
     def __init__(self, errors, scale):
         self.y = errors.y
         self.scale = scale
         self._errors = errors
+        self.fused = getattr(errors, "fused", False)
 
     def rows(self, start, stop):
         return self._errors.rows(start, stop) * self.scale
+
+    def window_sums(self, start, stop, halos, totals, scale=1.0):
+        """The fused source's window sums (see ``CompiledErrors.window_sums``), its errors scaled."""
+        return self._errors.window_sums(start, stop, halos, totals, scale * self.scale)
 
     def columns(self, start, stop):
         return self._errors.columns(start, stop) * self.scale
