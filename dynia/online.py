@@ -7,8 +7,10 @@ this with a window that ends at the newest step: the window at step ``t``
 holds steps ``t-2n .. t`` (clipped to the start of the record), the
 ``window="trailing"`` of :func:`dynia.engine.moving_window`. Its result for
 step ``t`` is therefore final as soon as step ``t`` is logged, and the whole
-history equals the batch analysis ``dynia.run(..., window="trailing")`` on
-the same record and seed, bit for bit.
+history equals the batch analysis ``dynia.run(..., window="trailing",
+engine="numpy")`` on the same record and seed, bit for bit: both sum each
+window left to right. The compiled engine's running sums agree with them to
+rounding (the contract of :mod:`dynia.engine.kernels`).
 
 Shapes follow the package convention (see :mod:`dynia.engine`); one update
 gives one time step of it: ``ic`` (n_params,), ``ci`` (n_params, 2) as

@@ -136,7 +136,9 @@ def run(
         as :class:`dynia.online.OnlineDynia` sees it).
     engine : {"auto", "numba", "numpy"}, default "auto"
         As :func:`dynia.engine.moving_window`; the compiled engine also
-        simulates the model in compiled code. Results are bit-identical.
+        simulates the model in compiled code. The two agree to rounding in
+        the costs, and exactly wherever a window's behavioural set is the
+        same (:mod:`dynia.engine.kernels`).
     workers : int, optional
         Threads (default: every core). Results do not depend on it.
     ic_error : bool, default False

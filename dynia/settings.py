@@ -211,7 +211,7 @@ class AnalysisSettings:
         steps up to the step, as an online analysis sees them).
     engine : {"auto", "numba", "numpy"}, default "auto"
         The compiled kernels (numba), plain numpy, or numba where it can;
-        results agree.
+        results agree to rounding (:mod:`dynia.engine.kernels`).
     workers : int or None, default None
         Threads (None: every core), at most :data:`MAX_WORKERS`. Results do
         not depend on it.

@@ -258,7 +258,9 @@ def quantile_position(n_samples):
     """0-based sorted position of the MAE at population quantile :data:`NOISE_FLOOR_QUANTILE` among ``n_samples``.
 
     ``floor(0.9 (n_samples - 1))``: every engine reads the same order
-    statistic, so their floors agree bit for bit.
+    statistic of its costs, so their floors agree as the costs do (bit for
+    bit between runs of one engine, to rounding between the numpy and the
+    compiled engine, :mod:`dynia.engine.kernels`).
 
     Examples
     --------
