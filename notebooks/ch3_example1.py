@@ -226,20 +226,32 @@ print("mean IC of T after the final step (405-440), first and second run:",
 #
 # The same analysis through the one-to-one port of the thesis's MATLAB
 # (`dynia.thesis.moving_window_calcs`, one parameter at a time, plain loops) gives
-# the same information content and limits as the engine, to the last bit, on
-# the same simulations.
+# the same information content and limits as the engine on numpy, to the last
+# bit, on the same simulations: both sum each window left to right. The
+# compiled engine (the default where numba is installed) keeps running sums
+# that are within rounding of those, so it agrees wherever a window's
+# behavioural set is the same. Where it is not, hundreds of sets tie within
+# rounding: after the record's last step (from about step 436) their
+# simulations have decayed to within a rounding of each other, so their costs
+# tie to the last bit on one engine and not on the other, which then keeps
+# other members of the tie, and the band moves a little. The printed lines say
+# how many windows and by how much.
 
 # %%
 # NBVAL_CHECK_OUTPUT
 if compare_with_port:
     sims = model.simulate(engine_first.samples, u)
-    engine = dynia.moving_window(y, sims, engine_first.samples, engine_first.bounds, n=n, percentage=percentage,
-                                 bins=bins)
+    options = dict(n=n, percentage=percentage, bins=bins)
+    engine = dynia.moving_window(y, sims, engine_first.samples, engine_first.bounds, engine="numpy", **options)
+    compiled = dynia.moving_window(y, sims, engine_first.samples, engine_first.bounds, engine="auto", **options)
     for p, name in enumerate(engine_first.names):
         IC, CI_t, _ = dynia.thesis.moving_window_calcs(u.size, engine_first.samples[:, p], 0.0, prior_high,
                                                        n_samples, sims, y, bins, percentage, n)
-        print(f"{name}: port and engine IC identical: {np.array_equal(IC, engine.ic[p])}, "
-              f"limits identical: {np.array_equal(CI_t, engine.ci[p])}")
+        same = compiled.ic[p] == engine.ic[p]
+        print(f"{name}: port and numpy engine IC identical: {np.array_equal(IC, engine.ic[p])}, "
+              f"limits identical: {np.array_equal(CI_t, engine.ci[p])}; compiled engine's IC identical in "
+              f"{same.sum()} of {same.size} windows, elsewhere within {np.abs(compiled.ic[p] - engine.ic[p]).max():.2f}"
+              + (f" (steps {np.flatnonzero(~same).min()}-{np.flatnonzero(~same).max()})" if not same.all() else ""))
 
 
 # %% [markdown]
