@@ -37,7 +37,7 @@ numpydoc_show_class_members = False
 # downloads their inventories (no network), so they cannot resolve here.
 nitpick_ignore_regex = [
     (r"py:.*", r"(numpy|np|xarray|xr|pandas|pd|matplotlib|scipy|control|dask|distributed|numba)(\..*)?"),
-    (r"py:.*", r"datetime(\..*)?"),
+    (r"py:.*", r"(datetime|collections)(\..*)?"),
 ]
 
 # Not documented: the deprecated shims and the two aliases of dynia.reference's modules.

@@ -231,8 +231,8 @@ def simulate_window_sums(
     leaves it; steps outside the record count 0. The sum of the window
     ending at e >= ``first_end`` goes to ``sums[e - first_end]``; the one
     ending at ``first_end`` is summed afresh from the ring, step by step, as
-    :func:`_first_window` sums a block's first window, and the next ones
-    slide as :func:`_next_window` slides, so the sums equal that kernel's on
+    ``_first_window`` sums a block's first window, and the next ones
+    slide as ``_next_window`` slides, so the sums equal that kernel's on
     the same error rows bit for bit. ``state`` (n_states, n_samples) and
     ``ring`` (slots, n_samples) carry over between calls; ``totals``
     (n_samples,) adds every simulated step's error in time order, as
@@ -812,7 +812,7 @@ def _slide(high, low, entering, leaving):
 def _window_sum(rows, first, period, slots, s):
     """Sample s's compensated sum of ``slots`` rows from ``first`` (row indices modulo ``period``), as (high, low).
 
-    Left to right, each step as :func:`_first_window` adds it. A window
+    Left to right, each step as ``_first_window`` adds it. A window
     holding an infinite (or NaN) error has no compensated sum: its plain sum
     is returned, as (inf or NaN, 0), which is what a left-to-right sum gives.
     """
