@@ -308,7 +308,9 @@ ic_figure(res1, "T1", 12, "information content of the first time constant")
 # simulated outputs far below the noise. The cell below reproduces the
 # behavioural set at the step where T1's IC is largest. It shows that the
 # samples kept and the samples rejected differ by outputs thousands of times
-# smaller than the noise. A narrow band there reflects the noise in that window
+# smaller than the noise, so much so that the last bits of the sums decide:
+# the compiled engine's running sums, within rounding of the left-to-right
+# sums of the thesis (and of the numpy engine), may keep other members here. A narrow band there reflects the noise in that window
 # and carries no information about T1. This is why the first run is read, and
 # the second run's ranges are chosen, from the windows that see a response
 # only.
@@ -327,12 +329,17 @@ for j in range(1, hi_w - lo_w):  # left to right, as the thesis and the engine s
 cost = (total / (hi_w - lo_w)) ** 2  # the thesis's cost: mean absolute error, squared
 kept = np.argsort(cost, kind="stable")[: int(n_samples * percentage / 100)]
 rejected = np.setdiff1d(np.arange(n_samples), kept)
-same_band = np.array_equal(dynia.engine.cld.limits(np.sort(res1.samples[kept, p_t1]), conf_level),
-                           res1.ci[p_t1, k_spike])
+reproduced = dynia.engine.cld.limits(np.sort(res1.samples[kept, p_t1]), conf_level)
+# The numpy engine sums as this cell does; the compiled engine (res1's) keeps running sums within rounding of these.
+numpy_engine = dynia.moving_window(y, model.simulate(res1.samples[:, order], u, x0="zero"), res1.samples,
+                                   res1.bounds, n=n, percentage=percentage, bins=bins, conf_level=conf_level,
+                                   engine="numpy")
 typical = np.max(np.abs(sims_window), axis=1)
 print(f"T1's IC in the zero state peaks at {res1.ic[p_t1, k_spike]:.2f} at step {k_spike}, "
       f"band [{res1.ci[p_t1, k_spike, 0]:.2f}, {res1.ci[p_t1, k_spike, 1]:.2f}] "
-      f"(behavioural set reproduced: {same_band})")
+      f"(behavioural set reproduced from left-to-right sums, as the numpy engine keeps it: "
+      f"{np.array_equal(reproduced, numpy_engine.ci[p_t1, k_spike])}; the same band as the compiled engine's: "
+      f"{np.array_equal(reproduced, res1.ci[p_t1, k_spike])})")
 print(f"  largest simulated |output| in that window, median over samples: kept {np.median(typical[kept]):.0e}, "
       f"rejected {np.median(typical[rejected]):.0e}; noise standard deviation {noise}")
 print(f"  the kept samples' costs span {cost[kept].max() - cost[kept].min():.0e}; "
