@@ -102,14 +102,10 @@ def write_analysis(
     write_json(directory / "summary.json", summary)
     if not saved:
         result.save(directory / "result.nc")
-    if labels is not None and (labels.units or labels.references):
-        add_attributes(
-            directory / "result.nc",
-            dict(
-                units=labels.units,
-                references={name: dict(value=value, label=text) for name, (value, text) in labels.references.items()},
-            ),
-        )
+    # The units and references as summary.json records them, so that the two files cannot say different things.
+    recorded = {key: summary["settings"][key] for key in ("units", "references") if summary["settings"].get(key)}
+    if recorded:
+        add_attributes(directory / "result.nc", dict(dict(units={}, references={}), **recorded))
     if plots:
         write_figures(directory, result, data, offset, labels, input_offset)
     floor = summary.get("noise_floor")
