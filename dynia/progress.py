@@ -25,7 +25,7 @@ import numpy as np
 
 from .errors import SettingsError
 
-__all__ = ["PROGRESS_CHOICES", "shows_progress", "progress_bar"]
+__all__ = ["PROGRESS_CHOICES", "shows_progress", "progress_bar", "stderr_is_terminal"]
 
 #: The values ``progress`` takes.
 PROGRESS_CHOICES = (True, False, "auto")
@@ -46,7 +46,7 @@ def shows_progress(progress):
     if isinstance(progress, str) and progress == "auto":
         if os.environ.get("TQDM_DISABLE", "") not in ("", "0"):
             return False
-        return _on_terminal() or _in_notebook()
+        return stderr_is_terminal() or _in_notebook()
     raise SettingsError(f"progress must be True, False or 'auto'; got {progress!r}", "progress")
 
 
@@ -62,7 +62,8 @@ def progress_bar(progress, iterable=None, **options):
     return tqdm(iterable, **options)
 
 
-def _on_terminal():
+def stderr_is_terminal():
+    """Whether stderr is a terminal (False for a replaced stream without ``isatty`` or a closed one)."""
     stream = sys.stderr
     try:
         return stream is not None and stream.isatty()

@@ -42,6 +42,7 @@ from ..io.csv import load_csv
 from ..io.outdir import OutputDirectory
 from ..models.base import user_code_failed
 from ..pipeline import DroppedSamplesWarning, TargetNotReachedWarning, run
+from ..progress import stderr_is_terminal
 from ..quality import check_quality
 from ..refine import narrowed_bounds
 from ..settings import MAX_PARAMETER, AnalysisSettings
@@ -942,7 +943,7 @@ def _shows_progress(options):
     Only on a terminal, so that the stderr of a script or a pipeline holds nothing but warnings and errors; --quiet
     silences it there too. Progress never goes to stdout, which holds the results (suggest --json's JSON).
     """
-    return sys.stderr.isatty() and not options["quiet"]
+    return stderr_is_terminal() and not options["quiet"]
 
 
 def _announce_compilation(options, settings):
