@@ -103,7 +103,8 @@ def write_analysis(
     if not saved:
         result.save(directory / "result.nc")
     # The units and references as summary.json records them, so that the two files cannot say different things.
-    recorded = {key: summary["settings"][key] for key in ("units", "references") if summary["settings"].get(key)}
+    settings = summary.get("settings", {})
+    recorded = {key: settings[key] for key in ("units", "references") if settings.get(key)}
     if recorded:
         add_attributes(directory / "result.nc", dict(dict(units={}, references={}), **recorded))
     if plots:
