@@ -278,6 +278,7 @@ class CompiledFlavour:
         reference = ThesisFlavour(params, bounds, percentage, bins, conf_level)
         self.count = reference.count
         self.columns = reference.columns
+        self.ranks, self.ordered = kernels.parameter_ranks(self.columns)
         self.n_bins = bins
         self.bin_centres = reference.bin_centres
         self.lows = np.ascontiguousarray(bounds[:, 0])
@@ -328,6 +329,8 @@ class CompiledFlavour:
             self.count,
             self.upper_position,
             self.columns,
+            self.ranks,
+            self.ordered,
             self.lows,
             self.highs,
             self.n_bins,

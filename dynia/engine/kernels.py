@@ -39,9 +39,14 @@ without fast-math, which stays off), the behavioural set as the first
 ``count`` of a stable sort, the likelihood total summed in index order (as
 :func:`dynia.engine.cld.likelihood` does with ``cumsum``) and the gradient
 accumulated in index order (as ``bincount``). The order statistics are
-found by selection instead of sorting, which cannot change their value, and
-one pass over a window's costs finds the candidates of the behavioural set
-(and of every Monte Carlo batch's) and of the noise floor's quantile.
+found without sorting, which cannot change their value: a window's
+behavioural threshold and the noise floor's quantile by selection among the
+few costs within a bracket around the previous window's (among all of them
+when it misses), after a pass that streams the costs and counts those below
+each bracket and one that picks the candidates (those of every Monte Carlo
+batch among them); the limits and median of the population's set by
+counting its members in a bitset of the samples' ranks, sorted once per
+run (a batch's, a few hundred values, by selection).
 
 The kernels release the GIL, so the engine's thread pool runs them on every
 core. This module needs numba; :data:`AVAILABLE` says whether it imported.
@@ -67,6 +72,7 @@ __all__ = [
     "simulate_window_sums",
     "analyse_windows",
     "analyse_windows_batched",
+    "parameter_ranks",
     "CompiledErrors",
 ]
 
@@ -123,6 +129,7 @@ def simulate_errors(
     errors,
     sample_start,
     sample_stop,
+    outputs=False,
 ):
     """Advance samples [sample_start, sample_stop) through steps [first_step, first_step + m).
 
@@ -130,8 +137,8 @@ def simulate_errors(
     left at the state of the step after the block (not advanced past
     ``last_step``, the record's last step, where it could only overflow).
     ``errors`` (m, n_samples) receives ``|sim - measured|``, 0 where the
-    measurement is NaN. ``state_terms`` (n_states, n_states + 2) and
-    ``output_terms`` (n_states + 2,) flag the terms the numpy path keeps
+    measurement is NaN, or with ``outputs`` the outputs themselves.
+    ``state_terms`` (n_states, n_states + 2) and ``output_terms`` (n_states + 2,) flag the terms the numpy path keeps
     (sources: the states, then u[k-d], then u[k-d-1]). The loop runs over
     time outside and samples inside, as the numpy path does, so each pass
     is a contiguous vector loop. Returns the first (step, sample) whose
@@ -162,6 +169,7 @@ def simulate_errors(
             errors,
             lo,
             hi,
+            outputs,
         )
     output_coefficients, state_coefficients = _coefficient_tables(phi, gamma_now, gamma_prev, c, feed_now, feed_prev)
     sources = np.empty((n_states + 2, n_samples))
@@ -174,7 +182,7 @@ def simulate_errors(
         k = first_step + j
         _delayed_inputs(sources[n_states], sources[n_states + 1], padded_input, delays, k, lo, hi)
         _combine(output, output_coefficients, output_terms, sources, lo, hi)
-        _absolute_errors(errors[j], output, measured[j], lo, hi)
+        _output_row(errors[j], output, measured[j], lo, hi, outputs)
         if bad_step < 0:
             for s in range(lo, hi):
                 if not np.isfinite(output[s]):
@@ -543,6 +551,15 @@ def _delayed_inputs(now, previous, padded_input, delays, k, lo, hi):
 
 
 @_jit
+def _output_row(row, output, y, lo, hi, outputs):
+    """``row[lo:hi]`` = the ``output`` itself, or (without ``outputs``) its error (see :func:`_absolute_errors`)."""
+    if outputs:
+        row[lo:hi] = output[lo:hi]
+    else:
+        _absolute_errors(row, output, y, lo, hi)
+
+
+@_jit
 def _absolute_errors(row, output, y, lo, hi):
     """``row[lo:hi]`` = |output - y|, or 0 where the measurement ``y`` is missing (NaN)."""
     if np.isnan(y):
@@ -571,6 +588,7 @@ def _simulate_lag(
     errors,
     lo,
     hi,
+    outputs,
 ):
     """:func:`simulate_errors` for one state and one common dead time (the lag models), fused.
 
@@ -598,7 +616,7 @@ def _simulate_lag(
             if prev_out:
                 output = output + feed_prev[s] * previous
             finite &= np.isfinite(output)
-            row[s] = 0.0 if missing else abs(output - y)
+            row[s] = output if outputs else (0.0 if missing else abs(output - y))
             if advance:
                 x = phi[s] * x
                 if now_state:
@@ -608,8 +626,8 @@ def _simulate_lag(
                 state[s] = x if abs(x) >= FLUSH_BELOW else 0.0
         if not finite and bad_step < 0:
             bad_step = k
-            # The row holds |output - y|, non-finite exactly where the output
-            # is, unless y is missing; then the sample is not known (-1).
+            # The row holds the output or |output - y|, non-finite exactly where the
+            # output is, unless y is missing; then the sample is not known (-1).
             for s in range(lo, hi):
                 if not np.isfinite(row[s]):
                     bad_sample = s
@@ -680,24 +698,56 @@ def _candidates(cost, first, stride, count, bound, candidates):
 
 
 @_jit
-def _behavioural(count, candidates, found, scratch, selected):
+def _threshold_of(count, candidates, found, scratch):
+    """The count-th smallest of the first ``found`` candidate costs (``candidates`` = (indices, costs)).
+
+    They hold every cost at or below the answer (what :func:`_candidates`
+    gives). A batch's few spare candidates are kept in a short buffer, its
+    largest costs; otherwise they are copied to ``scratch`` and selected.
+    """
+    costs = candidates[1]
+    if found - count < _FEW:
+        for i in range(found):
+            _keep(scratch, found - count + 1, i, costs[i], True)
+        return scratch[found - count]
+    for i in range(found):
+        scratch[i] = costs[i]
+    return _select(scratch, found, count - 1)
+
+
+@_jit
+def _bracketed_threshold(count, candidates, found, below, bracket, scratch):
+    """:func:`_threshold_of`, searched first among the candidates within ``bracket`` = (low, high).
+
+    ``below`` counts every cost under ``low``, and the candidates hold every
+    cost up to at least ``high``: when the count-th smallest lies in the
+    bracket, it is found among the few costs there (a bracket around the
+    previous window's, see :func:`_next_bracket`); otherwise, or with a NaN
+    bracket, among all the candidates.
+    """
+    low, high = bracket
+    costs = candidates[1]
+    inside = 0
+    # Branch-free: every cost is written, and kept (by counting it) when it is in the bracket.
+    for i in range(found):
+        scratch[inside] = costs[i]
+        inside += (costs[i] >= low) & (costs[i] <= high)
+    if below <= count - 1 < below + inside:
+        return _select(scratch, inside, count - 1 - below)
+    return _threshold_of(count, candidates, found, scratch)
+
+
+@_jit
+def _behavioural(count, candidates, found, threshold, selected, chosen):
     """Indices (ascending) of the first ``count`` of a stable ascending sort of the costs, into ``selected``.
 
     ``candidates`` = (indices, costs): ``indices[:found]`` (ascending) hold
-    every index of the count lowest costs and of any cost tied with the
-    count-th (what :func:`_candidates` gives), ``costs`` theirs, side by side
-    so that they are read in order; only they are searched. Returns the
-    count-th smallest cost.
+    every index of a cost at or below ``threshold``, the count-th smallest
+    cost, and ``costs`` theirs, side by side so that they are read in order.
+    Of the costs tied with the threshold, the lowest indices are taken.
+    Their costs go to ``chosen``, in the same order.
     """
     indices, costs = candidates
-    if found - count < _FEW:  # a batch's few spare candidates: the threshold is among their largest costs
-        for i in range(found):
-            _keep(scratch, found - count + 1, i, costs[i], True)
-        threshold = scratch[found - count]
-    else:
-        for i in range(found):
-            scratch[i] = costs[i]
-        threshold = _select(scratch, found, count - 1)
     below = 0
     for i in range(found):
         below += costs[i] < threshold
@@ -710,51 +760,67 @@ def _behavioural(count, candidates, found, scratch, selected):
             if value == threshold:
                 ties -= 1
             selected[taken] = s
+            chosen[taken] = value
             taken += 1
-    return threshold
 
 
 @_jit
-def _scan_costs(sums, present, cost, bound, upper_bound, candidates, upper_values):
-    """The window's costs from its sums, and in the same pass the candidates of its behavioural set and quantile.
+def _costs(sums, present, cost, lows):
+    """``cost`` = (sums / present)^2, each window's costs; returns how many lie below each of ``lows`` (2,).
 
-    ``cost`` = (sums / present)^2. ``candidates`` receives the indices
-    (ascending) and costs of those at or below ``bound`` (see :func:`_candidates`)
-    and ``upper_values`` the costs at or above ``upper_bound`` (see
-    :func:`_quantile_cost`); returns how many of each. A NaN bound keeps none.
+    A pass of its own, which vectorises: it streams the sums from memory,
+    and the passes that pick candidates then read the costs from cache.
     """
-    indices, costs = candidates
-    found = 0
-    above = 0
-    # Branch-free: every slot is written, and kept (by counting it) when it qualifies.
+    first_low, second_low = lows
+    first_below = 0
+    second_below = 0
     for s in range(cost.shape[0]):
         mae = sums[s] / present
         value = mae * mae
         cost[s] = value
-        indices[found] = s
-        costs[found] = value
-        found += value <= bound
-        upper_values[above] = value
-        above += value >= upper_bound
-    return found, above
+        first_below += value < first_low
+        second_below += value < second_low
+    return first_below, second_below
 
 
 @_jit
-def _quantile_cost(cost, position, upper_values, above):
-    """The ``position``-th smallest of ``cost`` (0-based), from the ``above`` costs :func:`_scan_costs` kept.
+def _gather(cost, bound, band, candidates, band_values):
+    """The candidates of a window's behavioural set and of its quantile, from its costs.
 
-    Those are the costs at or above a guess a little below the answer (from
-    the previous window): when at most ``position`` costs lie below it, the
-    answer is the (position - below)-th smallest of them; otherwise, or when
-    none was kept, all costs are searched. ``upper_values`` is overwritten.
+    ``candidates`` receives the indices (ascending) and costs of those at or
+    below ``bound`` (see :func:`_candidates`), ``band_values`` the costs
+    within ``band`` = (low, high); returns how many of each. A NaN bound or
+    band keeps none.
     """
+    indices, costs = candidates
+    low, high = band
+    found = 0
+    inside = 0
+    # Branch-free: every slot is written, and kept (by counting it) when it qualifies.
+    for s in range(cost.shape[0]):
+        value = cost[s]
+        indices[found] = s
+        costs[found] = value
+        found += value <= bound
+        band_values[inside] = value
+        inside += (value >= low) & (value <= high)
+    return found, inside
+
+
+@_jit
+def _quantile_cost(cost, position, band_values, inside, below):
+    """The ``position``-th smallest of ``cost`` (0-based), from the ``inside`` costs :func:`_gather` kept in its band.
+
+    ``below`` costs lie under the band: when the answer is in the band it is
+    the (position - below)-th smallest there; otherwise all costs are
+    searched. ``band_values`` is overwritten.
+    """
+    if below <= position < below + inside:
+        return _select(band_values, inside, position - below)
     n = cost.shape[0]
-    below = n - above
-    if below > position or above == 0:
-        for s in range(n):
-            upper_values[s] = cost[s]
-        return _select(upper_values, n, position)
-    return _select(upper_values, above, position - below)
+    for s in range(n):
+        band_values[s] = cost[s]
+    return _select(band_values, n, position)
 
 
 @_jit
@@ -893,52 +959,110 @@ def _round_sums(rows, first, period, slots, high, low, total):
 
 
 @_jit
-def _read_off(cost, count, candidates, found, rules, positions, t, ic, ci, median, gradient, whole, work):
+def _read_off(cost, count, candidates, found, threshold, rules, positions, t, ic, ci, median, gradient, whole, work):
     """Behavioural set of one window's ``cost`` and what it gives: ``ic``, ``ci``, ``median`` and ``gradient`` at t.
 
-    The set is searched among the first ``found`` of ``candidates`` =
-    (indices, costs) (see :func:`_behavioural`), indices of ``cost`` and of
-    the columns of ``columns``: a batch of samples is read off through
-    candidates that are its members only. Without ``whole`` (a batch's
-    read-off, whose IC and limits alone are used) the gradient, the median
-    and, for the thesis limits, the likelihoods are left alone. The
-    median is read off as the limits are: the first sorted value whose CLD
-    reaches 0.5 (``weighted``), or the value at sorted position
+    The set is the candidates (see :func:`_behavioural`) at or below
+    ``threshold``, the count-th smallest cost, = (indices, costs), indices
+    of ``cost`` and of the columns of ``columns``: a batch of samples is
+    read off through candidates that are its members only. Without ``whole``
+    (a batch's read-off, whose IC and limits alone are used) the gradient,
+    the median and, for the thesis limits, the likelihoods are left alone.
+    The median is read off as the limits are: the first sorted value whose
+    CLD reaches 0.5 (``weighted``), or the value at sorted position
     ``(count - 1) // 2``, which is ``floor(0.5 (count - 1))``.
-    ``rules`` is ``(columns, lows, highs, bins, levels, weighted)``, how every
-    window is read off, ``positions`` the thesis limits' sorted positions
-    (the population's or a batch's) and ``work`` the scratch arrays of
-    :func:`_workspace`. Returns the count-th smallest cost and the smallest.
+    ``rules`` is ``(columns, lows, highs, levels, weighted, ranks, ordered,
+    bin_of)``, how every window is read off (see :func:`analyse_windows`;
+    ``bin_of`` from :func:`_bin_indices`),
+    ``positions`` the thesis limits' sorted positions (the population's or a
+    batch's) and ``work`` the scratch arrays of :func:`_workspace`. Returns
+    the smallest cost of the set (NaN where its likelihoods are not needed).
     """
-    columns, lows, highs, bins, levels, weighted = rules
-    scratch, selected, weights, values, order, buffer = work
+    columns, lows, highs, levels, weighted, ranks, ordered, bin_of = rules
+    scratch, selected, chosen, weights, values, order, buffer, words = work
     n_params = columns.shape[0]
-    threshold = _behavioural(count, candidates, found, scratch, selected)
+    _behavioural(count, candidates, found, threshold, selected, chosen)
     # A batch's thesis limits are order statistics alone: its likelihoods are never used.
-    smallest = _likelihood_weights(cost, count, selected, weights) if whole or weighted else np.nan
+    smallest = _likelihood_weights(chosen, count, weights) if whole or weighted else np.nan
+    # The walk over every sample's rank pays once the set is a 32nd of the samples.
+    by_rank = whole and not weighted and 32 * count >= columns.shape[1]
     for p in range(n_params):
-        low, high = lows[p], highs[p]
-        for i in range(count):
-            values[i] = columns[p, selected[i]]
         if whole:
-            _gradient_column(values, weights, count, low, high, bins, gradient[p, :, t])
-        if weighted:
-            _stable_argsort(values, count, order, buffer)
-            for side in range(2):
-                ci[p, t, side] = _cld_read_off(values, weights, order, count, levels[side])
-            if whole:
-                median[p, t] = _cld_read_off(values, weights, order, count, 0.5)
+            _gradient_column(bin_of[p], selected, weights, count, gradient[p, :, t])
+        if by_rank:
+            ci[p, t, 0], ci[p, t, 1], median[p, t] = _ranked_order_statistics(
+                ranks[p], ordered[p], selected, count, positions, words
+            )
         else:
-            ci[p, t, 0], ci[p, t, 1], middle = _order_statistics(values, count, positions, whole, scratch)
-            if whole:
-                median[p, t] = middle
-        ic[p, t] = 1 - (ci[p, t, 1] - ci[p, t, 0]) / (high - low)
-    return threshold, smallest
+            for i in range(count):
+                values[i] = columns[p, selected[i]]
+            if weighted:
+                _stable_argsort(values, count, order, buffer)
+                for side in range(2):
+                    ci[p, t, side] = _cld_read_off(values, weights, order, count, levels[side])
+                if whole:
+                    median[p, t] = _cld_read_off(values, weights, order, count, 0.5)
+            else:
+                ci[p, t, 0], ci[p, t, 1], middle = _order_statistics(values, count, positions, whole, scratch)
+                if whole:
+                    median[p, t] = middle
+        ic[p, t] = 1 - (ci[p, t, 1] - ci[p, t, 0]) / (highs[p] - lows[p])
+    return smallest
+
+
+_ONE = np.uint64(1)
 
 
 @_jit
-def _likelihood_weights(cost, count, selected, weights):
-    """Fill ``weights[:count]`` with the behavioural set's normalised likelihoods 1 - cost; return its smallest cost.
+def _popcount(word):
+    """How many bits of the uint64 ``word`` are set (the bit-parallel count: pairs, nibbles, bytes, then a sum)."""
+    word = word - ((word >> _ONE) & np.uint64(0x5555555555555555))
+    word = (word & np.uint64(0x3333333333333333)) + ((word >> np.uint64(2)) & np.uint64(0x3333333333333333))
+    word = (word + (word >> np.uint64(4))) & np.uint64(0x0F0F0F0F0F0F0F0F)
+    return np.int64((word * np.uint64(0x0101010101010101)) >> np.uint64(56))
+
+
+@_jit
+def _ranked_order_statistics(ranks, ordered, selected, count, positions, words):
+    """:func:`_order_statistics` with the median, through the samples' ranks: one parameter's, of a set.
+
+    ``ranks`` (n_samples,) is every sample's position in the stable sort of
+    the parameter's values, ``ordered`` those values sorted: the set's
+    k-th smallest value is ``ordered`` at its k-th smallest rank, found by
+    setting the set's ranks as bits of ``words`` (zeros, (n_samples + 63)
+    // 64 of them, cleared again) and counting them in order, a word at a
+    time. The values selection finds, in time linear in the samples / 64
+    rather than in the set with a large constant.
+    """
+    for i in range(count):
+        rank = ranks[selected[i]]
+        words[rank >> 6] |= _ONE << np.uint64(rank & 63)
+    targets = (positions[0], (count - 1) // 2, positions[1])
+    found = np.empty(3, dtype=np.int64)
+    seen = 0
+    w = 0
+    for which in range(3):  # ascending targets: each walk goes on from the word the last one stopped in
+        target = targets[which]
+        while seen + _popcount(words[w]) <= target:
+            seen += _popcount(words[w])
+            w += 1
+        word = words[w]
+        counted = seen
+        bit = 0
+        while True:
+            if (word >> np.uint64(bit)) & _ONE:
+                if counted == target:
+                    break
+                counted += 1
+            bit += 1
+        found[which] = 64 * w + bit
+    words[:] = 0
+    return ordered[found[0]], ordered[found[2]], ordered[found[1]]
+
+
+@_jit
+def _likelihood_weights(chosen, count, weights):
+    """``weights[:count]`` = the normalised likelihoods 1 - cost of the set's costs ``chosen``; returns the smallest.
 
     As :func:`dynia.engine.cld.likelihood`: shifted to be non-negative when a
     cost exceeds 1, equal when they all vanish, then divided by their total
@@ -947,8 +1071,8 @@ def _likelihood_weights(cost, count, selected, weights):
     lowest = np.inf
     smallest = np.inf
     for i in range(count):
-        smallest = min(smallest, cost[selected[i]])
-        weights[i] = 1.0 - cost[selected[i]]
+        smallest = min(smallest, chosen[i])
+        weights[i] = 1.0 - chosen[i]
         lowest = min(lowest, weights[i])
     if lowest < 0:
         for i in range(count):
@@ -966,14 +1090,24 @@ def _likelihood_weights(cost, count, selected, weights):
 
 
 @_jit
-def _gradient_column(values, weights, count, low, high, bins, column):
-    """The likelihood mass of ``values[:count]`` in each of ``bins`` equal bins of [low, high], into ``column``."""
-    for b in range(bins):
-        column[b] = 0.0
+def _gradient_column(bin_of, selected, weights, count, column):
+    """The likelihood mass of the set ``selected[:count]`` in each bin (``bin_of``, every sample's), into ``column``."""
+    column[:] = 0.0
     for i in range(count):
-        which = int((values[i] - low) / (high - low) * bins)
-        which = min(max(which, 0), bins - 1)
-        column[which] += weights[i]
+        column[bin_of[selected[i]]] += weights[i]
+
+
+@_jit
+def _bin_indices(columns, lows, highs, bins):
+    """Every sample's bin of the gradient map, per parameter: which of ``bins`` equal bins of [low, high] holds it."""
+    n_params, n_samples = columns.shape
+    bin_of = np.empty((n_params, n_samples), dtype=np.int64)
+    for p in range(n_params):
+        low, high = lows[p], highs[p]
+        for s in range(n_samples):
+            which = int((columns[p, s] - low) / (high - low) * bins)
+            bin_of[p, s] = min(max(which, 0), bins - 1)
+    return bin_of
 
 
 @_jit
@@ -1054,25 +1188,29 @@ def _order_statistics(values, count, positions, with_median, scratch):
     return lower, upper, middle
 
 
+# A window's behavioural threshold and quantile are searched first within a bracket around the previous
+# window's: its half-width thrice the last window's relative change, within these limits. On thesis example 1
+# and the bench's record, the answer is outside the bracket in a few % of the windows, each a search of every
+# candidate (the threshold) or of every cost (the quantile).
+_NARROWEST, _WIDEST = 0.002, 0.5
+
+
+@_jit
+def _next_bracket(value, previous):
+    """(low, high) around ``value`` in which to look first for the next window's, from its change since ``previous``."""
+    change = abs(value - previous) / value if value > 0 else _WIDEST
+    width = min(max(3.0 * change, _NARROWEST), _WIDEST) if change == change else _WIDEST
+    return value * (1 - width), value * (1 + width)
+
+
 @_jit
 def _next_bound(threshold):
-    """A guess of the next window's count-th cost from this one's.
+    """A bound for the next window's candidates of a Monte Carlo batch's behavioural set, from this one's threshold.
 
     The next window's count-th cost is usually close: a bound a little above
     this one lets most windows search only a few candidates.
     """
     return threshold * 1.25 if threshold > 0 else threshold
-
-
-@_jit
-def _next_quantile_bound(cost):
-    """A guess below the next window's quantile cost from this one's (see :func:`_quantile_cost`).
-
-    0.7 of this one's: on thesis example 1 with 20 000 samples a bound that
-    close misses (finds more than the quantile's position below it) in 0.2 %
-    of the windows, and 0.8 in 6 %, each miss a search of every cost.
-    """
-    return cost * 0.7
 
 
 @_jit
@@ -1084,6 +1222,8 @@ def analyse_windows_batched(
     count,
     upper_position,
     columns,
+    ranks,
+    ordered,
     lows,
     highs,
     bins,
@@ -1115,13 +1255,15 @@ def analyse_windows_batched(
     """
     n_samples = rows.shape[1]
     n_batches = batch_counts.shape[0]
-    total, cost, upper_values = np.empty(n_samples), np.empty(n_samples), np.empty(n_samples)
+    total, cost, band_values = np.empty(n_samples), np.empty(n_samples), np.empty(n_samples)
     high, low = np.empty(n_samples), np.empty(n_samples)
     candidates = (np.empty(n_samples, dtype=np.int64), np.empty(n_samples))
-    rules = (columns, lows, highs, bins, levels, weighted)
+    rules = (columns, lows, highs, levels, weighted, ranks, ordered, _bin_indices(columns, lows, highs, bins))
     work = _workspace(n_samples, count)
-    bound = np.nan
-    upper_bound = np.nan
+    bracket = (np.nan, np.nan)
+    quantile_bracket = (np.nan, np.nan)
+    last_threshold = np.nan
+    last_upper = np.nan
     batch_bounds = np.full(n_batches, np.nan)
     batch_of = _batch_of(n_samples, n_batches)
     batch_size = (n_samples + n_batches - 1) // max(n_batches, 1)
@@ -1133,15 +1275,21 @@ def analyse_windows_batched(
         if present < min_points:
             _blank_window(t, ic, ci, median, gradient, extreme_costs, batch_ic, batch_ci)
             continue
-        found, above = _scan_costs(sums, present, cost, bound, upper_bound, candidates, upper_values)
+        below, below_band = _costs(sums, present, cost, (bracket[0], quantile_bracket[0]))
+        # The candidates reach the bracket's top, and every batch's bound, so that they hold the batches' sets.
+        bound = bracket[1]
+        for b in range(n_batches):
+            bound = max(bound, batch_bounds[b]) if batch_bounds[b] == batch_bounds[b] else bound
+        found, inside = _gather(cost, bound, quantile_bracket, candidates, band_values)
         if found < count:
             found = _candidates(cost, 0, 1, count, np.nan, candidates)
-        threshold, smallest = _read_off(
-            cost, count, candidates, found, rules, positions, t, ic, ci, median, gradient, True, work
+        threshold = _bracketed_threshold(count, candidates, found, below, bracket, work[0])
+        smallest = _read_off(
+            cost, count, candidates, found, threshold, rules, positions, t, ic, ci, median, gradient, True, work
         )
-        bound = _next_bound(threshold)
-        upper = _quantile_cost(cost, upper_position, upper_values, above)
-        upper_bound = _next_quantile_bound(upper)
+        upper = _quantile_cost(cost, upper_position, band_values, inside, below_band)
+        bracket, last_threshold = _next_bracket(threshold, last_threshold), threshold
+        quantile_bracket, last_upper = _next_bracket(upper, last_upper), upper
         extreme_costs[0, t] = smallest
         extreme_costs[1, t] = threshold
         extreme_costs[2, t] = upper
@@ -1152,11 +1300,13 @@ def analyse_windows_batched(
             members = (batch_candidates[0][b], batch_candidates[1][b])
             if batch_found[b] < batch_counts[b]:
                 batch_found[b] = _candidates(cost, b, n_batches, batch_counts[b], batch_bounds[b], members)
-            threshold, _ = _read_off(
+            threshold = _threshold_of(batch_counts[b], members, batch_found[b], work[0])
+            _read_off(
                 cost,
                 batch_counts[b],
                 members,
                 batch_found[b],
+                threshold,
                 rules,
                 batch_positions[b],
                 t,
@@ -1172,19 +1322,23 @@ def analyse_windows_batched(
 
 @_jit
 def _workspace(n_samples, count):
-    """The scratch arrays of :func:`_read_off`, made once a block: (scratch, selected, weights, values, order, buffer).
+    """The scratch arrays of :func:`_read_off`, made once a block.
 
+    (scratch, selected, chosen, weights, values, order, buffer, words):
     ``scratch`` (n_samples,) for the selections, then for ``count`` values:
-    the behavioural set's indices, likelihood weights and one parameter's
-    values, and the stable sort's order and its buffer.
+    the behavioural set's indices, their costs, likelihood weights and one
+    parameter's values, and the stable sort's order and its buffer; and
+    ``words``, zero bits for every sample (:func:`_ranked_order_statistics`).
     """
     return (
         np.empty(n_samples),
         np.empty(count, dtype=np.int64),
         np.empty(count),
         np.empty(count),
+        np.empty(count),
         np.empty(count, dtype=np.int64),
         np.empty(count, dtype=np.int64),
+        np.zeros((n_samples + 63) // 64, dtype=np.uint64),
     )
 
 
@@ -1240,6 +1394,8 @@ def analyse_windows(
     count,
     upper_position,
     columns,
+    ranks,
+    ordered,
     lows,
     highs,
     bins,
@@ -1262,6 +1418,10 @@ def analyse_windows(
     they are the window sums themselves, ``rows`` (m, n_samples) (from
     :meth:`CompiledErrors.window_sums`), and each window's measured points
     ``measured`` (m,).
+    ``columns`` (n_params, n_samples) are the samples' parameter values,
+    ``ranks`` (n_params, n_samples) each sample's position in the stable
+    sort of its row of ``columns`` and ``ordered`` (n_params, n_samples) the
+    rows sorted (see :func:`parameter_ranks`).
     ``positions`` are the thesis limits' sorted positions, ``levels`` the
     weighted limits' CLD levels. Writes ``ic`` (n_params, m), ``ci``
     (n_params, m, 2), ``median`` (n_params, m), the CLD median read off as
@@ -1280,6 +1440,8 @@ def analyse_windows(
         count,
         upper_position,
         columns,
+        ranks,
+        ordered,
         lows,
         highs,
         bins,
@@ -1297,6 +1459,24 @@ def analyse_windows(
         np.empty((0, n_params, m)),
         np.empty((0, n_params, m, 2)),
     )
+
+
+def parameter_ranks(columns):
+    """``(ranks, ordered)`` of ``columns`` (n_params, n_samples), as :func:`analyse_windows` takes them.
+
+    ``ordered`` holds each row sorted, ``ranks`` every sample's position in
+    its row's stable sort (ties in the order of the samples).
+
+    Examples
+    --------
+    >>> ranks, ordered = parameter_ranks(np.array([[0.3, 0.1, 0.3]]))
+    >>> ranks.tolist(), ordered.tolist()
+    ([[1, 0, 2]], [[0.1, 0.3, 0.3]])
+    """
+    order = np.argsort(columns, axis=1, kind="stable")
+    ranks = np.empty(columns.shape, dtype=np.int64)
+    np.put_along_axis(ranks, order, np.arange(columns.shape[1])[None, :], axis=1)
+    return ranks, np.ascontiguousarray(np.take_along_axis(columns, order, axis=1))
 
 
 class CompiledErrors:
@@ -1378,7 +1558,20 @@ class CompiledErrors:
             self._buffer = np.concatenate([self._buffer, self._simulate(computed, stop)])
         return self._buffer[: stop - start]
 
-    def _simulate(self, first, stop):
+    def output_chunks(self, chunk_steps):
+        """The simulated outputs, (n_samples, m) chunks of ``chunk_steps`` steps in time order: ``model.simulate`` cut.
+
+        Each set's output bit for bit as the model's numpy recursion gives it
+        (the noise floor's residuals need the sign the errors drop). Only on
+        a fresh source; it then serves nothing else.
+        """
+        if self._start or self._buffer.shape[0] or self._ring is not None:
+            raise SettingsError("outputs were requested after errors; a source gives one or the other")
+        self._start = self.y.shape[0]  # marks the source as used
+        for first in range(0, self.y.shape[0], chunk_steps):
+            yield np.ascontiguousarray(self._simulate(first, min(first + chunk_steps, self.y.shape[0]), True).T)
+
+    def _simulate(self, first, stop, outputs=False):
         system = self._system
         errors = np.empty((stop - first, self._n_samples))
         measured = np.ascontiguousarray(self.y[first:stop])
@@ -1401,6 +1594,7 @@ class CompiledErrors:
                 self._state,
                 errors,
                 *sample_range,
+                outputs,
             )
 
         self._raise_on_overflow(self._run(block))
