@@ -21,7 +21,7 @@ import dynia
 from dynia.engine import kernels
 from dynia.engine.noise import window_points
 from dynia.engine.windows import default_chunk_steps, moving_window, window_costs, window_halos
-from dynia.errors import ModelError
+from dynia.errors import ModelError, SettingsError
 from dynia.models import FOPDT, FirstOrder, SecondOrderDelay, TransferFunction
 
 pytestmark = pytest.mark.skipif(not kernels.AVAILABLE, reason="numba is not installed")
@@ -195,3 +195,24 @@ def test_the_sums_are_the_exact_sums_rounded_once_whatever_the_chunks(example1):
             exact = sum(Fraction(float(value)) for value in errors[s, first:stop])
             mae = float(exact) / (stop - first)  # float() of a Fraction rounds once, to nearest
             assert mae * mae == costs[t, s], (t, s)
+
+
+@pytest.mark.parametrize("model, bounds", MODELS, ids=lambda value: type(value).__name__)
+@pytest.mark.parametrize("x0", ["zero", "steady"])
+def test_the_kernels_outputs_are_the_models_own_bit_for_bit(model, bounds, x0):
+    # The noise floor's re-simulation of its few sets takes these on the compiled engine.
+    u, y = _record()
+    low, high = np.array(list(bounds.values())).T
+    params = np.random.default_rng(8).uniform(low, high, (6, low.size))
+    source = kernels.CompiledErrors(model, params, u, y, dt=0.7, x0=x0, workers=1)
+    chunks = list(source.output_chunks(37))
+    assert {chunk.shape[1] for chunk in chunks[:-1]} == {37}
+    np.testing.assert_array_equal(np.concatenate(chunks, axis=1), model.simulate(params, u, dt=0.7, x0=x0))
+    with pytest.raises(SettingsError, match="rows were requested after outputs"):
+        source.rows(0, 5)
+    with pytest.raises(SettingsError, match="outputs were requested after outputs"):
+        source.output_chunks(37)
+    used = kernels.CompiledErrors(model, params, u, y, dt=0.7, x0=x0, workers=1)
+    used.rows(0, 5)
+    with pytest.raises(SettingsError, match="outputs were requested after rows"):
+        used.output_chunks(37)

@@ -1536,6 +1536,7 @@ class CompiledErrors:
         self._start = 0
         self._buffer = np.zeros((0, n_samples))
         self._ring = None  # the last window's errors, once window_sums runs
+        self._serving = None  # what the source gives: "rows", "window sums" or "outputs", one kind only
         self._next = 0
         self._workers = max(1, min(workers, n_samples))
         self._pool = ThreadPoolExecutor(max_workers=self._workers) if self._workers > 1 else None
@@ -1544,8 +1545,7 @@ class CompiledErrors:
 
     def rows(self, start, stop):
         """Errors for times [start, stop), shape (stop - start, n_samples)."""
-        if self._ring is not None:
-            raise SettingsError("rows were requested after window sums; a source gives one or the other")
+        self._serve("rows")
         if start < self._start:
             raise SettingsError(
                 f"rows from step {start} were requested after rows from step {self._start}; "
@@ -1562,14 +1562,17 @@ class CompiledErrors:
         """The simulated outputs, (n_samples, m) chunks of ``chunk_steps`` steps in time order: ``model.simulate`` cut.
 
         Each set's output bit for bit as the model's numpy recursion gives it
-        (the noise floor's residuals need the sign the errors drop). Only on
-        a fresh source; it then serves nothing else.
+        (the noise floor's residuals need the sign the errors drop). Once, on
+        a fresh source, which then serves nothing else.
         """
-        if self._start or self._buffer.shape[0] or self._ring is not None:
-            raise SettingsError("outputs were requested after errors; a source gives one or the other")
-        self._start = self.y.shape[0]  # marks the source as used
-        for first in range(0, self.y.shape[0], chunk_steps):
-            yield np.ascontiguousarray(self._simulate(first, min(first + chunk_steps, self.y.shape[0]), True).T)
+        if self._serving is not None:
+            raise SettingsError(f"outputs were requested after {self._serving}; a source gives one or the other")
+        self._serving = "outputs"
+        n_steps = self.y.shape[0]
+        return (
+            np.ascontiguousarray(self._simulate(first, min(first + chunk_steps, n_steps), True).T)
+            for first in range(0, n_steps, chunk_steps)
+        )
 
     def _simulate(self, first, stop, outputs=False):
         system = self._system
@@ -1615,13 +1618,14 @@ class CompiledErrors:
         """
         before, after = halos
         n_steps = self.y.shape[0]
+        self._serve("window sums")
         if self._ring is None:
             self._ring = np.zeros((before + after + 1, self._n_samples))
             self._next = 0
-        if start != self._next or self._start or self._buffer.shape[0]:
+        if start != self._next:
             raise SettingsError(
                 f"window sums from step {start} were requested after the windows up to step {self._next}; "
-                "requests must come chunk after chunk, and not after rows"
+                "requests must come chunk after chunk"
             )
         system = self._system
         sums = np.empty((stop - start, self._n_samples))
@@ -1659,6 +1663,12 @@ class CompiledErrors:
         counted = np.cumsum(counted)
         slots = before + after + 1
         return sums, counted[slots : slots + stop - start] - counted[: stop - start]
+
+    def _serve(self, kind):
+        """Refuse a request of another ``kind`` than the source has served: each keeps its own state."""
+        if self._serving not in (None, kind):
+            raise SettingsError(f"{kind} were requested after {self._serving}; a source gives one or the other")
+        self._serving = kind
 
     def _run(self, block):
         """``block(sample_range)`` for every worker's range of samples, on the pool; their outcomes."""
