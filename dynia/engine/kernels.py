@@ -1264,11 +1264,8 @@ def analyse_windows_batched(
     quantile_bracket = (np.nan, np.nan)
     last_threshold = np.nan
     last_upper = np.nan
-    batch_bounds = np.full(n_batches, np.nan)
-    batch_of = _batch_of(n_samples, n_batches)
-    batch_size = (n_samples + n_batches - 1) // max(n_batches, 1)
-    batch_candidates = (np.empty((n_batches, batch_size), dtype=np.int64), np.empty((n_batches, batch_size)))
-    batch_found = np.empty(n_batches, dtype=np.int64)
+    batches = _batch_state(batch_counts, batch_positions, ranks)
+    batch_bounds = batches[5]
     present = 0.0
     for t in range(m):
         sums, present = _window_sums(rows, measured, t, slots, present, (high, low, total))
@@ -1295,20 +1292,78 @@ def analyse_windows_batched(
         extreme_costs[2, t] = upper
         if n_batches == 0:
             continue
-        _deal_candidates(candidates, found, batch_of, batch_candidates, batch_found)
-        for b in range(n_batches):
-            members = (batch_candidates[0][b], batch_candidates[1][b])
-            if batch_found[b] < batch_counts[b]:
-                batch_found[b] = _candidates(cost, b, n_batches, batch_counts[b], batch_bounds[b], members)
-            threshold = _threshold_of(batch_counts[b], members, batch_found[b], work[0])
+        _read_off_batches(cost, candidates, found, batches, rules, t, batch_ic, batch_ci, median, gradient, work)
+
+
+@_jit
+def _batch_state(counts, positions, ranks):
+    """What :func:`_read_off_batches` carries from window to window, for batches of these ``counts``.
+
+    (counts, positions, batch_of, member_candidates, member_found, bounds,
+    brackets, last_thresholds, selected, at_rank): each sample's batch, the
+    batches' candidates (indices, costs) and how many, each batch's bound
+    of candidates and bracket (see :func:`_next_bound`, :func:`_next_bracket`)
+    and last threshold, its behavioural set, and the batch of the sample at
+    every rank of every parameter (``ranks``, see :func:`parameter_ranks`).
+    """
+    n_batches = counts.shape[0]
+    n_params, n_samples = ranks.shape
+    batch_of = _batch_of(n_samples, n_batches)
+    size = (n_samples + n_batches - 1) // max(n_batches, 1)
+    at_rank = np.empty((n_params, n_samples if n_batches else 0), dtype=np.int64)
+    for p in range(n_params):
+        for s in range(at_rank.shape[1]):
+            at_rank[p, ranks[p, s]] = batch_of[s]
+    return (
+        counts,
+        positions,
+        batch_of,
+        (np.empty((n_batches, size), dtype=np.int64), np.empty((n_batches, size))),
+        np.empty(n_batches, dtype=np.int64),
+        np.full(n_batches, np.nan),
+        np.full((n_batches, 2), np.nan),
+        np.full(n_batches, np.nan),
+        np.empty((n_batches, counts.max() if n_batches else 0), dtype=np.int64),
+        at_rank,
+    )
+
+
+@_jit
+def _read_off_batches(cost, candidates, found, batches, rules, t, batch_ic, batch_ci, median, gradient, work):
+    """Every Monte Carlo batch's IC and limits at window t, from the population's ``candidates``.
+
+    Each batch's threshold is searched as the population's is (within a
+    bracket around its last); its thesis limits, order statistics of its
+    set, are then found for all batches in one walk over each parameter's
+    ranks from either end (:func:`_batch_limits`) when the sets are large,
+    else by :func:`_read_off`, as are the weighted limits, read off each
+    batch's CLD. ``batches`` is :func:`_batch_state`'s, updated here.
+    """
+    counts, positions, batch_of, batch_candidates, batch_found, bounds, brackets, last, selected, at_rank = batches
+    lows, highs, weighted, ranks, ordered = rules[1], rules[2], rules[4], rules[5], rules[6]
+    n_batches = counts.shape[0]
+    # As for the population (see _read_off): the walk over the ranks pays once the sets are a 32nd of the samples.
+    by_rank = not weighted and 32 * counts.sum() >= ranks.shape[1]
+    _deal_candidates(candidates, found, batch_of, batch_candidates, batch_found)
+    for b in range(n_batches):
+        members = (batch_candidates[0][b], batch_candidates[1][b])
+        if batch_found[b] < counts[b]:
+            batch_found[b] = _candidates(cost, b, n_batches, counts[b], bounds[b], members)
+        bracket = (brackets[b, 0], brackets[b, 1])
+        below = _count_below(members[1], batch_found[b], bracket[0])
+        threshold = _bracketed_threshold(counts[b], members, batch_found[b], below, bracket, work[0])
+        bounds[b] = _next_bound(threshold)
+        brackets[b, 0], brackets[b, 1] = _next_bracket(threshold, last[b])
+        last[b] = threshold
+        if not by_rank:
             _read_off(
                 cost,
-                batch_counts[b],
+                counts[b],
                 members,
                 batch_found[b],
                 threshold,
                 rules,
-                batch_positions[b],
+                positions[b],
                 t,
                 batch_ic[b],
                 batch_ci[b],
@@ -1317,7 +1372,72 @@ def analyse_windows_batched(
                 False,
                 work,
             )
-            batch_bounds[b] = _next_bound(threshold)
+        else:
+            _behavioural(counts[b], members, batch_found[b], threshold, selected[b], work[2])
+    if not by_rank:
+        return
+    limits = np.empty((n_batches, 2))
+    for p in range(ranks.shape[0]):
+        _batch_limits(selected, counts, positions, ranks[p], ordered[p], at_rank[p], work[7], limits)
+        for b in range(n_batches):
+            batch_ci[b, p, t, 0], batch_ci[b, p, t, 1] = limits[b, 0], limits[b, 1]
+            batch_ic[b, p, t] = 1 - (limits[b, 1] - limits[b, 0]) / (highs[p] - lows[p])
+
+
+@_jit
+def _count_below(costs, found, low):
+    """How many of ``costs[:found]`` lie below ``low``."""
+    below = 0
+    for i in range(found):
+        below += costs[i] < low
+    return below
+
+
+@_jit
+def _batch_limits(selected, counts, positions, ranks, ordered, at_rank, words, limits):
+    """Every batch's thesis limits for one parameter, into ``limits`` (n_batches, 2): order statistics of its set.
+
+    The sets' ranks are set as bits of ``words`` (zeros, cleared again),
+    then walked from the lowest rank up until every batch has met its lower
+    limit's position (``positions[b, 0]``), and from the highest down for the
+    upper: near the ends for a confidence level of 90 %, a few hundred of
+    the sets' members in all, where selecting in each set visits them all.
+    ``at_rank`` holds the batch of the sample at every rank.
+    """
+    n_batches = counts.shape[0]
+    for b in range(n_batches):
+        for i in range(counts[b]):
+            rank = ranks[selected[b, i]]
+            words[rank >> 6] |= _ONE << np.uint64(rank & 63)
+    seen = np.zeros(n_batches, dtype=np.int64)
+    remaining = n_batches
+    w = 0
+    while remaining:
+        word = words[w]
+        for bit in range(64 if word else 0):
+            if (word >> np.uint64(bit)) & _ONE:
+                rank = 64 * w + bit
+                b = at_rank[rank]
+                if seen[b] == positions[b, 0]:
+                    limits[b, 0] = ordered[rank]
+                    remaining -= 1
+                seen[b] += 1
+        w += 1
+    seen[:] = 0
+    remaining = n_batches
+    w = words.shape[0] - 1
+    while remaining:
+        word = words[w]
+        for bit in range(63 if word else -1, -1, -1):
+            if (word >> np.uint64(bit)) & _ONE:
+                rank = 64 * w + bit
+                b = at_rank[rank]
+                if seen[b] == counts[b] - 1 - positions[b, 1]:
+                    limits[b, 1] = ordered[rank]
+                    remaining -= 1
+                seen[b] += 1
+        w -= 1
+    words[:] = 0
 
 
 @_jit
