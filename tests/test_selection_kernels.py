@@ -27,24 +27,31 @@ def _tied_costs(rng, n_samples):
     return sums, (sums / PRESENT) ** 2
 
 
-def _picked(sums, count, bracket, quantile_band):
-    """The kernels' costs, threshold, behavioural set and the band's candidates for one window's ``sums``."""
+def _picked(sums, count, bracket):
+    """The kernels' costs, threshold and behavioural set for one window's ``sums``, searched first in ``bracket``."""
     n_samples = sums.size
     cost = np.empty(n_samples)
-    below, below_band = kernels._costs(sums, PRESENT, cost, (bracket[0], quantile_band[0]))
+    kernels._costs(sums, PRESENT, cost)
     candidates = (np.empty(n_samples, dtype=np.int64), np.empty(n_samples))
-    band_values = np.empty(n_samples)
-    found, inside = kernels._gather(cost, bracket[1], quantile_band, candidates, band_values)
-    if found < count:
-        found = kernels._candidates(cost, 0, 1, count, np.nan, candidates)
-    threshold = kernels._bracketed_threshold(count, candidates, found, below, bracket, np.empty(n_samples))
+    found = kernels._candidates(cost, 0, 1, count, bracket[1], candidates)
+    threshold, _ = kernels._select_near(candidates[1], found, count - 1, bracket, np.empty(n_samples))
     selected, chosen = np.empty(count, dtype=np.int64), np.empty(count)
     kernels._behavioural(count, candidates, found, threshold, selected, chosen)
-    return cost, threshold, selected, chosen, (band_values, inside, below_band)
+    return cost, threshold, selected, chosen
+
+
+BRACKETS = {  # around the answer x: (low, high) as multiples of it
+    "holds": (0.9, 1.1),
+    "too low": (0.2, 0.5),  # one move up
+    "far too low": (1e-9, 2e-9),  # every move up, then to infinity
+    "too high": (1.5, 2.0),
+    "far too high": (1e6, 1.1e6),
+    "point": (1.0, 1.0),
+}
 
 
 @pytest.mark.parametrize("seed", range(6))
-@pytest.mark.parametrize("where", ["holds", "too low", "too high", "nan", "point"])
+@pytest.mark.parametrize("where", [*BRACKETS, "nan"])
 def test_the_bracketed_threshold_and_set_are_the_stable_sorts(seed, where):
     rng = np.random.default_rng(seed)
     n_samples = int(rng.integers(50, 3000))
@@ -52,14 +59,8 @@ def test_the_bracketed_threshold_and_set_are_the_stable_sorts(seed, where):
     sums, costs = _tied_costs(rng, n_samples)
     order = np.argsort(costs, kind="stable")
     expected = costs[order[count - 1]]
-    bracket = {
-        "holds": (expected * 0.9, expected * 1.1),
-        "too low": (expected * 0.2, expected * 0.5),
-        "too high": (expected * 1.5, expected * 2.0),
-        "nan": (np.nan, np.nan),
-        "point": (expected, expected),
-    }[where]
-    cost, threshold, selected, chosen, _ = _picked(sums, count, bracket, (np.nan, np.nan))
+    bracket = tuple(expected * np.array(BRACKETS.get(where, (np.nan, np.nan))))
+    cost, threshold, selected, chosen = _picked(sums, count, bracket)
     np.testing.assert_array_equal(cost, costs)
     assert threshold == expected
     np.testing.assert_array_equal(selected, np.sort(order[:count]))
@@ -67,36 +68,35 @@ def test_the_bracketed_threshold_and_set_are_the_stable_sorts(seed, where):
 
 
 def test_every_cost_zero_gives_the_first_samples():
-    _, threshold, selected, _, _ = _picked(np.zeros(500), 50, (0.0, 0.0), (0.0, 0.0))
-    assert threshold == 0
-    np.testing.assert_array_equal(selected, np.arange(50))
+    for bracket in ((0.0, 0.0), (np.nan, np.nan), (1.0, 2.0)):
+        _, threshold, selected, _ = _picked(np.zeros(500), 50, bracket)
+        assert threshold == 0
+        np.testing.assert_array_equal(selected, np.arange(50))
 
 
 @pytest.mark.parametrize("seed", range(6))
-@pytest.mark.parametrize("where", ["holds", "too low", "too high", "nan"])
-def test_the_banded_quantile_is_the_sorted_value(seed, where):
+@pytest.mark.parametrize("where", [*BRACKETS, "nan"])
+def test_the_quantile_near_a_bracket_is_the_sorted_value(seed, where):
     rng = np.random.default_rng(seed)
     n_samples = int(rng.integers(50, 3000))
-    sums, costs = _tied_costs(rng, n_samples)
+    _, costs = _tied_costs(rng, n_samples)
     position = int(0.9 * n_samples)
     expected = np.sort(costs)[position]
-    band = {
-        "holds": (expected * 0.95, expected * 1.05),
-        "too low": (expected * 0.3, expected * 0.6),
-        "too high": (expected * 1.2, expected * 1.4),
-        "nan": (np.nan, np.nan),
-    }[where]
-    cost, _, _, _, (band_values, inside, below) = _picked(sums, 1, (np.nan, np.nan), band)
-    assert kernels._quantile_cost(cost, position, band_values, inside, below) == expected
+    bracket = tuple(expected * np.array(BRACKETS.get(where, (np.nan, np.nan))))
+    value, density = kernels._select_near(costs, n_samples, position, bracket, np.empty(n_samples))
+    assert value == expected
+    assert density >= 0
 
 
 def test_the_next_bracket_follows_the_last_change_within_its_limits():
-    assert kernels._next_bracket(1.0, np.nan) == (0.5, 1.5)  # the first window: widest
-    low, high = kernels._next_bracket(1.0, 0.98)  # changed by 2 %: thrice that either side
+    assert kernels._next_bracket(1.0, np.nan, 0.0) == (0.5, 1.5)  # the first window: widest
+    low, high = kernels._next_bracket(1.0, 0.98, 0.0)  # changed by 2 %: thrice that either side
     assert low == pytest.approx(0.94) and high == pytest.approx(1.06)
-    low, high = kernels._next_bracket(1.0, 1.0)  # unchanged: the narrowest
+    low, high = kernels._next_bracket(1.0, 1.0, 0.0)  # unchanged: the narrowest
     assert low == pytest.approx(1 - kernels._NARROWEST) and high == pytest.approx(1 + kernels._NARROWEST)
-    assert kernels._next_bracket(0.0, 1.0) == (0.0, 0.0)
+    low, high = kernels._next_bracket(1.0, 0.9, 1000.0)  # 1000 values a unit there: 128 either side, not 0.3
+    assert low == pytest.approx(1 - 0.128) and high == pytest.approx(1 + 0.128)
+    assert kernels._next_bracket(0.0, 1.0, 0.0) == (0.0, 0.0)
 
 
 @pytest.mark.parametrize("seed", range(10))

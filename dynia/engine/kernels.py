@@ -40,13 +40,12 @@ without fast-math, which stays off), the behavioural set as the first
 :func:`dynia.engine.cld.likelihood` does with ``cumsum``) and the gradient
 accumulated in index order (as ``bincount``). The order statistics are
 found without sorting, which cannot change their value: a window's
-behavioural threshold and the noise floor's quantile by selection among the
-few costs within a bracket around the previous window's (among all of them
-when it misses), after a pass that streams the costs and counts those below
-each bracket and one that picks the candidates (those of every Monte Carlo
-batch among them); the limits and median of the population's set by
-counting its members in a bitset of the samples' ranks, sorted once per
-run (a batch's, a few hundred values, by selection).
+behavioural threshold (and every Monte Carlo batch's) and the noise floor's
+quantile by selection among the few costs within a bracket around the
+previous window's, which a counting pass finds (moved outward when it
+misses); the limits and median of the population's set, and the batches'
+limits, by counting their members in a bitset of the samples' ranks,
+sorted once per run (a small set's by selection).
 
 The kernels release the GIL, so the engine's thread pool runs them on every
 core. This module needs numba; :data:`AVAILABLE` says whether it imported.
@@ -673,11 +672,11 @@ def _select(values, length, k):
 def _candidates(cost, first, stride, count, bound, candidates):
     """Indices (ascending) of the samples first, first + stride, ... whose cost is at or below ``bound``.
 
-    Written into ``candidates`` = (indices, their costs); returns how many. ``bound`` is a guess of
-    the count-th smallest of these costs (the previous window's): when at
-    least ``count`` costs lie at or below it, the behavioural set is among
-    them; otherwise (or when ``bound`` is NaN) every one of the samples is
-    a candidate.
+    Written into ``candidates`` = (indices, their costs); returns how many. ``bound`` is a guess at
+    or above the count-th smallest of these costs (a bracket's top): when
+    at least ``count`` costs lie at or below it, the behavioural set is
+    among them; otherwise (or when ``bound`` is NaN) every one of the
+    samples is a candidate.
     """
     n = cost.shape[0]
     indices, costs = candidates
@@ -698,43 +697,40 @@ def _candidates(cost, first, stride, count, bound, candidates):
 
 
 @_jit
-def _threshold_of(count, candidates, found, scratch):
-    """The count-th smallest of the first ``found`` candidate costs (``candidates`` = (indices, costs)).
+def _select_near(values, n, k, bracket, scratch):
+    """The k-th smallest (0-based) of ``values[:n]``, searched first within ``bracket`` = (low, high).
 
-    They hold every cost at or below the answer (what :func:`_candidates`
-    gives). A batch's few spare candidates are kept in a short buffer, its
-    largest costs; otherwise they are copied to ``scratch`` and selected.
-    """
-    costs = candidates[1]
-    if found - count < _FEW:
-        for i in range(found):
-            _keep(scratch, found - count + 1, i, costs[i], True)
-        return scratch[found - count]
-    for i in range(found):
-        scratch[i] = costs[i]
-    return _select(scratch, found, count - 1)
-
-
-@_jit
-def _bracketed_threshold(count, candidates, found, below, bracket, scratch):
-    """:func:`_threshold_of`, searched first among the candidates within ``bracket`` = (low, high).
-
-    ``below`` counts every cost under ``low``, and the candidates hold every
-    cost up to at least ``high``: when the count-th smallest lies in the
-    bracket, it is found among the few costs there (a bracket around the
-    previous window's, see :func:`_next_bracket`); otherwise, or with a NaN
-    bracket, among all the candidates.
+    A pass counts the values below and within the bracket; when the answer
+    lies within, the few values there are copied to ``scratch`` and
+    selected. Otherwise the bracket moves to the side of the answer,
+    fourfold wider, up to ``_RETRIES - 1`` times, then reaches to that
+    side's infinity, so the answer is always found (a NaN bracket starts
+    there). Returns it and the values' density near it, the count within
+    the last bracket over its width (0 when that is infinite or none), for
+    :func:`_next_bracket`.
     """
     low, high = bracket
-    costs = candidates[1]
-    inside = 0
-    # Branch-free: every cost is written, and kept (by counting it) when it is in the bracket.
-    for i in range(found):
-        scratch[inside] = costs[i]
-        inside += (costs[i] >= low) & (costs[i] <= high)
-    if below <= count - 1 < below + inside:
-        return _select(scratch, inside, count - 1 - below)
-    return _threshold_of(count, candidates, found, scratch)
+    if not low <= high:
+        low, high = -np.inf, np.inf
+    for attempt in range(_RETRIES + 1):
+        below = 0
+        inside = 0
+        for i in range(n):
+            below += values[i] < low
+            inside += (values[i] >= low) & (values[i] <= high)
+        if below <= k < below + inside:
+            break
+        width = max(high - low, _NARROWEST * max(abs(low), abs(high)))
+        if k < below:
+            low, high = (low - 4 * width if width > 0 and attempt < _RETRIES - 1 else -np.inf), low
+        else:
+            low, high = high, (high + 4 * width if width > 0 and attempt < _RETRIES - 1 else np.inf)
+    taken = 0
+    # Branch-free: every value is written, and kept (by counting it) when it is within the bracket.
+    for i in range(n):
+        scratch[taken] = values[i]
+        taken += (values[i] >= low) & (values[i] <= high)
+    return _select(scratch, taken, k - below), taken / (high - low) if high > low else 0.0
 
 
 @_jit
@@ -765,62 +761,15 @@ def _behavioural(count, candidates, found, threshold, selected, chosen):
 
 
 @_jit
-def _costs(sums, present, cost, lows):
-    """``cost`` = (sums / present)^2, each window's costs; returns how many lie below each of ``lows`` (2,).
+def _costs(sums, present, cost):
+    """``cost`` = (sums / present)^2, a window's costs.
 
     A pass of its own, which vectorises: it streams the sums from memory,
     and the passes that pick candidates then read the costs from cache.
     """
-    first_low, second_low = lows
-    first_below = 0
-    second_below = 0
     for s in range(cost.shape[0]):
         mae = sums[s] / present
-        value = mae * mae
-        cost[s] = value
-        first_below += value < first_low
-        second_below += value < second_low
-    return first_below, second_below
-
-
-@_jit
-def _gather(cost, bound, band, candidates, band_values):
-    """The candidates of a window's behavioural set and of its quantile, from its costs.
-
-    ``candidates`` receives the indices (ascending) and costs of those at or
-    below ``bound`` (see :func:`_candidates`), ``band_values`` the costs
-    within ``band`` = (low, high); returns how many of each. A NaN bound or
-    band keeps none.
-    """
-    indices, costs = candidates
-    low, high = band
-    found = 0
-    inside = 0
-    # Branch-free: every slot is written, and kept (by counting it) when it qualifies.
-    for s in range(cost.shape[0]):
-        value = cost[s]
-        indices[found] = s
-        costs[found] = value
-        found += value <= bound
-        band_values[inside] = value
-        inside += (value >= low) & (value <= high)
-    return found, inside
-
-
-@_jit
-def _quantile_cost(cost, position, band_values, inside, below):
-    """The ``position``-th smallest of ``cost`` (0-based), from the ``inside`` costs :func:`_gather` kept in its band.
-
-    ``below`` costs lie under the band: when the answer is in the band it is
-    the (position - below)-th smallest there; otherwise all costs are
-    searched. ``band_values`` is overwritten.
-    """
-    if below <= position < below + inside:
-        return _select(band_values, inside, position - below)
-    n = cost.shape[0]
-    for s in range(n):
-        band_values[s] = cost[s]
-    return _select(band_values, n, position)
+        cost[s] = mae * mae
 
 
 @_jit
@@ -1189,28 +1138,27 @@ def _order_statistics(values, count, positions, with_median, scratch):
 
 
 # A window's behavioural threshold and quantile are searched first within a bracket around the previous
-# window's: its half-width thrice the last window's relative change, within these limits. On thesis example 1
-# and the bench's record, the answer is outside the bracket in a few % of the windows, each a search of every
-# candidate (the threshold) or of every cost (the quantile).
+# window's (_select_near): its half-width thrice the last change, at least _NARROWEST of the value, at most
+# _WIDEST, and holding about _BRACKET_RANKS values either side at the last window's density of values there.
+# A miss moves the bracket and widens it fourfold, _RETRIES times, each a counting pass; the bench's record and
+# thesis example 1 need 0.1 to 1 such moves a window on average.
 _NARROWEST, _WIDEST = 0.002, 0.5
+_BRACKET_RANKS = 128
+_RETRIES = 3
 
 
 @_jit
-def _next_bracket(value, previous):
-    """(low, high) around ``value`` in which to look first for the next window's, from its change since ``previous``."""
-    change = abs(value - previous) / value if value > 0 else _WIDEST
-    width = min(max(3.0 * change, _NARROWEST), _WIDEST) if change == change else _WIDEST
-    return value * (1 - width), value * (1 + width)
+def _next_bracket(value, previous, density):
+    """(low, high) in which to look first for the next window's value, from ``value`` and the last two.
 
-
-@_jit
-def _next_bound(threshold):
-    """A bound for the next window's candidates of a Monte Carlo batch's behavioural set, from this one's threshold.
-
-    The next window's count-th cost is usually close: a bound a little above
-    this one lets most windows search only a few candidates.
+    ``density`` is :func:`_select_near`'s, values per unit near ``value``.
     """
-    return threshold * 1.25 if threshold > 0 else threshold
+    change = abs(value - previous)
+    width = max(3.0 * change, _NARROWEST * value) if change == change else _WIDEST * value
+    if density > 0:
+        width = min(width, _BRACKET_RANKS / density)
+    width = min(width, _WIDEST * value)
+    return value - width, value + width
 
 
 @_jit
@@ -1255,7 +1203,7 @@ def analyse_windows_batched(
     """
     n_samples = rows.shape[1]
     n_batches = batch_counts.shape[0]
-    total, cost, band_values = np.empty(n_samples), np.empty(n_samples), np.empty(n_samples)
+    total, cost, scratch = np.empty(n_samples), np.empty(n_samples), np.empty(n_samples)
     high, low = np.empty(n_samples), np.empty(n_samples)
     candidates = (np.empty(n_samples, dtype=np.int64), np.empty(n_samples))
     rules = (columns, lows, highs, levels, weighted, ranks, ordered, _bin_indices(columns, lows, highs, bins))
@@ -1265,28 +1213,26 @@ def analyse_windows_batched(
     last_threshold = np.nan
     last_upper = np.nan
     batches = _batch_state(batch_counts, batch_positions, ranks)
-    batch_bounds = batches[5]
+    batch_brackets = batches[5]
     present = 0.0
     for t in range(m):
         sums, present = _window_sums(rows, measured, t, slots, present, (high, low, total))
         if present < min_points:
             _blank_window(t, ic, ci, median, gradient, extreme_costs, batch_ic, batch_ci)
             continue
-        below, below_band = _costs(sums, present, cost, (bracket[0], quantile_bracket[0]))
-        # The candidates reach the bracket's top, and every batch's bound, so that they hold the batches' sets.
+        _costs(sums, present, cost)
+        # The candidates reach the bracket's top, and every batch's, so that they hold the batches' sets too.
         bound = bracket[1]
         for b in range(n_batches):
-            bound = max(bound, batch_bounds[b]) if batch_bounds[b] == batch_bounds[b] else bound
-        found, inside = _gather(cost, bound, quantile_bracket, candidates, band_values)
-        if found < count:
-            found = _candidates(cost, 0, 1, count, np.nan, candidates)
-        threshold = _bracketed_threshold(count, candidates, found, below, bracket, work[0])
+            bound = max(bound, batch_brackets[b, 1]) if batch_brackets[b, 1] == batch_brackets[b, 1] else bound
+        found = _candidates(cost, 0, 1, count, bound, candidates)
+        threshold, density = _select_near(candidates[1], found, count - 1, bracket, scratch)
         smallest = _read_off(
             cost, count, candidates, found, threshold, rules, positions, t, ic, ci, median, gradient, True, work
         )
-        upper = _quantile_cost(cost, upper_position, band_values, inside, below_band)
-        bracket, last_threshold = _next_bracket(threshold, last_threshold), threshold
-        quantile_bracket, last_upper = _next_bracket(upper, last_upper), upper
+        upper, quantile_density = _select_near(cost, n_samples, upper_position, quantile_bracket, scratch)
+        bracket, last_threshold = _next_bracket(threshold, last_threshold, density), threshold
+        quantile_bracket, last_upper = _next_bracket(upper, last_upper, quantile_density), upper
         extreme_costs[0, t] = smallest
         extreme_costs[1, t] = threshold
         extreme_costs[2, t] = upper
@@ -1299,12 +1245,12 @@ def analyse_windows_batched(
 def _batch_state(counts, positions, ranks):
     """What :func:`_read_off_batches` carries from window to window, for batches of these ``counts``.
 
-    (counts, positions, batch_of, member_candidates, member_found, bounds,
+    (counts, positions, batch_of, member_candidates, member_found,
     brackets, last_thresholds, selected, at_rank): each sample's batch, the
-    batches' candidates (indices, costs) and how many, each batch's bound
-    of candidates and bracket (see :func:`_next_bound`, :func:`_next_bracket`)
-    and last threshold, its behavioural set, and the batch of the sample at
-    every rank of every parameter (``ranks``, see :func:`parameter_ranks`).
+    batches' candidates (indices, costs) and how many, each batch's bracket
+    (see :func:`_next_bracket`, whose top bounds its candidates) and last
+    threshold, its behavioural set, and the batch of the sample at every
+    rank of every parameter (``ranks``, see :func:`parameter_ranks`).
     """
     n_batches = counts.shape[0]
     n_params, n_samples = ranks.shape
@@ -1320,7 +1266,6 @@ def _batch_state(counts, positions, ranks):
         batch_of,
         (np.empty((n_batches, size), dtype=np.int64), np.empty((n_batches, size))),
         np.empty(n_batches, dtype=np.int64),
-        np.full(n_batches, np.nan),
         np.full((n_batches, 2), np.nan),
         np.full(n_batches, np.nan),
         np.empty((n_batches, counts.max() if n_batches else 0), dtype=np.int64),
@@ -1333,13 +1278,13 @@ def _read_off_batches(cost, candidates, found, batches, rules, t, batch_ic, batc
     """Every Monte Carlo batch's IC and limits at window t, from the population's ``candidates``.
 
     Each batch's threshold is searched as the population's is (within a
-    bracket around its last); its thesis limits, order statistics of its
+    bracket around its last, :func:`_select_near`); its thesis limits, order statistics of its
     set, are then found for all batches in one walk over each parameter's
     ranks from either end (:func:`_batch_limits`) when the sets are large,
     else by :func:`_read_off`, as are the weighted limits, read off each
     batch's CLD. ``batches`` is :func:`_batch_state`'s, updated here.
     """
-    counts, positions, batch_of, batch_candidates, batch_found, bounds, brackets, last, selected, at_rank = batches
+    counts, positions, batch_of, batch_candidates, batch_found, brackets, last, selected, at_rank = batches
     lows, highs, weighted, ranks, ordered = rules[1], rules[2], rules[4], rules[5], rules[6]
     n_batches = counts.shape[0]
     # As for the population (see _read_off): the walk over the ranks pays once the sets are a 32nd of the samples.
@@ -1347,13 +1292,11 @@ def _read_off_batches(cost, candidates, found, batches, rules, t, batch_ic, batc
     _deal_candidates(candidates, found, batch_of, batch_candidates, batch_found)
     for b in range(n_batches):
         members = (batch_candidates[0][b], batch_candidates[1][b])
-        if batch_found[b] < counts[b]:
-            batch_found[b] = _candidates(cost, b, n_batches, counts[b], bounds[b], members)
         bracket = (brackets[b, 0], brackets[b, 1])
-        below = _count_below(members[1], batch_found[b], bracket[0])
-        threshold = _bracketed_threshold(counts[b], members, batch_found[b], below, bracket, work[0])
-        bounds[b] = _next_bound(threshold)
-        brackets[b, 0], brackets[b, 1] = _next_bracket(threshold, last[b])
+        if batch_found[b] < counts[b]:
+            batch_found[b] = _candidates(cost, b, n_batches, counts[b], bracket[1], members)
+        threshold, density = _select_near(members[1], batch_found[b], counts[b] - 1, bracket, work[0])
+        brackets[b, 0], brackets[b, 1] = _next_bracket(threshold, last[b], density)
         last[b] = threshold
         if not by_rank:
             _read_off(
@@ -1382,15 +1325,6 @@ def _read_off_batches(cost, candidates, found, batches, rules, t, batch_ic, batc
         for b in range(n_batches):
             batch_ci[b, p, t, 0], batch_ci[b, p, t, 1] = limits[b, 0], limits[b, 1]
             batch_ic[b, p, t] = 1 - (limits[b, 1] - limits[b, 0]) / (highs[p] - lows[p])
-
-
-@_jit
-def _count_below(costs, found, low):
-    """How many of ``costs[:found]`` lie below ``low``."""
-    below = 0
-    for i in range(found):
-        below += costs[i] < low
-    return below
 
 
 @_jit
