@@ -126,3 +126,15 @@ def test_parameter_ranks_are_the_stable_sort():
     ranks, ordered = kernels.parameter_ranks(columns)
     np.testing.assert_array_equal(ranks, [[2, 1, 3, 0], [0, 1, 2, 3]])
     np.testing.assert_array_equal(ordered, np.sort(columns, axis=1))
+
+
+def test_a_crowd_of_equal_values_is_answered_without_selection():
+    # Every sample simulating alike (a record resting at zero): the bracket holds them all, one value.
+    values = np.full(3 * kernels._CROWDED, 0.25)
+    values[:5] = 0.1
+    scratch = np.full(values.size, np.nan)
+    value, _ = kernels._select_near(values, values.size, 100, (0.2, 0.3), scratch)
+    assert value == 0.25
+    assert np.isnan(scratch).all()  # answered by the check, nothing copied
+    value, _ = kernels._select_near(values, values.size, 3, (0.05, 0.3), scratch)
+    assert value == 0.1  # a crowd of two values still selects

@@ -727,12 +727,22 @@ def _select_near(values, n, k, bracket, scratch):
             low, high = (low - 4 * width if width > 0 and attempt < _RETRIES - 1 else -np.inf), low
         else:
             low, high = high, (high + 4 * width if width > 0 and attempt < _RETRIES - 1 else np.inf)
+    density = inside / (high - low) if high > low else 0.0
+    if inside > _CROWDED:
+        # Every value within may be the same (samples that simulate alike, as all do once a record rests at zero).
+        smallest, largest = np.inf, -np.inf
+        for i in range(n):
+            within = (values[i] >= low) & (values[i] <= high)
+            smallest = min(smallest, values[i] if within else np.inf)
+            largest = max(largest, values[i] if within else -np.inf)
+        if smallest == largest:
+            return smallest, density
     taken = 0
     # Branch-free: every value is written, and kept (by counting it) when it is within the bracket.
     for i in range(n):
         scratch[taken] = values[i]
         taken += (values[i] >= low) & (values[i] <= high)
-    return _select(scratch, taken, k - below), taken / (high - low) if high > low else 0.0
+    return _select(scratch, taken, k - below), density
 
 
 @_jit
@@ -760,6 +770,8 @@ def _behavioural(count, candidates, found, threshold, selected, chosen):
             selected[taken] = s
             chosen[taken] = value
             taken += 1
+            if taken == count:  # the costs below the threshold are among them: no later one can be
+                break
 
 
 @_jit
@@ -1147,6 +1159,8 @@ def _order_statistics(values, count, positions, with_median, scratch):
 _NARROWEST, _WIDEST = 0.002, 0.5
 _BRACKET_RANKS = 128
 _RETRIES = 3
+# More values than this within a bracket are first checked for being all the same, which no selection then needs.
+_CROWDED = 1024
 
 
 @_jit
