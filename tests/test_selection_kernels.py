@@ -138,3 +138,14 @@ def test_a_crowd_of_equal_values_is_answered_without_selection():
     assert np.isnan(scratch).all()  # answered by the check, nothing copied
     value, _ = kernels._select_near(values, values.size, 3, (0.05, 0.3), scratch)
     assert value == 0.1  # a crowd of two values still selects
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_an_answer_just_outside_the_bracket_is_found_on_its_side(seed):
+    rng = np.random.default_rng(seed)
+    values = rng.uniform(0, 1, 500)  # distinct: the ranks at the bracket's edges are exact
+    ordered = np.sort(values)
+    k = int(rng.integers(10, 490))
+    for bracket in ((ordered[k - 6], ordered[k - 1]), (ordered[k + 1], ordered[k + 6])):
+        value, _ = kernels._select_near(values, values.size, k, bracket, np.empty(values.size))
+        assert value == ordered[k]
