@@ -278,7 +278,7 @@ def _analyse_samples(u, y, model, names, box, samples, settings, progress, outpu
                 progress=progress,
                 run=recorded,
                 output=output,
-                simulations=_simulations(u, y, model, analysed[:, model_order], sims, settings),
+                simulations=_simulations(u, y, model, analysed[:, model_order], sims, settings, errors),
             )
         finally:
             if isinstance(errors, (CompiledErrors, StateErrors)):
@@ -291,17 +291,17 @@ def _analyse_samples(u, y, model, names, box, samples, settings, progress, outpu
     return result
 
 
-def _simulations(u, y, model, params, sims, settings):
+def _simulations(u, y, model, params, sims, settings, errors):
     """``simulations(indices)`` of :func:`dynia.engine.windows.analyse_stream`: those samples simulated once more.
 
-    On the compiled engine a built-in linear model's few sets run through its kernel, which gives the numpy
-    recursion's outputs bit for bit without its Python loop over every step.
+    Where the analysis ran on the linear kernel (``errors``, its source), so do the few sets: the kernel gives
+    the numpy recursion's outputs bit for bit without its Python loop over every step.
     """
 
     def simulations(rows):
         if sims is not None:
             return [sims[rows]]
-        if compiled_engine(settings.engine, settings.flavour) and compiled_simulation(model):
+        if isinstance(errors, CompiledErrors):
             source = CompiledErrors(model, params[rows], u, y, dt=settings.dt, x0=settings.x0, workers=1)
             return source.output_chunks(RESIDUAL_CHUNK)
         return model.simulate_chunks(params[rows], u, dt=settings.dt, x0=settings.x0, chunk_steps=RESIDUAL_CHUNK)

@@ -270,32 +270,30 @@ def simulate_window_sums(
                 block_start,
                 block_stop,
             )
-            if step >= 0 and (bad_step < 0 or step < bad_step):
-                bad_step, bad_sample = step, sample
-            continue
-        step, sample = _fused_block(
-            phi,
-            gamma_now,
-            gamma_prev,
-            c,
-            feed_now,
-            feed_prev,
-            delays,
-            state_terms,
-            output_terms,
-            padded_input,
-            y,
-            scale,
-            steps,
-            first_end,
-            state,
-            ring,
-            sums,
-            totals,
-            block_start,
-            block_stop,
-            n_states,
-        )
+        else:
+            step, sample = _fused_block(
+                phi,
+                gamma_now,
+                gamma_prev,
+                c,
+                feed_now,
+                feed_prev,
+                delays,
+                state_terms,
+                output_terms,
+                padded_input,
+                y,
+                scale,
+                steps,
+                first_end,
+                state,
+                ring,
+                sums,
+                totals,
+                block_start,
+                block_stop,
+                n_states,
+            )
         if step >= 0 and (bad_step < 0 or step < bad_step):
             bad_step, bad_sample = step, sample
     return bad_step, bad_sample
@@ -1000,27 +998,32 @@ def _ranked_order_statistics(ranks, ordered, selected, count, positions, words):
     for i in range(count):
         rank = ranks[selected[i]]
         words[rank >> 6] |= _ONE << np.uint64(rank & 63)
-    targets = (positions[0], (count - 1) // 2, positions[1])
-    found = np.empty(3, dtype=np.int64)
-    seen = 0
-    w = 0
-    for which in range(3):  # ascending targets: each walk goes on from the word the last one stopped in
-        target = targets[which]
-        while seen + _popcount(words[w]) <= target:
-            seen += _popcount(words[w])
-            w += 1
-        word = words[w]
-        counted = seen
-        bit = 0
-        while True:
-            if (word >> np.uint64(bit)) & _ONE:
-                if counted == target:
-                    break
-                counted += 1
-            bit += 1
-        found[which] = 64 * w + bit
+    # Ascending targets: each walk goes on from the word the last one stopped in.
+    lower, w, seen = _set_bit_at(words, positions[0], 0, 0)
+    middle, w, seen = _set_bit_at(words, (count - 1) // 2, w, seen)
+    upper, w, seen = _set_bit_at(words, positions[1], w, seen)
     words[:] = 0
-    return ordered[found[0]], ordered[found[2]], ordered[found[1]]
+    return ordered[lower], ordered[upper], ordered[middle]
+
+
+@_jit
+def _set_bit_at(words, target, w, seen):
+    """Where the ``target``-th set bit (0-based) of ``words`` lies, counted on from word ``w`` after ``seen`` bits.
+
+    Returns its position, the word it lies in and the set bits before that word, for the next, later target.
+    """
+    while seen + _popcount(words[w]) <= target:
+        seen += _popcount(words[w])
+        w += 1
+    word = words[w]
+    counted = seen
+    bit = 0
+    while True:
+        if (word >> np.uint64(bit)) & _ONE:
+            if counted == target:
+                return 64 * w + bit, w, seen
+            counted += 1
+        bit += 1
 
 
 @_jit
@@ -1354,40 +1357,39 @@ def _batch_limits(selected, counts, positions, ranks, ordered, at_rank, words, l
     the sets' members in all, where selecting in each set visits them all.
     ``at_rank`` holds the batch of the sample at every rank.
     """
-    n_batches = counts.shape[0]
-    for b in range(n_batches):
+    for b in range(counts.shape[0]):
         for i in range(counts[b]):
             rank = ranks[selected[b, i]]
             words[rank >> 6] |= _ONE << np.uint64(rank & 63)
-    seen = np.zeros(n_batches, dtype=np.int64)
-    remaining = n_batches
-    w = 0
-    while remaining:
-        word = words[w]
-        for bit in range(64 if word else 0):
-            if (word >> np.uint64(bit)) & _ONE:
-                rank = 64 * w + bit
-                b = at_rank[rank]
-                if seen[b] == positions[b, 0]:
-                    limits[b, 0] = ordered[rank]
-                    remaining -= 1
-                seen[b] += 1
-        w += 1
-    seen[:] = 0
-    remaining = n_batches
-    w = words.shape[0] - 1
-    while remaining:
-        word = words[w]
-        for bit in range(63 if word else -1, -1, -1):
-            if (word >> np.uint64(bit)) & _ONE:
-                rank = 64 * w + bit
-                b = at_rank[rank]
-                if seen[b] == counts[b] - 1 - positions[b, 1]:
-                    limits[b, 1] = ordered[rank]
-                    remaining -= 1
-                seen[b] += 1
-        w -= 1
+    _walk_to_limits(words, at_rank, ordered, positions[:, 0], True, limits[:, 0])
+    _walk_to_limits(words, at_rank, ordered, counts - 1 - positions[:, 1], False, limits[:, 1])
     words[:] = 0
+
+
+@_jit
+def _walk_to_limits(words, at_rank, ordered, targets, upward, limits):
+    """``limits[b]`` = ``ordered`` at batch b's ``targets[b]``-th set rank (0-based) of ``words``, every batch.
+
+    Counted from the lowest rank up (``upward``) or from the highest down,
+    a word at a time, until every batch has met its target.
+    """
+    seen = np.zeros(targets.shape[0], dtype=np.int64)
+    remaining = targets.shape[0]
+    n_words = words.shape[0]
+    for i in range(n_words):
+        if remaining == 0:
+            break
+        w = i if upward else n_words - 1 - i
+        word = words[w]
+        for j in range(64 if word else 0):
+            bit = j if upward else 63 - j
+            if (word >> np.uint64(bit)) & _ONE:
+                rank = 64 * w + bit
+                b = at_rank[rank]
+                if seen[b] == targets[b]:
+                    limits[b] = ordered[rank]
+                    remaining -= 1
+                seen[b] += 1
 
 
 @_jit
