@@ -61,6 +61,7 @@ from . import _checks
 from .engine.selection import lowest_weighted
 from .engine.windows import ArrayErrors, analyse_errors, window_costs
 from .errors import SettingsError
+from .fit import record_least_squares
 from .io.frames import unpack
 from .progress import shows_progress
 from .settings import ADAPTIVE_SAMPLERS as SCHEMES
@@ -242,7 +243,7 @@ def adaptive_run(
         weights=weights,
         simulations=lambda rows: [sims[rows]],
     )
-    result = dataclasses.replace(result, timestamps=timestamps)
+    result = dataclasses.replace(record_least_squares(result, u, y, model), timestamps=timestamps)
     # The engine gives the noise floor, so the verdicts need neither data nor simulation.
     return dataclasses.replace(result, verdicts=assess(result))
 

@@ -98,8 +98,8 @@ from .engine.noise import (
     add_record_errors,
     floor_fields,
     floor_settings,
+    record_fit,
     record_noise_floor,
-    record_residuals,
     window_points,
 )
 from .engine.windows import (
@@ -114,6 +114,7 @@ from .engine.windows import (
     window_mean,
 )
 from .errors import DataError, DyniaError, ModelError, SettingsError
+from .fit import record_least_squares
 from .io.frames import unpack
 from .pipeline import warn_dropped
 from .progress import progress_bar, shows_progress
@@ -291,6 +292,7 @@ def run(
             progress,
         )
     result = _result(u, y, model, names, box, samples, settings, flavour_impl, windows, analysed, totals)
+    result = record_least_squares(result, u, y, model)
     return result if timestamps is None else dataclasses.replace(result, timestamps=timestamps)
 
 
@@ -353,7 +355,7 @@ def _result(u, y, model, names, box, samples, settings, flavour_impl, windows, a
         extreme /= windows.scale  # exact: a power of two
     # The record-best set and its neighbours are simulated once more here, as dynia.run does.
     model_order = [names.index(name) for name in model.names]
-    residuals = record_residuals(
+    fit = record_fit(
         y,
         samples,
         box,
@@ -371,7 +373,7 @@ def _result(u, y, model, names, box, samples, settings, flavour_impl, windows, a
         len(names),
         settings.percentage,
         samples.shape[0],
-        residuals,
+        fit,
     )
     # The same record as dynia.run's: the settings asked for, then what the analysis did.
     recorded = dataclasses.replace(

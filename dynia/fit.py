@@ -72,20 +72,21 @@ Examples
 import math
 import numbers
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.optimize import least_squares
 
 from . import _checks
-from .errors import DataError, ModelError, SettingsError
+from .engine.noise import steady_size_factor
+from .errors import DataError, DyniaError, ModelError, SettingsError
 from .io.frames import unpack
 from .models import Model
 from .segments import check_segments, mask_to_segments
 from .serial import json_number, json_ready
 from .settings import check_dt
 
-__all__ = ["FitResult", "fit_segments", "validation_error", "OFFSETS", "X0_CHOICES"]
+__all__ = ["FitResult", "fit_segments", "record_least_squares", "validation_error", "OFFSETS", "X0_CHOICES"]
 
 OFFSETS = ("none", "segment")
 X0_CHOICES = ("steady", "zero")
@@ -501,6 +502,74 @@ def fit_segments(
             n_starts=n_starts,
         ),
     )
+
+
+def record_least_squares(result, u, y, model):
+    """``result`` with the whole record's least-squares fit of ``model`` in its run record.
+
+    The front-ends' analyses leave the record's fit within the sample in
+    ``result.run.record_fit`` (:func:`dynia.engine.noise.record_fit`: the
+    record-best set and a Gauss-Newton step from its neighbours, as fine
+    as the sample). From there :func:`fit_segments` fits the whole record
+    inside the sampling box, with the run's ``dt`` and ``x0``; the
+    estimates, their HAC standard errors (robust to the residuals'
+    autocorrelation) and the residuals' RMSE replace it
+    (``record_fit``, ``record_fit_se``, ``record_fit_rmse``), and the
+    noise's own size factor read off its residuals where its output is
+    steady (``steady_size_factor``,
+    :func:`dynia.engine.noise.steady_size_factor`). The verdicts
+    compare the evidence bands with it (:mod:`dynia.verdicts`, reason
+    ``disagrees_with_record_fit``). A parameter whose range is a point is
+    held there. Where the least squares cannot run (the model cannot
+    simulate a point it reaches), the fit within the sample stays, without
+    standard errors, and no verdict compares with it.
+
+    Examples
+    --------
+    >>> import numpy as np, dynia
+    >>> u = np.r_[np.zeros(20), np.ones(100), np.zeros(80)]
+    >>> y = dynia.models.FirstOrder().simulate([[2.0, 3.0]], u)[0] + np.random.default_rng(0).normal(0, 0.05, 200)
+    >>> res = dynia.run(u, y, dynia.models.FirstOrder(), {"K": (0, 5), "T": (0, 10)}, n=5, rng=1)
+    >>> [round(value, 2) for value in res.run.record_fit], [round(se, 3) for se in res.run.record_fit_se]
+    ([2.01, 2.95], [0.005, 0.05])
+    """
+    start = result.run.record_fit
+    if start is None or result.settings is None:
+        return result
+    names = list(result.names)
+    bounds, fixed = {}, {}
+    for name, (low, high) in zip(names, result.bounds):
+        if high > low:
+            bounds[name] = (float(low), float(high))
+        else:
+            fixed[name] = float(low)
+    initial = {name: float(np.clip(value, *bounds[name])) for name, value in zip(names, start) if name in bounds}
+    try:
+        fit = fit_segments(
+            u,
+            y,
+            model,
+            [(0, np.asarray(y).shape[0])],
+            bounds=bounds,
+            initial=initial,
+            fixed=fixed,
+            dt=result.settings.dt,
+            x0=result.settings.x0,
+        )
+    except DyniaError:
+        return result
+    sigma = result.run.noise_sigma
+    steady = math.nan
+    if sigma is not None and math.isfinite(sigma):
+        before, after = result.window_halos
+        steady = steady_size_factor(np.asarray(y) - fit.fitted, fit.fitted, sigma, before + after + 1)
+    fields = dict(
+        record_fit=tuple(fit.parameters[name] for name in names),
+        record_fit_se=tuple(fit.std_errors_hac.get(name, 0.0) for name in names),
+        record_fit_rmse=fit.rmse,
+        steady_size_factor=steady,
+    )
+    return replace(result, run=replace(result.run, **fields))
 
 
 def _free_parameters(model, fixed, initial, bounds):

@@ -47,11 +47,12 @@ from .engine.noise import (
     add_record_errors,
     floor_fields,
     floor_settings,
+    record_fit,
     record_noise_floor,
-    record_residuals,
 )
 from .engine.windows import OverflowedWindowsWarning, blank_overflowed, error_scale
 from .errors import DataError, ModelError, SettingsError
+from .fit import record_least_squares
 from .io.frames import unpack
 from .models import FunctionModel, Model, StateSpaceModel
 from .models.base import SameOutput, refuse_ignored_params
@@ -409,10 +410,10 @@ class OnlineDynia:
             n_params,
             self._analysis.percentage,
             self.samples.shape[0],
-            residuals=record_residuals(y, self.samples, self.bounds, totals, self._simulations(u, start)),
+            fit=record_fit(y, self.samples, self.bounds, totals, self._simulations(u, start)),
         )
         run = dataclasses.replace(self._run, n_diverged=self.n_diverged, **floor_settings(floor))
-        return DyniaResult(
+        result = DyniaResult(
             names=self.names,
             samples=np.array(self.samples),
             bounds=self.bounds.copy(),
@@ -427,9 +428,11 @@ class OnlineDynia:
             timestamps=timestamps,
             **floor_fields(floor),
         )
+        # The whole record's least squares simulates from the start state: only a replay from step 0 has it.
+        return result if first else record_least_squares(result, u, y, self._model)
 
     def _simulations(self, u, start):
-        """``simulations(rows)`` of :func:`dynia.engine.noise.record_residuals` over the replayed record.
+        """``simulations(rows)`` of :func:`dynia.engine.noise.record_fit` over the replayed record.
 
         ``start`` is the stepper as the replay began, None when it began at
         step 0: the sets are then simulated alone, which the stepper equals

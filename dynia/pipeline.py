@@ -13,6 +13,7 @@ from .engine.kernels import CompiledErrors
 from .engine.noise import RESIDUAL_CHUNK
 from .engine.windows import ArrayErrors, StreamedErrors, analyse_errors, default_chunk_steps
 from .errors import ModelError, SettingsError
+from .fit import record_least_squares
 from .io.arrays import result_arrays
 from .io.frames import unpack
 from .models import LinearModel, Model, StateSpaceModel
@@ -288,7 +289,7 @@ def _analyse_samples(u, y, model, names, box, samples, settings, progress, outpu
         # Some sets overflowed: their costs were not finite, so the analysis is redone without them.
         finite[np.flatnonzero(finite)[errors.diverged]] = False
     warn_dropped(n_dropped, n_sampled, u)
-    return result
+    return record_least_squares(result, u, y, model)
 
 
 def _simulations(u, y, model, params, sims, settings, errors):

@@ -339,7 +339,10 @@ class DyniaResult:
         :meth:`informative_windows`, and whole) when there is one, else the
         one of highest IC of all (:func:`dynia.verdicts.reported_step`);
         ``highest_ic`` and ``time_of_highest_ic`` are the record's highest
-        IC wherever it lies. The estimate is the CLD median (:attr:`median`)
+        IC wherever it lies; where that is not the reported window,
+        ``highest_ic_no_evidence`` lists why its window is no evidence
+        (:func:`dynia.verdicts.no_evidence_reasons`: ``"record_edge"``,
+        ``"below_noise_floor"``, ``"noise_ranked"``, ...). The estimate is the CLD median (:attr:`median`)
         at the reported window, so it always lies in the band there; a result without
         the median (a file saved before it existed) reports the band's
         midpoint instead. The verdict ("identified", "weak" or
@@ -354,6 +357,13 @@ class DyniaResult:
         ``high_ic_span`` gives the time of the first and of the last of
         them ([None, None] when there is none).
 
+        ``record_fit`` is the whole record's least-squares fit of the model
+        and ``record_fit_se`` its standard error, robust to the residuals'
+        autocorrelation (``run.record_fit``, inf where the record does not
+        determine the parameter); None for a result without it. An
+        identified band holds it (:mod:`dynia.verdicts`, reason
+        ``disagrees_with_record_fit``).
+
         The times (``time_of_max_ic``, ``time_of_highest_ic``,
         ``high_ic_span``) are seconds from the start of the record (floats,
         as :attr:`time`), or for a dated result (:attr:`timestamps`) the
@@ -364,7 +374,8 @@ class DyniaResult:
         -------
         dict
             ``{name: {"max_ic", "time_of_max_ic", "band": [lower, upper], "estimate", "highest_ic",
-            "time_of_highest_ic", "high_ic_windows", "high_ic_span": [first, last], "verdict", "reasons"}}``
+            "time_of_highest_ic", "high_ic_windows", "high_ic_span": [first, last], "record_fit", "record_fit_se",
+            "verdict", "reasons"}}``
             with plain Python values but the dates; with the Monte Carlo errors also
             ``"max_ic_se"``, the standard error of the max IC.
 
@@ -381,7 +392,7 @@ class DyniaResult:
         np.datetime64('2015-02-01T00:00:00.000000000')
         """
         # verdicts reads results: imported here to keep the modules acyclic
-        from .verdicts import assess, high_ic_windows, reported_step
+        from .verdicts import assess, high_ic_windows, no_evidence_reasons, reported_step
 
         verdicts = self.verdicts if self.verdicts is not None else assess(self)
         summary = {}
@@ -406,6 +417,8 @@ class DyniaResult:
                     highest_ic=float(self.ic[p, highest]),
                     time_of_highest_ic=self._when(highest),
                 )
+                if highest != best:
+                    summary[name]["highest_ic_no_evidence"] = no_evidence_reasons(self, p, highest)
                 if self.ic_se is not None:
                     summary[name]["max_ic_se"] = float(self.ic_se[p, best])
             steps = np.flatnonzero(high_ic_windows(self, p))
@@ -413,8 +426,16 @@ class DyniaResult:
                 high_ic_windows=int(steps.size),
                 high_ic_span=[self._when(steps[0]), self._when(steps[-1])] if steps.size else [None, None],
             )
+            summary[name].update(self._record_fit(p))
             summary[name].update(verdict=verdicts[name]["verdict"], reasons=list(verdicts[name]["reasons"]))
         return summary
+
+    def _record_fit(self, p):
+        """``record_fit`` and ``record_fit_se`` of parameter ``p`` for :meth:`summary` (None where the run has none)."""
+        fit, errors = self.run.record_fit, self.run.record_fit_se
+        if fit is None or errors is None:
+            return dict(record_fit=None, record_fit_se=None)
+        return dict(record_fit=fit[p], record_fit_se=errors[p])
 
     def _when(self, step):
         """The time of ``step`` as :meth:`summary` reports it: its date (datetime64[ns]) when dated, else seconds."""

@@ -555,6 +555,26 @@ def _optional(kind, value, name):
     raise SettingsError(f"{name} must be {kind.__name__} or None; got {value!r} ({type(value).__name__})", name)
 
 
+def _named_ranges(rows):
+    """``first_run_bounds`` as ((name, (low, high)), ...), from pairs or a mapping; a SettingsError otherwise."""
+    pairs = rows.items() if isinstance(rows, Mapping) else rows
+    try:
+        return tuple((str(name), (float(low), float(high))) for name, (low, high) in pairs)
+    except (TypeError, ValueError):
+        raise SettingsError(
+            f"first_run_bounds must pair each name with (low, high); got {rows!r}", "first_run_bounds"
+        ) from None
+
+
+def _float_tuple(values, name):
+    """``values`` as a tuple of floats (one per parameter), None kept; a SettingsError naming ``name`` otherwise."""
+    if values is None:
+        return None
+    if isinstance(values, (str, bytes)) or not isinstance(values, (tuple, list, np.ndarray)):
+        raise SettingsError(f"{name} must be a sequence of numbers, one per parameter; got {values!r}", name)
+    return tuple(_optional(float, value, name) for value in values)
+
+
 def _same(a, b):
     """Equal values, NaN equal to NaN and arrays compared element by element (for :meth:`RunRecord.__eq__`)."""
     if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
@@ -620,6 +640,22 @@ class RunRecord:
         Lag-1 autocorrelation of the residuals (NaN: not estimated).
     noise_size_factor : float or None
         Factor on the noise's effective sample size that the autocorrelation gives (1: white noise).
+    record_fit : tuple of float or None
+        The whole record's least-squares fit of the model, one value per
+        parameter in ``result.names`` order
+        (:func:`dynia.fit.record_least_squares`); the fit within the sample
+        (:func:`dynia.engine.noise.record_fit`) where the least squares did
+        not run.
+    record_fit_se : tuple of float or None
+        Its standard errors, robust to the residuals' autocorrelation (HAC,
+        :mod:`dynia.fit`; inf where the record does not determine the
+        parameter); None where the least squares did not run.
+    record_fit_rmse : float or None
+        Root mean square of its residuals.
+    steady_size_factor : float or None
+        The noise's own size factor for a window, read off the record fit's
+        residuals where its output is steady
+        (:func:`dynia.engine.noise.steady_size_factor`; NaN where it never is).
     first_run_bounds : tuple of (str, (float, float)) or None
         :func:`dynia.refine.second_run`: the first run's ranges, ``dict(...)`` of it maps name to (low, high).
     narrowed : tuple of str or None
@@ -648,6 +684,10 @@ class RunRecord:
     behavioural_multiple: float | None = None
     noise_autocorrelation: float | None = None
     noise_size_factor: float | None = None
+    record_fit: tuple | None = None
+    record_fit_se: tuple | None = None
+    record_fit_rmse: float | None = None
+    steady_size_factor: float | None = None
     first_run_bounds: tuple | None = None
     narrowed: tuple | None = None
     narrowing_threshold: float | None = None
@@ -673,17 +713,10 @@ class RunRecord:
                     "target_se_rounds",
                 ) from None
             object.__setattr__(self, "target_se_rounds", rounds)
+        for name in ("record_fit", "record_fit_se"):
+            object.__setattr__(self, name, _float_tuple(getattr(self, name), name))
         if self.first_run_bounds is not None:
-            rows = self.first_run_bounds
-            rows = rows.items() if isinstance(rows, Mapping) else rows
-            try:
-                rows = tuple((str(name), (float(low), float(high))) for name, (low, high) in rows)
-            except (TypeError, ValueError):
-                raise SettingsError(
-                    f"first_run_bounds must pair each name with (low, high); got {self.first_run_bounds!r}",
-                    "first_run_bounds",
-                ) from None
-            object.__setattr__(self, "first_run_bounds", rows)
+            object.__setattr__(self, "first_run_bounds", _named_ranges(self.first_run_bounds))
         if self.narrowed is not None:
             if isinstance(self.narrowed, str) or not all(isinstance(name, str) for name in self.narrowed):
                 raise SettingsError(f"narrowed must be parameter names (str); got {self.narrowed!r}", "narrowed")

@@ -97,6 +97,8 @@ __all__ = [
     "band_disagreement",
     "window_stretches",
     "stretch_bands",
+    "noise_widening",
+    "widened",
 ]
 
 # A band closer to a bound than this fraction of its width (or one gradient bin)
@@ -288,6 +290,42 @@ def stretch_bands(result, p, stretches):
     return np.array([np.median(result.ci[p, steps], axis=0) for steps in stretches]).reshape(-1, 2)
 
 
+def noise_widening(result):
+    """Half-widths by which every band is widened on either side before bands are compared with each other.
+
+    ``sqrt(f) - 1``, f the noise's own size factor
+    (``result.run.steady_size_factor``, :func:`dynia.engine.noise.steady_size_factor`):
+    0 for white noise, for which the comparisons' tolerances were measured
+    (a band holds what noise does to its window's estimate). Noise whose
+    window counts f times fewer independent points moves a window's
+    estimate about sqrt(f) times as far, a slowly wandering disturbance
+    taken for a change of the parameter. Where the record never settles
+    (NaN), the factor of all its residuals (``noise_size_factor``), misfit
+    included; a result without a record fit (None) is compared as before.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> noise_widening(SimpleNamespace(run=SimpleNamespace(steady_size_factor=16.0, noise_size_factor=20.0)))
+    3.0
+    """
+    factor = result.run.steady_size_factor
+    if factor is None:
+        return 0.0
+    if math.isnan(factor):
+        factor = result.run.noise_size_factor
+    if factor is None or not math.isfinite(factor):
+        return 0.0
+    return max(math.sqrt(factor) - 1, 0.0)
+
+
+def widened(bands, widening):
+    """``bands`` (n, 2) widened by ``widening`` half-widths on either side."""
+    bands = np.asarray(bands, dtype=float).reshape(-1, 2)
+    half = (bands[:, 1] - bands[:, 0]) / 2
+    return np.stack([bands[:, 0] - widening * half, bands[:, 1] + widening * half], axis=1)
+
+
 @dataclass(frozen=True, eq=False)
 class Disagreement:
     """Two stretches of windows whose bands of one parameter are disjoint (see :func:`band_disagreement`).
@@ -322,8 +360,10 @@ def band_disagreement(result, p, windows):
     (joined across gaps shorter than one window, cut into stretches of one
     window length, 2n+1 steps), and each stretch's band is the median of
     its windows' limits (:func:`stretch_bands`), as for the structure
-    warnings. The stretches disagree when the highest lower limit exceeds
-    the lowest upper limit by more than the tolerance: one gradient bin
+    warnings. Each band is widened by :func:`noise_widening` half-widths on
+    either side (none under white noise), and the stretches disagree when
+    the highest lower limit exceeds the lowest upper limit by more than the
+    tolerance: one gradient bin
     (the resolution of the CLD), or, with the Monte Carlo errors
     (``result.ci_se``), two standard errors of that difference when larger.
     A constant parameter lies in both bands; no value does.
@@ -348,8 +388,9 @@ def band_disagreement(result, p, windows):
     if len(stretches) < 2:
         return None
     bands = stretch_bands(result, p, stretches)
-    below, above = int(np.argmin(bands[:, 1])), int(np.argmax(bands[:, 0]))
-    gap = float(bands[above, 0] - bands[below, 1])
+    compared = widened(bands, noise_widening(result))
+    below, above = int(np.argmin(compared[:, 1])), int(np.argmax(compared[:, 0]))
+    gap = float(compared[above, 0] - compared[below, 1])
     low, high = result.bounds[p]
     tolerance = float(high - low) / result.gradient.shape[1]
     if result.ci_se is not None:

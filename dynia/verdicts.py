@@ -98,6 +98,34 @@ several seeds and in wide and narrow ranges) leave overlaps of 20 to 70 %
 of a band's width; a gain of 2 that turns 3 half way leaves a gap of five
 bins.
 
+The record's fit
+----------------
+The windows compare with each other only where two stretches of the record
+are evidence; a model that approximates the process (a first order plus
+dead time fitted to a higher-order lag, whose "dead time" is the apparent
+one of the early response) or a parameter that moves under weak excitation
+often leaves one such stretch, and nothing checks its band. The whole
+record checks it: every front-end fits the model to the whole record by
+least squares (:func:`dynia.fit.record_least_squares`, from the
+record-best set of the noise floor), and where the model and a constant
+parameter describe the record, that fit and every evidence band agree
+within noise. A band (the reported window's, and the median band of each
+stretch of evidence windows as ``windows_disagree`` forms them) that
+excludes the fit by more than the tolerance raises
+``disagrees_with_record_fit``, naming both. The tolerance is two standard
+errors of the difference: the fit's standard error from noise alone
+(:func:`record_fit_noise_error`: its HAC standard error, scaled down by the
+windows' noise level over the fit's RMSE where misfit inflates the
+residuals, since another noise realisation would leave the misfit, and so
+the compromise value, where it is), and the Monte Carlo error of the band's
+limit (``result.ci_se``, or that of the behavioural set's order statistic
+for values spread evenly over the band). A parameter the record does not
+determine (infinite standard error) is not compared. Correctly specified
+first-order records (constant gain under white noise and under AR(1) noise
+of lag-1 autocorrelation 0.98, strong and weak excitation, 40 records) keep
+every identified band; the band of a gain that moves from 2 to 3 half way
+under weak excitation, seen in one half only, is caught.
+
 Each reason is ``{"code": ..., "text": ...}``; branch on the code, the text
 is for people.
 """
@@ -108,7 +136,7 @@ import numpy as np
 
 from .errors import ModelError, SettingsError
 from .settings import IC_THRESHOLD
-from .structure import band_disagreement
+from .structure import band_disagreement, noise_widening
 
 __all__ = [
     "VERDICTS",
@@ -116,8 +144,11 @@ __all__ = [
     "evidence_needed",
     "evidence_windows",
     "high_ic_windows",
+    "no_evidence_reasons",
     "noise_only",
     "noise_sigma",
+    "record_fit_conflict",
+    "record_fit_noise_error",
     "reported_step",
 ]
 
@@ -272,6 +303,7 @@ def assess(
             reasons.append(_reason(code, f"the window at max IC (time {when(step)}) " + text))
         reasons += _isolation_reasons(result, p, step, ic_threshold)
         reasons += _agreement_reasons(result, p, ic_threshold, when)
+        reasons += _record_fit_reasons(result, p, step, ic_threshold, when)
         ic = float(result.ic[p, step])
         if ic < ic_threshold:
             verdicts[name] = dict(
@@ -362,6 +394,38 @@ def reported_step(result, p, ic_threshold=IC_THRESHOLD):
     return int(np.nanargmax(ic))
 
 
+def no_evidence_reasons(result, p, step, ic_threshold=IC_THRESHOLD):
+    """Why the window at ``step`` is no evidence for parameter ``p``: a list of codes, empty when it is evidence.
+
+    ``"low_ic"`` (IC below ``ic_threshold`` or missing), ``"record_edge"``
+    (truncated by the record's start or end), ``"below_noise_floor"`` and
+    ``"noise_ranked"`` (behavioural set tied within noise): the codes of the
+    verdict reasons that say the same of a reported window.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dynia.result import DyniaResult
+    >>> res = DyniaResult(names=("K",), samples=np.zeros((2, 1)), bounds=np.array([[0.0, 1.0]]),
+    ...                   time=np.arange(9.0), ic=np.full((1, 9), 0.9), ci=np.zeros((1, 9, 2)),
+    ...                   gradient=np.zeros((1, 1, 9)), bin_centres=np.zeros((1, 1)), settings=dict(n=2),
+    ...                   informative=np.arange(9) != 4)
+    >>> no_evidence_reasons(res, 0, 0), no_evidence_reasons(res, 0, 4), no_evidence_reasons(res, 0, 5)
+    (['record_edge'], ['below_noise_floor'], [])
+    """
+    codes = []
+    ic = float(result.ic[p, step])
+    if not ic >= ic_threshold:
+        codes.append("low_ic")
+    if not result.full_windows[step]:
+        codes.append("record_edge")
+    if result.informative is not None and not result.informative[step]:
+        codes.append("below_noise_floor")
+    elif result.behavioural_spread is not None and result.behavioural_spread[step] <= result.behavioural_floor[step]:
+        codes.append("noise_ranked")
+    return codes
+
+
 def high_ic_windows(result, p, ic_threshold=IC_THRESHOLD):
     """Windows informative about parameter ``p``, (n_steps,) bool: the windows that can identify it.
 
@@ -409,6 +473,95 @@ def _agreement_reasons(result, p, ic_threshold, when):
             "model structure is wrong (thesis 4.4)",
         )
     ]
+
+
+def record_fit_conflict(result, p, ic_threshold=IC_THRESHOLD):
+    """How far the reported band of parameter ``p`` excludes the record's least-squares fit: see "The record's fit".
+
+    Returns ``(gap, tolerance)`` when the band at the reported window
+    (:func:`reported_step`), which is evidence, excludes
+    ``result.run.record_fit`` by more than the tolerance; None when it holds
+    it within the tolerance, when the window is no evidence (other reasons
+    say so) or when the result has no record fit with standard errors or
+    the record does not determine the parameter.
+    """
+    error = record_fit_noise_error(result, p)
+    step = reported_step(result, p, ic_threshold)
+    if error is None or step is None or not evidence_windows(result, p, ic_threshold)[step]:
+        return None
+    value = result.run.record_fit[p]
+    lower, upper = (float(limit) for limit in result.ci[p, step])
+    gap = max(lower - value, value - upper)
+    tolerance = 2 * math.hypot(error, _limit_error(result, p, step, lower, upper))
+    return (gap, tolerance) if gap > tolerance else None
+
+
+def record_fit_noise_error(result, p):
+    """The standard error of the record fit of parameter ``p`` that noise alone leaves; None without one.
+
+    ``result.run.record_fit_se`` (HAC) times ``noise_sigma / record_fit_rmse``
+    where the record fit's residuals exceed the noise the windows' best fits
+    show: what they hold beyond it is the model's misfit, a property of the
+    record that another noise realisation would leave as it is, so it does
+    not make the fit's value uncertain (see "The record's fit").
+    """
+    run = result.run
+    if run.record_fit is None or run.record_fit_se is None:
+        return None
+    value, error = run.record_fit[p], run.record_fit_se[p]
+    if not (math.isfinite(value) and math.isfinite(error)):
+        return None
+    sigma, rmse = run.noise_sigma, run.record_fit_rmse
+    if sigma is not None and rmse is not None and math.isfinite(sigma) and 0 < sigma < rmse:
+        error *= sigma / rmse
+    return error
+
+
+def _limit_error(result, p, step, lower, upper):
+    """Monte Carlo standard error of a limit of the band ``[lower, upper]`` of parameter ``p`` at ``step``.
+
+    ``result.ci_se`` when the run estimated it (the larger of the two
+    limits'); else that of an order statistic of the
+    behavioural set, its ``(1 - conf_level)/2`` quantile, for values spread
+    evenly over the band: ``sqrt(q (1 - q) / B) (upper - lower) / (1 - 2 q)``
+    with B behavioural sets.
+    """
+    if result.ci_se is not None:
+        return float(np.nanmax(result.ci_se[p, step]))
+    settings = result.settings
+    behavioural = result.run.n_behavioural or settings.n_behavioural
+    tail = (1 - settings.conf_level / 100) / 2
+    return math.sqrt(tail * (1 - tail) / max(behavioural, 1)) * (upper - lower) / (1 - 2 * tail)
+
+
+def _record_fit_reasons(result, p, step, ic_threshold, when):
+    """``disagrees_with_record_fit`` when the reported band of parameter ``p`` excludes the record's fit."""
+    conflict = record_fit_conflict(result, p, ic_threshold)
+    if conflict is None:
+        return []
+    gap, tolerance = conflict
+    value, error = result.run.record_fit[p], result.run.record_fit_se[p]
+    lower, upper = result.ci[p, step]
+    return [
+        _reason(
+            "disagrees_with_record_fit",
+            f"the band [{lower:.4g}, {upper:.4g}] at time {when(step)} excludes the whole record's least-squares fit "
+            f"{value:.4g} +- {error:.2g} by {gap:.3g} (tolerance {tolerance:.3g}): the model only approximates the "
+            "process, so that its parameters move with the part of the record it is fitted to, or the parameter "
+            f"itself moves over the record (thesis 4.4){_slow_noise(result)}",
+        )
+    ]
+
+
+def _slow_noise(result):
+    """The third cause a ``disagrees_with_record_fit`` text names where the noise is slow, else ''."""
+    widening = noise_widening(result)
+    if not widening:
+        return ""
+    return (
+        f", or a slow disturbance moves the window's estimate (a window of the noise counts {(widening + 1) ** 2:.3g} "
+        "times fewer independent points: longer windows average it out)"
+    )
 
 
 def _monte_carlo_reasons(result, p, step, ic_threshold):

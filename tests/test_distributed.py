@@ -298,7 +298,7 @@ def test_streaming_function_model_simulates_each_step_once_in_time_chunks(client
     LAG_CALLS.clear()
     result = run(u, y, model, LAG_BOUNDS, client=client, sample_chunks=100, time_chunks=20, **options)
     # Stage 0 checks each sample chunk over the whole record in one piece, and the noise floor simulates the
-    # record-best set and its neighbours twice on the client (engine.noise.record_residuals); stage 1 resumes
+    # record-best set and its neighbours twice on the client (engine.noise.record_fit); stage 1 resumes
     # in pieces.
     stage_one = sorted(call for call in LAG_CALLS if call[1] < STEPS)
     assert len(LAG_CALLS) - len(stage_one) == 4

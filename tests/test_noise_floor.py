@@ -17,9 +17,10 @@ from dynia.engine.noise import (
     fitted_noise_sigma,
     noise_floor,
     quantile_position,
-    record_residuals,
+    record_fit,
     residual_autocorrelation,
     size_factor,
+    steady_size_factor,
     window_points,
 )
 from dynia.engine.windows import moving_window
@@ -246,7 +247,7 @@ def test_record_totals_are_added_step_by_step_whatever_the_chunks():
         assert_array_equal(totals, expected)
 
 
-def test_record_residuals_take_the_best_sets_misfit_off_and_cut_the_same_in_any_chunks():
+def test_record_fit_takes_the_best_sets_misfit_off_and_cuts_the_same_in_any_chunks():
     rng = np.random.default_rng(1)
     u = np.repeat([0.0, 50.0, 20.0, 40.0], 100)  # a response of 100 noise SDs: the best set misfits it
     params = np.column_stack([rng.uniform(0, 7, 300), rng.uniform(0, 7, 300)])
@@ -255,15 +256,44 @@ def test_record_residuals_take_the_best_sets_misfit_off_and_cut_the_same_in_any_
     y = FirstOrder().simulate([[2.0, 3.0]], u)[0] + noise
     totals = np.abs(y - sims).sum(axis=1)
     bounds = np.array([[0.0, 7.0], [0.0, 7.0]])
-    residuals = record_residuals(y, params, bounds, totals, lambda rows: [sims[rows]], chunk_steps=64)
+    fit = record_fit(y, params, bounds, totals, lambda rows: [sims[rows]], chunk_steps=64)
     raw = y - sims[np.argmin(totals)]
-    residuals = residuals * 2.0 ** np.frexp(np.abs(y).max())[1]  # returned scaled by a power of two
+    residuals = fit.residuals * 2.0 ** np.frexp(np.abs(y).max())[1]  # returned scaled by a power of two
     assert np.std(residuals - noise) < 0.2 * np.std(raw - noise)
     assert residual_autocorrelation(residuals.copy(), 1)[1] < 0.15 < residual_autocorrelation(raw, 1)[1]
-    pieces = record_residuals(
+    pieces = record_fit(
         y, params, bounds, totals, lambda rows: [sims[rows][:, a : a + 37] for a in range(0, 400, 37)], chunk_steps=64
     )
-    assert_array_equal(pieces * 2.0 ** np.frexp(np.abs(y).max())[1], residuals)
+    assert_array_equal(pieces.residuals * 2.0 ** np.frexp(np.abs(y).max())[1], residuals)
+    assert_array_equal(pieces.values, fit.values)
+    # The Gauss-Newton step lands far closer to the least squares of the whole record than the best set.
+    best = params[np.argmin(totals)]
+    least = dynia.fit.fit_segments(u, y, FirstOrder(), [(0, u.size)], bounds={"K": (0, 7), "T": (0, 7)}, x0="zero")
+    exact = np.array([least.parameters["K"], least.parameters["T"]])
+    assert np.abs(fit.values - exact).max() < 0.1 * np.abs(best - exact).max()
+
+
+def test_a_step_beyond_the_neighbourhood_is_not_taken():
+    # The best set and its neighbours tie: the output does not depend on the parameter, so no step is trusted.
+    params = np.array([[1.0], [1.1], [0.9], [3.0]])
+    sims = np.ones((4, 50))
+    y = np.ones(50) + np.random.default_rng(0).normal(0, 0.1, 50)
+    fit = record_fit(y, params, np.array([[0.0, 4.0]]), np.abs(y - sims).sum(axis=1), lambda rows: [sims[rows]])
+    assert fit.values.tolist() == [1.0]
+
+
+def test_the_steady_size_factor_sees_slow_noise_and_not_a_misfit():
+    rng = np.random.default_rng(3)
+    u = np.repeat(rng.uniform(0, 2, 20), 50)
+    fitted = FirstOrder().simulate([[2.5, 5.0]], u)[0]
+    # A gain of 2 then 3 fitted as 2.5: the residual is a misfit that follows the input, over white noise.
+    true = np.r_[FirstOrder().simulate([[2.0, 5.0]], u)[0][:500], FirstOrder().simulate([[3.0, 5.0]], u)[0][500:]]
+    misfit = true + rng.normal(0, 0.2, u.size) - fitted
+    assert residual_autocorrelation(misfit.copy(), 1)[1] > 0.5  # all the residuals: strongly autocorrelated
+    assert steady_size_factor(misfit, fitted, 0.2, 21) < 1.5
+    slow = ar1(0.98, u.size, rng) * 0.2
+    assert steady_size_factor(slow, fitted, 0.2, 21) > 4
+    assert np.isnan(steady_size_factor(slow, np.arange(u.size, dtype=float), 0.2, 21))  # never steady
 
 
 def test_the_estimate_is_recorded_and_reported():

@@ -246,13 +246,15 @@ def test_heating_time_constant_is_reported_in_a_transient_not_at_its_tied_peak()
     assert summary["T"]["band"] == pytest.approx([41.3, 72.14], abs=0.01)
     found = assess(result, u=u, y=y, model=model)
     assert found["T"] == {"verdict": "identified", "reasons": []}
-    # The gain's peak, at the end of the first 9 V plateau (398 s), passes the rules of that window, but the
-    # gain of a linear model of this plant moves with the operating point: the high-IC windows of the last
-    # plateau (from 1410 s) rule out those of the second 9 V plateau (780-822 s).
+    # The gain's peak, at the end of the first 9 V plateau (398 s), passes the rules of that window, and its
+    # band holds the whole record's least-squares gain. The stretches of the last plateau (from 1410 s) and of
+    # the second 9 V plateau (780-822 s) no longer rule each other out: the residuals where the fitted output
+    # is steady are autocorrelated (a window counts about 5 times fewer independent points), and a disturbance
+    # that slow moves a window's band as far as they lie apart.
     assert summary["K"]["time_of_max_ic"] == 398.0
-    assert found["K"]["verdict"] == "suspect"
-    assert codes(found["K"]) == ["windows_disagree"]
-    assert "from time 780 to 822 and [3.655, 16.07] from time 1410 to 1420" in found["K"]["reasons"][0]["text"]
+    assert summary["K"]["band"][0] <= summary["K"]["record_fit"] <= summary["K"]["band"][1]
+    assert result.run.steady_size_factor == pytest.approx(5.0, abs=0.1)
+    assert found["K"] == {"verdict": "identified", "reasons": []}
 
 
 def fopdt_step(step_time):

@@ -180,8 +180,17 @@ def noise_floor_line(floor):
     )
 
 
+# How the table's notes say why a window is no evidence (the codes of dynia.verdicts.no_evidence_reasons).
+_NO_EVIDENCE = {
+    "low_ic": "IC below the threshold",
+    "record_edge": "truncated by the record's edge",
+    "below_noise_floor": "below the noise floor",
+    "noise_ranked": "its behavioural set tied within noise",
+}
+
+
 def verdict_table(parameters):
-    """The per-parameter lines ``dynia analyse`` prints: max IC, where, band, estimate, evidence, verdict and why.
+    """The lines ``dynia analyse`` prints per parameter: max IC, where, band, estimate, record fit, evidence, verdict.
 
     The evidence is the number of windows with IC >= 0.5 above the noise
     floor and the times of the first and the last of them ("from", "to").
@@ -193,17 +202,18 @@ def verdict_table(parameters):
 
 def verdict_parts(parameters):
     """The cells of :func:`verdict_table`: its header, its rows and the lines under it, as printed."""
-    header = ("parameter", "max IC", "at", "band", "estimate", "IC>=0.5", "from", "to", "verdict")
+    header = ("parameter", "max IC", "at", "band", "estimate", "record fit", "IC>=0.5", "from", "to", "verdict")
     rows = []
     for name, entry in parameters.items():
         first, last = entry["high_ic_span"]
+        record = _record_fit_cell(entry)
         windows = (
             str(entry["high_ic_windows"]),
             "-" if first is None else str(first),
             "-" if last is None else str(last),
         )
         if entry["max_ic"] is None:
-            rows.append((name, "-", "-", "-", "-", *windows, entry["verdict"]))
+            rows.append((name, "-", "-", "-", "-", record, *windows, entry["verdict"]))
             continue
         low, high = entry["band"]
         se = entry.get("max_ic_se")
@@ -214,6 +224,7 @@ def verdict_parts(parameters):
                 str(entry["time_of_max_ic"]),
                 f"[{low:.4g}, {high:.4g}]",
                 f"{entry['estimate']:.4g}",
+                record,
                 *windows,
                 entry["verdict"],
             )
@@ -221,14 +232,23 @@ def verdict_parts(parameters):
     notes = []
     for name, entry in parameters.items():
         if entry.get("highest_ic") is not None and entry["time_of_highest_ic"] != entry["time_of_max_ic"]:
+            why = [_NO_EVIDENCE.get(code, code) for code in entry.get("highest_ic_no_evidence", ())]
             notes.append(
                 f"  {name}: the record's highest IC, {entry['highest_ic']:.3f} at {entry['time_of_highest_ic']}, is "
-                "in a window that is no evidence (truncated, below the noise floor or tied within noise); shown: the "
-                "highest IC among the windows that are"
+                f"in a window that is no evidence ({' and '.join(why) or 'not evidence'}); shown: the highest IC among "
+                "the windows that are"
             )
         for reason in entry["reasons"]:
             notes.append(f"  {name} {entry['verdict']}: {reason['text']}")
     return header, rows, notes
+
+
+def _record_fit_cell(entry):
+    """The table's "record fit": the whole record's least-squares value +- its standard error, "-" without one."""
+    value, error = entry.get("record_fit"), entry.get("record_fit_se")
+    if value is None or not np.isfinite(value):
+        return "-"
+    return f"{value:.4g} +- " + ("inf" if error is None or not np.isfinite(error) else f"{error:.2g}")
 
 
 def identification_table(summary, *, fitted_steps, held_out_steps):

@@ -111,7 +111,7 @@ each set's absolute errors over the record, step by step in time order
 (:func:`add_record_errors`: the batch engine, the cluster and the online
 replay cut the record differently and find the same totals bit for bit).
 The set with the lowest total is simulated once more with its ``2 p``
-nearest sets (:func:`record_residuals`), and its residuals ``y - sim`` are
+nearest sets (:func:`record_fit`), and its residuals ``y - sim`` are
 projected off the differences of their outputs: a Gauss-Newton step
 within the sample, which takes off the set's misfit of the parameters, a
 smooth error of the response that is autocorrelated however white the
@@ -172,6 +172,7 @@ Examples
 [True, True, True, False]
 """
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -189,9 +190,11 @@ __all__ = [
     "fitted_noise_sigma",
     "window_points",
     "add_record_errors",
-    "record_residuals",
+    "RecordFit",
+    "record_fit",
     "residual_autocorrelation",
     "size_factor",
+    "steady_size_factor",
     "FAMILY_LEVEL",
     "NOISE_FLOOR_QUANTILE",
     "RESIDUAL_CHUNK",
@@ -201,7 +204,7 @@ __all__ = [
 
 # The chance that any noise-only stretch of a record is called informative (Bonferroni over its windows).
 FAMILY_LEVEL = 0.05
-# Steps per chunk of the record-best set's residuals (record_residuals): its sums are cut there.
+# Steps per chunk of the record-best set's residuals (record_fit): its sums are cut there.
 RESIDUAL_CHUNK = 65_536
 # The population quantile whose MAE the discrimination compares with the best (see the module documentation).
 NOISE_FLOOR_QUANTILE = 0.9
@@ -240,6 +243,11 @@ class NoiseFloor:
     size_factor : float
         A window of m points counts as ``m / size_factor`` independent ones
         (:func:`size_factor`; 1 for white residuals).
+    record_fit : ndarray (n_params,) or None
+        The record's fit within the sample (:class:`RecordFit` ``values``),
+        where the front-ends' least squares of the whole record start
+        (:func:`dynia.fit.record_least_squares`); None when the analysis had
+        no record fit.
     """
 
     informative: np.ndarray
@@ -252,6 +260,7 @@ class NoiseFloor:
     behavioural_multiple: float
     autocorrelation: float = math.nan
     size_factor: float = 1.0
+    record_fit: np.ndarray | None = None
 
 
 def quantile_position(n_samples):
@@ -350,42 +359,83 @@ def add_record_errors(totals, rows):
         np.add.reduce(block, axis=0, out=totals)
 
 
-def record_residuals(y, params, bounds, totals, simulations, chunk_steps=RESIDUAL_CHUNK):
-    """The noise estimate of the floor: residuals of the record-best set, less its own misfit of the parameters.
+@dataclass(frozen=True, eq=False)
+class RecordFit:
+    """The record-best set with its Gauss-Newton step: what :func:`record_fit` returns.
+
+    Attributes
+    ----------
+    residuals : ndarray (n_steps,)
+        ``y`` minus the record-best set's output, projected off the output
+        differences of its nearest sets, times a power of two (NaN where
+        ``y`` is).
+    values : ndarray (n_params,)
+        The record's least-squares fit within the sample: the record-best
+        set plus the Gauss-Newton step of the Jacobian estimated from its
+        nearest sets (the set itself where the step leaves their
+        neighbourhood, see :func:`record_fit`); a start for the least
+        squares of :func:`dynia.fit.record_least_squares`.
+    """
+
+    residuals: np.ndarray
+    values: np.ndarray
+
+
+# The Gauss-Newton step is taken only within this many times the distance of the farthest neighbour used: beyond,
+# the linearisation from that neighbourhood says nothing (a flat direction, or strong curvature).
+_STEP_REACH = 4.0
+
+
+def record_fit(y, params, bounds, totals, simulations, chunk_steps=RESIDUAL_CHUNK):
+    """The record-best set, its Gauss-Newton step and its residuals: the noise estimate of the floor.
 
     The set with the lowest record total absolute error (``totals``) fits
     the record only as well as the sample allows: its misfit, output
     differences of a smooth response, is autocorrelated even when the noise
     is white. The linearised fit around it removes that: the residuals
-    ``r = y - sim_best`` are projected off the output differences of its
-    ``2 p`` nearest sets (in the parameter box scaled to unit ranges), a
+    ``r = y - sim_best`` are projected off the output differences ``D`` of
+    its ``2 p`` nearest sets (in the parameter box scaled to unit ranges), a
     Gauss-Newton step within the sample. ``simulations(indices)`` yields
     the simulated outputs of those sets, (len(indices), m) arrays in time
     order covering the record; it is called twice, so that memory holds
     one series (8 bytes a step) and chunks of ``chunk_steps``, never the
-    sets' whole outputs. Returns the residuals (NaN where ``y`` is) times
-    a power of two that brings the record's largest magnitude near 1 (all
-    that is read of them, their autocorrelation, does not depend on it,
-    and records near the floating-point limits neither overflow nor
-    underflow), or None when they overflow all the same.
+    sets' whole outputs. The residuals are multiplied by a power of two that
+    brings the record's largest magnitude near 1 (what the floor reads of
+    them, their autocorrelation, does not depend on it, and records near the
+    floating-point limits neither overflow nor underflow).
+
+    The same sums give the record's least-squares fit in the parameters
+    (``values``), a start for the least squares of
+    :func:`dynia.fit.record_least_squares`: the neighbours' parameter offsets ``P`` (2p x p) and
+    ``D`` (2p x m) give the Jacobian by least squares, ``J^T = A D`` with
+    ``A = (P^T P)^-1 P^T`` (central differences, where the neighbours lie on
+    either side), so ``J^T J = A D D^T A^T`` and ``J^T r = A D r`` need only
+    the sums already formed. Where the step would leave the neighbourhood by
+    more than four times the farthest neighbour's distance, the
+    linearisation is not trusted and ``values`` is the record-best set
+    itself.
+
+    Returns a :class:`RecordFit`, or None when the outputs overflow all the same.
 
     Examples
     --------
     >>> t = np.arange(200.0)
-    >>> sims = np.array([gain * (1 - np.exp(-t / 10)) for gain in (1.9, 2.1, 1.0, 3.0, 1.7)])
-    >>> y = 2 * (1 - np.exp(-t / 10)) + 0.1 * np.cos(t)
-    >>> r = record_residuals(y, np.array([[1.9], [2.1], [1.0], [3.0], [1.7]]), np.array([[0.0, 4.0]]),
-    ...                      np.abs(y - sims).sum(axis=1), lambda rows: [sims[rows]])
-    >>> bool(np.abs(4 * r - 0.1 * np.cos(t)).max() < 0.01)  # r is scaled by 2^-2: y reaches 2.1
-    True
+    >>> gains = np.array([[1.9], [2.1], [1.0], [3.0], [1.7]])
+    >>> sims = gains * (1 - np.exp(-t / 10))
+    >>> y = 2.05 * (1 - np.exp(-t / 10)) + 0.1 * np.cos(t)
+    >>> fit = record_fit(y, gains, np.array([[0.0, 4.0]]), np.abs(y - sims).sum(axis=1), lambda rows: [sims[rows]])
+    >>> bool(np.abs(4 * fit.residuals - 0.1 * np.cos(t)).max() < 0.01), round(float(fit.values[0]), 2)
+    (True, 2.05)
     """
     y = np.asarray(y, dtype=float)
     best = int(np.argmin(np.fmin(totals, np.inf)))  # a NaN total (a diverged set) is never the best
-    scaled = (params - bounds[:, 0]) / np.where(bounds[:, 1] > bounds[:, 0], bounds[:, 1] - bounds[:, 0], 1.0)
+    widths = np.where(bounds[:, 1] > bounds[:, 0], bounds[:, 1] - bounds[:, 0], 1.0)
+    scaled = (params - bounds[:, 0]) / widths
     distance = np.sum((scaled - scaled[best]) ** 2, axis=1)
     distance[best] = np.inf
     count = min(2 * params.shape[1], params.shape[0] - 1)
-    rows = [best, *np.argsort(distance, kind="stable")[:count].tolist()]
+    nearest = np.argsort(distance, kind="stable")[:count]
+    rows = [best, *nearest.tolist()]
     largest = np.nanmax(np.abs(y)) if np.any(~np.isnan(y)) else 0.0
     scale = 2.0 ** -np.frexp(largest)[1] if 0 < largest < np.inf else 1.0  # exact: a power of two
     residuals = np.empty(y.size)
@@ -406,7 +456,21 @@ def record_residuals(y, params, bounds, totals, simulations, chunk_steps=RESIDUA
         step = np.linalg.lstsq(gram, projection, rcond=1e-10)[0]
         for start, chunk in _time_chunks(simulations(rows), chunk_steps):
             residuals[start : start + chunk.shape[1]] -= step @ ((chunk[1:] - chunk[0]) * scale)
-    return residuals
+    return RecordFit(residuals, _parameter_step(params, best, nearest, widths, gram, projection))
+
+
+def _parameter_step(params, best, nearest, widths, gram, projection):
+    """:class:`RecordFit` ``values`` from the neighbours' sums (see :func:`record_fit`)."""
+    if not nearest.size:
+        return params[best].astype(float)
+    # In unit ranges, so that the rank decisions do not depend on the parameters' units.
+    offsets = (params[nearest] - params[best]) / widths
+    spread = np.linalg.pinv(offsets, rcond=1e-10)  # A = (P^T P)^-1 P^T, (p, 2p)
+    step = np.linalg.pinv(spread @ gram @ spread.T, rcond=1e-10, hermitian=True) @ (spread @ projection)
+    reach = _STEP_REACH * math.sqrt(float(np.max(np.sum(offsets**2, axis=1))))
+    if not (np.all(np.isfinite(step)) and math.sqrt(float(step @ step)) <= reach):
+        return params[best].astype(float)
+    return (params[best] + step * widths).astype(float)
 
 
 def _time_chunks(chunks, size):
@@ -485,6 +549,51 @@ def size_factor(rho, points):
     """
     lags = np.arange(1, min(len(rho), max(int(points) - 1, 0)) + 1)
     return float(1 + 2 * np.sum((1 - lags / points) * np.asarray(rho)[: lags.size]))
+
+
+def steady_size_factor(residuals, fitted, sigma, slots):
+    """The noise's own :func:`size_factor` for windows of ``slots`` steps, read where the model's output is steady.
+
+    The record fit's residuals hold the noise and the model's misfit, and
+    both can be smooth in time: a slowly wandering disturbance (AR(1) noise
+    of lag-1 autocorrelation 0.98) and a gain that fits one half of the
+    record but not the other look alike in their autocorrelation. Where the
+    fitted output is steady (it moves by less than ``sigma / slots`` a step,
+    so less than one noise standard deviation over a window) a misfit of the
+    dynamics is gone and one of the gain is a constant: within runs of at
+    least ``slots`` such steps, each taken about its own mean, what remains
+    is the noise. The autocorrelations of those runs (pairs within one run,
+    cut as :func:`residual_autocorrelation` cuts them) give the factor. NaN
+    where no such run exists (a record that never settles): then the noise
+    cannot be told from the misfit.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> flat = np.zeros(400)
+    >>> white = rng.normal(0, 1, 400)
+    >>> round(steady_size_factor(white, flat, 1.0, 21), 2)
+    1.0
+    >>> slow = np.convolve(rng.normal(0, 1, 900), np.ones(30) / 30, mode="valid")[:400]
+    >>> bool(steady_size_factor(slow, flat, 1.0, 21) > 5)
+    True
+    """
+    residuals, fitted = np.asarray(residuals, dtype=float), np.asarray(fitted, dtype=float)
+    with np.errstate(invalid="ignore"):
+        steady = np.abs(np.diff(fitted, prepend=fitted[:1])) <= sigma / slots
+    steady &= np.isfinite(residuals)
+    edges = np.flatnonzero(np.diff(np.r_[0, steady.astype(np.int8), 0]))
+    runs = [(start, stop) for start, stop in zip(edges[::2], edges[1::2]) if stop - start >= slots]
+    if not runs:
+        return math.nan
+    # The runs end to end, each less its straight line, with a NaN between them so that no pair spans two runs.
+    pieces = []
+    for start, stop in runs:
+        steps = np.arange(stop - start, dtype=float)
+        line = np.polynomial.polynomial.polyfit(steps, residuals[start:stop], 1)
+        pieces += [residuals[start:stop] - np.polynomial.polynomial.polyval(steps, line), np.full(slots, np.nan)]
+    rho, _ = residual_autocorrelation(np.concatenate(pieces), slots - 1)
+    return size_factor(rho, slots)
 
 
 def noise_floor(
@@ -566,21 +675,21 @@ def noise_floor(
     )
 
 
-def record_noise_floor(best, upper, threshold, points, slots, n_params, percentage, n_samples, residuals=None):
+def record_noise_floor(best, upper, threshold, points, slots, n_params, percentage, n_samples, fit=None):
     """:func:`noise_floor` of an analysis whose windows hold ``slots`` steps and ``points`` measured points each.
 
     The one place that turns an analysis's settings into the test's: the
-    batch engine, the cluster and the online replay all call it.
-    ``residuals`` (n_steps,), from :func:`record_residuals` (NaN where
-    missing), gives the autocorrelation of the module documentation; it is
-    overwritten. Without it the floor assumes white
-    noise.
+    batch engine, the cluster and the online replay all call it. ``fit``,
+    from :func:`record_fit`, gives the autocorrelation of the module
+    documentation from its residuals (which are overwritten) and the
+    start of the record's least squares (``record_fit``); without it the
+    floor assumes white noise.
     """
     sigma, factor, first = fitted_noise_sigma(best, points, n_params), 1.0, math.nan
-    if residuals is not None:
-        rho, first = residual_autocorrelation(residuals, slots - 1)
+    if fit is not None:
+        rho, first = residual_autocorrelation(fit.residuals, slots - 1)
         factor = size_factor(rho, slots)
-    return noise_floor(
+    floor = noise_floor(
         best,
         upper,
         threshold,
@@ -593,6 +702,7 @@ def record_noise_floor(best, upper, threshold, points, slots, n_params, percenta
         size_factor=factor,
         autocorrelation=first,
     )
+    return floor if fit is None else dataclasses.replace(floor, record_fit=fit.values)
 
 
 def floor_settings(floor):
@@ -604,6 +714,7 @@ def floor_settings(floor):
         behavioural_multiple=floor.behavioural_multiple,
         noise_autocorrelation=floor.autocorrelation,
         noise_size_factor=floor.size_factor,
+        record_fit=None if floor.record_fit is None else tuple(floor.record_fit),
     )
 
 

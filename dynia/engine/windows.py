@@ -117,7 +117,7 @@ from ..progress import progress_bar
 from ..result import DyniaResult
 from ..settings import FLAVOURS, WINDOWS, AnalysisSettings, RunRecord
 from .flavours import compiled_engine, flavour_analysis, monte_carlo_errors
-from .noise import add_record_errors, floor_fields, floor_settings, record_noise_floor, record_residuals, window_points
+from .noise import add_record_errors, floor_fields, floor_settings, record_fit, record_noise_floor, window_points
 
 __all__ = [
     "moving_window",
@@ -349,7 +349,7 @@ def analyse_stream(
     ``indices`` again, (len(indices), m) arrays in time order covering
     ``y``: the noise floor estimates the noise's autocorrelation from the
     residuals of the record-best sample and its neighbours
-    (:func:`dynia.engine.noise.record_residuals`); without it the floor
+    (:func:`dynia.engine.noise.record_fit`); without it the floor
     assumes white noise. ``settings`` (an
     :class:`~dynia.settings.AnalysisSettings`) and ``run`` (a
     :class:`~dynia.settings.RunRecord`) are what the caller knows of the run;
@@ -517,12 +517,10 @@ def _noise_floor(y, params, bounds, time, settings, passed, scale, simulations):
         extreme /= scale  # exact: a power of two
     before, after = window_halos(settings.n, settings.window)
     points = window_points(y, before, after)
-    residuals = None if simulations is None else record_residuals(y, params, bounds, totals, simulations)
+    fit = None if simulations is None else record_fit(y, params, bounds, totals, simulations)
     n_samples, n_params = params.shape
     slots = before + after + 1
-    return record_noise_floor(
-        best, upper, threshold, points, slots, n_params, settings.percentage, n_samples, residuals
-    )
+    return record_noise_floor(best, upper, threshold, points, slots, n_params, settings.percentage, n_samples, fit)
 
 
 def _flavour(settings, params, bounds, weights):
