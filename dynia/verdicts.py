@@ -96,7 +96,12 @@ bands. Correctly specified records with constant parameters (first-order
 data with random level steps, white noise, thesis examples 1 and 2, in
 several seeds and in wide and narrow ranges) leave overlaps of 20 to 70 %
 of a band's width; a gain of 2 that turns 3 half way leaves a gap of five
-bins.
+bins. Noise that wanders slowly moves every window's band with it: before
+they are compared, the bands are widened by
+:func:`dynia.structure.noise_widening` half-widths (none for white noise).
+A constant gain under weak excitation and AR(1) noise of lag-1
+autocorrelation 0.98 drew this reason on 11 of 15 records without the
+widening, on 1 of 20 with it.
 
 The record's fit
 ----------------
@@ -112,19 +117,30 @@ parameter describe the record, that fit and every evidence band agree
 within noise. A band (the reported window's, and the median band of each
 stretch of evidence windows as ``windows_disagree`` forms them) that
 excludes the fit by more than the tolerance raises
-``disagrees_with_record_fit``, naming both. The tolerance is two standard
-errors of the difference: the fit's standard error from noise alone
-(:func:`record_fit_noise_error`: its HAC standard error, scaled down by the
-windows' noise level over the fit's RMSE where misfit inflates the
+``disagrees_with_record_fit``, naming both. Only the reported band is
+compared: it is the estimate a user reads, and under slowly wandering noise
+other stretches' bands wander with it (``windows_disagree`` widens them for
+that, see :func:`dynia.structure.noise_widening`). The tolerance is two
+standard errors of the difference: the fit's standard error from noise
+alone (:func:`record_fit_noise_error`: its HAC standard error, scaled down
+by the windows' noise level over the fit's RMSE where misfit inflates the
 residuals, since another noise realisation would leave the misfit, and so
 the compromise value, where it is), and the Monte Carlo error of the band's
 limit (``result.ci_se``, or that of the behavioural set's order statistic
 for values spread evenly over the band). A parameter the record does not
-determine (infinite standard error) is not compared. Correctly specified
-first-order records (constant gain under white noise and under AR(1) noise
-of lag-1 autocorrelation 0.98, strong and weak excitation, 40 records) keep
-every identified band; the band of a gain that moves from 2 to 3 half way
-under weak excitation, seen in one half only, is caught.
+determine (infinite standard error) is not compared.
+
+Measured on first-order records of 1 000 steps (T = 5, input levels held 50
+steps, noise SD 0.2, 2 000 samples, n = 10; ``tests/test_record_fit.py``
+builds the same records): a gain that moves from 2 to 3 half way under
+weak excitation (levels in [0, 2]) is identified on 1 of 10 seeds (3
+before the rule), its band then within the fit's standard error of it; a
+constant gain stays identified on 10 of 10 (white noise) and on 15 of 20
+under AR(1) noise of lag-1 autocorrelation 0.98, the other 5 suspect
+because their bands miss the record's fit (as they miss the truth); a
+constant gain of strong excitation (levels in [5, 30], AR(1) 0.98 noise of
+SD 0.5) on 20 of 20. Every identified band of these records holds the
+record's fit.
 
 Each reason is ``{"code": ..., "text": ...}``; branch on the code, the text
 is for people.
