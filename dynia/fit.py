@@ -71,6 +71,7 @@ Examples
 
 import math
 import numbers
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
@@ -79,7 +80,7 @@ from scipy.optimize import least_squares
 
 from . import _checks
 from .engine.noise import steady_size_factor
-from .errors import DataError, DyniaError, ModelError, SettingsError
+from .errors import DataError, ModelError, SettingsError
 from .io.frames import unpack
 from .models import Model
 from .segments import check_segments, mask_to_segments
@@ -522,7 +523,9 @@ def record_least_squares(result, u, y, model):
     ``disagrees_with_record_fit``). A parameter whose range is a point is
     held there. Where the least squares cannot run (the model cannot
     simulate a point it reaches), the fit within the sample stays, without
-    standard errors, and no verdict compares with it.
+    standard errors, and no verdict compares with it; so does a record whose
+    squared residuals overflow or underflow (magnitudes near the
+    floating-point limits).
 
     Examples
     --------
@@ -545,24 +548,30 @@ def record_least_squares(result, u, y, model):
             fixed[name] = float(low)
     initial = {name: float(np.clip(value, *bounds[name])) for name, value in zip(names, start) if name in bounds}
     try:
-        fit = fit_segments(
-            u,
-            y,
-            model,
-            [(0, np.asarray(y).shape[0])],
-            bounds=bounds,
-            initial=initial,
-            fixed=fixed,
-            dt=result.settings.dt,
-            x0=result.settings.x0,
-        )
-    except DyniaError:
+        # Records near the floating-point limits square into overflow or underflow: such a fit is dropped below.
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            fit = fit_segments(
+                u,
+                y,
+                model,
+                [(0, np.asarray(y).shape[0])],
+                bounds=bounds,
+                initial=initial,
+                fixed=fixed,
+                dt=result.settings.dt,
+                x0=result.settings.x0,
+            )
+    except ValueError:  # ours (DyniaError), or scipy's for residuals that overflowed on the way
+        return result
+    if not (math.isfinite(fit.rmse) and fit.rmse > 0):
         return result
     sigma = result.run.noise_sigma
     steady = math.nan
     if sigma is not None and math.isfinite(sigma):
         before, after = result.window_halos
-        steady = steady_size_factor(np.asarray(y) - fit.fitted, fit.fitted, sigma, before + after + 1)
+        with np.errstate(all="ignore"):
+            steady = steady_size_factor(y, fit.fitted, sigma, before + after + 1)
     fields = dict(
         record_fit=tuple(fit.parameters[name] for name in names),
         record_fit_se=tuple(fit.std_errors_hac.get(name, 0.0) for name in names),

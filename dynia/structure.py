@@ -299,21 +299,17 @@ def noise_widening(result):
     (a band holds what noise does to its window's estimate). Noise whose
     window counts f times fewer independent points moves a window's
     estimate about sqrt(f) times as far, a slowly wandering disturbance
-    taken for a change of the parameter. Where the record never settles
-    (NaN), the factor of all its residuals (``noise_size_factor``), misfit
-    included; a result without a record fit (None) is compared as before.
+    taken for a change of the parameter. Where the noise cannot be told
+    from the misfit (NaN: the record is never steady) and for a result
+    without a record fit (None), the bands are compared as they are.
 
     Examples
     --------
     >>> from types import SimpleNamespace
-    >>> noise_widening(SimpleNamespace(run=SimpleNamespace(steady_size_factor=16.0, noise_size_factor=20.0)))
+    >>> noise_widening(SimpleNamespace(run=SimpleNamespace(steady_size_factor=16.0)))
     3.0
     """
     factor = result.run.steady_size_factor
-    if factor is None:
-        return 0.0
-    if math.isnan(factor):
-        factor = result.run.noise_size_factor
     if factor is None or not math.isfinite(factor):
         return 0.0
     return max(math.sqrt(factor) - 1, 0.0)

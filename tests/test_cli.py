@@ -69,7 +69,8 @@ def test_heating_system_end_to_end(heating_run):
     assert summary["version"] == __version__
     for name in ("K", "T"):
         entry = summary["parameters"][name]
-        assert set(entry) == {
+        # Why the record's highest IC is no evidence, where it is not the window reported.
+        assert set(entry) - {"highest_ic_no_evidence"} == {
             "max_ic",
             "time_of_max_ic",
             "band",
@@ -78,9 +79,13 @@ def test_heating_system_end_to_end(heating_run):
             "time_of_highest_ic",
             "high_ic_windows",
             "high_ic_span",
+            "record_fit",
+            "record_fit_se",
             "verdict",
             "reasons",
         }
+        assert ("highest_ic_no_evidence" in entry) == (entry["time_of_highest_ic"] != entry["time_of_max_ic"])
+        assert entry["record_fit_se"] > 0
         assert entry["verdict"] in ("identified", "weak", "suspect")
         assert entry["band"][0] <= entry["estimate"] <= entry["band"][1]
         column = header.index(name)

@@ -180,7 +180,7 @@ def test_a_constant_gain_under_weak_excitation_stays_identified(seed):
 @pytest.mark.parametrize("seed", [0, 1, 3, 4, 6])
 def test_slow_noise_raises_no_windows_disagree_and_leaves_no_identified_band_off_the_record_fit(seed):
     _, _, result = weak_run(seed, phi=0.98)
-    assert result.run.steady_size_factor > 3  # the noise's own autocorrelation, seen where the output is steady
+    assert result.run.steady_size_factor > 2  # the noise's own autocorrelation, seen where the output is steady
     for name, summary in result.summary().items():
         assert "windows_disagree" not in codes(summary), (name, summary["reasons"])
         if summary["verdict"] == "identified":

@@ -551,47 +551,54 @@ def size_factor(rho, points):
     return float(1 + 2 * np.sum((1 - lags / points) * np.asarray(rho)[: lags.size]))
 
 
-def steady_size_factor(residuals, fitted, sigma, slots):
-    """The noise's own :func:`size_factor` for windows of ``slots`` steps, read where the model's output is steady.
+def steady_size_factor(y, fitted, sigma, slots):
+    """The noise's own :func:`size_factor` for windows of ``slots`` steps, read where the process is steady.
 
-    The record fit's residuals hold the noise and the model's misfit, and
-    both can be smooth in time: a slowly wandering disturbance (AR(1) noise
-    of lag-1 autocorrelation 0.98) and a gain that fits one half of the
-    record but not the other look alike in their autocorrelation. Where the
-    fitted output is steady (it moves by less than ``sigma / slots`` a step,
-    so less than one noise standard deviation over a window) a misfit of the
-    dynamics is gone and one of the gain is a constant: within runs of at
-    least ``slots`` such steps, each taken about its own mean, what remains
-    is the noise. The autocorrelations of those runs (pairs within one run,
-    cut as :func:`residual_autocorrelation` cuts them) give the factor. NaN
-    where no such run exists (a record that never settles): then the noise
-    cannot be told from the misfit.
+    The record fit's residuals ``y - fitted`` hold the noise and the model's
+    misfit, and both can be smooth in time: a slowly wandering disturbance
+    (AR(1) noise of lag-1 autocorrelation 0.98) and a gain that fits one
+    half of the record but not the other look alike in their
+    autocorrelation. Where the fitted output is steady (it moves by less
+    than ``sigma / slots`` a step, so less than one noise standard deviation
+    over a window) a misfit of the dynamics is gone and one of the gain is a
+    constant. Runs of at least ``slots`` such steps are kept where the
+    measured output is steady too (its straight line over the run moves by
+    at most ``2 sigma``: a process still settling where the model has, or
+    moving with the operating point, is misfit); within them, each less its
+    straight line, what remains is the noise. The autocorrelations of those
+    runs (pairs within one run, cut as :func:`residual_autocorrelation` cuts
+    them) give the factor. NaN where no run is kept: then the noise cannot
+    be told from the misfit.
 
     Examples
     --------
     >>> rng = np.random.default_rng(0)
     >>> flat = np.zeros(400)
-    >>> white = rng.normal(0, 1, 400)
-    >>> round(steady_size_factor(white, flat, 1.0, 21), 2)
+    >>> round(steady_size_factor(rng.normal(0, 1, 400), flat, 1.0, 21), 2)
     1.0
     >>> slow = np.convolve(rng.normal(0, 1, 900), np.ones(30) / 30, mode="valid")[:400]
-    >>> bool(steady_size_factor(slow, flat, 1.0, 21) > 5)
+    >>> bool(steady_size_factor(slow, flat, 0.5, 21) > 3)
     True
     """
-    residuals, fitted = np.asarray(residuals, dtype=float), np.asarray(fitted, dtype=float)
+    y, fitted = np.asarray(y, dtype=float), np.asarray(fitted, dtype=float)
     with np.errstate(invalid="ignore"):
         steady = np.abs(np.diff(fitted, prepend=fitted[:1])) <= sigma / slots
-    steady &= np.isfinite(residuals)
+    steady &= np.isfinite(y)
     edges = np.flatnonzero(np.diff(np.r_[0, steady.astype(np.int8), 0]))
-    runs = [(start, stop) for start, stop in zip(edges[::2], edges[1::2]) if stop - start >= slots]
-    if not runs:
-        return math.nan
-    # The runs end to end, each less its straight line, with a NaN between them so that no pair spans two runs.
+    # The kept runs end to end, each less its straight line, with NaN between them so that no pair spans two.
     pieces = []
-    for start, stop in runs:
+    for start, stop in zip(edges[::2], edges[1::2]):
+        if stop - start < slots:
+            continue
         steps = np.arange(stop - start, dtype=float)
-        line = np.polynomial.polynomial.polyfit(steps, residuals[start:stop], 1)
-        pieces += [residuals[start:stop] - np.polynomial.polynomial.polyval(steps, line), np.full(slots, np.nan)]
+        drift = np.polynomial.polynomial.polyfit(steps, y[start:stop], 1)[1] * (stop - start - 1)
+        if abs(drift) > 2 * sigma:
+            continue
+        residuals = y[start:stop] - fitted[start:stop]
+        line = np.polynomial.polynomial.polyfit(steps, residuals, 1)
+        pieces += [residuals - np.polynomial.polynomial.polyval(steps, line), np.full(slots, np.nan)]
+    if not pieces:
+        return math.nan
     rho, _ = residual_autocorrelation(np.concatenate(pieces), slots - 1)
     return size_factor(rho, slots)
 
