@@ -24,7 +24,16 @@ class UsageError(SettingsError):
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse, but a usage mistake is one line on stderr (no usage dump), exit status 2."""
+    """argparse, but a usage mistake is one line on stderr (no usage dump), exit status 2, and no abbreviations.
+
+    argparse would read ``--n 15`` given to a command without ``--n`` as an abbreviation of whichever option it
+    begins (``--no-plots``), and its error would then name an option the user never typed; every parser of the
+    command, the commands' own included (argparse makes them of this class), takes options only as spelled.
+    """
+
+    def __init__(self, *args, **kwargs):
+        kwargs["allow_abbrev"] = False
+        super().__init__(*args, **kwargs)
 
     def error(self, message):
         raise UsageError(message)
