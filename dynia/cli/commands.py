@@ -101,6 +101,7 @@ def _options(args):
     """
     command = args.command
     options, set_by_user = _merged_options(args, command)
+    options["given"] = set_by_user
     if options.get("max_memory") is not None:
         options["max_memory"] = parse_size(options["max_memory"], "--max-memory")
     if options.get("window") is not None:
@@ -109,8 +110,8 @@ def _options(args):
         options["window_seconds"] = parse_duration(options["window"], "--window")
     _check_required(options, command)
     _ranges(options["param"])  # checked before the model runs; against the model below
-    if command != "suggest":  # suggest proposes the analysis settings
-        options["analysis"] = _analysis_settings(options)
+    # suggest's are the settings of its pilot, and those given are kept in its proposal.
+    options["analysis"] = _analysis_settings(options)
     _check_command_options(options)
     options["offset"] = _offset(options["offset"], "--offset")
     options["input_offset"] = _offset(options["input_offset"], "--input-offset")
@@ -882,7 +883,8 @@ def _suggest(options, command_line, caught):
             f"{entry['reason']}"
             for entry in findings
         ]
-    _announce_compilation(options, AnalysisSettings())  # the pilot runs on the default engine and flavour
+    _announce_compilation(options, options["analysis"])
+    given = options["given"]
     found = suggest(
         u,
         y,
@@ -890,6 +892,11 @@ def _suggest(options, command_line, caught):
         options["bounds"],
         dt=data.dt,
         x0=options["x0"],
+        # Kept as given (a --window is n on the data's grid by now, _load); the rest is proposed around them.
+        n=options["n"] if {"n", "window"} & given else None,
+        percentage=options["percentage"] if "percentage" in given else None,
+        n_samples=options["samples"] if "samples" in given else None,
+        settings=options["analysis"],
         max_samples=options["max_samples"],
         max_memory=options["max_memory"],
         progress=_shows_progress(options),
@@ -899,8 +906,8 @@ def _suggest(options, command_line, caught):
     dropped = _dynia_warnings(caught)
     for line in notices + dropped:
         print(f"dynia: warning: {line}", file=sys.stderr)
-    # The analyse command this proposal is for: the same data and model options, the proposed settings.
-    # suggest's own options (its seed is given anew) are not analyse's.
+    # The analyse command this proposal is for: every analyse option as the user gave it, and the settings proposed
+    # (the proposal leaves out those given). suggest's own options (its seed is given anew) are not analyse's.
     own = ("--seed", "--max-samples", "--max-memory")
     kept, words = [], iter(command_line[2:])
     for word in words:
