@@ -48,7 +48,7 @@ class Option:
     ----------
     key : str
         The argparse destination and the ``--config`` key; the option is ``--key`` with dashes.
-    kind : {"flag", "whole", "number", "text", "names", "offset", "size"}
+    kind : {"flag", "whole", "number", "text", "names", "offset", "size", "length"}
         The value it takes, on the command line and in a ``--config`` file.
     help : str
         Its help; ``{default}`` in it is the default, else a default that is not None or False is added at the end
@@ -326,6 +326,13 @@ _IDENTIFY_SELECTION = (
         "dynia: a step is informative when any parameter's IC reaches the threshold (default) or when all do",
         default="any",
         choices=("any", "joint"),
+    ),
+    Option(
+        "min_length",
+        "length",
+        "dynia: the shortest segment kept, in steps (a whole number) or as a duration such as 60s, 2min or 1h "
+        "(default: one window, 2n+1 steps): shorter runs of informative windows see the same few points",
+        metavar="STEPS|DURATION",
     ),
     Option(
         "held_out",
