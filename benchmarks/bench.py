@@ -581,7 +581,7 @@ def _run_case(name, **options):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0], allow_abbrev=False)
     parser.add_argument("--case", choices=sorted(CASES), help="run one case in this process")
     parser.add_argument("--skip", nargs="*", default=[], choices=sorted(CASES), help="cases to leave out")
     parser.add_argument("--distributed-samples", type=int, default=10_000, help="samples of the distributed case")

@@ -60,6 +60,31 @@ inform the gain only, or with the response to the next input change
 (several regimes in one window). Input changes closer together than one
 window are reported.
 
+The window must also beat the measurement noise. A parameter a tenth off
+its value (the resolution the behavioural share aims at, below) moves the
+response by about a tenth of its size A, the standard deviation of the
+first-order fit's response (the part of the output the input explains,
+``sqrt(R^2) * SD(y)``); noise of standard deviation sigma hides a shift of
+the mean over a window of m measured points below ``sigma / sqrt(m)``. The
+window tells the two apart when that tenth is at least :data:`NOISE_MARGIN`
+(2) such standard errors, ``A / 10 >= 2 sigma / sqrt(m)``, so it holds at
+least ``m = (2 * 10 * sigma / A)^2`` steps, and the window is the longer of
+the two. sigma is :func:`dynia.verdicts.noise_sigma` of the output (the
+median absolute difference of neighbours, which steps and slow dynamics
+barely move). On a first-order record with T = 5 s at 1 s, responses of
+about 1 degC and noise of 0.4 degC, one time constant is a 5 s window in
+which neither gain nor time constant is identified (every window's
+behavioural set ties within the noise); the noise asks for about 45 s, which
+identifies both. On a clean record (the TCLab-like step test: responses of
+20 degC under 0.15 degC of noise) the time constant sets the window alone.
+
+A window given (``n=``, ``dynia suggest --n`` or ``--window``) is kept as
+given: the rest is proposed around it, and the reasons say what the record
+would have asked for. So are a behavioural share (``percentage=``) and a
+number of samples (``n_samples=``) given; the pilot runs with the share and
+window given, and with the other settings of ``settings`` (flavour, bins,
+confidence level, sampler, ...).
+
 The behavioural share
 ---------------------
 The information content is ``1 - (band width)/(range)``, and the band is
@@ -169,6 +194,7 @@ from .settings import (
     check_x0,
     parameter_box,
 )
+from .verdicts import noise_sigma
 
 __all__ = [
     "Suggestion",
@@ -183,6 +209,7 @@ __all__ = [
     "IC_SE_TARGET",
     "MEMORY_SHARE",
     "MIN_EXPLAINED",
+    "NOISE_MARGIN",
 ]
 
 # The Monte Carlo standard error of the IC the proposed number of samples aims at.
@@ -191,6 +218,8 @@ IC_SE_TARGET = 0.02
 MEMORY_SHARE = 0.5
 # Below this share of the output's variance explained (R^2) the first-order fit sizes no window.
 MIN_EXPLAINED = 0.5
+#: A parameter a tenth off must move a window's mean by this many standard errors of the noise (The window).
+NOISE_MARGIN = 2.0
 #: The pilot and the fit keep this many dominant time constants of a gap without output (see Gaps in the output).
 GAP_MEMORY = 10
 
@@ -493,6 +522,9 @@ class Suggestion:
     memory : dict
         Estimated bytes of the ``pilot`` and of the ``proposed`` run
         (:func:`run_memory`), and the ``limit`` the pilot was held to.
+    given : tuple of str
+        The settings given to :func:`suggest` and kept as given ("n",
+        "percentage", "n_samples"): :meth:`arguments` leaves them out.
     """
 
     n: int
@@ -506,10 +538,13 @@ class Suggestion:
     notes: list = field(default_factory=list)
     dt: float = 1.0
     memory: dict = field(default_factory=dict)
+    given: tuple = ()
 
     def arguments(self):
-        """The ``dynia analyse`` options of this suggestion, as a list of strings."""
-        return ["--n", str(self.n), "--percentage", f"{self.percentage:g}", "--samples", str(self.n_samples)]
+        """The ``dynia analyse`` options of the settings this suggestion proposes (not those given), as strings."""
+        options = (("n", "--n", str(self.n)), ("percentage", "--percentage", f"{self.percentage:g}"))
+        options += (("n_samples", "--samples", str(self.n_samples)),)
+        return [word for name, option, value in options if name not in self.given for word in (option, value)]
 
     def to_dict(self):
         """JSON-ready: the settings, the reasons and the evidence."""
@@ -517,6 +552,7 @@ class Suggestion:
         return dict(
             settings=dict(n=self.n, window=self.window, percentage=self.percentage, n_samples=self.n_samples),
             arguments=self.arguments(),
+            given=list(self.given),
             time_constant=json_number(scale.time_constant),
             first_order_fit=dict(
                 time_constant=json_number(scale.time_constant),
@@ -537,8 +573,13 @@ class Suggestion:
 
     def text(self):
         """Plain text for a terminal: the options, then why, then what to look at."""
+        given = {"n": f"--n {self.n}", "percentage": f"--percentage {self.percentage:g}"}
+        given["n_samples"] = f"--samples {self.n_samples}"
+        kept = [given[name] for name in self.given]
         lines = [
-            "suggested settings for dynia analyse: " + " ".join(self.arguments()),
+            "suggested settings for dynia analyse: "
+            + (" ".join(self.arguments()) or "none")
+            + (f" (kept as given: {', '.join(kept)})" if kept else ""),
             f"  (window {self.window:g} s = 2n+1 = {2 * self.n + 1} steps of {self.dt:g} s)",
             "why:",
             *(f"  - {reason}" for reason in self.reasons),
@@ -556,6 +597,10 @@ def suggest(
     *,
     dt=None,
     x0="zero",
+    n=None,
+    percentage=None,
+    n_samples=None,
+    settings=None,
     ic_se_target=IC_SE_TARGET,
     max_samples=DEFAULT_MAX_SAMPLES,
     max_memory=None,
@@ -585,6 +630,16 @@ def suggest(
     x0 : {"zero", "steady"}, default "zero"
         The analysis's initial state, used by the time-scale fit, the pilot
         and the least-squares fit.
+    n, percentage, n_samples : optional
+        The half window, the behavioural share or the number of samples of
+        the analysis, fixed: kept as given, the rest proposed around them,
+        and the reasons say what the record would have asked for. With
+        ``n`` given, a record whose first-order fit sizes no window gets a
+        proposal all the same.
+    settings : dynia.settings.AnalysisSettings, optional
+        The analysis's other settings (flavour, bins, conf_level, sampler,
+        min_points, dtype, ...), which the pilot runs with; its ``n``,
+        ``percentage``, ``n_samples``, ``x0`` and ``dt`` are not read.
     ic_se_target : float, default 0.02
         The Monte Carlo standard error of the IC the samples should reach.
     max_samples : int, default 200000
@@ -628,20 +683,39 @@ def suggest(
     rng = _checks.generator(rng)
     progress = shows_progress(progress)
 
-    scale, n, reasons, notes = _window(u, y, dt, x0)
-    percentage = _share(len(names), max_samples, reasons, notes)
-    pilot_settings = AnalysisSettings(
+    given = {"n": n, "percentage": percentage, "n_samples": n_samples}
+    given = {name: value for name, value in given.items() if value is not None}
+    if "n" in given:
+        n = AnalysisSettings(n=n).n  # checked as the analysis checks it
+        if 2 * n + 1 > y.size:
+            raise SettingsError(f"n {n}: the window 2n+1 = {2 * n + 1} is longer than the record ({y.size} steps)", "n")
+    scale, n, reasons, notes = _window(u, y, dt, x0, n)
+    percentage = _share(len(names), max_samples, reasons, notes, given.get("percentage"))
+    base = AnalysisSettings() if settings is None else settings
+    if base.flavour == "mcat":
+        # The pilot needs the IC's Monte Carlo error, which MCAT's likelihood (carried from window to window) has not.
+        base = base.replace(flavour="thesis")
+        notes.append(
+            "the pilot ran the thesis flavour, not mcat, which has no IC standard error yet: the samples proposed "
+            "are those that bring the thesis flavour's to the target"
+        )
+    pilot_settings = base.replace(
         n_samples=min(max_samples, max(_PILOT_MIN, math.ceil(_PILOT_BEHAVIOURAL / (percentage / 100)))),
         n=n,
         percentage=percentage,
         x0=x0,
         dt=dt,
         ic_error=True,
+        target_se=None,
+        max_samples=None,
+        store=None,
     )
-    short_u, short_y = _shorten_gaps(u, y, max(math.ceil(GAP_MEMORY * scale.time_constant / dt), 2 * n + 1), reasons)
+    # A time scale the record does not show (a window given) is no memory of a gap: the window stands in for it.
+    memory_steps = scale.time_constant / dt if scale.explained >= MIN_EXPLAINED else 2 * n + 1
+    short_u, short_y = _shorten_gaps(u, y, max(math.ceil(GAP_MEMORY * memory_steps), 2 * n + 1), reasons)
     memory = _pilot_memory(model, pilot_settings, short_y.size, limit, limit_source)
     pilot = _pilot(short_u, short_y, model, bounds, pilot_settings, progress=progress, rng=rng)
-    n_samples = _sample_count(pilot, target, max_samples, percentage, reasons, notes)
+    n_samples = _sample_count(pilot, target, max_samples, percentage, reasons, notes, given.get("n_samples"))
     memory["proposed"] = run_memory(model, n_samples, y.size, n)
     if limit is not None and memory["proposed"] > limit:
         notes.append(
@@ -667,14 +741,16 @@ def suggest(
         notes=notes,
         dt=dt,
         memory=memory,
+        given=tuple(given),
     )
 
 
-def _window(u, y, dt, x0):
-    """The half window n from the record's dominant time constant: the time scale, n, and their reasons and notes.
+def _window(u, y, dt, x0, given=None):
+    """The half window n: the time scale, n, and their reasons and notes.
 
-    Raises :class:`~dynia.errors.SuggestionError` when the record shows no
-    time scale to size a window by.
+    n is the longer of one dominant time constant and what beats the noise (module docs), or ``given`` as given.
+    Raises :class:`~dynia.errors.SuggestionError` when the record shows no time scale to size a window by and
+    none is given.
     """
     n_steps = y.size
     measured = y[~np.isnan(y)]
@@ -685,28 +761,28 @@ def _window(u, y, dt, x0):
         )
     scale = dominant_time_constant(u, y, dt, x0)
     other = dominant_time_constant(u, y, dt, "steady" if x0 == "zero" else "zero")
+    unusable = None
     if not scale.explained >= MIN_EXPLAINED:  # NaN too
-        raise SuggestionError(_no_time_scale(u, y, scale, other, dt))
-    if scale.edge == "fast":
+        unusable = _no_time_scale(u, y, scale, other, dt)
+    elif scale.edge == "fast":
         # The shortest trial time constant fits best: a step in the output one sample after the input's, or a pure
         # delay, looks the same; a 3-step window sized by it would rest on no time scale of the record.
-        raise SuggestionError(
+        unusable = (
             f"cannot propose a window: the output follows the input within one sample ({dt:g} s), so the record "
             "resolves no time constant at this sampling to size a window by (a first-order fit finds the shortest "
             "it tries, dt); sample faster, or give the window yourself (--window or --n)"
         )
-    tau = scale.time_constant
-    wanted = max(math.floor(tau / (2 * dt) + 0.5), 1)
-    n = min(wanted, (n_steps - 1) // 2)
-    gains = ", ".join(f"{gain:.3g}" for gain in scale.gains)
-    reasons = [
-        f"dominant time constant {tau:.4g} s: a first-order fit to the whole record from the analysis's initial "
-        f"state (x0 {x0}; gain {gains}, RMS residual {scale.rmse:.3g}, {100 * scale.explained:.0f} % of the "
-        "output's variance explained)",
-        f"window 2n+1 = {2 * n + 1} steps ({(2 * n + 1) * dt:g} s), about one time constant: centred on an input "
-        "change it holds the level before and the bend of the response, where gain and time constant act "
-        "differently; shorter windows see a line (only their ratio), longer ones mix in settled stretches",
-    ]
+    if unusable is not None:
+        if given is None:
+            raise SuggestionError(unusable)
+        why = unusable.removeprefix("cannot propose a window: ").split("; ")[0]
+        reasons = [
+            f"no dominant time constant: {why}",
+            f"window 2n+1 = {2 * given + 1} steps ({(2 * given + 1) * dt:g} s), as given (n = {given})",
+        ]
+        return scale, given, reasons, _close_changes(u, given, dt)
+    wanted, reasons = _window_reasons(scale, y, dt, x0, given)
+    n = min(wanted, (n_steps - 1) // 2) if given is None else given
     notes = []
     if scale.edge == "slow":
         notes.append("the first-order fit finds a time constant as long as the record: the record may not settle")
@@ -715,10 +791,52 @@ def _window(u, y, dt, x0):
             f"with x0 {other.x0} a first-order model explains {100 * other.explained:.0f} % of the output's variance, "
             f"against {100 * scale.explained:.0f} % with x0 {x0}: check the initial state and the offsets"
         )
-    if n < wanted:
+    if n < wanted and given is None:
         notes.append(f"the window is capped at the record's length ({n_steps} steps); a longer record would help")
     notes += _close_changes(u, n, dt)
     return scale, n, reasons, notes
+
+
+def _window_reasons(scale, y, dt, x0, given):
+    """The half window the record asks for (one time constant, or what beats the noise), and the two reasons."""
+    tau = scale.time_constant
+    by_tau = max(math.floor(tau / (2 * dt) + 0.5), 1)
+    sigma = noise_sigma(y)
+    # The response's size: the standard deviation of the fitted first-order response, sqrt(R^2) SD(y).
+    size = math.sqrt(max(scale.explained, 0.0)) * float(np.nanstd(y))
+    points = (NOISE_MARGIN * _RANGE_SHARE_INVERSE * sigma / size) ** 2 if size > 0 else math.inf
+    by_noise = max(math.ceil((points - 1) / 2), 0) if math.isfinite(points) else y.size
+    wanted = max(by_tau, by_noise)
+    gains = ", ".join(f"{gain:.3g}" for gain in scale.gains)
+    noise = (
+        f"the noise (SD {sigma:.3g}, from the output's differences) against the response's size {size:.3g} (the "
+        f"fitted response's SD) asks for m >= ({NOISE_MARGIN:g} x {_RANGE_SHARE_INVERSE} x {sigma:.3g} / "
+        f"{size:.3g})^2 = {points:.3g} points, for a parameter a tenth off to move a window's mean by "
+        f"{NOISE_MARGIN:g} standard errors of the noise"
+    )
+    if by_noise > by_tau:
+        window = (
+            f"window 2n+1 = {2 * wanted + 1} steps ({(2 * wanted + 1) * dt:g} s), longer than one time constant "
+            f"({2 * by_tau + 1} steps) to beat the noise: {noise}"
+        )
+    else:
+        window = (
+            f"window 2n+1 = {2 * wanted + 1} steps ({(2 * wanted + 1) * dt:g} s), about one time constant: centred on "
+            "an input change it holds the level before and the bend of the response, where gain and time constant "
+            f"act differently; shorter windows see a line (only their ratio), longer ones mix in settled stretches; "
+            + noise.replace("asks for", "asks for no more than one time constant:", 1)
+        )
+    if given is not None:
+        window = f"window 2n+1 = {2 * given + 1} steps ({(2 * given + 1) * dt:g} s), as given (n = {given}); " + (
+            f"the record would ask for n = {wanted}: " + window.split(": ", 1)[1] if wanted != given else "as proposed"
+        )
+    reasons = [
+        f"dominant time constant {tau:.4g} s: a first-order fit to the whole record from the analysis's initial "
+        f"state (x0 {x0}; gain {gains}, RMS residual {scale.rmse:.3g}, {100 * scale.explained:.0f} % of the "
+        "output's variance explained)",
+        window,
+    ]
+    return wanted, reasons
 
 
 def _shorten_gaps(u, y, keep, reasons):
@@ -748,8 +866,16 @@ def _shorten_gaps(u, y, keep, reasons):
     return u[~drop], y[~drop]
 
 
-def _share(d, max_samples, reasons, notes):
-    """The behavioural percentage for ``d`` parameters within ``max_samples``; its reason and notes appended."""
+def _share(d, max_samples, reasons, notes, given=None):
+    """The behavioural percentage for ``d`` parameters within ``max_samples``, or ``given``; its reason and notes
+    appended."""
+    if given is not None:
+        proposed = _share(d, max_samples, [], [])
+        reasons.append(
+            f"percentage {given:g}, as given"
+            + ("" if given == proposed else f"; with {d} parameter(s) suggest would propose {proposed:g} (module docs)")
+        )
+        return float(given)
     wanted_percentage = min(_MAX_PERCENTAGE, 100.0 / _RANGE_SHARE_INVERSE**d)
     percentage = max(wanted_percentage, _round_up_share(100.0 * _PILOT_BEHAVIOURAL / max_samples))
     if percentage > wanted_percentage:
@@ -788,10 +914,20 @@ def _pilot_memory(model, settings, n_steps, limit, limit_source):
     return memory
 
 
-def _sample_count(pilot, target, max_samples, percentage, reasons, notes):
-    """Samples whose IC standard error reaches ``target``, from the pilot's; its reason and notes appended."""
+def _sample_count(pilot, target, max_samples, percentage, reasons, notes, given=None):
+    """Samples whose IC standard error reaches ``target``, from the pilot's, or ``given``; its reason and notes
+    appended."""
     worst = max(pilot["parameters"], key=lambda name: pilot["parameters"][name]["ic_se"])
     worst_se = pilot["parameters"][worst]["ic_se"]
+    if given is not None:
+        proposed = _sample_count(pilot, target, max_samples, percentage, [], [])
+        reached = worst_se * math.sqrt(pilot["n_samples"] / given)
+        reasons.append(
+            f"samples {given}, as given: a pilot with {pilot['n_samples']} samples gave an IC standard error of "
+            f"{worst_se:.3f} for {worst} near its highest IC (result.ic_se), so {given} reach about {reached:.3f}"
+            + ("" if given == proposed else f"; suggest would propose {proposed} for {target:g}")
+        )
+        return int(given)
     needed = pilot["n_samples"] * (worst_se / target) ** 2
     floor = math.ceil(_MIN_BEHAVIOURAL / (percentage / 100))
     n_samples = min(max(_round_up(needed), floor), max_samples)

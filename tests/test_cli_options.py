@@ -9,6 +9,7 @@ import re
 import pytest
 from cli_cases import BASE, GOOD, cli_analyse, cli_one_error, write_text_file
 
+from dynia.cli import main
 from dynia.cli.parser import OPTIONS, parser
 from dynia.errors import SettingsError
 from dynia.settings import AnalysisSettings
@@ -128,3 +129,26 @@ def test_a_config_value_is_one_of_the_options_choices(tmp_path, capsys, line, ne
     good = write_text_file(tmp_path / "data.csv", GOOD)
     config = write_text_file(tmp_path / "run.toml", line + "\n")
     cli_one_error(*cli_analyse(capsys, good, *BASE, "--config", config, "--out", tmp_path / "out"), needle)
+
+
+@pytest.mark.parametrize(
+    "command, options, typed",
+    [
+        ("analyse", ["--samp", "100"], "--samp"),  # would be --samples
+        ("identify", ["--held", "0.2"], "--held"),  # would be --held-out
+        ("suggest", ["--no-plot"], "--no-plot"),  # would be suggest's refused --no-plots, named as never typed
+        ("suggest", ["--max-mem", "1GB"], "--max-mem"),  # would be --max-memory
+    ],
+)
+def test_an_abbreviated_option_is_refused_naming_what_was_typed(tmp_path, capsys, command, options, typed):
+    good = write_text_file(tmp_path / "data.csv", GOOD)
+    status = main([command, str(good), *BASE[:10], *options])  # the data and the model: options of every command
+    captured = capsys.readouterr()
+    line = cli_one_error(status, captured.out, captured.err)
+    assert line.endswith(f"unrecognized arguments: {' '.join(options)}") and line.count(typed) == 1
+
+
+def test_every_parser_of_the_command_refuses_abbreviations():
+    top = parser()
+    commands = top._subparsers._group_actions[0].choices
+    assert not top.allow_abbrev and all(not sub.allow_abbrev for sub in commands.values())

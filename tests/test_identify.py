@@ -156,3 +156,107 @@ def test_dynias_model_structure_warning_reaches_the_identification():
     )
     disagree = [note for note in found.warnings if "the windows with IC >= 0.5 disagree" in note]
     assert len(disagree) == 1 and disagree[0].startswith("K: ")
+
+
+# ------------------------------------------------- errors in options, too little data
+
+
+def _cli_record(tmp_path, drift=0.0):
+    u, y = _record()
+    y[420:] += drift  # the held-out part drifts away from what the fitted part shows
+    path = tmp_path / "record.csv"
+    np.savetxt(path, np.column_stack([np.arange(u.size), u, y]), delimiter=",", header="time,u,y", comments="")
+    common = [str(path), "--time", "time", "--input", "u", "--output", "y", "--model", "first-order"]
+    return common + ["--param", "K=0:7", "--param", "T=0:20", "--samples", "500", "--seed", "1", "--no-plots"]
+
+
+@pytest.mark.parametrize(
+    "options, needles",
+    [
+        # DYNIA's selection, too strict: segments_from_ic's rule, in the options that set it.
+        (["--min-length", "400"], ["DYNIA selected nothing", "--min-length 400 steps", "lower --ic-threshold"]),
+        (["--min-length", "7min"], ["at least --min-length 420 steps"]),
+        (["--held-out", "0.999"], ["--held-out 0.999 leaves 1 of the record's 600 steps"]),
+        (["--min-length", "ten"], ["--min-length must be a whole number of steps or a duration such as 60s"]),
+        (["--min-length", "0"], ["--min-length 0: the shortest segment kept must hold at least 1 step"]),
+        (["--min-length", "0.2s"], ["--min-length 0.2s (0 steps of 1 s): the shortest segment kept"]),
+        (["--min-length", "5", "--method", "whole"], ["--min-length is the shortest segment DYNIA selects"]),
+    ],
+)
+def test_identifys_errors_name_the_options_typed(tmp_path, capsys, options, needles):
+    from cli_cases import cli_one_error
+
+    from dynia.cli import main
+
+    status = main(["identify", *_cli_record(tmp_path), *options, "--out", str(tmp_path / "out")])
+    captured = capsys.readouterr()
+    line = cli_one_error(status, captured.out, captured.err, *needles)
+    for python_name in ("segments_from_ic", "min_length", "ic_threshold", "held_out", "n_starts", "exclude_flagged"):
+        assert python_name not in line
+
+
+def test_min_length_selects_longer_segments_and_is_recorded_in_steps(tmp_path, capsys):
+    from dynia.cli import main
+
+    assert main(["identify", *_cli_record(tmp_path), "--min-length", "30s", "--out", str(tmp_path / "out")]) == 0
+    capsys.readouterr()
+    found = json.loads((tmp_path / "out" / "identified.json").read_text())
+    assert found["settings"]["min_length"] == 30
+    assert all(end - start + 1 >= 30 for start, end in found["segments"])
+
+
+def test_the_library_names_become_options():
+    from dynia.cli.commands import _in_options
+
+    text = (
+        "segments_from_ic selected nothing: no run of at least min_length=21 steps; lower ic_threshold or min_length, "
+        "or use mode 'any'; hold out another part (held_out); exclude them with exclude_flagged=True"
+    )
+    assert _in_options(text) == (
+        "DYNIA selected nothing: no run of at least --min-length 21 steps; lower --ic-threshold or --min-length, "
+        "or use --mode any; hold out another part (--held-out); exclude them with --exclude-flagged"
+    )
+
+
+def test_a_fit_on_too_little_data_is_warned_about():
+    u, y = _record()
+    # Five points per parameter, on the first step's response: fewer than ten.
+    few = identify(u, y, FirstOrder(), BOUNDS, method="given", segments=[(58, 68)], rng=1)
+    assert few.little_data is not None and few.little_data in few.warnings
+    assert few.little_data.startswith("too little data for 2 fitted parameter(s): 10 measured points")
+    assert "5.0 per parameter (fewer than 10)" in few.little_data
+    # The same model on the whole fitting part: hundreds of points, a validation error at the noise level.
+    whole = identify(u, y, FirstOrder(), BOUNDS, method="whole", rng=1)
+    assert whole.little_data is None and not any("too little data" in note for note in whole.warnings)
+
+
+def test_a_validation_error_far_above_the_fit_error_is_warned_about():
+    u, y = _record()
+    y = y.copy()
+    y[420:] += 0.5  # the held-out part drifts away from what the fitted part shows
+    found = identify(u, y, FirstOrder(), BOUNDS, method="whole", rng=1)
+    assert found.validation_error > 2 * found.fit.rmse
+    assert "times the fit's RMS error" in found.little_data and "(more than 2)" in found.little_data
+    assert "per parameter" not in found.little_data  # 420 points are enough
+
+
+def test_the_cli_puts_the_little_data_warning_on_stderr_in_the_json_and_in_the_figure(tmp_path, capsys, monkeypatch):
+    from dynia.cli import main, report
+
+    titles = []
+    original = report.write_fit_figure
+
+    def recording(path, found, *args, **kwargs):
+        titles.append(found.little_data)
+        return original(path, found, *args, **kwargs)
+
+    monkeypatch.setattr(report, "write_fit_figure", recording)
+    common = [word for word in _cli_record(tmp_path, drift=0.5) if word != "--no-plots"]
+    status = main(["identify", *common, "--method", "whole", "--out", str(tmp_path / "out")])
+    captured = capsys.readouterr()
+    found = json.loads((tmp_path / "out" / "identified.json").read_text())
+    warned = [line for line in found["warnings"] if line.startswith("too little data")]
+    assert status == 0 and len(warned) == 1 and "ic_threshold" not in warned[0] and "--ic-threshold" in warned[0]
+    assert "times the fit's RMS error" in warned[0] and (tmp_path / "out" / "fit.png").exists()
+    assert f"dynia: warning: {warned[0]}" in captured.err.splitlines()
+    assert titles == [warned[0]]

@@ -185,10 +185,12 @@ def test_suggest_prints_the_reasons_and_the_command_to_run(tclab, capsys):
     assert command[-2:] == ["--out", "RESULTS"]
 
 
-def test_suggest_needs_no_out_and_refuses_analysis_options(tclab, capsys):
+def test_suggest_needs_no_out_and_refuses_what_only_writing_takes(tclab, capsys):
     path, _, _ = tclab
-    status, _, err = run_cli(capsys, "suggest", path, *TCLAB_ARGS, "--n", "5")
-    assert status == 2 and err.count("\n") == 1 and "--n" in err
+    for option in (["--out", "results"], ["--overwrite"], ["--no-plots"]):
+        status, _, err = run_cli(capsys, "suggest", path, *TCLAB_ARGS, *option)
+        assert status == 2 and err.count("\n") == 1
+        assert f"dynia suggest writes nothing (it prints its proposal), so it takes no {option[0]}" in err
     status, _, err = run_cli(capsys, "suggest", path, "--time", "time", "--input", "Q1", "--output", "T1")
     assert status == 2 and "--model is required" in err
 
@@ -248,6 +250,49 @@ def test_window_and_n_are_exclusive_across_the_config_file(short_record, tmp_pat
     assert json.loads((tmp_path / "p" / "summary.json").read_text())["settings"]["n"] == 5
 
 
+SUGGEST_SHORT = [*SHORT_ARGS[:12], "--seed", "1", "--max-samples", "5000"]  # the data and the model
+
+
+def test_suggest_keeps_a_window_given_and_carries_the_analyse_options_into_its_command(short_record, tmp_path, capsys):
+    carried = ["--window", "1min", "--flavour", "mcat", "--conf-level", "95", "--percentage", "10", "--bins", "20"]
+    status, out, err = run_cli(capsys, "suggest", short_record, *SUGGEST_SHORT, *carried, "--json")
+    assert status == 0, err
+    proposal = json.loads(out)
+    assert proposal["settings"]["n"] == 15 and proposal["settings"]["percentage"] == 10  # 60 s / (2 x 2 s)
+    assert proposal["given"] == ["n", "percentage"] and proposal["arguments"][0] == "--samples"
+    assert any(reason.startswith("window 2n+1 = 31 steps (62 s), as given (n = 15)") for reason in proposal["reasons"])
+    command = proposal["command"]
+    assert command[: 3 + len(SUGGEST_SHORT) - 4] == ["dynia", "analyse", str(short_record), *SUGGEST_SHORT[:-4]]
+    for option, value in zip(carried[::2], carried[1::2]):
+        assert command.count(option) == 1 and command[command.index(option) + 1] == value, option
+    assert "--n" not in command and "--max-samples" not in command and command.count("--seed") == 1
+    # The command runs as printed, with the window and the options given.
+    out_dir = tmp_path / "analysed"
+    status, _, err = run_cli(capsys, *command[1:-1], out_dir, "--no-plots")
+    assert status == 0, err
+    settings = json.loads((out_dir / "summary.json").read_text())["settings"]
+    assert settings["n"] == 15 and settings["analysis"]["flavour"] == "mcat" and settings["analysis"]["bins"] == 20
+
+
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        (["--window", "60s", "--n", "5"], "--window and --n both set the window; give one of them"),
+        (["--window", "5s"], "--window 5 s is 2.5 steps of 2 s; a window needs at least 3 steps"),
+        (["--n", "-1"], "--n must be at least 0; got -1"),
+        (["--n", "200"], "200 time steps, fewer than one window of 2n+1 = 401 (--n 200)"),
+        (["--percentage", "0"], "--percentage"),
+        (["--samples", "0"], "--samples must be at least 1; got 0"),
+        (["--conf-level", "0.9"], "--conf-level is a percentage in (50, 100)"),
+        (["--target-se", "0.01"], "unrecognized arguments: --target-se 0.01"),
+    ],
+)
+def test_suggest_checks_the_analyse_options_as_analyse_does(short_record, capsys, options, message):
+    status, out, err = run_cli(capsys, "suggest", short_record, *SUGGEST_SHORT, *options)
+    assert status == 2 and out == "" and err.count("\n") == 1 and err.startswith("dynia: error: ")
+    assert message in err
+
+
 def test_the_sample_count_brings_the_pilots_ic_standard_error_to_the_target():
     u, y = tclab_record()
     found = suggest(u[:3400], y[:3400] - y[0], FirstOrder(), {"K": (0, 2), "T": (0, 500)}, rng=1)
@@ -302,6 +347,59 @@ def test_a_fit_that_explains_little_proposes_no_window():
     noise = np.random.default_rng(2).normal(0, 1.0, 2000)
     with pytest.raises(SuggestionError, match="give the window yourself"):
         suggest(np.repeat([0.0, 1.0], 1000), noise, FirstOrder(), {"K": (0, 2), "T": (0, 500)}, rng=1)
+
+
+# A first-order lag of 5 s sampled at 1 s under sensor noise of 0.4 degC: heater steps of a few %, a gain of
+# 0.8 degC/%, so responses of about 1-3 degC, 1600 s. One time constant is a 5 s window (n = 2), in which the
+# behavioural sets tie within the noise and neither parameter is identified; the default window (n = 10)
+# identifies both.
+NOISY_BOUNDS = {"K": (0, 2), "T": (0, 50)}
+
+
+def noisy_fast_record():
+    u = np.repeat([0.0, 3.0, 1.0, 4.0, 2.0, 5.0, 1.0, 3.0], 200)
+    y = FirstOrder().simulate([[0.8, 5.0]], u)[0] + np.random.default_rng(1).normal(0, 0.4, u.size)
+    return u, y
+
+
+def test_the_window_of_a_noisy_record_with_a_short_time_constant_beats_the_noise():
+    u, y = noisy_fast_record()
+    found = suggest(u, y, FirstOrder(), NOISY_BOUNDS, rng=1, max_samples=20_000)
+    assert found.time_scale.time_constant == pytest.approx(5.0, rel=0.1)
+    assert found.n >= 10  # at least the default window, which identifies both
+    assert "longer than one time constant (5 steps) to beat the noise" in found.reasons[1]
+
+    def verdicts(n):
+        result = dynia.run(
+            u, y, FirstOrder(), NOISY_BOUNDS, n=n, percentage=found.percentage, n_samples=found.n_samples, rng=2
+        )
+        return {name: verdict["verdict"] for name, verdict in result.verdicts.items()}
+
+    assert verdicts(found.n) == {"K": "identified", "T": "identified"}
+    # The window of one time constant, which suggest proposed before it weighed the noise, identifies neither.
+    assert "identified" not in verdicts(2).values()
+
+
+def test_a_window_given_is_kept_and_the_rest_proposed_around_it():
+    u, y = noisy_fast_record()
+    found = suggest(u, y, FirstOrder(), NOISY_BOUNDS, n=12, percentage=2.0, rng=1, max_samples=20_000)
+    assert found.n == 12 and found.window == 25.0 and found.percentage == 2.0 and found.given == ("n", "percentage")
+    assert found.arguments() == ["--samples", str(found.n_samples)]
+    assert found.pilot["n_samples"] == 2500  # 50 behavioural sets at the share given
+    assert found.reasons[1].startswith("window 2n+1 = 25 steps (25 s), as given (n = 12); the record would ask for n =")
+    assert found.reasons[2] == "percentage 2, as given; with 2 parameter(s) suggest would propose 1 (module docs)"
+    assert "kept as given: --n 12, --percentage 2" in found.text().splitlines()[0]
+    fixed = suggest(u, y, FirstOrder(), NOISY_BOUNDS, n_samples=3000, rng=1, max_samples=20_000)
+    assert fixed.n_samples == 3000 and fixed.arguments()[:2] == ["--n", str(fixed.n)]
+    assert fixed.reasons[3].startswith("samples 3000, as given: a pilot with 5000 samples")
+
+
+def test_a_window_given_gets_a_proposal_where_the_record_sizes_none():
+    noise = np.random.default_rng(2).normal(0, 1.0, 2000)
+    found = suggest(np.repeat([0.0, 1.0], 1000), noise, FirstOrder(), {"K": (0, 2), "T": (0, 500)}, n=20, rng=1)
+    assert found.n == 20 and found.reasons[0].startswith("no dominant time constant: a first-order model")
+    with pytest.raises(SettingsError, match="^n 1000: the window 2n\\+1 = 2001 is longer than the record"):
+        suggest(np.repeat([0.0, 1.0], 1000), noise, FirstOrder(), {"K": (0, 2), "T": (0, 500)}, n=1000, rng=1)
 
 
 def test_the_cli_says_in_one_line_why_it_proposes_nothing(tmp_path, capsys):

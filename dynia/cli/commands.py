@@ -25,6 +25,7 @@ import json
 import math
 import os
 import platform
+import re
 import shlex
 import sys
 import tomllib
@@ -36,7 +37,7 @@ from .. import __version__, models
 from ..engine import kernels
 from ..engine.flavours import compiled_engine
 from ..engine.windows import OverflowedWindowsWarning
-from ..errors import DyniaError, ModelError, OutputError, SettingsError
+from ..errors import DyniaError, ModelError, NothingSelected, OutputError, SettingsError
 from ..identification import identify
 from ..io.csv import load_csv
 from ..io.outdir import OutputDirectory
@@ -101,6 +102,7 @@ def _options(args):
     """
     command = args.command
     options, set_by_user = _merged_options(args, command)
+    options["given"] = set_by_user
     if options.get("max_memory") is not None:
         options["max_memory"] = parse_size(options["max_memory"], "--max-memory")
     if options.get("window") is not None:
@@ -109,8 +111,8 @@ def _options(args):
         options["window_seconds"] = parse_duration(options["window"], "--window")
     _check_required(options, command)
     _ranges(options["param"])  # checked before the model runs; against the model below
-    if command != "suggest":  # suggest proposes the analysis settings
-        options["analysis"] = _analysis_settings(options)
+    # suggest's are the settings of its pilot, and those given are kept in its proposal.
+    options["analysis"] = _analysis_settings(options)
     _check_command_options(options)
     options["offset"] = _offset(options["offset"], "--offset")
     options["input_offset"] = _offset(options["input_offset"], "--input-offset")
@@ -359,11 +361,79 @@ def _check_command_options(options):
         raise UsageError(f"--seed must be a whole number >= 0; got {options['seed']}")
     if "starts" in options and options["starts"] < 1:
         raise UsageError(f"--starts must be a whole number >= 1; got {options['starts']}")
+    if options.get("min_length") is not None:
+        if options["method"] != "dynia":
+            raise UsageError(
+                f"--min-length is the shortest segment DYNIA selects (--method dynia); --method {options['method']} "
+                "selects its data otherwise"
+            )
+        _min_length(options["min_length"], None)  # its form now; in steps once the data's grid is known
     if not (options["max_gap"] > 1 or math.isinf(options["max_gap"])):
         raise UsageError(
             f"--max-gap is a multiple of the grid step above 1 (a gap longer than that many steps is "
             f"left missing); got {options['max_gap']:g}"
         )
+
+
+def _min_length(value, dt):
+    """``--min-length`` in steps: a whole number is steps, a duration (60s, 2min) is rounded onto the grid ``dt``.
+
+    With ``dt`` None only its form is checked (None is returned for a duration).
+    """
+    text = str(value).strip()
+    if text.isdigit():
+        steps = int(text)
+    else:
+        try:
+            seconds = parse_duration(text, "--min-length")
+        except SettingsError:
+            raise UsageError(
+                f"--min-length must be a whole number of steps or a duration such as 60s, 2min or 1h; got {value!r}"
+            ) from None
+        if dt is None:
+            return None
+        steps = math.floor(seconds / dt + 0.5)
+    if steps < 1:
+        where = "" if text.isdigit() else f" ({steps} steps of {dt:g} s)"
+        raise UsageError(f"--min-length {text}{where}: the shortest segment kept must hold at least 1 step")
+    return steps
+
+
+# The library's names in what identify says, as the command line spells them: an error or a warning never names a
+# Python argument the user cannot give. Longest first, so that min_length= is read before min_length.
+_IDENTIFY_WORDS = (
+    ("segments_from_ic selected nothing", "DYNIA selected nothing"),
+    ("exclude_flagged=True", "--exclude-flagged"),
+    ("loosen baseline_options", "the command line does not tune it: try --method dynia or --method whole"),
+    ("choose bounds", "choose --param ranges"),
+    ("min_length=", "--min-length "),
+    ("min_length", "--min-length"),
+    ("ic_threshold", "--ic-threshold"),
+    ("held_out", "--held-out"),
+    ("n_starts", "--starts"),
+    ("mode 'any'", "--mode any"),
+    ("mode 'joint'", "--mode joint"),
+    ("method 'dynia'", "--method dynia"),
+    ("method 'baseline'", "--method baseline"),
+    ("method 'whole'", "--method whole"),
+)
+
+
+def _in_options(text):
+    """``text`` of the library with its names of identify's arguments replaced by the options that give them."""
+    for name, option in _IDENTIFY_WORDS:
+        text = re.sub(r"(?<![\w-])" + re.escape(name) + (r"(?!\w)" if name[-1].isalnum() else ""), option, text)
+    return text
+
+
+@contextlib.contextmanager
+def _identify_errors():
+    """An error of :func:`dynia.identify` as one naming the command line's options (:func:`_in_options`)."""
+    try:
+        yield
+    except (NothingSelected, SettingsError) as error:
+        kind = NothingSelected if isinstance(error, NothingSelected) else UsageError
+        raise kind(_in_options(str(error))) from None
 
 
 def _read_config(path, command):
@@ -403,6 +473,8 @@ def _typed(value, option, where):
         return value
     if kind in ("offset", "size") and (isinstance(value, str) or is_number):
         return value
+    if kind == "length" and (isinstance(value, str) or (isinstance(value, int) and not isinstance(value, bool))):
+        return str(value)
     if kind == "names":
         if isinstance(value, str):
             return [value]
@@ -416,6 +488,7 @@ def _typed(value, option, where):
         "offset": "none, first or a number",
         "size": 'a size such as "4GB" or a number of bytes',
         "names": "a string or a list of strings",
+        "length": 'a whole number of steps or a duration such as "60s"',
     }[kind]
     raise UsageError(f"{where} must be {expected}; got {value!r} ({type(value).__name__})")
 
@@ -801,7 +874,6 @@ def _monte_carlo_record(result):
 
 
 def _identify(options, command_line, caught):
-    model = options["model_object"]
     with options["destination"] as staging, _written_into(options["out"], staging):
         data, offset, input_offset, u, y = _load(options)
         analysis = options["analysis"].replace(dt=data.dt)
@@ -810,21 +882,15 @@ def _identify(options, command_line, caught):
             print(f"dynia: warning: {line}", file=sys.stderr)
         if options["method"] == "dynia":
             _announce_compilation(options, analysis)
-        found = identify(
-            u,
-            y,
-            model,
-            options["bounds"],
-            method=options["method"],
-            settings=analysis,
-            held_out=options["held_out"],
-            ic_threshold=options["ic_threshold"],
-            mode=options["mode"],
-            quality=options["quality"],
-            exclude_flagged=options["exclude_flagged"],
-            n_starts=options["starts"],
-            rng=options["seed"],
-            progress=_shows_progress(options),
+        if options.get("min_length") is not None:
+            options["min_length"] = _min_length(options["min_length"], data.dt)
+        with _identify_errors():
+            found = _identified(options, u, y, analysis)
+        # Its warnings are the command line's: the terminal, identified.json and fit.png name options.
+        found = dataclasses.replace(
+            found,
+            warnings=[_in_options(line) for line in found.warnings],
+            little_data=found.little_data and _in_options(found.little_data),
         )
         dropped = _dynia_warnings(caught)
         for line in dropped + found.warnings:
@@ -871,6 +937,27 @@ def _identify(options, command_line, caught):
     return _done(options)
 
 
+def _identified(options, u, y, analysis):
+    """:func:`dynia.identify` with the command's options."""
+    return identify(
+        u,
+        y,
+        options["model_object"],
+        options["bounds"],
+        method=options["method"],
+        settings=analysis,
+        held_out=options["held_out"],
+        ic_threshold=options["ic_threshold"],
+        mode=options["mode"],
+        min_length=options.get("min_length"),
+        quality=options["quality"],
+        exclude_flagged=options["exclude_flagged"],
+        n_starts=options["starts"],
+        rng=options["seed"],
+        progress=_shows_progress(options),
+    )
+
+
 def _suggest(options, command_line, caught):
     data, offset, input_offset, u, y = _load(options)
     # suggest writes no summary.json: the findings go with the proposal, as JSON or one warning line each.
@@ -882,7 +969,8 @@ def _suggest(options, command_line, caught):
             f"{entry['reason']}"
             for entry in findings
         ]
-    _announce_compilation(options, AnalysisSettings())  # the pilot runs on the default engine and flavour
+    _announce_compilation(options, options["analysis"])
+    given = options["given"]
     found = suggest(
         u,
         y,
@@ -890,6 +978,11 @@ def _suggest(options, command_line, caught):
         options["bounds"],
         dt=data.dt,
         x0=options["x0"],
+        # Kept as given (a --window is n on the data's grid by now, _load); the rest is proposed around them.
+        n=options["n"] if {"n", "window"} & given else None,
+        percentage=options["percentage"] if "percentage" in given else None,
+        n_samples=options["samples"] if "samples" in given else None,
+        settings=options["analysis"],
         max_samples=options["max_samples"],
         max_memory=options["max_memory"],
         progress=_shows_progress(options),
@@ -899,8 +992,8 @@ def _suggest(options, command_line, caught):
     dropped = _dynia_warnings(caught)
     for line in notices + dropped:
         print(f"dynia: warning: {line}", file=sys.stderr)
-    # The analyse command this proposal is for: the same data and model options, the proposed settings.
-    # suggest's own options (its seed is given anew) are not analyse's.
+    # The analyse command this proposal is for: every analyse option as the user gave it, and the settings proposed
+    # (the proposal leaves out those given). suggest's own options (its seed is given anew) are not analyse's.
     own = ("--seed", "--max-samples", "--max-memory")
     kept, words = [], iter(command_line[2:])
     for word in words:

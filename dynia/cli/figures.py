@@ -13,6 +13,7 @@ figure, with the Agg backend: the command line writes files and never opens a wi
 
 import dataclasses
 import datetime
+import textwrap
 
 import numpy as np
 
@@ -259,7 +260,12 @@ def write_fit_figure(path, found, data, u, y, offset, labels=None):
         f"{name} = {value:.4g} \u00b1 {robust[name]:.2g}" + (f" {labels.units[name]}" if name in labels.units else "")
         for name, value in found.parameters.items()
     )
-    axes[0].set_title(f"{found.method}: {estimates}; validation RMSE {found.validation_error:.3g}")
+    title = f"{found.method}: {estimates}; validation RMSE {found.validation_error:.3g}"
+    little_data = getattr(found, "little_data", None)
+    if little_data:
+        # Under the estimates it doubts, so that the figure never shows them without it.
+        title += "\n" + textwrap.fill("warning: " + little_data.split(": the estimates")[0], 110)
+    axes[0].set_title(title, color="k" if not little_data else "tab:red", fontsize=None if not little_data else 9)
     _finish_time_axis(bottom, xlabel, dated)
     bottom.legend(loc="best", fontsize=8)
     fig.savefig(path, dpi=110, bbox_inches="tight")

@@ -10,6 +10,7 @@ its options, in the order ``--help`` lists them.
 
 import argparse
 import dataclasses
+import textwrap
 import types
 
 from .. import __version__
@@ -24,7 +25,16 @@ class UsageError(SettingsError):
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse, but a usage mistake is one line on stderr (no usage dump), exit status 2."""
+    """argparse, but a usage mistake is one line on stderr (no usage dump), exit status 2, and no abbreviations.
+
+    argparse would read ``--n 15`` given to a command without ``--n`` as an abbreviation of whichever option it
+    begins (``--no-plots``), and its error would then name an option the user never typed; every parser of the
+    command, the commands' own included (argparse makes them of this class), takes options only as spelled.
+    """
+
+    def __init__(self, *args, **kwargs):
+        kwargs["allow_abbrev"] = False
+        super().__init__(*args, **kwargs)
 
     def error(self, message):
         raise UsageError(message)
@@ -38,7 +48,7 @@ class Option:
     ----------
     key : str
         The argparse destination and the ``--config`` key; the option is ``--key`` with dashes.
-    kind : {"flag", "whole", "number", "text", "names", "offset", "size"}
+    kind : {"flag", "whole", "number", "text", "names", "offset", "size", "length"}
         The value it takes, on the command line and in a ``--config`` file.
     help : str
         Its help; ``{default}`` in it is the default, else a default that is not None or False is added at the end
@@ -318,6 +328,13 @@ _IDENTIFY_SELECTION = (
         choices=("any", "joint"),
     ),
     Option(
+        "min_length",
+        "length",
+        "dynia: the shortest segment kept, in steps (a whole number) or as a duration such as 60s, 2min or 1h "
+        "(default: one window, 2n+1 steps): shorter runs of informative windows see the same few points",
+        metavar="STEPS|DURATION",
+    ),
+    Option(
         "held_out",
         "number",
         "share of the record, at its end, kept for validation",
@@ -365,6 +382,24 @@ _SUGGEST_PILOT = (
     _QUIET,
 )
 
+# The analyse options suggest takes, to carry them into the analyse command it proposes: all of analyse's method
+# but the seed and --max-samples, which are suggest's own (the pilot's seed, the most samples of the proposal), and
+# --target-se, whose budget is analyse's --max-samples.
+# What suggest proposes shows no default: left out, suggest proposes it.
+_SUGGEST_ANALYSIS = tuple(
+    dataclasses.replace(option, help=option.help + " (default: proposed)")
+    if option.key in ("samples", "n", "window", "percentage")
+    else option
+    for option in _ANALYSE_METHOD
+    if option.key not in ("seed", "max_samples", "target_se")
+)
+
+_SUGGEST_ANALYSIS_TEXT = (
+    "the options of the dynia analyse command suggest proposes: each one given is carried into that command as "
+    "given, and the pilot runs with it. --n or --window, --percentage and --samples fix what suggest would "
+    "otherwise propose: it keeps the value given, proposes the rest around it and says what the record asks for"
+)
+
 # Each command's option groups, in the order of its --help.
 _GROUPS = {
     "analyse": (("data", _DATA), ("model", _MODEL), ("method", _ANALYSE_METHOD), ("output", _OUTPUT)),
@@ -374,8 +409,16 @@ _GROUPS = {
         ("selection and fit", _IDENTIFY_SELECTION),
         ("output", _OUTPUT),
     ),
-    "suggest": (("data", _DATA), ("model", _MODEL), ("pilot and output", _SUGGEST_PILOT)),
+    "suggest": (
+        ("data", _DATA),
+        ("model", _MODEL),
+        ("analysis (carried into the proposed command)", _SUGGEST_ANALYSIS),
+        ("pilot and output", _SUGGEST_PILOT),
+    ),
 }
+
+# What --help says under a group's title, where the title does not say it all.
+_GROUP_TEXTS = {"analysis (carried into the proposed command)": textwrap.fill(_SUGGEST_ANALYSIS_TEXT, 76)}
 
 # Every command's options by key: their defaults, their kinds in a --config file, and exactly what its summary records.
 OPTIONS = {
@@ -436,15 +479,20 @@ example (the heating-system record; the last 30 % of it is held out for validati
     ),
     "suggest": dict(
         help="propose a window, a behavioural share and a number of samples for analyse, and say why",
-        description="Estimate the record's dominant time constant, choose a window of about one time constant, "
-        "a behavioural share that lets the IC reach high values, and the number of samples that brings a "
-        "pilot run's IC standard error to 0.02; check the parameter ranges against a least-squares fit. "
-        "Writes nothing; prints the proposal (--json: as JSON).",
+        description="Estimate the record's dominant time constant and its noise, choose a window of about one "
+        "time constant or, on a noisy record, as long as it takes to beat the noise, a behavioural share that lets "
+        "the IC reach high values, and the number of samples that brings a pilot run's IC standard error to 0.02; "
+        "check the parameter ranges against a least-squares fit. A window (--n or --window), share (--percentage) "
+        "or number of samples (--samples) given is kept, and the rest proposed around it; every analyse option "
+        "given is carried into the proposed command. Writes nothing; prints the proposal (--json: as JSON).",
         epilog="""\
 example (proposes --n, --percentage and --samples for dynia analyse, with the reasons):
   dynia suggest data/heating_system/heating_system.csv --time time --input u --output y \\
       --model first-order --param K=0:40 --param T=0:200 \\
       --input-offset 6 --offset first --x0 zero --seed 1
+
+  with --window 2min (or --n 60) it keeps that window and proposes the share and the
+  samples for it; --flavour mcat, --conf-level 95, ... go into the proposed command.
 """,
     ),
 }
@@ -463,7 +511,7 @@ def parser():
         sub = commands.add_parser(command, formatter_class=argparse.RawDescriptionHelpFormatter, **text)
         groups = _GROUPS[command]
         for title, options in groups:
-            group = sub.add_argument_group(title)
+            group = sub.add_argument_group(title, _GROUP_TEXTS.get(title))
             for option in options:
                 option.add_to(group)
         group.add_argument(_CONFIG.flag, metavar=_CONFIG.metavar, help=_CONFIG.help)
