@@ -520,8 +520,7 @@ def record_least_squares(result, u, y, model):
     steady (``steady_size_factor``,
     :func:`dynia.engine.noise.steady_size_factor`). The verdicts
     compare the evidence bands with it (:mod:`dynia.verdicts`, reason
-    ``disagrees_with_record_fit``). A parameter whose range is a point is
-    held there. Where the least squares cannot run (the model cannot
+    ``disagrees_with_record_fit``). Where the least squares cannot run (the model cannot
     simulate a point it reaches), the fit within the sample stays, without
     standard errors, and no verdict compares with it; so does a record whose
     squared residuals overflow or underflow (magnitudes near the
@@ -540,13 +539,8 @@ def record_least_squares(result, u, y, model):
     if start is None or result.settings is None:
         return result
     names = list(result.names)
-    bounds, fixed = {}, {}
-    for name, (low, high) in zip(names, result.bounds):
-        if high > low:
-            bounds[name] = (float(low), float(high))
-        else:
-            fixed[name] = float(low)
-    initial = {name: float(np.clip(value, *bounds[name])) for name, value in zip(names, start) if name in bounds}
+    bounds = {name: (float(low), float(high)) for name, (low, high) in zip(names, result.bounds)}
+    initial = {name: float(np.clip(value, *bounds[name])) for name, value in zip(names, start)}
     try:
         # Records near the floating-point limits square into overflow or underflow: such a fit is dropped below.
         with np.errstate(all="ignore"), warnings.catch_warnings():
@@ -558,7 +552,6 @@ def record_least_squares(result, u, y, model):
                 [(0, np.asarray(y).shape[0])],
                 bounds=bounds,
                 initial=initial,
-                fixed=fixed,
                 dt=result.settings.dt,
                 x0=result.settings.x0,
             )
@@ -802,7 +795,10 @@ def _inverse_normal_matrix(jacobian, scale):
     rows and columns of the others are blanked by :func:`_masked`).
     """
     scaled = jacobian * scale
-    _, singular, right = np.linalg.svd(scaled)
+    # Only the right singular vectors are used: the left ones of a long record (n_points x n_points) would take
+    # seconds and gigabytes. Full matrices only where there are fewer points than parameters, so that the right
+    # ones span the null space too.
+    _, singular, right = np.linalg.svd(scaled, full_matrices=scaled.shape[0] < scaled.shape[1])
     # With fewer points than parameters J has fewer singular values than
     # columns; the missing ones are zeros.
     singular = np.concatenate((singular, np.zeros(right.shape[0] - singular.size)))

@@ -222,3 +222,20 @@ def test_the_table_shows_the_record_fit_and_says_why_the_highest_ic_is_no_eviden
     table = verdict_table(summary)
     assert "record fit" in table.splitlines()[0] and "2.5 +- 0.01" in table.splitlines()[1]
     assert "is in a window that is no evidence (below the noise floor)" in table
+
+
+@pytest.mark.parametrize("x0", ["zero", "steady"])
+@pytest.mark.parametrize(
+    "model, params",
+    [
+        (dynia.models.FirstOrder(), [[2.0, 5.0], [1.0, 3.0]]),
+        (dynia.models.FOPDT(), [[1.0, 4.0, 2.5]]),
+        (dynia.models.SecondOrderDelay(), [[2.0, 5.0, 2.0, 3.3]]),
+    ],
+)
+def test_the_kernel_simulates_for_the_least_squares_as_the_model_does(model, params, x0):
+    u = np.random.default_rng(0).normal(size=500)
+    kernel = dynia.pipeline.KernelSimulated(model)
+    assert kernel.names == model.names and repr(kernel) == repr(model)
+    expected = model.simulate(np.array(params), u, dt=0.7, x0=x0)
+    assert np.array_equal(kernel.simulate(np.array(params), u, dt=0.7, x0=x0), expected)  # bit for bit
