@@ -114,13 +114,12 @@ record checks it: every front-end fits the model to the whole record by
 least squares (:func:`dynia.fit.record_least_squares`, from the
 record-best set of the noise floor), and where the model and a constant
 parameter describe the record, that fit and every evidence band agree
-within noise. A band (the reported window's, and the median band of each
-stretch of evidence windows as ``windows_disagree`` forms them) that
-excludes the fit by more than the tolerance raises
-``disagrees_with_record_fit``, naming both. Only the reported band is
-compared: it is the estimate a user reads, and under slowly wandering noise
-other stretches' bands wander with it (``windows_disagree`` widens them for
-that, see :func:`dynia.structure.noise_widening`). The tolerance is two
+within noise. A reported band (its window evidence) that excludes the fit
+by more than the tolerance raises ``disagrees_with_record_fit``, naming
+both. Only the reported band is compared: it is the estimate a user reads,
+and under slowly wandering noise the other stretches' bands wander with it
+(``windows_disagree`` widens them for that, see
+:func:`dynia.structure.noise_widening`). The tolerance is two
 standard errors of the difference: the fit's standard error from noise
 alone (:func:`record_fit_noise_error`: its HAC standard error, scaled down
 by the windows' noise level over the fit's RMSE where misfit inflates the
