@@ -613,8 +613,9 @@ def test_heating_record_verdicts_as_in_the_readme(tmp_path, capsys):
     assert parameters["K"]["verdict"] == "suspect"
     assert [reason["code"] for reason in parameters["K"]["reasons"]] == ["windows_disagree"]
     assert parameters["K"]["high_ic_windows"] == 327 and parameters["K"]["high_ic_span"] == [122.0, 1420.0]
-    assert "K          0.884   398.0  [19.22, 23.88]  21.76     327      122.0  1420.0  suspect" in stdout
-    assert "T          0.846   836.0  [41.3, 72.14]   55.75     181      6.0    1430.0  identified" in stdout
+    assert "K          0.884   398.0  [19.22, 23.88]  21.76     19.59 +- 0.49  327      122.0  1420.0  suspect" in stdout
+    assert "T          0.846   836.0  [41.3, 72.14]   55.75     68.28 +- 4.5   181      6.0    1430.0  identified" in stdout
+    assert "is in a window that is no evidence (its behavioural set tied within noise)" in stdout
 
 
 def test_a_dead_time_peaking_in_a_tied_window_at_the_record_start_is_reported_where_it_is_evidence(tmp_path, capsys):
