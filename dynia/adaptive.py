@@ -63,6 +63,7 @@ from .engine.windows import ArrayErrors, analyse_errors, window_costs
 from .errors import SettingsError
 from .io.frames import unpack
 from .progress import shows_progress
+from .quality import screening
 from .settings import ADAPTIVE_SAMPLERS as SCHEMES
 from .settings import AnalysisSettings, RunRecord, merged_settings, parameter_box
 from .verdicts import assess
@@ -227,7 +228,11 @@ def adaptive_run(
     )
     weights = mixture.importance_weights(samples)
     run = dataclasses.replace(
-        RunRecord.of(model, n_sampled=spent, n_dropped=0), n_evaluations=spent, weights=weights, n_blocks=n_blocks
+        RunRecord.of(model, n_sampled=spent, n_dropped=0),
+        n_evaluations=spent,
+        weights=weights,
+        n_blocks=n_blocks,
+        screened=screening(u, y, settings),
     )
     result = analyse_errors(
         y,

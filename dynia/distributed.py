@@ -117,6 +117,7 @@ from .errors import DataError, DyniaError, ModelError, SettingsError
 from .io.frames import unpack
 from .pipeline import warn_dropped
 from .progress import progress_bar, shows_progress
+from .quality import screening
 from .result import DyniaResult
 from .sampling import sample
 from .settings import SAMPLERS, RunRecord, merged_settings, parameter_box
@@ -378,6 +379,7 @@ def _result(u, y, model, names, box, samples, settings, flavour_impl, windows, a
         RunRecord.of(model, n_sampled=n_samples, n_dropped=n_samples - samples.shape[0]),
         n_behavioural=flavour_impl.count,
         ic_batches=flavour_impl.batches if settings.ic_error else None,
+        screened=screening(u, y, settings),
         **floor_settings(floor),
     )
     return DyniaResult(

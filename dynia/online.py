@@ -55,6 +55,7 @@ from .errors import DataError, ModelError, SettingsError
 from .io.frames import unpack
 from .models import FunctionModel, Model, StateSpaceModel
 from .models.base import SameOutput, refuse_ignored_params
+from .quality import screen
 from .result import DyniaResult
 from .sampling import sample
 from .settings import SAMPLERS, AnalysisSettings, RunRecord, merged_settings, parameter_box
@@ -412,6 +413,10 @@ class OnlineDynia:
             residuals=record_residuals(y, self.samples, self.bounds, totals, self._simulations(u, start)),
         )
         run = dataclasses.replace(self._run, n_diverged=self.n_diverged, **floor_settings(floor))
+        if self._analysis.quality:
+            # Screened once replayed: a stream cannot be screened before it is seen. Windows reaching back before
+            # this replay are judged on the samples replayed.
+            run = dataclasses.replace(run, screened=screen(u, y, (2 * self._analysis.n, 0)))
         return DyniaResult(
             names=self.names,
             samples=np.array(self.samples),

@@ -18,6 +18,7 @@ from .io.frames import unpack
 from .models import LinearModel, Model, StateSpaceModel
 from .models.custom import StateErrors
 from .progress import shows_progress
+from .quality import screening
 from .sampling import sample
 from .settings import ADAPTIVE_SAMPLERS, IC_THRESHOLD, MAX_PARAMETER, RunRecord, merged_settings, parameter_box
 from .verdicts import assess
@@ -203,12 +204,13 @@ def run(
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
     settings.check_record(y.size)  # before any simulation
     names, box = parameter_box(bounds, model.names, repr(model))
-    if settings.sampler in ADAPTIVE_SAMPLERS:
+    if settings.sampler in ADAPTIVE_SAMPLERS:  # adaptive_run screens the record itself
         result = adaptive_run(
             u, y, model, dict(zip(names, map(tuple, box))), scheme=settings.sampler, settings=settings, rng=rng
         )
         # The verdicts name times: again with the dates, when there are dates.
         return result if timestamps is None else dated(result, timestamps)
+    screened = screening(u, y, settings)  # before the analysis, which it does not change: the verdicts read it
     generator = _checks.generator(rng)
     samples = sample(settings.sampler, settings.n_samples, box, generator)
     # The arrays in memory, or in settings.store as they are produced, committed with the verdicts (dynia.io.arrays).
@@ -217,6 +219,7 @@ def run(
             result = _analyse_samples(u, y, model, names, box, samples, settings, progress, output)
         else:
             result = _analyse_to_target(u, y, model, names, box, samples, settings, generator, progress, output)
+        result = dataclasses.replace(result, run=dataclasses.replace(result.run, screened=screened))
         return output.commit(dated(result, timestamps))
 
 

@@ -50,7 +50,7 @@ from ..suggestion import parse_duration, parse_size, suggest, window_half_width
 from ..verdicts import assess
 from . import report
 from .figures import Labels
-from .parser import OPTIONS, WRITING_OPTIONS, UsageError, setting_options, unwritten
+from .parser import OPTIONS, RETIRED, WRITING_OPTIONS, UsageError, retired, setting_options, unwritten
 
 __all__ = ["execute"]
 
@@ -112,6 +112,7 @@ def _options(args):
     if command != "suggest":  # suggest proposes the analysis settings
         options["analysis"] = _analysis_settings(options)
     _check_command_options(options)
+    options["quality"] = not options["no_quality"]  # screening is on unless --no-quality
     options["offset"] = _offset(options["offset"], "--offset")
     options["input_offset"] = _offset(options["input_offset"], "--input-offset")
     if options.get("seed") is None:
@@ -126,8 +127,6 @@ def _options(args):
         )
     model = options["model_object"] = _model(options["model"])
     options["input"] = _input_columns(options["input"], model)
-    if model.n_inputs > 1 and options["quality"]:
-        raise UsageError(f"--quality checks one input; the model {model!r} has {model.n_inputs}")
     options["bounds"] = _bounds(options["param"], model)
     known = [*model.names, *options["input"], options["output"]]
     options["units"] = _units(options.get("unit") or (), known)
@@ -178,6 +177,9 @@ def _references(specs, known):
 
 def _merged_options(args, command):
     """The command's defaults, then its --config file, then the command line; and the keys the user set."""
+    for option, message in RETIRED.items():
+        if getattr(args, retired(option), False):
+            raise UsageError(message)
     refused = [option for option in WRITING_OPTIONS if getattr(args, unwritten(option), None) is not None]
     if refused:
         raise UsageError(
@@ -190,7 +192,7 @@ def _merged_options(args, command):
         if value is not None
         and key not in ("command", "config")
         and value is not False
-        and not key.startswith("unwritten_")
+        and not key.startswith(("unwritten_", "retired_"))
     }
     options = {key: option.default for key, option in OPTIONS[command].items()}
     options["command"] = command
@@ -333,7 +335,11 @@ def _import_model_module(where, spec):
 
 def _analysis_settings(options):
     """The AnalysisSettings of the command's options; the settings check them (and errors name the options)."""
-    fields = {option.setting: options[key] for key, option in OPTIONS[options["command"]].items() if option.is_setting}
+    fields = {
+        option.setting: not options[key] if option.negated else options[key]
+        for key, option in OPTIONS[options["command"]].items()
+        if option.is_setting
+    }
     if options.get("window") is not None and "min_points" in fields:
         # With --window the window's length is known only on the data's grid; min_points is checked then (_load).
         fields["min_points"] = 1
@@ -377,6 +383,11 @@ def _read_config(path, command):
     except tomllib.TOMLDecodeError as error:
         raise UsageError(f"--config {path}: not valid TOML: {error}") from None
     config = {key.replace("-", "_"): value for key, value in config.items()}
+    if "quality" in config and "quality" not in OPTIONS[command]:
+        raise UsageError(
+            f"--config {path}: quality: the data-quality screening is on by default; write no_quality = true to "
+            "turn it off"
+        )
     allowed = sorted(OPTIONS[command])
     unknown = sorted(set(config) - set(allowed))
     if unknown:
