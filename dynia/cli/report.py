@@ -115,7 +115,8 @@ def write_analysis(
         summary,
         command="analyse",
         tables=[([], *verdict_parts(summary["parameters"]))],
-        lines=[] if floor is None else [noise_floor_line(floor)],
+        lines=[line.strip() for line in screening_lines(summary)]
+        + ([] if floor is None else [noise_floor_line(floor)]),
         plots=plots,
     )
 
@@ -180,6 +181,36 @@ def noise_floor_line(floor):
     )
 
 
+def screening_lines(summary):
+    """The lines ``dynia analyse`` prints under the verdict table about the data-quality screening.
+
+    One per screened finding of ``summary["data_quality"]``, in the units measured, with the windows it takes
+    from the evidence, and one for the total (``summary["screening"]``); none when the run was not screened.
+    """
+    screening = summary.get("screening")
+    if not screening:
+        return []
+    lines = []
+    for entry in summary.get("data_quality", ()):
+        if not entry.get("screened"):
+            continue
+        value, column, kind = entry["value"], entry["column"], entry["kind"]
+        if kind == "saturated":
+            what = f"{column} saturated at {value:.6g} (its record {entry['limit']})"
+        elif kind == "stuck":
+            what = f"{column} frozen at {value:.6g}"
+        else:
+            what = f"{column} quantised in steps of {value:.6g} (coarser than its noise)"
+        where = "" if kind == "quantised" else f" from {entry['start_time']} to {entry['end_time']}"
+        lines.append(f"  data quality: {what}{where}: {entry['windows_excluded']} window(s) are no evidence")
+    if lines or screening["excluded_windows"]:
+        lines.append(
+            f"data quality: {screening['excluded_windows']} of {screening['n_windows']} windows screened out of the "
+            "evidence for every parameter (saturated, frozen or quantised readings; --no-quality keeps them)"
+        )
+    return lines
+
+
 def verdict_table(parameters):
     """The per-parameter lines ``dynia analyse`` prints: max IC, where, band, estimate, evidence, verdict and why.
 
@@ -223,7 +254,7 @@ def verdict_parts(parameters):
         if entry.get("highest_ic") is not None and entry["time_of_highest_ic"] != entry["time_of_max_ic"]:
             notes.append(
                 f"  {name}: the record's highest IC, {entry['highest_ic']:.3f} at {entry['time_of_highest_ic']}, is "
-                "in a window that is no evidence (truncated, below the noise floor or tied within noise); shown: the "
+                "in a window that is no evidence (truncated, below the noise floor, tied within noise or screened); shown: the "
                 "highest IC among the windows that are"
             )
         for reason in entry["reasons"]:
