@@ -254,8 +254,8 @@ def verdict_parts(parameters):
         if entry.get("highest_ic") is not None and entry["time_of_highest_ic"] != entry["time_of_max_ic"]:
             notes.append(
                 f"  {name}: the record's highest IC, {entry['highest_ic']:.3f} at {entry['time_of_highest_ic']}, is "
-                "in a window that is no evidence (truncated, below the noise floor, tied within noise or screened); shown: the "
-                "highest IC among the windows that are"
+                "in a window that is no evidence (truncated, below the noise floor, tied within noise or screened); "
+                "shown: the highest IC among the windows that are"
             )
         for reason in entry["reasons"]:
             notes.append(f"  {name} {entry['verdict']}: {reason['text']}")
