@@ -54,8 +54,9 @@ stuck
     most ``stuck_tolerance``, at least ``min_stuck`` long and at least
     ``stuck_factor`` times as long as the signal's usual runs (the 95th
     percentile of its run lengths), in a signal that moves from most samples
-    to the next, entered with a step rather than settled into, and not at
-    the signal's record maximum or minimum (that is saturated).
+    to the next, entered with a step rather than settled into (a run that
+    opens the record is not judged), and not at the signal's record maximum
+    or minimum (that is saturated).
 quantised (the output only)
     The output takes values on a grid coarser than its noise: every change
     between consecutive readings is a whole multiple of the smallest change
@@ -152,7 +153,10 @@ steps before it are all below a thousandth of the signal's median step.
 The same guards hold for saturated runs, with one difference: whether the
 signal moves is judged on its steps off the extremes, so that a sensor
 clipped for much of the record is still checked, and an input that only
-switches between two levels (every reading at an extreme) is not.
+switches between two levels (every reading at an extreme) is not; and a
+run that opens the record is not judged, since how it was entered is
+unknown (a noise-free output at rest before the first input step sits at
+its minimum as exactly as a clipped sensor).
 
 Examples
 --------
@@ -807,7 +811,9 @@ def _saturated_runs(x, floor, settings):
     found = []
     for at_extreme, value, which in ((top, high, "maximum"), (bottom, low, "minimum")):
         for start, stop in mask_to_segments(at_extreme):
-            if stop - start < shortest or _settled_into(steps, start, settled):
+            # A run that opens the record may have been entered any way: a noise-free output at rest before the
+            # first input step sits at its minimum exactly like a clipped sensor.
+            if start == 0 or stop - start < shortest or _settled_into(steps, start, settled):
                 continue
             exact = bool((x[start:stop] == value).all())
             found.append(
@@ -864,7 +870,8 @@ def _stuck_runs(x, settings):
     settled = _SETTLED_FRACTION * float(np.median(steps))
     found = []
     for start, stop in zip(starts.tolist(), stops.tolist(), strict=True):
-        if stop - start < shortest or _settled_into(steps, start, settled):
+        # As for saturated runs: how a run that opens the record was entered is unknown (an output at rest).
+        if start == 0 or stop - start < shortest or _settled_into(steps, start, settled):
             continue
         found.append(
             (

@@ -243,8 +243,8 @@ class AnalysisSettings:
         are produced, so that they never lie whole in memory; the result
         reads them from it (see :mod:`dynia.io.arrays`). Kept as a str.
     quality : bool, default True
-        Screen the record for saturated, frozen (stuck) and coarsely
-        quantised readings before the analysis (:func:`dynia.quality.screen`):
+        Screen the record for saturated, frozen and coarsely quantised
+        readings before the analysis (:func:`dynia.quality.screen`):
         ``result.run.screened`` lists what was found, and the windows that
         use such readings are no evidence for any parameter
         (:attr:`dynia.result.DyniaResult.screened_windows`). The command
@@ -331,8 +331,7 @@ class AnalysisSettings:
     quality: bool = dataclasses.field(
         default=True,
         metadata=dict(
-            help="do not screen the record for saturated, frozen and coarsely quantised readings (on by default, "
-            "their windows are then no evidence for any parameter)",
+            help="screen the record for saturated, frozen and coarsely quantised readings before the analysis",
             option="--no-quality",
             negated=True,
         ),

@@ -401,7 +401,7 @@ def test_an_absurd_value_is_a_magnitude_finding_with_quality(tmp_path, capsys, c
     text = GOOD.replace("20,1.0,2.0", "20,1e308,2.0" if column == "u" else "20,1.0,1e308")
     data = write_text_file(tmp_path / "data.csv", text)
     out = tmp_path / "results"
-    status, stdout, err = cli_analyse(capsys, data, *BASE, "--quality", "--out", out)
+    status, stdout, err = cli_analyse(capsys, data, *BASE, "--out", out)
     cli_succeeded(status, stdout, err)
     findings = _summary(out)["data_quality"]
     magnitude = [entry for entry in findings if entry["kind"] == "magnitude"]

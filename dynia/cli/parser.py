@@ -122,7 +122,10 @@ _KINDS = {int: "whole", float: "number", bool: "flag", str: "text"}
 _OFFERED = {"sampler": tuple(sorted(SAMPLERS))}
 
 # What the command line adds to a setting's help: where it writes what the setting adds.
-_WRITES = {"ic_error": ": NAME_se columns in ic.csv, max_ic_se in summary.json, IC +- 2 SE shaded in the plots"}
+_WRITES = {
+    "ic_error": ": NAME_se columns in ic.csv, max_ic_se in summary.json, IC +- 2 SE shaded in the plots",
+    "quality": ": their windows are no evidence for any parameter, and data_quality in summary.json says which",
+}
 
 
 def setting_option(name, prefix=""):
@@ -134,10 +137,13 @@ def setting_option(name, prefix=""):
         annotation = next(member for member in annotation.__args__ if member is not type(None))
     flag = _SETTING_FLAGS[name]
     negated = meta.get("negated", False)
+    help_text = meta["help"].format(**_SETTING_FLAGS) + _WRITES.get(name, "")
+    if negated:
+        help_text = f"do not {help_text} (on by default)"
     return Option(
         key=flag[2:].replace("-", "_"),
         kind=_KINDS[annotation],
-        help=prefix + meta["help"].format(**_SETTING_FLAGS) + _WRITES.get(name, ""),
+        help=prefix + help_text,
         # A negated flag is not given by default, which leaves its setting at its default (True).
         default=not field.default if negated else field.default,
         metavar=meta.get("metavar"),
