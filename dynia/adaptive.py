@@ -146,6 +146,7 @@ def adaptive_run(
     engine=None,
     workers=None,
     ic_error=None,
+    quality=None,
     progress="auto",
 ):
     """DYNIA with evaluations concentrated in the windows' low-cost regions.
@@ -153,6 +154,7 @@ def adaptive_run(
     Parameters
     ----------
     u, y, model, bounds, dt, n, percentage, bins, conf_level, flavour, x0, rng, min_points, window, workers, progress
+    quality
         As :func:`dynia.run`; ``bounds`` is a mapping name -> (low, high).
         pandas ``u`` and ``y`` too, as :func:`dynia.run` takes them
         (:func:`dynia.io.frames.unpack`): one index, whose time gives dt and

@@ -162,6 +162,7 @@ def run(
     window=None,
     engine=None,
     ic_error=None,
+    quality=None,
 ):
     """:func:`dynia.run` on a ``dask.distributed`` cluster, with the same result.
 
@@ -203,6 +204,9 @@ def run(
         ``ci_se``, the batches read off in each time chunk's analysis.
         (``target_se``, ``dtype`` and ``store`` are :func:`dynia.run`'s
         only.)
+    quality : bool, default True
+        As :func:`dynia.run`: the record is screened on the client before
+        the result is made, and ``run.screened`` records what was found.
 
     Returns
     -------

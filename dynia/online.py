@@ -93,6 +93,11 @@ class OnlineDynia:
     min_points : int, default 1
         A window with fewer measured points than this has NaN results, so
         the first results appear once ``min_points`` measurements are in.
+    quality : bool, default True
+        As :func:`dynia.run`, but a stream cannot be screened before it is
+        analysed: :meth:`replay` screens the record it was given once it is
+        replayed (``run.screened`` of its result); :meth:`update` screens
+        nothing.
 
     Attributes
     ----------
@@ -180,6 +185,7 @@ class OnlineDynia:
         x0=None,
         sampler=None,
         min_points=None,
+        quality=None,
     ):
         if not isinstance(model, Model):
             raise TypeError(

@@ -80,6 +80,7 @@ def run(
     max_samples=None,
     dtype=None,
     store=None,
+    quality=None,
     rng=None,
     progress="auto",
 ):
@@ -170,6 +171,14 @@ def run(
         complete (verdicts included) and renamed into place when ``run``
         returns, never left half-written, and the result reads it lazily
         (:mod:`dynia.io.arrays`; ``dynia.load`` reads it too).
+    quality : bool, default True
+        Screen the record first (:func:`dynia.quality.screen`): saturated
+        and frozen readings of the input or the output, and a coarsely
+        quantised output. ``result.run.screened`` records what was found,
+        and the windows it dominates
+        (:attr:`~dynia.result.DyniaResult.screened_windows`) are no
+        evidence for any parameter. False: not screened
+        (``run.screened`` None).
     settings : dynia.settings.AnalysisSettings, optional
         All of the above in one checked object.
 
