@@ -64,6 +64,7 @@ from .errors import SettingsError
 from .fit import record_least_squares
 from .io.frames import unpack
 from .progress import shows_progress
+from .quality import screening
 from .settings import ADAPTIVE_SAMPLERS as SCHEMES
 from .settings import AnalysisSettings, RunRecord, merged_settings, parameter_box
 from .verdicts import assess
@@ -146,6 +147,7 @@ def adaptive_run(
     engine=None,
     workers=None,
     ic_error=None,
+    quality=None,
     progress="auto",
 ):
     """DYNIA with evaluations concentrated in the windows' low-cost regions.
@@ -153,6 +155,7 @@ def adaptive_run(
     Parameters
     ----------
     u, y, model, bounds, dt, n, percentage, bins, conf_level, flavour, x0, rng, min_points, window, workers, progress
+    quality
         As :func:`dynia.run`; ``bounds`` is a mapping name -> (low, high).
         pandas ``u`` and ``y`` too, as :func:`dynia.run` takes them
         (:func:`dynia.io.frames.unpack`): one index, whose time gives dt and
@@ -228,7 +231,11 @@ def adaptive_run(
     )
     weights = mixture.importance_weights(samples)
     run = dataclasses.replace(
-        RunRecord.of(model, n_sampled=spent, n_dropped=0), n_evaluations=spent, weights=weights, n_blocks=n_blocks
+        RunRecord.of(model, n_sampled=spent, n_dropped=0),
+        n_evaluations=spent,
+        weights=weights,
+        n_blocks=n_blocks,
+        screened=screening(u, y, settings),
     )
     result = analyse_errors(
         y,

@@ -118,6 +118,7 @@ from .fit import record_least_squares
 from .io.frames import unpack
 from .pipeline import warn_dropped
 from .progress import progress_bar, shows_progress
+from .quality import screening
 from .result import DyniaResult
 from .sampling import sample
 from .settings import SAMPLERS, RunRecord, merged_settings, parameter_box
@@ -162,6 +163,7 @@ def run(
     window=None,
     engine=None,
     ic_error=None,
+    quality=None,
 ):
     """:func:`dynia.run` on a ``dask.distributed`` cluster, with the same result.
 
@@ -203,6 +205,9 @@ def run(
         ``ci_se``, the batches read off in each time chunk's analysis.
         (``target_se``, ``dtype`` and ``store`` are :func:`dynia.run`'s
         only.)
+    quality : bool, default True
+        As :func:`dynia.run`: the record is screened on the client before
+        the result is made, and ``run.screened`` records what was found.
 
     Returns
     -------
@@ -380,6 +385,7 @@ def _result(u, y, model, names, box, samples, settings, flavour_impl, windows, a
         RunRecord.of(model, n_sampled=n_samples, n_dropped=n_samples - samples.shape[0]),
         n_behavioural=flavour_impl.count,
         ic_batches=flavour_impl.batches if settings.ic_error else None,
+        screened=screening(u, y, settings),
         **floor_settings(floor),
     )
     return DyniaResult(

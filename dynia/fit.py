@@ -512,7 +512,9 @@ def record_least_squares(result, u, y, model):
     ``result.run.record_fit`` (:func:`dynia.engine.noise.record_fit`: the
     record-best set and a Gauss-Newton step from its neighbours, as fine
     as the sample). From there :func:`fit_segments` fits the whole record
-    inside the sampling box, with the run's ``dt`` and ``x0``; the
+    inside the sampling box, with the run's ``dt`` and ``x0``, leaving out
+    the output's saturated and frozen readings that the run screened
+    (``run.screened``, :mod:`dynia.quality`); the
     estimates, their HAC standard errors (robust to the residuals'
     autocorrelation) and the residuals' RMSE replace it
     (``record_fit``, ``record_fit_se``, ``record_fit_rmse``), and the
@@ -540,6 +542,10 @@ def record_least_squares(result, u, y, model):
         return result
     names = list(result.names)
     bounds = {name: (float(low), float(high)) for name, (low, high) in zip(names, result.bounds)}
+    y = np.array(y, dtype=float)
+    for kind, signal, first, stop, _ in result.run.screened or ():
+        if signal == "y" and kind != "quantised":  # a clipped or frozen reading is no measurement of the output
+            y[first:stop] = np.nan
     initial = {name: float(np.clip(value, *bounds[name])) for name, value in zip(names, start)}
     try:
         # Records near the floating-point limits square into overflow or underflow: such a fit is dropped below.

@@ -56,6 +56,7 @@ from .fit import record_least_squares
 from .io.frames import unpack
 from .models import FunctionModel, Model, StateSpaceModel
 from .models.base import SameOutput, refuse_ignored_params
+from .quality import screen
 from .result import DyniaResult
 from .sampling import sample
 from .settings import SAMPLERS, AnalysisSettings, RunRecord, merged_settings, parameter_box
@@ -93,6 +94,11 @@ class OnlineDynia:
     min_points : int, default 1
         A window with fewer measured points than this has NaN results, so
         the first results appear once ``min_points`` measurements are in.
+    quality : bool, default True
+        As :func:`dynia.run`, but a stream cannot be screened before it is
+        analysed: :meth:`replay` screens the record it was given once it is
+        replayed (``run.screened`` of its result); :meth:`update` screens
+        nothing.
 
     Attributes
     ----------
@@ -180,6 +186,7 @@ class OnlineDynia:
         x0=None,
         sampler=None,
         min_points=None,
+        quality=None,
     ):
         if not isinstance(model, Model):
             raise TypeError(
@@ -413,6 +420,10 @@ class OnlineDynia:
             fit=record_fit(y, self.samples, self.bounds, totals, self._simulations(u, start)),
         )
         run = dataclasses.replace(self._run, n_diverged=self.n_diverged, **floor_settings(floor))
+        if self._analysis.quality:
+            # Screened once replayed: a stream cannot be screened before it is seen. Windows reaching back before
+            # this replay are judged on the samples replayed.
+            run = dataclasses.replace(run, screened=screen(u, y, (2 * self._analysis.n, 0)))
         result = DyniaResult(
             names=self.names,
             samples=np.array(self.samples),

@@ -19,6 +19,7 @@ from .io.frames import unpack
 from .models import LinearModel, Model, StateSpaceModel
 from .models.custom import StateErrors
 from .progress import shows_progress
+from .quality import screening
 from .sampling import sample
 from .settings import ADAPTIVE_SAMPLERS, IC_THRESHOLD, MAX_PARAMETER, RunRecord, merged_settings, parameter_box
 from .verdicts import assess
@@ -81,6 +82,7 @@ def run(
     max_samples=None,
     dtype=None,
     store=None,
+    quality=None,
     rng=None,
     progress="auto",
 ):
@@ -171,6 +173,14 @@ def run(
         complete (verdicts included) and renamed into place when ``run``
         returns, never left half-written, and the result reads it lazily
         (:mod:`dynia.io.arrays`; ``dynia.load`` reads it too).
+    quality : bool, default True
+        Screen the record first (:func:`dynia.quality.screen`): saturated
+        and frozen readings of the input or the output, and a coarsely
+        quantised output. ``result.run.screened`` records what was found,
+        and the windows it dominates
+        (:attr:`~dynia.result.DyniaResult.screened_windows`) are no
+        evidence for any parameter. False: not screened
+        (``run.screened`` None).
     settings : dynia.settings.AnalysisSettings, optional
         All of the above in one checked object.
 
@@ -205,12 +215,13 @@ def run(
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
     settings.check_record(y.size)  # before any simulation
     names, box = parameter_box(bounds, model.names, repr(model))
-    if settings.sampler in ADAPTIVE_SAMPLERS:
+    if settings.sampler in ADAPTIVE_SAMPLERS:  # adaptive_run screens the record itself
         result = adaptive_run(
             u, y, model, dict(zip(names, map(tuple, box))), scheme=settings.sampler, settings=settings, rng=rng
         )
         # The verdicts name times: again with the dates, when there are dates.
         return result if timestamps is None else dated(result, timestamps)
+    screened = screening(u, y, settings)  # before the analysis, which it does not change: the verdicts read it
     generator = _checks.generator(rng)
     samples = sample(settings.sampler, settings.n_samples, box, generator)
     # The arrays in memory, or in settings.store as they are produced, committed with the verdicts (dynia.io.arrays).
@@ -219,6 +230,10 @@ def run(
             result = _analyse_samples(u, y, model, names, box, samples, settings, progress, output)
         else:
             result = _analyse_to_target(u, y, model, names, box, samples, settings, generator, progress, output)
+        result = dataclasses.replace(result, run=dataclasses.replace(result.run, screened=screened))
+        # The least squares simulates a few sets at a time: through the kernel where the analysis ran on it.
+        kernel = result.settings.engine == "numba" and compiled_simulation(model)
+        result = record_least_squares(result, u, y, KernelSimulated(model) if kernel else model)
         return output.commit(dated(result, timestamps))
 
 
@@ -290,9 +305,7 @@ def _analyse_samples(u, y, model, names, box, samples, settings, progress, outpu
         # Some sets overflowed: their costs were not finite, so the analysis is redone without them.
         finite[np.flatnonzero(finite)[errors.diverged]] = False
     warn_dropped(n_dropped, n_sampled, u)
-    # The least squares simulates one set at a time: through the kernel where the analysis ran on it.
-    fitted = KernelSimulated(model) if isinstance(errors, CompiledErrors) else model
-    return record_least_squares(result, u, y, fitted)
+    return result
 
 
 def _simulations(u, y, model, params, sims, settings, errors):

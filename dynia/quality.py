@@ -1,4 +1,4 @@
-"""Data quality of an input/output record: absurd magnitudes, isolated glitches, outliers and stuck values.
+"""Data quality of an input/output record: absurd magnitudes, glitches, outliers, saturated, stuck and quantised values.
 
 A DYNIA window is only as good as the samples in it. In the thesis's case
 study (section 3.1.3) the highest information content of the time constant
@@ -38,52 +38,102 @@ outlier
     above the ``1 - outlier_quantile`` quantile (both rounded inwards to a
     sample, so that even a short record leaves its most extreme value out of
     the bulk). Consecutive outlying samples form one finding.
+saturated
+    A run of consecutive readings at the signal's record maximum or minimum
+    (exactly, or within ``1e-9`` of the signal's size: the rounding of a
+    unit conversion or an offset subtracted; a smooth output settling
+    within the floor below of its maximum is no sensor at its limit), at least
+    ``min_saturated`` long and at least ``stuck_factor`` times as long as the
+    signal's usual runs, in a signal that moves from most samples to the
+    next off its extremes, entered with a step rather than settled into: a
+    sensor or transmitter at the end of its range (a tank level at its top)
+    reads its limit, not the process. Reported at the value measured, and
+    never also as stuck.
 stuck
-    A run of consecutive readings that differ by at most ``stuck_tolerance``,
-    at least ``min_stuck`` long and at least ``stuck_factor`` times as long as
-    the signal's usual runs (the 95th percentile of its run lengths), in a
-    signal that moves from most samples to the next, entered with a step
-    rather than settled into.
+    A frozen sensor or tag: a run of consecutive readings that differ by at
+    most ``stuck_tolerance``, at least ``min_stuck`` long and at least
+    ``stuck_factor`` times as long as the signal's usual runs (the 95th
+    percentile of its run lengths), in a signal that moves from most samples
+    to the next, entered with a step rather than settled into (a run that
+    opens the record is not judged), and not at the signal's record maximum
+    or minimum (that is saturated).
+quantised (the output only)
+    The output takes values on a grid coarser than its noise: every change
+    between consecutive readings is a whole multiple of the smallest change
+    q (within ``1e-3 q``), the output changes at least
+    ``quantised_min_changes`` times and spans at least ``quantised_min_levels``
+    grid steps, and the robust noise standard deviation of its changes
+    (``1.4826 median|dy| / sqrt(2)`` over every consecutive pair) is below
+    q / 2. Every non-zero change is at least q, so that estimate is either 0
+    or above 1.05 q: the test is "at least half of the consecutive readings
+    are equal in an output that moves", the noise hidden under the grid. One
+    finding spans the whole signal, its value the step q. A window whose
+    output moves by fewer than a few steps carries no information the model
+    can rank (:func:`screen`). Not tested on the input: an input that
+    holds a few levels (steps, a PRBS) is an experiment's design, not a
+    coarse sensor, and the windows' information is read off the output.
 
 The other kinds are tested independently; one sample can be in several
 findings (a zero reading in a signal near 72 is a glitch and an outlier).
 
+Screening
+---------
+:func:`dynia.run` (and :func:`dynia.distributed.run`) screen the record with
+these tests before the analysis when ``settings.quality`` is True, the
+default: the saturated, stuck and quantised findings (:data:`SCREENED_KINDS`)
+go into ``result.run.screened`` (:func:`screen`), and the windows they
+dominate are no evidence for any parameter
+(:attr:`dynia.result.DyniaResult.screened_windows`). A saturated or frozen
+reading holds no information about the process, and a window that uses one
+ranks parameter sets by how well they reproduce a sensor's limit. Glitches,
+outliers and absurd magnitudes are reported but not screened: one erroneous
+reading is the user's to remove (:meth:`QualityReport.exclude`), and an
+outlier may be the record's largest, most informative event.
+
 Tuning parameters
 -----------------
-=====================  ========  ==============================================================
-parameter              default   reasoning
-=====================  ========  ==============================================================
-``half_window``        3         Hampel window of 7 samples: short, so the median follows
-                                 steps and transients, and long enough that a run of up to
-                                 ``max_glitch_length`` bad samples cannot move the median.
-``glitch_threshold``   6.0       Robust standard deviations. The textbook Hampel 3 flags
-                                 0.3 % of Gaussian noise, tens of false glitches in a
-                                 record of thousands; a Gaussian sample departs 6 of them
-                                 with probability 2e-9, and both neighbours must be as far.
-                                 Heavy-tailed noise does reach it now and then.
-``glitch_min_size``    0.1       Gross errors only. A record resampled from an exception
-                                 log is straight between stored readings, so its robust
-                                 scales are tiny and one ordinary stored reading stands
-                                 out by many of them; it moves by a few % of the signal's
-                                 range, the thesis's zero reading by several ranges.
-``max_glitch_length``  2         One erroneous reading (thesis 3.1.3) lands on one grid
-                                 point, or on two at partial depth when resampling falls
-                                 between readings. Longer excursions are real events (the
-                                 3-sample input dip of the thesis's example 1) or outliers.
-``outlier_quantile``   0.01      The bulk of the record is its 1 %-99 % range: a handful
-                                 of bad values cannot move it.
-``outlier_fence``      1.0       A value one bulk width beyond the bulk: about 7 standard
-                                 deviations for Gaussian noise, so only gross errors count.
-``min_stuck``          10        Fewer identical readings happen by chance on a quantised
-                                 sensor.
-``stuck_factor``       4.0       A run counts as stuck only when it is much longer than the
-                                 signal's own usual runs.
-``stuck_tolerance``    0.0       A frozen tag repeats its value exactly.
-``max_magnitude``      1e12      No reading of a process variable in the units its historian
-                                 logs comes near it; sentinels (1e30, 3.4e38, 1e308) and
-                                 corrupted floats lie far beyond. Totalisers in small units
-                                 can be large: raise it for them.
-=====================  ========  ==============================================================
+=========================  ========  ==============================================================
+parameter                  default   reasoning
+=========================  ========  ==============================================================
+``half_window``            3         Hampel window of 7 samples: short, so the median follows
+                                     steps and transients, and long enough that a run of up to
+                                     ``max_glitch_length`` bad samples cannot move the median.
+``glitch_threshold``       6.0       Robust standard deviations. The textbook Hampel 3 flags
+                                     0.3 % of Gaussian noise, tens of false glitches in a
+                                     record of thousands; a Gaussian sample departs 6 of them
+                                     with probability 2e-9, and both neighbours must be as far.
+                                     Heavy-tailed noise does reach it now and then.
+``glitch_min_size``        0.1       Gross errors only. A record resampled from an exception
+                                     log is straight between stored readings, so its robust
+                                     scales are tiny and one ordinary stored reading stands
+                                     out by many of them; it moves by a few % of the signal's
+                                     range, the thesis's zero reading by several ranges.
+``max_glitch_length``      2         One erroneous reading (thesis 3.1.3) lands on one grid
+                                     point, or on two at partial depth when resampling falls
+                                     between readings. Longer excursions are real events (the
+                                     3-sample input dip of the thesis's example 1) or outliers.
+``outlier_quantile``       0.01      The bulk of the record is its 1 %-99 % range: a handful
+                                     of bad values cannot move it.
+``outlier_fence``          1.0       A value one bulk width beyond the bulk: about 7 standard
+                                     deviations for Gaussian noise, so only gross errors count.
+``min_stuck``              10        Fewer identical readings happen by chance on a quantised
+                                     sensor.
+``min_saturated``          10        As ``min_stuck``: fewer readings at the extreme happen on a
+                                     quantised sensor at a steady high level; a clipped noisy
+                                     signal sits there for as long as the process lies beyond.
+``stuck_factor``           4.0       A run counts as stuck only when it is much longer than the
+                                     signal's own usual runs.
+``stuck_tolerance``        0.0       A frozen tag repeats its value exactly.
+``max_magnitude``          1e12      No reading of a process variable in the units its historian
+                                     logs comes near it; sentinels (1e30, 3.4e38, 1e308) and
+                                     corrupted floats lie far beyond. Totalisers in small units
+                                     can be large: raise it for them.
+``quantised_min_changes``  20        Changes of the output; fewer do not show a grid, and a
+                                     signal switching a few times is a record of steps.
+``quantised_min_levels``   4         Grid steps the output must span: an output between two or
+                                     three values is a noise-free simulation of a switching
+                                     input, not a coarse sensor.
+=========================  ========  ==============================================================
 
 Every scale has a floor of ``1e-6`` times the signal's size (the larger of
 its bulk width and its median magnitude), so that noise-free signals, whose
@@ -100,6 +150,13 @@ signal's usual runs. A noise-free output settles into its steady state, the
 steps before the run shrinking to nothing, and reaches exactly repeated
 values; a frozen tag stops at once. So a run is not flagged when the three
 steps before it are all below a thousandth of the signal's median step.
+The same guards hold for saturated runs, with one difference: whether the
+signal moves is judged on its steps off the extremes, so that a sensor
+clipped for much of the record is still checked, and an input that only
+switches between two levels (every reading at an extreme) is not; and a
+run that opens the record is not judged, since how it was entered is
+unknown (a noise-free output at rest before the first input step sits at
+its minimum as exactly as a clipped sensor).
 
 Examples
 --------
@@ -131,13 +188,33 @@ from .io.frames import unpack
 from .segments import mask_to_segments
 from .settings import MAD_TO_STD
 
-__all__ = ["Finding", "QualityReport", "check_quality", "KINDS", "SIGNALS"]
+__all__ = [
+    "Finding",
+    "QualityReport",
+    "check_quality",
+    "screen",
+    "screening",
+    "screened_windows",
+    "KINDS",
+    "SCREENED_KINDS",
+    "SIGNALS",
+    "QUANTISED_MIN_STEPS",
+]
 
-KINDS = ("magnitude", "glitch", "outlier", "stuck")
+KINDS = ("magnitude", "glitch", "outlier", "saturated", "stuck", "quantised")
+# The kinds dynia.run screens: their windows are no evidence (see "Screening" above).
+SCREENED_KINDS = ("saturated", "stuck", "quantised")
 SIGNALS = ("u", "y")
+# A window whose output spans fewer than this many grid steps of a quantised output is screened: with at most three
+# levels in it, the rounding (uniform, 0.29 steps standard deviation) is as large as what the output does there.
+QUANTISED_MIN_STEPS = 3
+# Changes of a quantised signal are whole multiples of its step to within this share of the step.
+_GRID_TOLERANCE = 1e-3
 
 # Scales never fall below this fraction of a signal's size (see the module docstring).
 _RESOLUTION = 1e-6
+# Readings this fraction of a signal's size apart are one value read at a limit, rounded (saturated runs).
+_ROUNDING = 1e-9
 # The usual run length of a signal is this quantile of its run lengths.
 _USUAL_RUN_QUANTILE = 0.95
 # A run entered by _SETTLING_STEPS steps all below _SETTLED_FRACTION of the median step is
@@ -156,15 +233,16 @@ class Finding:
     Attributes
     ----------
     signal : {"u", "y"}
-    kind : {"magnitude", "glitch", "outlier", "stuck"}
+    kind : {"magnitude", "glitch", "outlier", "saturated", "stuck", "quantised"}
     start, stop : int
         Sample indices ``[start, stop)`` of the stretch (missing samples
-        inside it are not flagged).
+        inside it are not flagged); a quantised finding spans the signal.
     start_time, end_time : float
         Time of the first and of the last sample of the stretch.
     value : float
         The most deviant value of the stretch (for magnitude findings: the
-        largest in size; for stuck runs: the value repeated).
+        largest in size; for saturated and stuck runs: the value read, in
+        the units of the signal checked; for quantised: the grid step).
     reason : str
         One sentence on why it was flagged.
     """
@@ -206,8 +284,9 @@ class QualityReport:
         Parameters
         ----------
         signal : {"u", "y"}
-        kinds : sequence of {"magnitude", "glitch", "outlier", "stuck"}, optional
-            Only these kinds (default: all).
+        kinds : sequence of kinds, optional
+            Only these kinds (default: all but "quantised", whose finding
+            spans the signal: its readings are right, only rounded).
 
         Examples
         --------
@@ -243,8 +322,9 @@ class QualityReport:
             The signal checked (``u`` or ``y``).
         signal : {"u", "y"}, default "y"
             Which of the two it is.
-        kinds : sequence of {"magnitude", "glitch", "outlier", "stuck"}, optional
-            Exclude only these kinds (default: all).
+        kinds : sequence of kinds, optional
+            Exclude only these kinds (default: all but "quantised", as
+            :meth:`mask`).
 
         Returns
         -------
@@ -331,12 +411,12 @@ class QualityReport:
         >>> import numpy as np
         >>> from dynia.quality import check_quality
         >>> print(check_quality(None, np.ones(30), np.linspace(0, 1, 30)).summary())
-        Data quality of 30 samples: no absurd magnitudes, glitches, outliers or stuck values found.
+        Data quality of 30 samples: no absurd magnitude, glitch, outlier, saturated, stuck or quantised value.
         """
         if not self.findings:
             return (
-                f"Data quality of {self.time.size} samples: no absurd magnitudes, glitches, outliers or stuck "
-                "values found."
+                f"Data quality of {self.time.size} samples: no absurd magnitude, glitch, outlier, saturated, "
+                "stuck or quantised value."
             )
         count = len(self.findings)
         lines = [f"Data quality of {self.time.size} samples: {count} finding{'' if count == 1 else 's'}."]
@@ -364,11 +444,14 @@ def check_quality(
     outlier_quantile=0.01,
     outlier_fence=1.0,
     min_stuck=10,
+    min_saturated=10,
     stuck_factor=4.0,
     stuck_tolerance=0.0,
     max_magnitude=1e12,
+    quantised_min_changes=20,
+    quantised_min_levels=4,
 ):
-    """Find absurd magnitudes, isolated glitches, outliers and stuck values in an input/output record.
+    """Find absurd magnitudes, glitches, outliers, saturated, stuck and quantised values in an input/output record.
 
     The tests and the reasoning behind every default are in the module
     documentation.
@@ -396,13 +479,22 @@ def check_quality(
         Bulk widths beyond the bulk from which a value is an outlier.
     min_stuck : int, default 10
         Shortest run of equal readings that can be stuck.
+    min_saturated : int, default 10
+        Shortest run of readings at the record's maximum or minimum that can
+        be saturated.
     stuck_factor : float > 0, default 4.0
-        A stuck run is at least this many times the signal's usual run length.
+        A stuck or saturated run is at least this many times the signal's
+        usual run length.
     stuck_tolerance : float >= 0, default 0.0
         Consecutive readings differing by at most this are equal.
     max_magnitude : float > 0, default 1e12
         Values larger in size are magnitude findings, as are those above
         1e150 whatever it says (``math.inf``: only those).
+    quantised_min_changes : int, default 20
+        Fewest changes between consecutive output readings that can show
+        a grid.
+    quantised_min_levels : int, default 4
+        Fewest grid steps the output must span to be called quantised.
 
     Returns
     -------
@@ -448,9 +540,12 @@ def check_quality(
         outlier_quantile=_checks.open_interval(outlier_quantile, "outlier_quantile", 0, 0.5),
         outlier_fence=_checks.open_interval(outlier_fence, "outlier_fence", 0, math.inf),
         min_stuck=_checks.whole_number(min_stuck, "min_stuck", minimum=2),
+        min_saturated=_checks.whole_number(min_saturated, "min_saturated", minimum=2),
         stuck_factor=_checks.open_interval(stuck_factor, "stuck_factor", 0, math.inf),
         stuck_tolerance=_nonnegative(stuck_tolerance, "stuck_tolerance"),
         max_magnitude=_magnitude_limit(max_magnitude),
+        quantised_min_changes=_checks.whole_number(quantised_min_changes, "quantised_min_changes", minimum=2),
+        quantised_min_levels=_checks.whole_number(quantised_min_levels, "quantised_min_levels", minimum=2),
     )
     findings = []
     for signal, values in (("u", u), ("y", y)):
@@ -458,6 +553,103 @@ def check_quality(
     return QualityReport(
         findings=tuple(findings), time=time, missing={"u": np.isnan(u), "y": np.isnan(y)}, settings=settings
     )
+
+
+def screen(u, y, window_halos, *, time=None, min_steps=QUANTISED_MIN_STEPS, **options):
+    """What :func:`dynia.run` screens: a record's saturated, stuck and quantised stretches, as its run records them.
+
+    Parameters
+    ----------
+    u : array_like, shape (n_steps,) or (n_steps, n_inputs)
+        The input; only a single input is checked (several: the output only).
+    y : array_like, shape (n_steps,)
+        The output, NaN where missing.
+    window_halos : (int, int)
+        Steps (before, after) the window at a step reaches:
+        :attr:`dynia.result.DyniaResult.window_halos`.
+    time : array_like, shape (n_steps,), optional
+        As :func:`check_quality`.
+    min_steps : int, default :data:`QUANTISED_MIN_STEPS` (3)
+        A window of a quantised output is screened when its output spans
+        fewer than this many grid steps.
+    **options
+        Tuning of :func:`check_quality`.
+
+    Returns
+    -------
+    tuple of (kind, signal, start, stop, value)
+        ``result.run.screened``. For "saturated" and "stuck" the samples
+        ``[start, stop)`` of the run and the value read (in the units of the
+        ``u`` and ``y`` given); for "quantised" the steps ``[start, stop)`` of
+        a run of windows whose output moves by fewer than ``min_steps`` grid
+        steps, and the step. Empty when nothing is screened.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> y = np.sin(np.arange(300) / 20.0) + rng.normal(0, 0.05, 300)
+    >>> y[100:140] = y.max() + 0.2                    # the sensor at the top of its range
+    >>> screen(np.zeros(300), y, (5, 5))[0][:4]
+    ('saturated', 'y', 100, 140)
+    """
+    y = _checks.as_1d_float(y, "y", allow_nan=True)
+    u = np.asarray(u, dtype=float)
+    min_steps = _checks.whole_number(min_steps, "min_steps", minimum=1)
+    report = check_quality(time, u if u.ndim == 1 else np.zeros(y.size), y, **options)
+    screened = []
+    for finding in report.findings:
+        if finding.kind in ("saturated", "stuck"):
+            screened.append((finding.kind, finding.signal, finding.start, finding.stop, finding.value))
+        elif finding.kind == "quantised":
+            flat = _flat_windows(y, finding.value, window_halos, min_steps)
+            screened += [(finding.kind, finding.signal, a, b, finding.value) for a, b in mask_to_segments(flat)]
+    return tuple(screened)
+
+
+def screening(u, y, settings):
+    """``result.run.screened`` of a front-end's run: :func:`screen` with the window of ``settings``, or None.
+
+    None when ``settings.quality`` is False (not screened); the window's
+    reach follows ``settings.n`` and ``settings.window``.
+    """
+    if not settings.quality:
+        return None
+    n = settings.n
+    return screen(u, y, (n, n) if settings.window == "centred" else (2 * n, 0))
+
+
+def screened_windows(screened, windows_using, n_steps):
+    """The windows that the entries of :func:`screen` take from the evidence, (n_steps,) bool.
+
+    ``windows_using(samples)`` maps a sample mask to the windows using one
+    (:meth:`dynia.result.DyniaResult.windows_using`): every window that uses
+    a saturated or stuck reading, and the quantised entries' windows.
+    """
+    windows = np.zeros(n_steps, dtype=bool)
+    samples = np.zeros(n_steps, dtype=bool)
+    for kind, _, start, stop, _ in screened or ():
+        (windows if kind == "quantised" else samples)[start:stop] = True
+    return windows | windows_using(samples) if samples.any() else windows
+
+
+def _flat_windows(y, step, window_halos, min_steps):
+    """The windows whose present output spans fewer than ``min_steps`` grid steps of size ``step``, (n_steps,) bool."""
+    from scipy.ndimage import maximum_filter1d, minimum_filter1d
+
+    before, after = window_halos
+    length = before + after + 1
+    present = ~np.isnan(y)
+
+    def padded(values, fill):
+        return np.concatenate((np.full(before, fill), np.where(present, values, fill), np.full(after, fill)))
+
+    # origin -(length // 2) makes entry t the extreme of padded[t : t + length], the window of step t.
+    top = maximum_filter1d(padded(y, -np.inf), length, origin=-(length // 2))[: y.size]
+    bottom = minimum_filter1d(padded(y, np.inf), length, origin=-(length // 2))[: y.size]
+    with np.errstate(invalid="ignore"):  # a window without a measured point spans inf - inf: NaN, never flat
+        # Spans are whole steps up to rounding: half a step apart is a safe threshold.
+        return (top - bottom) < (min_steps - 0.5) * step
 
 
 def _signal_findings(signal, values, time, settings):
@@ -479,8 +671,18 @@ def _signal_findings(signal, values, time, settings):
 
     found += [_finding(signal, time, where, "glitch", *run) for run in _glitches(x, high - low, floor, settings)]
     found += [_finding(signal, time, where, "outlier", *run) for run in _outliers(x, low, high, floor, settings)]
-    found += [_finding(signal, time, where, "stuck", *run) for run in _stuck_runs(x, settings)]
+    saturated = _saturated_runs(x, floor, settings)
+    found += [_finding(signal, time, where, "saturated", *run) for run in saturated]
+    # A run at the record's extreme is a sensor at its limit: reported as saturated, never also as frozen.
+    stuck = [run for run in _stuck_runs(x, settings) if not any(_overlap(run, other) for other in saturated)]
+    found += [_finding(signal, time, where, "stuck", *run) for run in stuck]
+    if signal == "y":
+        found += [_finding(signal, time, where, "quantised", *run) for run in _quantisation(x, floor, settings)]
     return found
+
+
+def _overlap(run, other):
+    return run[0] < other[1] and other[0] < run[1]
 
 
 def _finding(signal, time, where, kind, start, stop, value, reason):
@@ -576,6 +778,84 @@ def _outliers(x, low, high, floor, settings):
     return found
 
 
+def _usual_run(steps, tolerance):
+    """The usual length of a signal's runs of equal readings (:data:`_USUAL_RUN_QUANTILE` of them) and their bounds."""
+    changes = np.flatnonzero(steps > tolerance) + 1
+    starts = np.r_[0, changes]
+    stops = np.r_[changes, steps.size + 1]
+    return float(np.quantile(stops - starts, _USUAL_RUN_QUANTILE)), starts, stops
+
+
+def _settled_into(steps, start, settled):
+    """Whether the steps before ``start`` all shrank below ``settled``: a steady state reached smoothly."""
+    approach = steps[max(start - _SETTLING_STEPS, 0) : start]
+    return bool(approach.size) and bool((approach <= settled).all())
+
+
+def _saturated_runs(x, floor, settings):
+    """(start, stop, value, reason) of every long run of readings at the record's maximum or minimum."""
+    high, low = float(x.max()), float(x.min())
+    if x.size < 2 or high - low <= floor:
+        return []
+    floor *= _ROUNDING / _RESOLUTION  # readings at the limit are one value but for rounding
+    steps = np.abs(np.diff(x))
+    top, bottom = x >= high - floor, x <= low + floor
+    off = ~(top | bottom)
+    inner = steps[off[:-1] & off[1:]]  # the steps between readings off the extremes
+    tolerance = settings["stuck_tolerance"]
+    if inner.size < settings["min_saturated"] or (inner <= tolerance).mean() >= 0.5:
+        return []  # the signal does not move off its extremes: a held or switching input, not a clipped sensor
+    usual, _, _ = _usual_run(steps, tolerance)
+    shortest = max(settings["min_saturated"], settings["stuck_factor"] * usual)
+    settled = _SETTLED_FRACTION * float(np.median(steps))
+    found = []
+    for at_extreme, value, which in ((top, high, "maximum"), (bottom, low, "minimum")):
+        for start, stop in mask_to_segments(at_extreme):
+            # A run that opens the record may have been entered any way: a noise-free output at rest before the
+            # first input step sits at its minimum exactly like a clipped sensor.
+            if start == 0 or stop - start < shortest or _settled_into(steps, start, settled):
+                continue
+            exact = bool((x[start:stop] == value).all())
+            found.append(
+                (
+                    start,
+                    stop,
+                    value,
+                    (
+                        f"saturated at {value:.6g} (its record {which}) for {stop - start} consecutive readings"
+                        + ("" if exact else f", each within {floor:.3g}")
+                        + ": a sensor at the end of its range reads its limit, not the process"
+                    ),
+                )
+            )
+    return sorted(found)
+
+
+def _quantisation(x, floor, settings):
+    """[(0, n, q, reason)] when the output lies on a grid of step q coarser than its noise, else []."""
+    if x.size < 2:
+        return []
+    steps = np.abs(np.diff(x))
+    changes = steps[steps > floor]
+    if changes.size < settings["quantised_min_changes"]:
+        return []
+    step = float(changes.min())
+    multiples = changes / step
+    if np.abs(multiples - np.rint(multiples)).max() > _GRID_TOLERANCE:
+        return []
+    levels = (float(x.max()) - float(x.min())) / step
+    noise = MAD_TO_STD * float(np.median(np.where(steps > floor, steps, 0.0))) / math.sqrt(2)
+    if levels < settings["quantised_min_levels"] or not step > 2 * noise:
+        return []
+    equal = float(np.mean(steps <= floor))
+    reason = (
+        f"takes values on a grid of step {step:.6g} over {levels:.0f} steps, and {100 * equal:.0f} % of its "
+        f"consecutive readings are equal: the noise (robust standard deviation {noise:.3g}) hides under the grid, "
+        f"so a window where it moves by fewer than {QUANTISED_MIN_STEPS} steps holds rounding, not dynamics"
+    )
+    return [(0, x.size, step, reason)]
+
+
 def _stuck_runs(x, settings):
     """(start, stop, value, reason) of every run of equal readings much longer than usual."""
     if x.size < 2:
@@ -584,17 +864,14 @@ def _stuck_runs(x, settings):
     equal = steps <= settings["stuck_tolerance"]
     if equal.mean() >= 0.5:
         return []  # the signal is flat more often than not: a repeat is its normal behaviour
-    changes = np.flatnonzero(~equal) + 1
-    starts = np.r_[0, changes]
-    stops = np.r_[changes, x.size]
-    usual = float(np.quantile(stops - starts, _USUAL_RUN_QUANTILE))
+    tolerance = settings["stuck_tolerance"]
+    usual, starts, stops = _usual_run(steps, tolerance)
     shortest = max(settings["min_stuck"], settings["stuck_factor"] * usual)
     settled = _SETTLED_FRACTION * float(np.median(steps))
-    tolerance = settings["stuck_tolerance"]
     found = []
     for start, stop in zip(starts.tolist(), stops.tolist(), strict=True):
-        approach = steps[max(start - _SETTLING_STEPS, 0) : start]
-        if stop - start < shortest or (approach.size and (approach <= settled).all()):
+        # As for saturated runs: how a run that opens the record was entered is unknown (an output at rest).
+        if start == 0 or stop - start < shortest or _settled_into(steps, start, settled):
             continue
         found.append(
             (
@@ -647,7 +924,7 @@ def _signal_name(signal):
 
 def _kind_names(kinds):
     if kinds is None:
-        return KINDS
+        return tuple(kind for kind in KINDS if kind != "quantised")
     if isinstance(kinds, str):
         raise SettingsError(f"kinds must be a sequence of kinds, e.g. ['glitch']; got the string {kinds!r}", "kinds")
     unknown = [kind for kind in kinds if kind not in KINDS]

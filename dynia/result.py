@@ -216,8 +216,12 @@ class DyniaResult:
         its behavioural set is not tied within noise (:attr:`behavioural_spread`
         above :attr:`behavioural_floor`; when it ties, which sets are kept,
         and so the band whose width the IC is, is decided by the noise
-        realisation). A window with no IC (NaN: too few measured points) never
-        is. Windows truncated by the record's ends count: the floor judges
+        realisation), and it is not screened (:attr:`screened_windows`: it
+        uses no saturated or frozen reading and, on a coarsely quantised
+        output, the output moves by at least a few grid steps in it; a window
+        that ranks parameter sets by how well they reproduce a sensor's limit
+        is evidence of the sensor, not of the process). A window with no IC
+        (NaN: too few measured points) never is. Windows truncated by the record's ends count: the floor judges
         each window with its own measured points, so a truncated window above
         it is informative about the data it holds. With ``ic_threshold=0``
         the mask is every window whose IC says something about the data.
@@ -236,7 +240,8 @@ class DyniaResult:
         A result without the noise floor (``informative`` None: the
         reference ports :mod:`dynia.reference`, results built by hand, files
         saved before the floor existed) has only the IC test; one with the
-        floor but without the behavioural spread skips the tie test.
+        floor but without the behavioural spread skips the tie test; one
+        that was not screened (``run.screened`` None) skips the screening.
 
         Parameters
         ----------
@@ -270,7 +275,42 @@ class DyniaResult:
                 informative &= np.asarray(self.informative, dtype=bool)
             if self.behavioural_spread is not None:
                 informative &= ~(np.asarray(self.behavioural_spread) <= np.asarray(self.behavioural_floor))
+        if self.run.screened:
+            informative &= ~self.screened_windows
         return informative
+
+    @property
+    def screened_windows(self):
+        """Windows the data-quality screening takes from the evidence for every parameter, (n_steps,) bool.
+
+        Computed from ``run.screened`` (:func:`dynia.quality.screen`, which
+        :func:`dynia.run` records when ``settings.quality`` is True, the
+        default): every window that uses a saturated or stuck (frozen)
+        reading of the input or the output (:meth:`windows_using`), and,
+        when the output is coarsely quantised, every window whose output
+        moves by fewer than :data:`dynia.quality.QUANTISED_MIN_STEPS` grid
+        steps. :meth:`informative_windows` excludes them, so no verdict,
+        segment, narrowing or structure warning rests on them. All False
+        when nothing was screened or found (``run.screened`` None or empty).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> res = DyniaResult(names=("K",), samples=np.zeros((2, 1)), bounds=np.array([[0.0, 1.0]]),
+        ...                   time=np.arange(12.0), ic=np.full((1, 12), 0.9), ci=np.zeros((1, 12, 2)),
+        ...                   gradient=np.zeros((1, 1, 12)), bin_centres=np.zeros((1, 1)), settings=dict(n=1),
+        ...                   run=dict(screened=(("saturated", "y", 5, 7, 0.95),)))
+        >>> np.flatnonzero(res.screened_windows).tolist()  # windows 4 to 7 use sample 5 or 6
+        [4, 5, 6, 7]
+        >>> res.informative_windows()[0].sum()
+        np.int64(8)
+        """
+        # quality imports the settings only: imported here like verdicts, to keep the modules acyclic
+        from .quality import screened_windows
+
+        if not self.run.screened:
+            return np.zeros(self.time.shape, dtype=bool)
+        return screened_windows(self.run.screened, self.windows_using, self.time.size)
 
     def window_cover(self, steps):
         """Which samples the windows at the marked ``steps`` used, as a boolean mask (n_steps,).

@@ -242,6 +242,16 @@ class AnalysisSettings:
         A netCDF file that the time-dependent arrays are written to as they
         are produced, so that they never lie whole in memory; the result
         reads them from it (see :mod:`dynia.io.arrays`). Kept as a str.
+    quality : bool, default True
+        Screen the record for saturated, frozen and coarsely quantised
+        readings before the analysis (:func:`dynia.quality.screen`):
+        ``result.run.screened`` lists what was found, and the windows that
+        use such readings are no evidence for any parameter
+        (:attr:`dynia.result.DyniaResult.screened_windows`). The command
+        line's ``--no-quality`` turns it off. :class:`dynia.online.OnlineDynia`
+        streams and cannot screen a record before analysing it: it screens
+        what :meth:`~dynia.online.OnlineDynia.replay` was given, once replayed;
+        single updates are not screened.
     """
 
     # Each field's metadata says what a front-end needs to offer it, once: "help" (one line, lower case; the first
@@ -317,6 +327,15 @@ class AnalysisSettings:
             help="a netCDF file that the time-dependent arrays are written to as they are produced", metavar="FILE"
         ),
     )
+    # On by default, so its option is the negation: "negated" makes it --no-quality, which stores False.
+    quality: bool = dataclasses.field(
+        default=True,
+        metadata=dict(
+            help="screen the record for saturated, frozen and coarsely quantised readings before the analysis",
+            option="--no-quality",
+            negated=True,
+        ),
+    )
 
     def __post_init__(self):
         self._check_sampling()
@@ -372,10 +391,10 @@ class AnalysisSettings:
     def _check_errors_and_storage(self):
         """The Monte Carlo error, its target, and where the result arrays go."""
         store = self._store
-        if not isinstance(self.ic_error, bool):
-            raise SettingsError(
-                f"ic_error must be True or False; got {self.ic_error!r} ({type(self.ic_error).__name__})", "ic_error"
-            )
+        for name in ("ic_error", "quality"):
+            value = getattr(self, name)
+            if not isinstance(value, bool):
+                raise SettingsError(f"{name} must be True or False; got {value!r} ({type(value).__name__})", name)
         if self.target_se is not None:
             target_se = _real(self.target_se, "target_se")
             if not 0 < target_se < 1:
@@ -663,6 +682,15 @@ class RunRecord:
     narrowing_threshold : float or None
     narrowing_margin : float or None
         The ``threshold`` and ``margin`` the ranges were narrowed with.
+    screened : tuple of (str, str, int, int, float) or None
+        ``settings.quality``: what the screening found, one
+        ``(kind, signal, start, stop, value)`` per stretch
+        (:func:`dynia.quality.screen`): for "saturated" and "stuck" the
+        samples ``[start, stop)`` and the value read, in the units of the
+        record the run was given (after any offset the caller subtracted);
+        for "quantised" the windows (steps) ``[start, stop)`` whose output
+        moves by fewer than a few grid steps, and the step. An empty tuple:
+        screened, nothing found; None: not screened.
     """
 
     thesis_code: bool = False
@@ -692,6 +720,7 @@ class RunRecord:
     narrowed: tuple | None = None
     narrowing_threshold: float | None = None
     narrowing_margin: float | None = None
+    screened: tuple | None = None
 
     def __post_init__(self):
         for item in dataclasses.fields(self):
@@ -717,10 +746,16 @@ class RunRecord:
             object.__setattr__(self, name, _float_tuple(getattr(self, name), name))
         if self.first_run_bounds is not None:
             object.__setattr__(self, "first_run_bounds", _named_ranges(self.first_run_bounds))
+        self._check_collections()
+
+    def _check_collections(self):
+        """The fields that hold names, entries or an array."""
         if self.narrowed is not None:
             if isinstance(self.narrowed, str) or not all(isinstance(name, str) for name in self.narrowed):
                 raise SettingsError(f"narrowed must be parameter names (str); got {self.narrowed!r}", "narrowed")
             object.__setattr__(self, "narrowed", tuple(self.narrowed))
+        if self.screened is not None:
+            object.__setattr__(self, "screened", _screened_entries(self.screened))
         if self.weights is not None:
             weights = np.array(self.weights, dtype=float)
             if weights.ndim != 1:
@@ -747,6 +782,23 @@ class RunRecord:
             for item in dataclasses.fields(self)
             if getattr(self, item.name) is not None and not (item.name == "thesis_code" and not self.thesis_code)
         }
+
+
+def _screened_entries(entries):
+    """``RunRecord.screened`` as a tuple of (kind, signal, start, stop, value), or a SettingsError naming it."""
+    why = "screened must hold (kind, signal, start, stop, value) entries with 0 <= start < stop"
+    try:
+        checked = tuple(
+            (kind, signal, _optional(int, start, "screened"), _optional(int, stop, "screened"), float(value))
+            for kind, signal, start, stop, value in entries
+        )
+    except (TypeError, ValueError):
+        raise SettingsError(f"{why}; got {entries!r}", "screened") from None
+    for entry in checked:
+        kind, signal, start, stop, _ = entry
+        if not (isinstance(kind, str) and isinstance(signal, str) and 0 <= start < stop):
+            raise SettingsError(f"{why}; got {entry!r}", "screened")
+    return checked
 
 
 def merged_settings(settings, keywords, default=None):

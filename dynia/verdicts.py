@@ -57,6 +57,12 @@ the response, or the truncated ones at the start.
         when :func:`assess` is given the data and the model: the samples
         are simulated again and the window's median minus best MAE is
         compared with noise (see :func:`noise_only`).
+    ``"screened"``
+        The window at max IC is one the data-quality screening took from
+        the evidence (:attr:`~dynia.result.DyniaResult.screened_windows`: a
+        saturated or frozen reading in it, or a coarsely quantised output
+        that hardly moves there); reported only because no window is
+        evidence.
     ``"monte_carlo_error"``
         The result has the Monte Carlo standard error of IC (``ic_error``)
         and the max IC reaches ``ic_threshold`` by less than two of them:
@@ -313,6 +319,7 @@ def assess(
         step = best[p]
         reasons = _bound_reasons(result, p, step) + _edge_reasons(result, step, windows[step], when)
         reasons += _monte_carlo_reasons(result, p, step, ic_threshold)
+        reasons += _screened_reasons(result, step, when)
         if noise.get(step):
             code, text = noise[step]
             reasons.append(_reason(code, f"the window at max IC (time {when(step)}) " + text))
@@ -413,9 +420,10 @@ def no_evidence_reasons(result, p, step, ic_threshold=IC_THRESHOLD):
     """Why the window at ``step`` is no evidence for parameter ``p``: a list of codes, empty when it is evidence.
 
     ``"low_ic"`` (IC below ``ic_threshold`` or missing), ``"record_edge"``
-    (truncated by the record's start or end), ``"below_noise_floor"`` and
-    ``"noise_ranked"`` (behavioural set tied within noise): the codes of the
-    verdict reasons that say the same of a reported window.
+    (truncated by the record's start or end), ``"below_noise_floor"``,
+    ``"noise_ranked"`` (behavioural set tied within noise) and ``"screened"``
+    (saturated, frozen or quantised readings, :attr:`~dynia.result.DyniaResult.screened_windows`):
+    the codes of the verdict reasons that say the same of a reported window.
 
     Examples
     --------
@@ -438,6 +446,8 @@ def no_evidence_reasons(result, p, step, ic_threshold=IC_THRESHOLD):
         codes.append("below_noise_floor")
     elif result.behavioural_spread is not None and result.behavioural_spread[step] <= result.behavioural_floor[step]:
         codes.append("noise_ranked")
+    if result.screened_windows[step]:
+        codes.append("screened")
     return codes
 
 
@@ -577,6 +587,25 @@ def _slow_noise(result):
         f", or a slow disturbance moves the window's estimate (a window of the noise counts {(widening + 1) ** 2:.3g} "
         "times fewer independent points: longer windows average it out)"
     )
+
+
+def _screened_reasons(result, step, when):
+    """``screened`` when the window at max IC is one the data-quality screening took from the evidence."""
+    if not result.screened_windows[step]:
+        return []
+    kinds = sorted({kind for kind, *_ in result.run.screened})
+    return [
+        _reason(
+            "screened",
+            f"the window at max IC (time {when(step)}) is screened out of the evidence: it holds "
+            f"{' or '.join(_SCREENED[kind] for kind in kinds)} readings (dynia.quality; the record has no other "
+            "window that can be evidence)",
+        )
+    ]
+
+
+# How a screened reason names what the screening found (the kinds of dynia.quality.screen).
+_SCREENED = {"saturated": "saturated", "stuck": "frozen", "quantised": "too coarsely quantised"}
 
 
 def _monte_carlo_reasons(result, p, step, ic_threshold):

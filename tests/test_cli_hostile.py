@@ -401,7 +401,7 @@ def test_an_absurd_value_is_a_magnitude_finding_with_quality(tmp_path, capsys, c
     text = GOOD.replace("20,1.0,2.0", "20,1e308,2.0" if column == "u" else "20,1.0,1e308")
     data = write_text_file(tmp_path / "data.csv", text)
     out = tmp_path / "results"
-    status, stdout, err = cli_analyse(capsys, data, *BASE, "--quality", "--out", out)
+    status, stdout, err = cli_analyse(capsys, data, *BASE, "--out", out)
     cli_succeeded(status, stdout, err)
     findings = _summary(out)["data_quality"]
     magnitude = [entry for entry in findings if entry["kind"] == "magnitude"]
@@ -613,8 +613,13 @@ def test_heating_record_verdicts_as_in_the_readme(tmp_path, capsys):
     assert parameters["K"]["verdict"] == "suspect"
     assert [reason["code"] for reason in parameters["K"]["reasons"]] == ["windows_disagree"]
     assert parameters["K"]["high_ic_windows"] == 327 and parameters["K"]["high_ic_span"] == [122.0, 1420.0]
-    assert "K          0.884   398.0  [19.22, 23.88]  21.76     19.59 +- 0.49  327      122.0  1420.0  suspect" in stdout
-    assert "T          0.846   836.0  [41.3, 72.14]   55.75     68.28 +- 4.5   181      6.0    1430.0  identified" in stdout
+    assert (
+        "K          0.884   398.0  [19.22, 23.88]  21.76     19.59 +- 0.49  327      122.0  1420.0  suspect" in stdout
+    )
+    assert (
+        "T          0.846   836.0  [41.3, 72.14]   55.75     68.28 +- 4.5   181      6.0    1430.0  identified"
+        in stdout
+    )
     assert "is in a window that is no evidence (its behavioural set tied within noise)" in stdout
 
 

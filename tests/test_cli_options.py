@@ -49,19 +49,22 @@ def test_every_option_of_a_setting_has_the_fields_default_and_shows_it():
     for command, options in OPTIONS.items():
         for option in options.values():
             if option.is_setting:
-                assert option.default == FIELDS[option.setting].default, (command, option.key)
+                # A negated flag (--no-quality) is off by default, leaving its setting at its default.
+                default = not option.default if option.negated else option.default
+                assert default == FIELDS[option.setting].default, (command, option.key)
     text = parser()._subparsers._group_actions[0].choices["analyse"].format_help()
     flat = " ".join(text.split())
     assert "--samples N Monte Carlo parameter sets (default 2000)" in flat
     assert "(50, 100) (default 90)" in flat and "(default uniform)" in flat
     assert "--max-samples N the budget of --target-se" in flat
+    assert "--no-quality do not screen the record for saturated, frozen and coarsely quantised readings" in flat
 
 
 def test_the_analysis_options_are_the_settings_with_their_option_names():
     analyse = {option.setting: key for key, option in OPTIONS["analyse"].items() if option.is_setting}
     assert analyse["n_samples"] == "samples" and analyse["conf_level"] == "conf_level"
     identify = {option.setting for option in OPTIONS["identify"].values() if option.is_setting}
-    assert identify == {"x0", "n_samples", "n", "percentage"}
+    assert identify == {"x0", "n_samples", "n", "percentage", "quality"}
     # suggest's --max-samples is its own (the most samples of the proposal), not the budget of --target-se.
     assert not OPTIONS["suggest"]["max_samples"].is_setting
 

@@ -70,7 +70,7 @@ def _run(command, out, *extra):
 @pytest.fixture(scope="module")
 def analysed(tmp_path_factory):
     out = tmp_path_factory.mktemp("report") / "heating"
-    return (out, *_run("analyse", out, "--quality"))
+    return (out, *_run("analyse", out))
 
 
 @pytest.fixture(scope="module")
@@ -152,7 +152,7 @@ def test_analyse_report_holds_the_settings_versions_and_data_notes(analysed):
         assert needle in shown
     for package in ("dynia", "numpy", "numba", "python"):
         assert package in page.text
-    assert "Data quality (--quality): 0 finding(s)" in shown and "Warnings and data notes" in shown
+    assert "Data quality: 0 finding(s)" in shown and "Warnings and data notes" in shown
 
 
 def test_identify_report_holds_the_printed_estimates_and_the_fit(identified):

@@ -102,7 +102,7 @@ def glitch(tmp_path_factory):
 
 
 def test_quality_findings_come_with_the_proposal_not_in_a_summary_it_does_not_write(glitch, capsys):
-    options = ["--param", "K=0:2", "--param", "T=0:100", "--quality", "--max-samples", "1000"]
+    options = ["--param", "K=0:2", "--param", "T=0:100", "--max-samples", "1000"]
     status = main(["suggest", str(glitch), *DATA, *options, "--seed", "1"])
     err = capsys.readouterr().err
     assert status == 0 and "summary.json" not in err

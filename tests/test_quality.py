@@ -435,8 +435,11 @@ def test_to_dataframe_and_summary(glitchy):
     stuck = table[table.kind == "stuck"].iloc[0]
     assert (stuck.start_time, stuck.end_time) == (time[250], time[289])
     text = report.summary()
-    assert "5 findings" in text and "u: 0 magnitude, 1 glitch, 1 outlier, 0 stuck; 1 flagged sample\n" in text
-    assert "y: 0 magnitude, 1 glitch, 1 outlier, 1 stuck; 41 flagged samples" in text
+    assert (
+        "5 findings" in text
+        and "u: 0 magnitude, 1 glitch, 1 outlier, 0 saturated, 0 stuck, 0 quantised; 1 flagged sample\n" in text
+    )
+    assert "y: 0 magnitude, 1 glitch, 1 outlier, 0 saturated, 1 stuck, 0 quantised; 41 flagged samples" in text
     assert "40 consecutive readings" in text
 
 

@@ -44,14 +44,14 @@ from ..io.outdir import OutputDirectory
 from ..models.base import user_code_failed
 from ..pipeline import DroppedSamplesWarning, TargetNotReachedWarning, run
 from ..progress import stderr_is_terminal
-from ..quality import check_quality
+from ..quality import SCREENED_KINDS, check_quality
 from ..refine import narrowed_bounds
 from ..settings import MAX_PARAMETER, AnalysisSettings
 from ..suggestion import parse_duration, parse_size, suggest, window_half_width
 from ..verdicts import assess
 from . import report
 from .figures import Labels
-from .parser import OPTIONS, WRITING_OPTIONS, UsageError, setting_options, unwritten
+from .parser import OPTIONS, RETIRED, WRITING_OPTIONS, UsageError, retired, setting_options, unwritten
 
 __all__ = ["execute"]
 
@@ -114,6 +114,7 @@ def _options(args):
     # suggest's are the settings of its pilot, and those given are kept in its proposal.
     options["analysis"] = _analysis_settings(options)
     _check_command_options(options)
+    options["quality"] = not options["no_quality"]  # screening is on unless --no-quality
     options["offset"] = _offset(options["offset"], "--offset")
     options["input_offset"] = _offset(options["input_offset"], "--input-offset")
     if options.get("seed") is None:
@@ -128,8 +129,6 @@ def _options(args):
         )
     model = options["model_object"] = _model(options["model"])
     options["input"] = _input_columns(options["input"], model)
-    if model.n_inputs > 1 and options["quality"]:
-        raise UsageError(f"--quality checks one input; the model {model!r} has {model.n_inputs}")
     options["bounds"] = _bounds(options["param"], model)
     known = [*model.names, *options["input"], options["output"]]
     options["units"] = _units(options.get("unit") or (), known)
@@ -180,6 +179,9 @@ def _references(specs, known):
 
 def _merged_options(args, command):
     """The command's defaults, then its --config file, then the command line; and the keys the user set."""
+    for option, message in RETIRED.items():
+        if getattr(args, retired(option), False):
+            raise UsageError(message)
     refused = [option for option in WRITING_OPTIONS if getattr(args, unwritten(option), None) is not None]
     if refused:
         raise UsageError(
@@ -192,7 +194,7 @@ def _merged_options(args, command):
         if value is not None
         and key not in ("command", "config")
         and value is not False
-        and not key.startswith("unwritten_")
+        and not key.startswith(("unwritten_", "retired_"))
     }
     options = {key: option.default for key, option in OPTIONS[command].items()}
     options["command"] = command
@@ -335,7 +337,11 @@ def _import_model_module(where, spec):
 
 def _analysis_settings(options):
     """The AnalysisSettings of the command's options; the settings check them (and errors name the options)."""
-    fields = {option.setting: options[key] for key, option in OPTIONS[options["command"]].items() if option.is_setting}
+    fields = {
+        option.setting: not options[key] if option.negated else options[key]
+        for key, option in OPTIONS[options["command"]].items()
+        if option.is_setting
+    }
     if options.get("window") is not None and "min_points" in fields:
         # With --window the window's length is known only on the data's grid; min_points is checked then (_load).
         fields["min_points"] = 1
@@ -447,6 +453,11 @@ def _read_config(path, command):
     except tomllib.TOMLDecodeError as error:
         raise UsageError(f"--config {path}: not valid TOML: {error}") from None
     config = {key.replace("-", "_"): value for key, value in config.items()}
+    if "quality" in config and "quality" not in OPTIONS[command]:
+        raise UsageError(
+            f"--config {path}: quality: the data-quality screening is on by default; write no_quality = true to "
+            "turn it off"
+        )
     allowed = sorted(OPTIONS[command])
     unknown = sorted(set(config) - set(allowed))
     if unknown:
@@ -654,10 +665,12 @@ def _offset_value(offset, values, path, option):
     return float(offset)
 
 
-def _data_warnings(data, u, y, options, where="see data_quality in summary.json"):
-    """Lines for stderr and summary.json: gaps, absurd magnitudes and (with --quality) data-quality findings.
+def _data_warnings(data, options, where="see data_quality in summary.json"):
+    """Lines for stderr and summary.json: gaps, absurd magnitudes and (unless --no-quality) data-quality findings.
 
-    ``where`` ends the line that counts the findings: where the command puts them.
+    ``where`` ends the line that counts the findings: where the command puts them. The findings are those of the
+    data as the file holds them, before any offset is subtracted, so that their values are the ones measured; the
+    run screens the same stretches (the tests do not depend on an offset).
     """
     lines = []
     for start, stop in data.gaps:
@@ -673,27 +686,63 @@ def _data_warnings(data, u, y, options, where="see data_quality in summary.json"
             lines.append(
                 f"the {name} holds {huge.size} value(s) beyond {_ABSURD:g} in magnitude, the first "
                 f"{values[huge[0]]:g} at time {report.file_times(data, [data.time[huge[0]]])[0]}; "
-                "check the data (--quality reports them)"
+                "check the data (the data-quality findings list them)"
             )
     findings = []
     if options["quality"]:
-        found = check_quality(data.time, u, y)
-        for finding in found.findings:
+        for finding in _measured_quality(data).findings:
             start, end = report.file_times(data, [data.time[finding.start], data.time[finding.stop - 1]])
-            findings.append(
-                dict(
-                    signal=finding.signal,
-                    kind=finding.kind,
-                    start_time=start,
-                    end_time=end,
-                    value=finding.value,
-                    reason=finding.reason,
-                )
+            entry = dict(
+                signal=finding.signal,
+                column=options["output"] if finding.signal == "y" else options["input"][0],
+                kind=finding.kind,
+                start_time=start,
+                end_time=end,
+                value=finding.value,
+                reason=finding.reason,
             )
+            if finding.kind == "saturated":
+                values = data.y if finding.signal == "y" else data.u
+                entry["limit"] = "maximum" if finding.value >= np.nanmax(values) else "minimum"
+            findings.append((finding, entry))
         if findings:
-            kinds = sorted({entry["kind"] for entry in findings})
+            kinds = sorted({entry["kind"] for _, entry in findings})
             lines.append(f"data quality: {len(findings)} finding(s) ({', '.join(kinds)}); {where}")
     return lines, findings
+
+
+def _measured_quality(data):
+    """:func:`~dynia.quality.check_quality` of the data as measured; with several inputs, of the output only."""
+    u = data.u if data.u.ndim == 1 else np.zeros(data.y.size)
+    return check_quality(data.time, u, data.y)
+
+
+def _screening_summary(result, findings):
+    """summary.json's ``data_quality`` (each finding, and the windows it takes from the evidence) and ``screening``.
+
+    ``findings`` are :func:`_data_warnings`' (finding, entry) pairs; a screened kind's windows are those that use
+    its readings (saturated, stuck) or the run's quantised windows of its signal.
+    """
+    listed = []
+    for finding, entry in findings:
+        excluded = 0
+        if finding.kind == "quantised":
+            excluded = sum(
+                stop - start
+                for kind, signal, start, stop, _ in result.run.screened or ()
+                if kind == "quantised" and signal == finding.signal
+            )
+        elif finding.kind in SCREENED_KINDS:
+            samples = np.zeros(result.time.size, dtype=bool)
+            samples[finding.start : finding.stop] = True
+            excluded = int(result.windows_using(samples).sum())
+        listed.append(dict(entry, screened=finding.kind in SCREENED_KINDS, windows_excluded=excluded))
+    screening = dict(
+        quality=result.settings.quality,
+        excluded_windows=int(result.screened_windows.sum()),
+        n_windows=int(result.time.size),
+    )
+    return listed, screening
 
 
 def _dynia_warnings(caught):
@@ -740,7 +789,7 @@ def _analyse(options, command_line, caught):
     with options["destination"] as staging, _written_into(options["out"], staging):
         data, offset, input_offset, u, y = _load(options)
         analysis = options["analysis"].replace(dt=data.dt)
-        notices, quality_findings = _data_warnings(data, u, y, options)
+        notices, quality_findings = _data_warnings(data, options)
         for line in notices:
             print(f"dynia: warning: {line}", file=sys.stderr)
 
@@ -792,7 +841,7 @@ def _analyse(options, command_line, caught):
                 **_provenance(options, command_line),
             )
             if options["quality"]:
-                summary["data_quality"] = quality_findings
+                summary["data_quality"], summary["screening"] = _screening_summary(result, quality_findings)
             report.write_analysis(
                 directory,
                 result,
@@ -805,6 +854,7 @@ def _analyse(options, command_line, caught):
                 labels=_labels(options),
             )
             table = report.verdict_table(parameters)
+            table += "".join("\n" + line for line in report.screening_lines(summary))
             if summary["noise_floor"] is not None:
                 table += "\n" + report.noise_floor_line(summary["noise_floor"])
             return result, parameters, table
@@ -877,7 +927,7 @@ def _identify(options, command_line, caught):
     with options["destination"] as staging, _written_into(options["out"], staging):
         data, offset, input_offset, u, y = _load(options)
         analysis = options["analysis"].replace(dt=data.dt)
-        notices, _ = _data_warnings(data, u, y, dict(options, quality=False))
+        notices, _ = _data_warnings(data, dict(options, quality=False))
         for line in notices:
             print(f"dynia: warning: {line}", file=sys.stderr)
         if options["method"] == "dynia":
@@ -902,8 +952,13 @@ def _identify(options, command_line, caught):
 
         for key, pairs in (("segments", found.segments), ("validation_segments", found.validation)):
             summary[key] = [[file_time(start), file_time(stop - 1)] for start, stop in pairs]
+        # identify checked the record it fits, offsets subtracted: the values and reasons as measured instead.
+        measured = {(f.signal, f.kind, f.start, f.stop): f for f in _measured_quality(data).findings}
         for finding, entry in zip(found.quality.findings if found.quality else (), summary.get("data_quality", [])):
             entry.update(start_time=file_time(finding.start), end_time=file_time(finding.stop - 1))
+            same = measured.get((finding.signal, finding.kind, finding.start, finding.stop))
+            if same is not None:
+                entry.update(value=same.value, reason=same.reason)
         recorded = _recorded(options, analysis, offset, input_offset)
         # identify's own record adds what the command line does not set (held_out_steps, min_length, ...);
         # the analysis settings are already under "analysis".
@@ -950,7 +1005,8 @@ def _identified(options, u, y, analysis):
         ic_threshold=options["ic_threshold"],
         mode=options["mode"],
         min_length=options.get("min_length"),
-        quality=options["quality"],
+        # identify checks one input; with several, the run still screens the output.
+        quality=options["quality"] and options["model_object"].n_inputs == 1,
         exclude_flagged=options["exclude_flagged"],
         n_starts=options["starts"],
         rng=options["seed"],
@@ -962,7 +1018,8 @@ def _suggest(options, command_line, caught):
     data, offset, input_offset, u, y = _load(options)
     # suggest writes no summary.json: the findings go with the proposal, as JSON or one warning line each.
     where = "see data_quality in the JSON output" if options["json"] else "listed in the warnings below"
-    notices, findings = _data_warnings(data, u, y, options, where)
+    notices, pairs = _data_warnings(data, options, where)
+    findings = [entry for _, entry in pairs]
     if not options["json"]:
         notices += [
             f"data quality: {entry['signal']} {entry['kind']} from {entry['start_time']} to {entry['end_time']}: "
@@ -1054,5 +1111,5 @@ def _announce_compilation(options, settings):
 
 
 # Values beyond this are no measurement of a process: a logger's overflow or
-# fill value (1e308, 9.9e37). Reported on every run; --quality lists them.
+# fill value (1e308, 9.9e37). Reported on every run; the data-quality findings list them (unless --no-quality).
 _ABSURD = 1e12

@@ -205,9 +205,18 @@ def _notes(summary, text):
         page.append("<p>None: the command printed no warning and loading changed nothing in the data.</p>")
     findings = summary.get("data_quality")
     if findings is not None:
-        page.append(f"<h3>Data quality (--quality): {len(findings)} finding(s)</h3>")
+        page.append(f"<h3>Data quality: {len(findings)} finding(s)</h3>")
+        screening = summary.get("screening")
+        if screening:
+            page.append(
+                f"<p>{text(str(screening['excluded_windows']))} of {text(str(screening['n_windows']))} windows are "
+                "screened out of the evidence: they use saturated or frozen readings, or their output moves by "
+                "fewer than a few steps of a coarse quantisation (--no-quality keeps them).</p>"
+            )
         if findings:
-            header = ("signal", "kind", "start_time", "end_time", "value", "reason")
+            # analyse says how many windows each finding took from the evidence; identify selects segments instead.
+            counted = ("windows_excluded",) if any("windows_excluded" in entry for entry in findings) else ()
+            header = ("signal", "kind", "start_time", "end_time", "value", *counted, "reason")
             page += _table(header, [[_cell(entry.get(key)) for key in header] for entry in findings], text)
     return page
 

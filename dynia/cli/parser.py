@@ -17,7 +17,18 @@ from .. import __version__
 from ..errors import SettingsError
 from ..settings import DEFAULT_MAX_SAMPLES, IC_THRESHOLD, SAMPLERS, AnalysisSettings
 
-__all__ = ["OPTIONS", "Option", "UsageError", "WRITING_OPTIONS", "attached", "parser", "setting_options", "unwritten"]
+__all__ = [
+    "OPTIONS",
+    "Option",
+    "RETIRED",
+    "UsageError",
+    "WRITING_OPTIONS",
+    "attached",
+    "parser",
+    "retired",
+    "setting_options",
+    "unwritten",
+]
 
 
 class UsageError(SettingsError):
@@ -60,6 +71,8 @@ class Option:
     setting : str or None
         The library's name of what it gives (an :class:`~dynia.settings.AnalysisSettings` field, or an argument of
         the command's function): a :class:`~dynia.errors.SettingsError` naming it is reported naming the option.
+    negated : bool
+        A flag that turns off a setting on by default (``--no-quality``): the setting is ``not`` the flag.
     """
 
     key: str
@@ -69,6 +82,7 @@ class Option:
     metavar: str | None = None
     choices: tuple | None = None
     setting: str | None = None
+    negated: bool = False
 
     @property
     def flag(self):
@@ -118,7 +132,10 @@ _KINDS = {int: "whole", float: "number", bool: "flag", str: "text"}
 _OFFERED = {"sampler": tuple(sorted(SAMPLERS))}
 
 # What the command line adds to a setting's help: where it writes what the setting adds.
-_WRITES = {"ic_error": ": NAME_se columns in ic.csv, max_ic_se in summary.json, IC +- 2 SE shaded in the plots"}
+_WRITES = {
+    "ic_error": ": NAME_se columns in ic.csv, max_ic_se in summary.json, IC +- 2 SE shaded in the plots",
+    "quality": ": their windows are no evidence for any parameter, and data_quality in summary.json says which",
+}
 
 
 def setting_option(name, prefix=""):
@@ -129,14 +146,20 @@ def setting_option(name, prefix=""):
     if isinstance(annotation, types.UnionType):  # int | None: the option takes an int, or is left out
         annotation = next(member for member in annotation.__args__ if member is not type(None))
     flag = _SETTING_FLAGS[name]
+    negated = meta.get("negated", False)
+    help_text = meta["help"].format(**_SETTING_FLAGS) + _WRITES.get(name, "")
+    if negated:
+        help_text = f"do not {help_text} (on by default)"
     return Option(
         key=flag[2:].replace("-", "_"),
         kind=_KINDS[annotation],
-        help=prefix + meta["help"].format(**_SETTING_FLAGS) + _WRITES.get(name, ""),
-        default=field.default,
+        help=prefix + help_text,
+        # A negated flag is not given by default, which leaves its setting at its default (True).
+        default=not field.default if negated else field.default,
         metavar=meta.get("metavar"),
         choices=_OFFERED.get(name, meta.get("choices")),
         setting=name,
+        negated=negated,
     )
 
 
@@ -191,11 +214,7 @@ _DATA = (
         default="error",
         choices=("error", "mean"),
     ),
-    Option(
-        "quality",
-        "flag",
-        "check the data for absurd magnitudes, glitches, outliers and stuck values and report them",
-    ),
+    setting_option("quality"),
     Option(
         "offset",
         "offset",
@@ -436,6 +455,17 @@ def setting_options(command):
 WRITING_OPTIONS = ("--out", "--overwrite", "--no-plots", "--unit", "--reference")
 
 
+# Options that are gone, and what replaced them: refused with this message rather than argparse's "unrecognized".
+RETIRED = {
+    "--quality": "--quality is gone: the data-quality screening is on by default (--no-quality turns it off)",
+}
+
+
+def retired(option):
+    """The argparse destination of a retired option, known only to refuse it."""
+    return f"retired_{option[2:].replace('-', '_')}"
+
+
 def unwritten(option):
     """The argparse destination of an output option that suggest knows only to refuse."""
     return f"unwritten_{option[2:].replace('-', '_')}"
@@ -515,6 +545,9 @@ def parser():
             for option in options:
                 option.add_to(group)
         group.add_argument(_CONFIG.flag, metavar=_CONFIG.metavar, help=_CONFIG.help)
+        # Known only to be refused with a message that says what replaced it (see RETIRED).
+        for option in RETIRED:
+            group.add_argument(option, action="store_true", dest=retired(option), help=argparse.SUPPRESS)
         if command == "suggest":
             for option in WRITING_OPTIONS:
                 group.add_argument(option, nargs="?", const=True, dest=unwritten(option), help=argparse.SUPPRESS)

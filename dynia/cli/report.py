@@ -115,7 +115,8 @@ def write_analysis(
         summary,
         command="analyse",
         tables=[([], *verdict_parts(summary["parameters"]))],
-        lines=[] if floor is None else [noise_floor_line(floor)],
+        lines=[line.strip() for line in screening_lines(summary)]
+        + ([] if floor is None else [noise_floor_line(floor)]),
         plots=plots,
     )
 
@@ -180,12 +181,43 @@ def noise_floor_line(floor):
     )
 
 
+def screening_lines(summary):
+    """The lines ``dynia analyse`` prints under the verdict table about the data-quality screening.
+
+    One per screened finding of ``summary["data_quality"]``, in the units measured, with the windows it takes
+    from the evidence, and one for the total (``summary["screening"]``); none when the run was not screened.
+    """
+    screening = summary.get("screening")
+    if not screening:
+        return []
+    lines = []
+    for entry in summary.get("data_quality", ()):
+        if not entry.get("screened"):
+            continue
+        value, column, kind = entry["value"], entry["column"], entry["kind"]
+        if kind == "saturated":
+            what = f"{column} saturated at {value:.6g} (its record {entry['limit']})"
+        elif kind == "stuck":
+            what = f"{column} frozen at {value:.6g}"
+        else:
+            what = f"{column} quantised in steps of {value:.6g} (coarser than its noise)"
+        where = "" if kind == "quantised" else f" from {entry['start_time']} to {entry['end_time']}"
+        lines.append(f"  data quality: {what}{where}: {entry['windows_excluded']} window(s) are no evidence")
+    if lines or screening["excluded_windows"]:
+        lines.append(
+            f"data quality: {screening['excluded_windows']} of {screening['n_windows']} windows screened out of the "
+            "evidence for every parameter (saturated, frozen or quantised readings; --no-quality keeps them)"
+        )
+    return lines
+
+
 # How the table's notes say why a window is no evidence (the codes of dynia.verdicts.no_evidence_reasons).
 _NO_EVIDENCE = {
     "low_ic": "IC below the threshold",
     "record_edge": "truncated by the record's edge",
     "below_noise_floor": "below the noise floor",
     "noise_ranked": "its behavioural set tied within noise",
+    "screened": "screened out for saturated, frozen or quantised readings",
 }
 
 
