@@ -233,8 +233,12 @@ def test_fit_baseline_and_quality_align_pandas_records_and_take_dt_from_the_inde
     assert fitted.parameters["T"] == pytest.approx(10.0, rel=1e-6)
     assert validation_error(u, y, FirstOrder(), fitted.parameters, [(200, 300)]) == pytest.approx(0.0, abs=1e-9)
     assert find_intervals(u, y).dt == 2.0
-    stuck = check_quality(None, u, y).findings[0]
-    assert (stuck.kind, stuck.end_time) == ("stuck", 200.0)  # seconds from the first row, not steps
+    frozen = y.copy()
+    frozen.iloc[110:140] = frozen.iloc[
+        110
+    ]  # the tag freezes during the rise (its rest before the step opens the record)
+    stuck = check_quality(None, u, frozen).findings[0]
+    assert (stuck.kind, stuck.end_time) == ("stuck", 278.0)  # seconds from the first row, not steps
     shifted = y.shift(1, freq="2s")
     for call in (
         lambda: fit_segments(u, shifted, FirstOrder(), [(0, 300)], bounds=bounds),
