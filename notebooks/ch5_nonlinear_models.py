@@ -337,7 +337,8 @@ fig.savefig(f"{figure_dir}/nonlinear_hymod_identifiability.png", dpi=120, bbox_i
 #   tie, so the summary reports it: IC 0.51, band [0.020, 0.51], a band
 #   that misses the truth (the check at the end of the notebook lists it).
 #   It is the only window that can be evidence, so the verdict is `suspect`
-#   (`isolated_evidence`). With `kq` free over [0.1, 1], other
+#   (`isolated_evidence`), and its band excludes the whole record's
+#   least-squares `alpha` (`disagrees_with_record_fit`). With `kq` free over [0.1, 1], other
 #   quick-flow residence times with a different split fit the peaks as
 #   well. The verdict rules cannot know the truth; here the tie gives one
 #   window's wrong band away, and its neighbour's is flagged because no
@@ -402,7 +403,8 @@ for label, result in (("first run", first), ("second run", second)):
 #   larger than sigma: there the floor is too low if anything, so the tie
 #   is real, and the band misses the truth. The next window, day 545,
 #   misses it too but does not tie; as the only window of evidence it is
-#   reported as `suspect` (`isolated_evidence`).
+#   reported as `suspect` (`isolated_evidence`; its band excludes the
+#   record's least-squares fit too, `disagrees_with_record_fit`).
 #
 # With errors that grow with the output, read a `noise_ranked` or
 # `below_noise_floor` verdict, and a highest IC the summary leaves out,
@@ -563,7 +565,7 @@ print("every identified band holds the truth:",
 # | HYMOD `ks` | recessions | yes: late in every recession, more often after `kq` is narrowed; bands hold the truth; `suspect` (`isolated_evidence`) in the first run, whose highest IC, in the low flows late in a recession, ties within noise (a false tie of relative errors) and is left out, leaving 2 windows of evidence; `identified` in the second |
 # | HYMOD `b` | wetting-up | weakly: highest IC on storms over a dry soil early in a wet season; mean IC in wetting-up only slightly above that on peaks; IC 0.51 in both runs, `suspect` (`isolated_evidence`: 2 untied windows), though its bands hold the truth |
 # | HYMOD `cmax` | wetting-up | no: highest in wetting-up, but IC never reaches 0.5 (`weak`) |
-# | HYMOD `alpha` | peaks | only in the second run; in the first its two windows with IC >= 0.5 miss the truth; its verdict is `suspect` (`isolated_evidence`: only one of them does not tie within noise) |
+# | HYMOD `alpha` | peaks | only in the second run; in the first its two windows with IC >= 0.5 miss the truth; its verdict is `suspect` (`isolated_evidence`: only one of them does not tie within noise; `disagrees_with_record_fit`: that band excludes the whole record's least-squares fit) |
 # | tank `c` | steady levels | yes, in both runs; in the second its bands miss the truth in 15 % of the windows with IC >= 0.5, all of them below the floor or tied within noise, and the reported band holds it |
 # | tank `A` | transients | only in the second run, with `c` narrowed (`identified`); in the first run only the first filling (`suspect`) |
 #

@@ -129,7 +129,9 @@ print("share of informative windows:", round(float(res.informative.mean()), 2))
 #   least-squares first-order fit of the whole record with the time constant
 #   searched on a grid (no starting value), so that a window centred on a step
 #   sees the bend of the response, where gain and time constant act
-#   differently;
+#   differently, and longer where the noise asks for more points (a
+#   parameter a tenth off must move a window's mean by two standard errors
+#   of the noise; on this record the time constant decides);
 # * the **behavioural share** is `100 / 10^d` % for d parameters, a tenth of
 #   each range, since the behavioural set is a fixed share of the parameter
 #   box, and 10 % of the box of two parameters caps the IC of a time constant
