@@ -181,7 +181,7 @@ from .engine.windows import default_chunk_steps
 from .errors import DataError, ModelError, SettingsError, SuggestionError
 from .fit import fit_segments
 from .io.frames import unpack
-from .pipeline import run
+from .pipeline import KernelSimulated, compiled_simulation, run
 from .progress import shows_progress
 from .segments import mask_to_segments
 from .serial import json_number
@@ -949,7 +949,9 @@ def _sample_count(pilot, target, max_samples, percentage, reasons, notes, given=
 
 def _ranges(u, y, model, bounds, dt, x0, rng, reasons, notes):
     """Least squares on the whole record, per parameter; its reason and the notes on the ranges appended."""
-    fitted = fit_segments(u, y, model, [(0, y.size)], bounds=bounds, dt=dt, x0=x0, n_starts=3, rng=rng)
+    # Through the compiled kernel where it simulates the model (the same outputs, bit for bit): the pilot compiled it.
+    simulated = KernelSimulated(model) if compiled_simulation(model) else model
+    fitted = fit_segments(u, y, simulated, [(0, y.size)], bounds=bounds, dt=dt, x0=x0, n_starts=3, rng=rng)
     fit = {}
     for name, (low, high) in bounds.items():
         estimate = fitted.parameters[name]
