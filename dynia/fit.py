@@ -555,7 +555,7 @@ def record_least_squares(result, u, y, model):
                 u,
                 y,
                 model,
-                [(0, np.asarray(y).shape[0])],
+                [(0, y.shape[0])],
                 bounds=bounds,
                 initial=initial,
                 dt=result.settings.dt,
@@ -573,7 +573,7 @@ def record_least_squares(result, u, y, model):
             steady = steady_size_factor(y, fit.fitted, sigma, before + after + 1)
     fields = dict(
         record_fit=tuple(fit.parameters[name] for name in names),
-        record_fit_se=tuple(fit.std_errors_hac.get(name, 0.0) for name in names),
+        record_fit_se=tuple(fit.std_errors_hac[name] for name in names),
         record_fit_rmse=fit.rmse,
         steady_size_factor=steady,
     )
