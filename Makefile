@@ -34,7 +34,7 @@ NOTEBOOK_ENV := $(shell sed -e '/^\#/d' -e '/^$$/d' tests/notebook.env)
 # NBVAL_CHECK_OUTPUT and checks that their code matches notebooks/.
 REFERENCES := $(patsubst notebooks/%.py,tests/notebooks/%.ipynb,$(NOTEBOOKS))
 
-.PHONY: install test check-wheel docs bench figures references clean
+.PHONY: install test pytest check-wheel docs bench figures references clean
 
 install: $(INSTALLED)
 
@@ -44,12 +44,17 @@ $(INSTALLED): pyproject.toml
 	$(PY) -m pip install --quiet -e ".[dev]"
 	touch $@
 
+# The suite (on every core: -n auto in pyproject.toml), the docs and the wheel side by side, not one after another:
+# the docs and the wheel (its build, install and first run, which compiles the kernels afresh) share the cores with
+# the suite and fill them where it leaves one idle, at its start and its end. Each one's output is printed whole when
+# it ends (--output-sync), and any one failing fails the target.
 test: $(INSTALLED)
 	$(PY) -m ruff check dynia tests notebooks benchmarks
 	$(PY) -m ruff format --check dynia tests benchmarks
+	$(MAKE) --no-print-directory -j3 --output-sync=target pytest docs check-wheel
+
+pytest: $(INSTALLED)
 	$(PY) -m pytest
-	$(MAKE) docs
-	$(MAKE) check-wheel
 
 # The wheel a user installs, used from outside the checkout (see .ci/check-wheel).
 check-wheel: $(INSTALLED)
