@@ -231,6 +231,11 @@ class NoiseFloor:
     behavioural_floor : ndarray (n_steps,)
         The same as ``floor`` with ``behavioural_multiple``: the behavioural
         set ties within noise where ``behavioural_spread`` is at most this.
+    best : ndarray (n_steps,)
+        Every window's best MAE, what ``sigma`` is estimated from; NaN where
+        no result. With ``discrimination`` and ``behavioural_spread`` it
+        gives back the three MAEs, so that a record that grows (``dynia
+        follow``) can be judged again without analysing its windows again.
     sigma : float
         The noise level estimated from the best fits (NaN when no window
         could give it).
@@ -255,6 +260,7 @@ class NoiseFloor:
     floor: np.ndarray
     behavioural_spread: np.ndarray
     behavioural_floor: np.ndarray
+    best: np.ndarray
     sigma: float
     multiple: float
     behavioural_multiple: float
@@ -674,6 +680,7 @@ def noise_floor(
         floor=floor,
         behavioural_spread=threshold - best,
         behavioural_floor=np.multiply(noise_sd, behavioural_multiple, out=noise_sd),
+        best=best,
         sigma=sigma,
         multiple=multiple,
         behavioural_multiple=behavioural_multiple,
@@ -733,4 +740,5 @@ def floor_fields(floor):
         noise_floor=floor.floor,
         behavioural_spread=floor.behavioural_spread,
         behavioural_floor=floor.behavioural_floor,
+        best_mae=floor.best,
     )
