@@ -35,7 +35,9 @@ grows with the number of steps.
 
 import copy
 import dataclasses
+import io
 import numbers
+import pickle
 import warnings
 
 import numpy as np
@@ -241,6 +243,16 @@ class OnlineDynia:
         self._diverged = np.zeros(n_samples, dtype=bool)
 
     @property
+    def settings(self):
+        """The :class:`~dynia.settings.AnalysisSettings` of every result (``window="trailing"``, numpy engine)."""
+        return self._analysis
+
+    @property
+    def n_behavioural(self):
+        """Parameter sets in every window's behavioural set."""
+        return self._flavour.count
+
+    @property
     def time(self):
         """Time of the latest step, ``(steps - 1) * dt``; NaN before the first update."""
         return (self.steps - 1) * self._analysis.dt if self.steps else float("nan")
@@ -295,6 +307,100 @@ class OnlineDynia:
             ``.ic``, ``.ci`` and ``.gradient`` (with the CLD median as
             ``.median``); new arrays at every update.
         """
+        self._take(u_t, y_t)
+        with np.errstate(over="ignore", invalid="ignore"):
+            usable = self._window_mean()
+        self._analyse(usable)
+        return self.ic, self.ci, self.gradient
+
+    def advance(self, u, y, totals=None):
+        """Feed a stretch of the record without analysing its windows.
+
+        For a caller that has those windows' results already, from the batch
+        engine on the same record (``dynia follow`` catching up a backlog):
+        the models, the window's errors and the error scale move on exactly
+        as :meth:`update` moves them, so that the updates after it give what
+        they would have given, while the costly part of an update, ranking the
+        window, is skipped. The latest results (``.ic``, ...) are blanked.
+
+        Parameters
+        ----------
+        u, y : ndarray (n_steps,)
+            Input (n_steps, n_inputs for several inputs) and measured output,
+            checked as :meth:`update` checks each value.
+        totals : ndarray (n_samples,), optional
+            Every sample's running record total absolute error, in the
+            window's scaled units (:attr:`newest_errors`), added to in place
+            step by step (:func:`dynia.engine.noise.add_record_errors`).
+        """
+        for u_t, y_t in zip(np.asarray(u).tolist(), np.asarray(y, dtype=float).tolist()):
+            scale = self.error_scale
+            self._take(u_t, y_t)
+            if totals is not None:
+                if self.error_scale != scale:
+                    totals *= self.error_scale
+                add_record_errors(totals, self.newest_errors[None])
+        self._blank_results()
+
+    @property
+    def newest_errors(self):
+        """The absolute error of every sample at the newest step, times :attr:`error_scale` (read-only)."""
+        view = self._errors[(self.steps - 1) % self._errors.shape[0]].view()
+        view.flags.writeable = False
+        return view
+
+    @property
+    def window_statistics(self):
+        """(best, upper, threshold, points) of the newest window: what the noise floor reads of it.
+
+        Its best MAE, its MAE at population quantile 0.9 and its behavioural
+        threshold MAE, in the record's units, and its measured points
+        (:mod:`dynia.engine.noise`); the MAEs are NaN where the window had no
+        result.
+        """
+        return self._best, self._upper, self._threshold, self._present
+
+    def to_bytes(self):
+        """The object's whole state (samples, models, window, error scale) as bytes, for :meth:`from_bytes`.
+
+        The model itself is left out: whoever restores the state gives it
+        again, so that no code travels with the bytes.
+        """
+        buffer = io.BytesIO()
+        pickler = pickle.Pickler(buffer, protocol=pickle.HIGHEST_PROTOCOL)
+        pickler.persistent_id = lambda value: _MODEL_ID if value is self._model else None
+        pickler.dump(self)
+        return buffer.getvalue()
+
+    @classmethod
+    def from_bytes(cls, data, model):
+        """The object :meth:`to_bytes` gave ``data`` of, with ``model``, the model it was made with.
+
+        Only the classes of numpy's arrays and of dynia's own models,
+        settings, flavours and this class are rebuilt: bytes naming any
+        other (a damaged or foreign checkpoint) raise a DataError instead of
+        running code.
+
+        Raises
+        ------
+        DataError
+            ``data`` is not a state written by :meth:`to_bytes`, or was
+            written for another kind of model.
+        """
+        unpickler = _StateUnpickler(io.BytesIO(data))
+        unpickler.persistent_load = lambda key: model if key == _MODEL_ID else _refuse_state(f"reference {key!r}")
+        try:
+            state = unpickler.load()
+        except DataError:
+            raise
+        except Exception as error:  # what a damaged pickle raises varies: truncated, bad opcode, bad arguments
+            raise DataError(f"the saved OnlineDynia state cannot be read ({type(error).__name__}: {error})") from None
+        if not isinstance(state, cls):
+            raise DataError(f"the saved state is a {type(state).__name__}, not an OnlineDynia")
+        return state
+
+    def _take(self, u_t, y_t):
+        """Step every model by ``u_t`` and put its absolute errors against ``y_t`` into the window's ring."""
         if self._model.n_inputs == 1:
             u_t = _scalar(u_t, "u_t", self.steps, allow_nan=False)
         else:
@@ -331,9 +437,6 @@ class OnlineDynia:
             else:
                 errors.fill(0.0)
             self.steps += 1
-            usable = self._window_mean()
-        self._analyse(usable)
-        return self.ic, self.ci, self.gradient
 
     def replay(self, u, y):
         """Feed a whole record, step by step as if live, and collect every step's results.
@@ -404,7 +507,7 @@ class OnlineDynia:
             median[:, step] = self.median
             best[step], upper[step], threshold[step] = self._best, self._upper, self._threshold
             points[step] = self._present
-            add_record_errors(totals, self._errors[(self.steps - 1) % width][None])  # as the batch engine adds them
+            add_record_errors(totals, self.newest_errors[None])  # as the batch engine adds them
         if self._same.same:  # every set tied in every window: no result is one
             refuse_ignored_params(self._model, self._model_params, _functions(self._model))
         totals[self._diverged] = np.inf
@@ -536,6 +639,43 @@ class OnlineDynia:
         self.ci = np.full((n_params, 2), np.nan)
         self.median = np.full(n_params, np.nan)
         self.gradient = np.full((n_params, n_bins), np.nan)
+
+
+# Where the model was in the state of to_bytes: the restorer gives it back.
+_MODEL_ID = "model"
+
+# What a saved state may rebuild besides dynia's own classes: numpy's arrays, dtypes and scalars.
+_NUMPY_REBUILDERS = frozenset(
+    {
+        ("numpy", "dtype"),
+        ("numpy", "ndarray"),
+        *(
+            (f"numpy.{core}.{module}", name)
+            for core in ("core", "_core")
+            for module, name in (("numeric", "_frombuffer"), ("multiarray", "_reconstruct"), ("multiarray", "scalar"))
+        ),
+    }
+)
+
+# The modules of the classes an OnlineDynia holds: its flavour, its settings, the model's stepper.
+_STATE_MODULES = ("dynia.online", "dynia.settings", "dynia.engine.flavours", "dynia.models.")
+
+
+def _refuse_state(what):
+    raise DataError(f"the saved OnlineDynia state names {what}, which no state written by to_bytes holds")
+
+
+class _StateUnpickler(pickle.Unpickler):
+    """Rebuilds numpy arrays and the classes of dynia's own state, nothing else (see :meth:`OnlineDynia.from_bytes`)."""
+
+    def find_class(self, module, name):
+        if (module, name) in _NUMPY_REBUILDERS:
+            return super().find_class(module, name)
+        if module.startswith(_STATE_MODULES) or module == "dynia.models":
+            found = super().find_class(module, name)
+            if isinstance(found, type):
+                return found
+        return _refuse_state(f"{module}.{name}")
 
 
 def _functions(model):
