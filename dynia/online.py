@@ -63,7 +63,7 @@ from .result import DyniaResult
 from .sampling import sample
 from .settings import SAMPLERS, AnalysisSettings, RunRecord, merged_settings, parameter_box
 
-__all__ = ["OnlineDynia"]
+__all__ = ["OnlineDynia", "SharedArrays"]
 
 
 class OnlineDynia:
@@ -224,6 +224,7 @@ class OnlineDynia:
         # Built once here so that bad settings fail now rather than at the first update.
         self._flavour = FLAVOUR_CLASSES[settings.flavour](*self._flavour_args)
         self._stepper = model.stepper(self._model_params, dt=settings.dt, x0=settings.x0)  # checks dt and x0
+        self._lagged = copy.deepcopy(self._stepper)
         self.bin_centres = self._flavour.bin_centres
         self._run = dataclasses.replace(
             RunRecord.of(model, n_sampled=n_samples, n_dropped=0), n_behavioural=self._flavour.count
@@ -235,12 +236,52 @@ class OnlineDynia:
         self._unscaled()
 
     def _allocate_window(self, width, n_samples):
-        """The ring of the window's last ``width`` steps of errors, and the per-sample work arrays."""
+        """The ring of the window's last ``width`` steps of errors, their inputs and outputs, and work arrays.
+
+        The models are also stepped ``width`` steps behind (``_lagged``):
+        from there and the ring's inputs and outputs the errors can be made
+        again, so that a checkpoint (:meth:`to_bytes`) need not hold them.
+        """
         self._errors = np.zeros((width, n_samples))  # ring: row t % width holds step t
         self._measured = np.zeros(width, dtype=bool)
+        self._recent_u = np.zeros((width, self._model.n_inputs))
+        self._recent_y = np.zeros(width)
+        self._diverged = np.zeros(n_samples, dtype=bool)
+        self._work_arrays(n_samples)
+
+    def _work_arrays(self, n_samples):
         self._mae = np.empty((1, n_samples))
         self._finite = np.empty(n_samples, dtype=bool)
-        self._diverged = np.zeros(n_samples, dtype=bool)
+
+    # The per-sample arrays a checkpoint leaves out: the work arrays, the errors and the stepper they come from.
+    _REMADE = ("_errors", "_stepper", "_mae", "_finite")
+
+    def __getstate__(self):
+        return {key: value for key, value in self.__dict__.items() if key not in self._REMADE}
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        width, n_samples = self._measured.size, self.samples.shape[0]
+        self._work_arrays(n_samples)
+        self._errors = np.zeros((width, n_samples))
+        self._stepper = copy.deepcopy(self._lagged)
+        # The steps the lagged models have not taken, stepped again: their outputs, hence the errors, bit for bit.
+        with np.errstate(over="ignore", invalid="ignore"):
+            for step in range(max(self.steps - width, 0), self.steps):
+                slot = step % width
+                simulated = self._stepper.step(self._stepper_input(self._recent_u[slot]))
+                if self._measured[slot]:
+                    self._window_errors(simulated, self._recent_y[slot], self._errors[slot])
+
+    def _window_errors(self, simulated, y_t, errors):
+        """The scaled absolute errors of ``simulated`` against a measured ``y_t``, into ``errors``."""
+        np.subtract(simulated, y_t, out=errors)  # |s - y| == |y - s| bit for bit
+        np.abs(errors, out=errors)
+        if self.error_scale != 1.0:
+            errors *= self.error_scale  # as the batch engine's ScaledErrors
+
+    def _stepper_input(self, row):
+        return float(row[0]) if row.size == 1 else row
 
     @property
     def settings(self):
@@ -266,6 +307,7 @@ class OnlineDynia:
         """Start again at step 0 with the same samples, as a new object would."""
         self._flavour = FLAVOUR_CLASSES[self._analysis.flavour](*self._flavour_args)
         self._stepper = self._model.stepper(self._model_params, dt=self._analysis.dt, x0=self._analysis.x0)
+        self._lagged = copy.deepcopy(self._stepper)
         self._errors.fill(0.0)
         self._measured.fill(False)
         self._diverged.fill(False)
@@ -360,35 +402,62 @@ class OnlineDynia:
         """
         return self._best, self._upper, self._threshold, self._present
 
-    def to_bytes(self):
+    def to_bytes(self, shared=None):
         """The object's whole state (samples, models, window, error scale) as bytes, for :meth:`from_bytes`.
 
         The model itself is left out: whoever restores the state gives it
         again, so that no code travels with the bytes.
+
+        Parameters
+        ----------
+        shared : SharedArrays, optional
+            Arrays of a series of checkpoints that are written once: every
+            array of the state that equals one of them is stored as a
+            reference to it (the samples, the models' coefficients: two
+            thirds of a checkpoint). An empty one takes every large array of
+            this state.
         """
         buffer = io.BytesIO()
         pickler = pickle.Pickler(buffer, protocol=pickle.HIGHEST_PROTOCOL)
-        pickler.persistent_id = lambda value: _MODEL_ID if value is self._model else None
+        model = self._model
+
+        def persistent_id(value):
+            if value is model:
+                return _MODEL_ID
+            return None if shared is None else shared.reference(value)
+
+        pickler.persistent_id = persistent_id
         pickler.dump(self)
+        if shared is not None:
+            shared.accepting = False
         return buffer.getvalue()
 
     @classmethod
-    def from_bytes(cls, data, model):
+    def from_bytes(cls, data, model, shared=None):
         """The object :meth:`to_bytes` gave ``data`` of, with ``model``, the model it was made with.
 
         Only the classes of numpy's arrays and of dynia's own models,
         settings, flavours and this class are rebuilt: bytes naming any
         other (a damaged or foreign checkpoint) raise a DataError instead of
-        running code.
+        running code. ``shared`` are the :class:`SharedArrays` it was
+        written with.
 
         Raises
         ------
         DataError
             ``data`` is not a state written by :meth:`to_bytes`, or was
-            written for another kind of model.
+            written for another kind of model or other shared arrays.
         """
         unpickler = _StateUnpickler(io.BytesIO(data))
-        unpickler.persistent_load = lambda key: model if key == _MODEL_ID else _refuse_state(f"reference {key!r}")
+
+        def load(key):
+            if key == _MODEL_ID:
+                return model
+            if shared is not None and key in shared.arrays:
+                return shared.copy(key)
+            return _refuse_state(f"reference {key!r}")
+
+        unpickler.persistent_load = load
         try:
             state = unpickler.load()
         except DataError:
@@ -425,15 +494,15 @@ class OnlineDynia:
                         f"sets is not finite (NaN or overflow) by step {self.steps}; check the model and the "
                         "parameter ranges"
                     )
+            if self.steps >= width:  # the lagged models take the step leaving the ring
+                self._lagged.step(self._stepper_input(self._recent_u[slot]))
+            self._recent_u[slot], self._recent_y[slot] = u_t, y_t
             self._measured[slot] = y_t == y_t
             if self._measured[slot]:
                 if self._scaled_by is None and y_t != 0.0:
                     self._fix_scale(y_t)
                 self._largest = max(self._largest, abs(y_t))
-                np.subtract(simulated, y_t, out=errors)  # |s - y| == |y - s| bit for bit
-                np.abs(errors, out=errors)
-                if self.error_scale != 1.0:
-                    errors *= self.error_scale  # as the batch engine's ScaledErrors
+                self._window_errors(simulated, y_t, errors)
             else:
                 errors.fill(0.0)
             self.steps += 1
@@ -639,6 +708,70 @@ class OnlineDynia:
         self.ci = np.full((n_params, 2), np.nan)
         self.median = np.full(n_params, np.nan)
         self.gradient = np.full((n_params, n_bins), np.nan)
+
+
+class SharedArrays:
+    """The large arrays that a series of :meth:`OnlineDynia.to_bytes` checkpoints share, written once.
+
+    The first checkpoint written with an empty one takes every array of at
+    least :attr:`SMALLEST` bytes; later ones refer to each that still equals
+    it (compared byte for byte: an array changed in place is written out
+    again) and write the others in full.
+
+    Attributes
+    ----------
+    arrays : dict of str to ndarray
+        The shared arrays by key, as first written.
+    """
+
+    SMALLEST = 8192
+
+    def __init__(self, arrays=None):
+        self.arrays = dict(arrays or {})
+        self.accepting = not self.arrays
+        self._keys = {}  # id of an array of the state -> its key
+
+    def reference(self, value):
+        """The key of ``value`` when it is a shared array, else None (a persistent id of pickle)."""
+        if not isinstance(value, np.ndarray) or value.nbytes < self.SMALLEST:
+            return None
+        key = self._keys.get(id(value))
+        # A read-only array (the samples) cannot have changed in place: no comparison needed.
+        if key is not None and (not value.flags.writeable or _same_array(value, self.arrays[key])):
+            return key
+        if not self.accepting:
+            return None
+        key = f"a{len(self.arrays)}"
+        self.arrays[key] = value.copy()
+        self._keys[id(value)] = key
+        return key
+
+    def copy(self, key):
+        """A copy of shared array ``key`` for a restored state, remembered as that array."""
+        value = self.arrays[key].copy()
+        self._keys[id(value)] = key
+        return value
+
+    def to_bytes(self):
+        buffer = io.BytesIO()
+        np.savez(buffer, **self.arrays)
+        return buffer.getvalue()
+
+    @classmethod
+    def from_bytes(cls, data):
+        try:
+            with np.load(io.BytesIO(data), allow_pickle=False) as stored:
+                return cls({key: stored[key] for key in stored.files})
+        except Exception as error:  # a damaged archive: zipfile's, numpy's or the OS's error
+            raise DataError(f"the saved shared arrays cannot be read ({type(error).__name__}: {error})") from None
+
+
+def _same_array(value, kept):
+    return (
+        value.dtype == kept.dtype
+        and value.shape == kept.shape
+        and np.array_equal(value, kept, equal_nan=value.dtype.kind in "fc")
+    )
 
 
 # Where the model was in the state of to_bytes: the restorer gives it back.
