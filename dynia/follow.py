@@ -42,6 +42,7 @@ Between judgements a new step's ``informative`` is judged with the noise
 level of the last one (NULL before the first).
 """
 
+import copy
 import dataclasses
 import datetime
 import io
@@ -65,7 +66,7 @@ from .errors import DataError, SettingsError
 from .fit import record_least_squares
 from .io.database import Clock, FollowerTables
 from .io.stream import StreamGrid
-from .online import OnlineDynia
+from .online import OnlineDynia, SharedArrays
 from .pipeline import KernelSimulated, compiled_simulation, run
 from .quality import screen
 from .result import DyniaResult
@@ -158,13 +159,14 @@ class Follower:
             self._history = _History(len(bounds), len(source.inputs))
             if saved is None:
                 self.progress = _fresh_progress(settings)
-                self.online, self.totals = None, None
+                self.online, self.totals, self._shared = None, None, SharedArrays()
             else:
                 self._resume(connection, *saved)
+        self._grid = StreamGrid.restored(self.progress["grid"])
 
     # -- starting --------------------------------------------------------------------------------------------------
 
-    def _resume(self, connection, options, progress, analysis, totals):
+    def _resume(self, connection, options, progress, analysis, totals, shared):
         """Go on from the checkpoint; refuse other settings, naming the first that differs."""
         for option, value in self.settings.options.items():
             if option == "--seed" and value is None:
@@ -178,7 +180,8 @@ class Follower:
                 )
         self.settings = dataclasses.replace(self.settings, seed=options["--seed"])
         self.progress = progress
-        self.online = None if analysis is None else OnlineDynia.from_bytes(analysis, self.model)
+        self._shared = SharedArrays() if shared is None else SharedArrays.from_bytes(shared)
+        self.online = None if analysis is None else OnlineDynia.from_bytes(analysis, self.model, self._shared)
         self.totals = None if totals is None else np.load(io.BytesIO(totals), allow_pickle=False)
         if progress["clock"] is not None:
             self._history.load(*self.tables.history(connection), self.online)
@@ -211,32 +214,18 @@ class Follower:
             written += self._catch_up(batch_rows, stop)
         while not stop():
             with self.engine.begin() as connection:
-                reads = self._read(connection, batch_rows)
-                if reads is None:
-                    break
-                written += self._commit(connection, reads)
+                rows = self._read(connection, batch_rows)
+                if rows is not None:
+                    written += self._commit(connection, rows)
+            if rows is None or rows.count < batch_rows:  # caught up: the next rows are for the next poll
+                break
         return written
 
     def _read(self, connection, batch_rows):
-        """The next rows (None when there are none), after counting the late ones; updates the progress."""
+        """The next rows after the last time read (None when there are none); fixes the clock at the first."""
         progress = self.progress
         clock = self._clock
         last = None if clock is None else clock.from_json(progress["last_time"])
-        if last is not None:
-            through = self.source.count_through(connection, last)
-            if through > progress["consumed"]:
-                late = through - progress["consumed"]
-                progress["late"] += late
-                progress["consumed"] = through
-                log.warning(
-                    "%d row(s) of %s arrived with a time at or before %s, the last time analysed: skipped "
-                    "(%d late in all)",
-                    late,
-                    self.source.name,
-                    clock.shown(last),
-                    progress["late"],
-                )
-                self._save(connection)
         rows = self.source.rows_after(connection, last, batch_rows)
         if rows.count == 0:
             return None
@@ -255,7 +244,7 @@ class Follower:
                 chunks.append(rows)
         if not chunks:
             return 0
-        grid = StreamGrid.restored(self.progress["grid"])
+        grid = copy.deepcopy(self._grid)  # a look ahead: the follower's own grid takes the rows as they commit
         points = [self._gridded(grid, rows, record=False) for rows in chunks]
         u = np.concatenate([p.u for p in points]) if points else np.empty((0, len(self.source.inputs)))
         y = np.concatenate([p.y for p in points])
@@ -345,9 +334,8 @@ class Follower:
 
     def _commit(self, connection, rows, backlog=None):
         """Grid ``rows``, analyse the steps they complete, write them with the checkpoint; the steps written."""
-        grid = StreamGrid.restored(self.progress["grid"])
+        grid = self._grid
         points = self._gridded(grid, rows)
-        self.progress["grid"] = grid.state()
         self.progress["last_time"] = self._clock.to_json(rows.times[-1])
         self.progress["consumed"] += rows.count
         if points.index.size:
@@ -446,16 +434,42 @@ class Follower:
         connection.execute(self.tables.steps.insert(), rows)
 
     def _save(self, connection):
-        analysis = None if self.online is None else self.online.to_bytes()
+        self.progress["grid"] = self._grid.state()
+        first = self._shared.accepting
+        analysis = None if self.online is None else self.online.to_bytes(self._shared)
+        shared = self._shared.to_bytes() if first and analysis is not None else None
         totals = None
         if self.totals is not None:
             buffer = io.BytesIO()
             np.save(buffer, self.totals, allow_pickle=False)
             totals = buffer.getvalue()
         options = dict(self.settings.options, **{"--seed": self.settings.seed})
-        self.tables.save_state(connection, options, self.progress, analysis, totals)
+        self.tables.save_state(connection, options, self.progress, analysis, totals, shared)
 
     # -- judging ---------------------------------------------------------------------------------------------------
+
+    def _count_late(self, connection):
+        """Count (and log) the rows that arrived with a time at or before the last one read: they are skipped.
+
+        The source's rows up to that time, less the rows read: a scan of the
+        time column's index, so it runs with the judgement, not every poll.
+        """
+        progress, clock = self.progress, self._clock
+        if clock is None or progress["last_time"] is None:
+            return
+        last = clock.from_json(progress["last_time"])
+        through = self.source.count_through(connection, last)
+        if through > progress["consumed"]:
+            late = through - progress["consumed"]
+            progress["late"] += late
+            progress["consumed"] = through
+            log.warning(
+                "%d row(s) of %s arrived with a time at or before %s, the last time analysed: skipped (%d late in all)",
+                late,
+                self.source.name,
+                clock.shown(last),
+                progress["late"],
+            )
 
     def judge(self):
         """Judge the record so far as the batch analysis would; return the verdicts (see the module documentation).
@@ -465,6 +479,9 @@ class Follower:
         parameter whose verdict changed, in one transaction.
         """
         if self.online is None or self.steps == 0:
+            with self.engine.begin() as connection:
+                self._count_late(connection)
+                self._save(connection)
             return {}
         history = self._history
         result = self.result()
@@ -474,6 +491,7 @@ class Follower:
             for name, v in result.verdicts.items()
         }
         with self.engine.begin() as connection:
+            self._count_late(connection)
             if changed.size:
                 table = self.tables.results
                 statement = (
@@ -723,14 +741,14 @@ class _History:
         )
         for name, values in new.items():
             held = self._arrays[name]
-            axis = 0 if name in ("u", "y") else held.ndim - 1
+            axis = 1 if held.ndim == 2 and name != "u" else 0  # time is the last axis of the (n_params, n_steps) ones
             if held.shape[axis] < size + count:
-                grown = list(held.shape)
-                grown[axis] = max(2 * held.shape[axis], size + count, 64)
-                bigger = np.empty(grown, dtype=held.dtype)
-                np.copyto(np.moveaxis(bigger, axis, 0)[:size], np.moveaxis(held, axis, 0)[:size])
-                self._arrays[name] = held = bigger
-            np.moveaxis(held, axis, 0)[size : size + count] = np.moveaxis(np.asarray(values), axis, 0)
+                shape = list(held.shape)
+                shape[axis] = max(2 * held.shape[axis], size + count, 64)
+                grown = np.empty(shape, dtype=held.dtype)
+                grown[(slice(None),) * axis + (slice(0, size),)] = held[(slice(None),) * axis + (slice(0, size),)]
+                self._arrays[name] = held = grown
+            held[(slice(None),) * axis + (slice(size, size + count),)] = values
         self.times.extend(times)
 
     def set_informative(self, steps, flags):

@@ -173,6 +173,7 @@ Examples
 """
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass
 
@@ -300,6 +301,8 @@ def window_points(y, before, after):
     return (measured[last] - measured[first]).astype(float)
 
 
+# A follower judges every new step with the multiple of its record's windows so far: the same few values, again.
+@functools.lru_cache(maxsize=256)
 def critical_multiple(quantile, n_samples, n_windows, level=FAMILY_LEVEL):
     """Sampling standard deviations of a noise-only MAE that the MAE at ``quantile`` minus the best must exceed.
 

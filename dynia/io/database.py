@@ -32,8 +32,8 @@ The follower's tables (:class:`FollowerTables`), named after ``results``:
     offsets: the history the record's verdicts are judged on.
 ``<results>_state``
     One row: the settings, the progress (JSON) and the checkpoint of the
-    analysis (bytes), written in the same transaction as the rows they
-    cover.
+    analysis (bytes, its large constant arrays apart in ``shared``, written
+    once), written in the same transaction as the rows they cover.
 """
 
 import dataclasses
@@ -84,20 +84,35 @@ def connect(url):
     if parsed.drivername == "postgresql":
         parsed = parsed.set(drivername="postgresql+psycopg")
     shown = parsed.render_as_string(hide_password=True)
-    options = {"connect_args": {"timeout": 30}} if parsed.get_backend_name() == "sqlite" else {}
+    sqlite = parsed.get_backend_name() == "sqlite"
     try:
-        engine = sqlalchemy.create_engine(parsed, **options)
+        engine = sqlalchemy.create_engine(parsed, **({"connect_args": {"timeout": 30}} if sqlite else {}))
     except ModuleNotFoundError as error:
         extra = ' (pip install "dynia[postgres]")' if parsed.get_backend_name() == "postgresql" else ""
         raise SettingsError(f"{shown}: its database driver {error.name!r} is not installed{extra}", "url") from None
     except Exception as error:
         raise SettingsError(f"{shown}: {error_line(error)}", "url") from None
+    if sqlite:
+        sqlalchemy.event.listen(engine, "connect", _write_ahead)
     try:
         with engine.connect():
             pass
     except Exception as error:
         raise SettingsError(f"{shown}: cannot connect: {error_line(error)}", "url") from None
     return engine
+
+
+def _write_ahead(connection, _):
+    """SQLite in write-ahead-log mode: the logger's writes and the follower's reads do not block each other.
+
+    A commit then waits for no flush to disk (synchronous NORMAL): a killed
+    process loses no committed transaction; a power cut may lose the last
+    ones, whole, never half of one. The mode stays with the database file.
+    """
+    cursor = connection.cursor()
+    cursor.execute("PRAGMA journal_mode=WAL")
+    cursor.execute("PRAGMA synchronous=NORMAL")
+    cursor.close()
 
 
 def error_line(error):
@@ -457,6 +472,7 @@ class FollowerTables:
             column("progress", types.Text(), nullable=False),
             column("analysis", types.LargeBinary()),
             column("totals", types.LargeBinary()),
+            column("shared", types.LargeBinary()),
         )
         self._metadata = metadata
         self.n_inputs = n_inputs
@@ -473,15 +489,20 @@ class FollowerTables:
             connection.execute(self.events.delete().where(self.events.c.follower == self.name))
 
     def load_state(self, connection):
-        """(settings, progress, analysis bytes, totals bytes) of the checkpoint, or None before the first."""
+        """(settings, progress, analysis, totals, shared) of the checkpoint, or None before the first.
+
+        ``analysis``, ``totals`` and ``shared`` are bytes (None until the analysis has started).
+        """
         row = connection.execute(self.state.select().where(self.state.c.follower == self.name)).first()
         if row is None:
             return None
-        return json.loads(row.settings), json.loads(row.progress), row.analysis, row.totals
+        return json.loads(row.settings), json.loads(row.progress), row.analysis, row.totals, row.shared
 
-    def save_state(self, connection, settings, progress, analysis, totals):
-        """Write the checkpoint (in the caller's transaction, with the rows it covers)."""
+    def save_state(self, connection, settings, progress, analysis, totals, shared=None):
+        """Write the checkpoint (in the caller's transaction, with the rows it covers); ``shared`` when given."""
         values = dict(settings=json.dumps(settings), progress=json.dumps(progress), analysis=analysis, totals=totals)
+        if shared is not None:
+            values["shared"] = shared
         done = connection.execute(self.state.update().where(self.state.c.follower == self.name).values(**values))
         if done.rowcount == 0:
             connection.execute(self.state.insert().values(follower=self.name, **values))
