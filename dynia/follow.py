@@ -62,7 +62,7 @@ from .engine.noise import (
     record_noise_floor,
     window_points,
 )
-from .errors import DataError, SettingsError
+from .errors import DataError, ModelError, SettingsError
 from .fit import record_least_squares
 from .io.database import Clock, FollowerTables
 from .io.stream import StreamGrid
@@ -308,21 +308,32 @@ class Follower:
         return u - np.asarray(self.progress["input_offset"]), y - self.progress["offset"]
 
     def _batch(self, u, y):
-        """The backlog's windows from the batch engine: per-step arrays, or None if it dropped samples."""
+        """The backlog's windows from the batch engine: per-step arrays, or None where the updates must do them.
+
+        The batch run equals the updates only where it drops no parameter set
+        (OnlineDynia's Notes); and it refuses a record on which every set's
+        output is the same (a plant at rest), which the updates go on with.
+        """
         analysis = self.online.settings
-        result = run(
-            _inputs(u),
-            y,
-            self.model,
-            self.bounds,
-            settings=analysis.replace(engine="auto", quality=False),
-            rng=self.settings.seed,
-            progress=False,
-        )
+        try:
+            result = run(
+                _inputs(u),
+                y,
+                self.model,
+                self.bounds,
+                settings=analysis.replace(engine="auto", quality=False),
+                rng=self.settings.seed,
+                progress=False,
+            )
+        except ModelError:
+            return None
         if result.run.n_dropped or not np.array_equal(result.samples, self.online.samples):
-            return None  # equal only without dropped sets (OnlineDynia's Notes): step by step instead
+            return None
         before = 2 * analysis.n
+        # Judged as the batch run judges the backlog: the judgement after it then changes nothing.
+        self.progress["judged"] = dict(sigma=result.run.noise_sigma, size_factor=result.run.noise_size_factor)
         return _Steps(
+            informative=result.informative,
             ic=result.ic,
             ci=result.ci,
             median=result.median,
@@ -351,7 +362,7 @@ class Follower:
             times = [
                 self._time(k, seconds, record) for k, seconds, record in zip(points.index, points.time, points.record)
             ]
-            informative = self._informative(steps)
+            informative = self._informative(steps) if steps.informative is None else steps.informative.tolist()
             self._write(connection, first, times, u, y, steps, informative)
             self._history.append(times, u, y, steps, informative)
         self._save(connection)
@@ -417,7 +428,7 @@ class Follower:
             for k, time in enumerate(times)
             for p, name in enumerate(names)
         ]
-        connection.execute(self.tables.results.insert(), results)
+        self.tables.insert(connection, self.tables.results, results)
         rows = [
             dict(
                 step=first + k,
@@ -431,7 +442,7 @@ class Follower:
             )
             for k, time in enumerate(times)
         ]
-        connection.execute(self.tables.steps.insert(), rows)
+        self.tables.insert(connection, self.tables.steps, rows)
 
     def _save(self, connection):
         self.progress["grid"] = self._grid.state()
@@ -663,6 +674,7 @@ class _Steps:
     discrimination: np.ndarray
     spread: np.ndarray
     points: np.ndarray
+    informative: np.ndarray | None = None  # the noise floor's verdict, where the batch engine judged the steps
 
     @classmethod
     def empty(cls, n_params, n_steps):
@@ -685,6 +697,7 @@ class _Steps:
             discrimination=self.discrimination[start:stop],
             spread=self.spread[start:stop],
             points=self.points[start:stop],
+            informative=None if self.informative is None else self.informative[start:stop],
         )
 
 

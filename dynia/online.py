@@ -363,26 +363,81 @@ class OnlineDynia:
         the models, the window's errors and the error scale move on exactly
         as :meth:`update` moves them, so that the updates after it give what
         they would have given, while the costly part of an update, ranking the
-        window, is skipped. The latest results (``.ic``, ...) are blanked.
+        window, is skipped, and the errors are formed a block of steps at a
+        time. The latest results (``.ic``, ...) are blanked.
 
         Parameters
         ----------
         u, y : ndarray (n_steps,)
-            Input (n_steps, n_inputs for several inputs) and measured output,
-            checked as :meth:`update` checks each value.
+            Input (n_steps, n_inputs for several inputs; finite) and measured
+            output (NaN where missing, else finite).
         totals : ndarray (n_samples,), optional
             Every sample's running record total absolute error, in the
             window's scaled units (:attr:`newest_errors`), added to in place
             step by step (:func:`dynia.engine.noise.add_record_errors`).
         """
-        for u_t, y_t in zip(np.asarray(u).tolist(), np.asarray(y, dtype=float).tolist()):
-            scale = self.error_scale
-            self._take(u_t, y_t)
-            if totals is not None:
-                if self.error_scale != scale:
-                    totals *= self.error_scale
-                add_record_errors(totals, self.newest_errors[None])
+        u, y = _checks.record(u, y, n_inputs=self._model.n_inputs)
+        inputs = u.reshape(y.size, -1)
+        width = self._errors.shape[0]
+        for start in range(0, y.size, _ADVANCE_BLOCK):
+            stop = min(start + _ADVANCE_BLOCK, y.size)
+            self._advance_block(inputs[start:stop], y[start:stop], totals, width)
         self._blank_results()
+
+    def _advance_block(self, inputs, y, totals, width):
+        """:meth:`advance` over one block of steps: the models step by step, the errors as one array."""
+        count = y.size
+        outputs = np.empty((count, self.samples.shape[0]))
+        # The lagged models take the steps that leave the ring: those whose inputs are in it, then the block's own.
+        behind = [self._recent_u[(self.steps + k) % width] for k in range(min(count, width)) if self.steps + k >= width]
+        behind += list(inputs[: max(count - width, 0)])
+        with np.errstate(over="ignore", invalid="ignore"):
+            for k in range(count):
+                outputs[k] = self._stepper.step(self._stepper_input(inputs[k]))
+            for row in behind:
+                self._lagged.step(self._stepper_input(row))
+            self._same.check(outputs.T, last=False)
+            finite = np.isfinite(outputs).all(axis=0)
+            if not finite.all():
+                self._diverged |= ~finite
+                if self._diverged.all():
+                    raise ModelError(
+                        f"{self._model!r}: the simulation of every one of the {self._diverged.size} parameter "
+                        f"sets is not finite (NaN or overflow) by step {self.steps + count - 1}; check the model and "
+                        "the parameter ranges"
+                    )
+            measured = ~np.isnan(y)
+            errors = np.abs(np.subtract(outputs, y[:, None], out=outputs), out=outputs)  # |s - y| == |y - s|
+            errors[~measured] = 0.0
+            fixed_at = self._scale_in_block(y, measured)
+            self._largest = max(self._largest, float(np.abs(y[measured]).max(initial=0.0)))
+            # Rows before the scale was fixed are added unscaled and the totals rescaled, as step by step.
+            if totals is not None and fixed_at is not None:
+                add_record_errors(totals, errors[:fixed_at])
+                totals *= self.error_scale
+            if self.error_scale != 1.0:
+                errors[fixed_at or 0 :] *= self.error_scale
+                if fixed_at is not None:
+                    self._errors *= self.error_scale  # the ring's errors so far were against zeros
+            if totals is not None:
+                add_record_errors(totals, errors[fixed_at or 0 :])
+        for k in range(max(count - width, 0), count):
+            slot = (self.steps + k) % width
+            self._errors[slot] = errors[k] if k >= (fixed_at or 0) else errors[k] * self.error_scale
+            self._recent_u[slot], self._recent_y[slot], self._measured[slot] = inputs[k], y[k], measured[k]
+        self.steps += count
+
+    def _scale_in_block(self, y, measured):
+        """Fix the error scale at the block's first measured value that is not zero, if none was before: its index."""
+        if self._scaled_by is not None:
+            return None
+        nonzero = np.flatnonzero(measured & (y != 0.0))
+        if not nonzero.size:
+            return None
+        first = int(nonzero[0])
+        self.error_scale = error_scale([y[first]])
+        self._scaled_by = (self.steps + first, float(y[first]))
+        return first
 
     @property
     def newest_errors(self):
@@ -420,11 +475,19 @@ class OnlineDynia:
         buffer = io.BytesIO()
         pickler = pickle.Pickler(buffer, protocol=pickle.HIGHEST_PROTOCOL)
         model = self._model
+        if shared is None or shared.accepting:
 
-        def persistent_id(value):
-            if value is model:
-                return _MODEL_ID
-            return None if shared is None else shared.reference(value)
+            def persistent_id(value):
+                if value is model:
+                    return _MODEL_ID
+                return None if shared is None else shared.reference(value)
+
+        else:
+            # Called for every object pickled: a dict look-up of the shared arrays checked beforehand.
+            references = shared.unchanged()
+
+            def persistent_id(value):
+                return _MODEL_ID if value is model else references.get(id(value))
 
         pickler.persistent_id = persistent_id
         pickler.dump(self)
@@ -730,6 +793,8 @@ class SharedArrays:
         self.arrays = dict(arrays or {})
         self.accepting = not self.arrays
         self._keys = {}  # id of an array of the state -> its key
+        self._bytes = {}  # key -> the shared array's bytes, to compare with
+        self._holders = {}  # key -> the array of the state that held it when last seen
 
     def reference(self, value):
         """The key of ``value`` when it is a shared array, else None (a persistent id of pickle)."""
@@ -737,19 +802,38 @@ class SharedArrays:
             return None
         key = self._keys.get(id(value))
         # A read-only array (the samples) cannot have changed in place: no comparison needed.
-        if key is not None and (not value.flags.writeable or _same_array(value, self.arrays[key])):
+        if key is not None and (not value.flags.writeable or self._same(value, key)):
             return key
         if not self.accepting:
             return None
         key = f"a{len(self.arrays)}"
         self.arrays[key] = value.copy()
         self._keys[id(value)] = key
+        self._holders[key] = value
         return key
+
+    def unchanged(self):
+        """{id: key} of the arrays of the state that still hold their shared array (see :meth:`reference`)."""
+        return {
+            id(value): key
+            for key, value in self._holders.items()
+            if not value.flags.writeable or self._same(value, key)
+        }
+
+    def _same(self, value, key):
+        """Whether ``value`` holds shared array ``key`` byte for byte (NaN payloads and signed zeros included)."""
+        kept = self.arrays[key]
+        if value.dtype != kept.dtype or value.shape != kept.shape:
+            return False
+        if key not in self._bytes:
+            self._bytes[key] = kept.tobytes()
+        return value.tobytes() == self._bytes[key]
 
     def copy(self, key):
         """A copy of shared array ``key`` for a restored state, remembered as that array."""
         value = self.arrays[key].copy()
         self._keys[id(value)] = key
+        self._holders[key] = value
         return value
 
     def to_bytes(self):
@@ -766,13 +850,8 @@ class SharedArrays:
             raise DataError(f"the saved shared arrays cannot be read ({type(error).__name__}: {error})") from None
 
 
-def _same_array(value, kept):
-    return (
-        value.dtype == kept.dtype
-        and value.shape == kept.shape
-        and np.array_equal(value, kept, equal_nan=value.dtype.kind in "fc")
-    )
-
+# Steps whose outputs advance() holds at once: 8 MB at 2 000 samples.
+_ADVANCE_BLOCK = 512
 
 # Where the model was in the state of to_bytes: the restorer gives it back.
 _MODEL_ID = "model"
