@@ -163,6 +163,7 @@ class Follower:
             else:
                 self._resume(connection, *saved)
         self._grid = StreamGrid.restored(self.progress["grid"])
+        self._through = None
 
     # -- starting --------------------------------------------------------------------------------------------------
 
@@ -204,12 +205,15 @@ class Follower:
     # -- reading and analysing -------------------------------------------------------------------------------------
 
     def poll(self, batch_rows=10_000, stop=lambda: False):
-        """Analyse every row the source holds now, a transaction per batch of rows; return the steps written.
+        """Analyse the rows the source holds as the poll begins, a transaction per batch of rows; the steps written.
 
         ``stop()`` is asked between transactions; when it is true the
-        follower returns with what it committed.
+        follower returns with what it committed. After an exception the
+        object no longer matches the database (its transaction rolled back):
+        make a new one, which goes on from the last commit.
         """
         written = 0
+        self._through = None  # the source's newest time as the poll began: read with its first rows
         if self.online is None:
             written += self._catch_up(batch_rows, stop)
         while not stop():
@@ -226,7 +230,11 @@ class Follower:
         progress = self.progress
         clock = self._clock
         last = None if clock is None else clock.from_json(progress["last_time"])
-        rows = self.source.rows_after(connection, last, batch_rows)
+        if self._through is None:
+            self._through = self.source.last_time(connection)
+            if self._through is None:
+                return None
+        rows = self.source.rows_after(connection, last, batch_rows, self._through)
         if rows.count == 0:
             return None
         if clock is None:
@@ -262,7 +270,7 @@ class Follower:
         if not chunks:
             return self._read(connection, batch_rows)
         last = chunks[-1].times[-1]
-        rows = self.source.rows_after(connection, last, batch_rows)
+        rows = self.source.rows_after(connection, last, batch_rows, self._through)
         return None if rows.count == 0 else rows
 
     def _commit_chunks(self, chunks, backlog, stop):

@@ -787,7 +787,7 @@ class SharedArrays:
         The shared arrays by key, as first written.
     """
 
-    SMALLEST = 8192
+    SMALLEST = 1024
 
     def __init__(self, arrays=None):
         self.arrays = dict(arrays or {})

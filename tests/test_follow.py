@@ -9,6 +9,7 @@ import io
 import signal
 import subprocess
 import sys
+import threading
 import time
 
 import numpy as np
@@ -162,6 +163,33 @@ def test_late_rows_are_counted_and_skipped(database_url, caplog):
     assert "2 row(s) of plant arrived with a time at or before 298" in caplog.text
 
 
+def test_a_poll_reads_what_the_table_held_as_it_began(database_url):
+    """A logger faster than the follower cannot keep a poll (a cron job's --once) from ending."""
+    engine = connect(database_url)
+    u, y = record(400)
+    table = wide_table(engine)
+    insert(engine, table, np.arange(200.0), u[:200], y[:200])
+    logging_on, poll_done, logged = threading.Event(), threading.Event(), [200]
+
+    def logger():  # a row a millisecond or so, until the poll has ended (or 20 000 rows)
+        while not poll_done.is_set() and logged[0] < 20_000:
+            k = logged[0]
+            insert(engine, table, [float(k)], u[k % 400 : k % 400 + 1], y[k % 400 : k % 400 + 1])
+            logged[0] += 1
+            logging_on.set()
+
+    thread = threading.Thread(target=logger)
+    thread.start()
+    logging_on.wait(60)
+    following = follower(engine)
+    following.poll()  # the rows present: the batch engine
+    following.poll(batch_rows=1)  # then a transaction a row, slower than the logger
+    poll_done.set()
+    thread.join()
+    assert logged[0] < 20_000, "the poll went on with the rows that kept coming"
+    assert 200 <= following.steps < logged[0]
+
+
 def test_a_gap_is_a_gap_as_in_the_csv_reader(database_url, tmp_path):
     engine = connect(database_url)
     u, y = record(400)
@@ -285,11 +313,11 @@ def steps_written(engine):
 
 def test_sigkill_half_way_then_again_equals_the_batch_analysis(database_url):
     engine = connect(database_url)
-    u, y = record(900)
+    u, y = record(3000)  # long enough that the kill comes before the end, a transaction of 7 rows at a time
     table = wide_table(engine)
     insert(engine, table, np.arange(40.0), u[:40], y[:40])
     assert subprocess.run(command(database_url, "--once"), capture_output=True).returncode == 0
-    insert(engine, table, np.arange(40.0, 900.0), u[40:], y[40:])
+    insert(engine, table, np.arange(40.0, 3000.0), u[40:], y[40:])
     running = subprocess.Popen(command(database_url, "--once", "--batch", "7"), stderr=subprocess.PIPE)
     deadline = time.monotonic() + 120
     while steps_written(engine) < 300 and running.poll() is None and time.monotonic() < deadline:
@@ -297,7 +325,7 @@ def test_sigkill_half_way_then_again_equals_the_batch_analysis(database_url):
     running.send_signal(signal.SIGKILL)
     running.wait()
     assert running.returncode == -signal.SIGKILL, "killed half-way, not finished"
-    assert 300 <= steps_written(engine) < 900
+    assert 300 <= steps_written(engine) < 3000
     done = subprocess.run(command(database_url, "--once"), capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     assert_equal_to_batch(engine, u, y)

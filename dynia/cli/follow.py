@@ -123,6 +123,12 @@ def follow(options, command_line, caught):
                 if unjudged and (options["once"] or stopping.is_set() or due):
                     follower.judge()
                     judged, unjudged = time.monotonic(), False
+            except sqlalchemy.exc.IntegrityError:
+                raise SettingsError(
+                    f"{options['results']} was given a step it already holds: another follower writes to it; give "
+                    "each follower its own --results",
+                    "results",
+                ) from None
             except sqlalchemy.exc.OperationalError as error:
                 if options["once"]:
                     raise SettingsError(f"the database failed while following: {error_line(error)}", "url") from None

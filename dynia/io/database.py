@@ -94,6 +94,7 @@ def connect(url):
         raise SettingsError(f"{shown}: {error_line(error)}", "url") from None
     if sqlite:
         sqlalchemy.event.listen(engine, "connect", _write_ahead)
+        sqlalchemy.event.listen(engine, "begin", _begin)
     try:
         with engine.connect():
             pass
@@ -108,11 +109,21 @@ def _write_ahead(connection, _):
     A commit then waits for no flush to disk (synchronous NORMAL): a killed
     process loses no committed transaction; a power cut may lose the last
     ones, whole, never half of one. The mode stays with the database file.
+    The driver's own transaction handling is turned off, so that a
+    transaction begins where SQLAlchemy begins it (:func:`_begin`), reads
+    included, not at the first write.
     """
+    connection.isolation_level = None
     cursor = connection.cursor()
     cursor.execute("PRAGMA journal_mode=WAL")
     cursor.execute("PRAGMA synchronous=NORMAL")
     cursor.close()
+
+
+def _begin(connection):
+    # IMMEDIATE: the write lock at once. A transaction that read first and wrote after a logger's commit would fail
+    # (its snapshot is stale); the logger waits the few milliseconds of a follower's transaction instead.
+    connection.exec_driver_sql("BEGIN IMMEDIATE")
 
 
 def error_line(error):
@@ -323,13 +334,17 @@ class Source:
         query = sqlalchemy.select(sqlalchemy.func.count()).select_from(self.table).where(self._selected())
         return int(connection.execute(query.where(self.time <= last)).scalar_one())
 
-    def first_time(self, connection):
+    def last_time(self, connection):
+        """The source's newest time (None when it has no rows)."""
         sqlalchemy = _sqlalchemy()
-        query = sqlalchemy.select(sqlalchemy.func.min(self.time)).where(self._selected())
+        query = sqlalchemy.select(sqlalchemy.func.max(self.time)).where(self._selected())
         return connection.execute(query).scalar_one()
 
-    def rows_after(self, connection, last, limit):
+    def rows_after(self, connection, last, limit, through=None):
         """Up to about ``limit`` rows after the time ``last`` (None: from the first), whole times only.
+
+        With ``through``, only rows at or before that time: what a poll
+        reads is what the table held when it began, however fast rows arrive.
 
         A read that stops at ``limit`` leaves out the rows of its last time,
         unless they are all it holds, so that rows sharing a time are read
@@ -340,6 +355,8 @@ class Source:
         query = sqlalchemy.select(*columns).where(self._selected()).order_by(self.time).limit(limit + 1)
         if last is not None:
             query = query.where(self.time > last)
+        if through is not None:
+            query = query.where(self.time <= through)
         rows = connection.execute(query).all()
         if any(row[0] is None for row in rows):
             raise DataError(f"table {self.name!r} has rows without a time in {self.time.name!r}")
