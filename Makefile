@@ -44,10 +44,12 @@ $(INSTALLED): pyproject.toml
 	$(PY) -m pip install --quiet -e ".[dev]"
 	touch $@
 
+# pytest runs with a throwaway PostgreSQL server, started and stopped by .ci/with-postgres (its URL in
+# DYNIA_TEST_POSTGRES_URL; a server named there already is used instead). Its binaries: apt-get install postgresql.
 test: $(INSTALLED)
 	$(PY) -m ruff check dynia tests notebooks benchmarks
 	$(PY) -m ruff format --check dynia tests benchmarks
-	$(PY) -m pytest
+	.ci/with-postgres $(PY) -m pytest
 	$(MAKE) docs
 	$(MAKE) check-wheel
 
