@@ -372,8 +372,3 @@ def test_started_again_with_other_settings_the_command_refuses_in_one_line(datab
 def test_follow_options_are_checked(extra, message, tmp_path):
     refused = subprocess.run(command(f"sqlite:///{tmp_path}/plant.db", *extra), capture_output=True, text=True)
     assert refused.returncode == 2 and message in refused.stderr
-
-
-@pytest.fixture
-def database_url(tmp_path):  # TEMPORARY until conftest's
-    return f"sqlite:///{tmp_path}/plant.db"
