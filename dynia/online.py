@@ -441,7 +441,7 @@ class OnlineDynia:
 
     @property
     def newest_errors(self):
-        """The absolute error of every sample at the newest step, times :attr:`error_scale` (read-only)."""
+        """The absolute error of every sample at the newest step, times ``error_scale`` (read-only)."""
         view = self._errors[(self.steps - 1) % self._errors.shape[0]].view()
         view.flags.writeable = False
         return view
