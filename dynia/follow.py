@@ -457,6 +457,8 @@ class Follower:
         first = self._shared.accepting
         analysis = None if self.online is None else self.online.to_bytes(self._shared)
         shared = self._shared.to_bytes() if first and analysis is not None else None
+        if shared is not None:
+            self._restorable(analysis, shared)
         totals = None
         if self.totals is not None:
             buffer = io.BytesIO()
@@ -464,6 +466,16 @@ class Follower:
             totals = buffer.getvalue()
         options = dict(self.settings.options, **{"--seed": self.settings.seed})
         self.tables.save_state(connection, options, self.progress, analysis, totals, shared)
+
+    def _restorable(self, analysis, shared):
+        """Refuse now, not at a restart, a model whose simulation state a checkpoint cannot rebuild."""
+        try:
+            OnlineDynia.from_bytes(analysis, self.model, SharedArrays.from_bytes(shared))
+        except DataError as error:
+            raise ModelError(
+                f"{self.model!r}: its simulation state cannot be checkpointed ({error}); dynia follow restores only "
+                "numpy arrays, plain values and dynia's own classes"
+            ) from None
 
     # -- judging ---------------------------------------------------------------------------------------------------
 

@@ -224,7 +224,7 @@ class OnlineDynia:
         # Built once here so that bad settings fail now rather than at the first update.
         self._flavour = FLAVOUR_CLASSES[settings.flavour](*self._flavour_args)
         self._stepper = model.stepper(self._model_params, dt=settings.dt, x0=settings.x0)  # checks dt and x0
-        self._lagged = copy.deepcopy(self._stepper)
+        self._lagged = self._copied(self._stepper)
         self.bin_centres = self._flavour.bin_centres
         self._run = dataclasses.replace(
             RunRecord.of(model, n_sampled=n_samples, n_dropped=0), n_behavioural=self._flavour.count
@@ -264,7 +264,7 @@ class OnlineDynia:
         width, n_samples = self._measured.size, self.samples.shape[0]
         self._work_arrays(n_samples)
         self._errors = np.zeros((width, n_samples))
-        self._stepper = copy.deepcopy(self._lagged)
+        self._stepper = self._copied(self._lagged)
         # The steps the lagged models have not taken, stepped again: their outputs, hence the errors, bit for bit.
         with np.errstate(over="ignore", invalid="ignore"):
             for step in range(max(self.steps - width, 0), self.steps):
@@ -279,6 +279,10 @@ class OnlineDynia:
         np.abs(errors, out=errors)
         if self.error_scale != 1.0:
             errors *= self.error_scale  # as the batch engine's ScaledErrors
+
+    def _copied(self, stepper):
+        """A copy of ``stepper`` that shares the model (a stepper of a custom model holds it, and its functions)."""
+        return copy.deepcopy(stepper, {id(self._model): self._model})
 
     def _stepper_input(self, row):
         return float(row[0]) if row.size == 1 else row
@@ -307,7 +311,7 @@ class OnlineDynia:
         """Start again at step 0 with the same samples, as a new object would."""
         self._flavour = FLAVOUR_CLASSES[self._analysis.flavour](*self._flavour_args)
         self._stepper = self._model.stepper(self._model_params, dt=self._analysis.dt, x0=self._analysis.x0)
-        self._lagged = copy.deepcopy(self._stepper)
+        self._lagged = self._copied(self._stepper)
         self._errors.fill(0.0)
         self._measured.fill(False)
         self._diverged.fill(False)
@@ -490,7 +494,13 @@ class OnlineDynia:
                 return _MODEL_ID if value is model else references.get(id(value))
 
         pickler.persistent_id = persistent_id
-        pickler.dump(self)
+        try:
+            pickler.dump(self)
+        except (pickle.PicklingError, TypeError, AttributeError) as error:  # what pickle raises varies by object
+            raise ModelError(
+                f"the state of {self._model!r}'s simulation cannot be saved: {error}; a checkpoint holds numpy "
+                "arrays and plain values (a model's own functions are taken from the model itself)"
+            ) from None
         if shared is not None:
             shared.accepting = False
         return buffer.getvalue()
@@ -628,7 +638,7 @@ class OnlineDynia:
         best, upper, threshold, points = np.empty(y.size), np.empty(y.size), np.empty(y.size), np.empty(y.size)
         first = self.steps
         # The simulation from here on, to simulate the record-best set again once it is known.
-        start = copy.deepcopy(self._stepper) if first else None
+        start = self._copied(self._stepper) if first else None
         totals = np.zeros(self.samples.shape[0])
         width = self._errors.shape[0]
         for step, (u_t, y_t) in enumerate(zip(u.tolist(), y.tolist())):  # u_t a list for several inputs
@@ -691,7 +701,7 @@ class OnlineDynia:
                 return self._model.simulate_chunks(
                     model_params, u, dt=self._analysis.dt, x0=self._analysis.x0, chunk_steps=RESIDUAL_CHUNK
                 )
-            return _stepped(copy.deepcopy(start), u, rows)
+            return _stepped(self._copied(start), u, rows)
 
         return simulations
 

@@ -372,3 +372,39 @@ def test_started_again_with_other_settings_the_command_refuses_in_one_line(datab
 def test_follow_options_are_checked(extra, message, tmp_path):
     refused = subprocess.run(command(f"sqlite:///{tmp_path}/plant.db", *extra), capture_output=True, text=True)
     assert refused.returncode == 2 and message in refused.stderr
+
+
+TANK = dynia.models.StateSpaceModel(
+    step=lambda x, u_k, p, dt: np.maximum(x + dt * (u_k - p[:, 1:2] * np.sqrt(x)) / p[:, 0:1], 0.0),
+    output=lambda x, u_k, p: x[:, 0],
+    x0=[1.0],
+    names=["A", "c"],
+    n_states=1,
+)
+
+
+def test_a_model_of_your_own_is_followed_and_checkpointed(database_url):
+    """A state-space model of Python functions: its stepper holds the model, which no checkpoint copies."""
+    engine = connect(database_url)
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(0, 2, 20), 20)
+    y = TANK.simulate([[2.0, 0.5]], u)[0] + rng.normal(0, 0.01, u.size)
+    table = wide_table(engine)
+    bounds = {"A": (0.5, 4.0), "c": (0.1, 1.0)}
+    for start, stop in ((0, 300), (300, 400)):
+        insert(engine, table, np.arange(start, stop, dtype=float), u[start:stop], y[start:stop])
+        source = Source(engine, "plant", time="time", inputs=["u"], output="y")
+        following = Follower(engine, source, TANK, bounds, settings())
+        following.poll()
+    expected = dynia.run(u, y, TANK, bounds, n_samples=SAMPLES, n=N, rng=SEED, window="trailing")
+    np.testing.assert_allclose(following.result().ic, expected.ic, rtol=1e-9, atol=1e-12, equal_nan=True)
+
+
+def test_a_model_that_cannot_step_is_refused_in_one_line(tmp_path):
+    engine = connect(f"sqlite:///{tmp_path}/plant.db")
+    u, y = record(50)
+    insert(engine, wide_table(engine), np.arange(50.0), u, y)
+    whole = dynia.models.FunctionModel(lambda params, u, dt: params[:, :1] * u[None, :], ["K"])
+    source = Source(engine, "plant", time="time", inputs=["u"], output="y")
+    with pytest.raises(dynia.errors.ModelError, match="cannot step one sample at a time"):
+        Follower(engine, source, whole, {"K": (0, 5)}, settings()).poll()
