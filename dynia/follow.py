@@ -49,6 +49,8 @@ import io
 import json
 import logging
 import math
+import tempfile
+from pathlib import Path
 
 import numpy as np
 import sqlalchemy
@@ -83,6 +85,10 @@ logging.addLevelName(VERDICT_CHANGE, "VERDICT")
 
 # A first backlog of at least this many windows goes through the batch engine; a shorter one is updated step by step.
 BACKLOG_WINDOWS = 10
+
+# A backlog whose CLD gradient would take more memory than this writes it to a temporary file (a year of 1 s data
+# at two parameters and 40 bins: 20 GB).
+BACKLOG_GRADIENT_BYTES = 1 << 30
 
 
 @dataclasses.dataclass(frozen=True)
@@ -323,16 +329,22 @@ class Follower:
         output is the same (a plant at rest), which the updates go on with.
         """
         analysis = self.online.settings
+        n_params, n_bins = self.online.bin_centres.shape
         try:
-            result = run(
-                _inputs(u),
-                y,
-                self.model,
-                self.bounds,
-                settings=analysis.replace(engine="auto", quality=False),
-                rng=self.settings.seed,
-                progress=False,
-            )
+            with tempfile.TemporaryDirectory(prefix="dynia-follow-") as folder:
+                # The CLD gradient, which the follower does not keep, goes to a file when it would not fit in memory.
+                large = y.size * n_params * n_bins * 8 > BACKLOG_GRADIENT_BYTES
+                store = Path(folder, "backlog.nc") if large else None
+                result = run(
+                    _inputs(u),
+                    y,
+                    self.model,
+                    self.bounds,
+                    settings=analysis.replace(engine="auto", quality=False, store=store),
+                    rng=self.settings.seed,
+                    progress=False,
+                )
+                ic, ci, median = (np.asarray(values) for values in (result.ic, result.ci, result.median))
         except ModelError:
             return None
         if result.run.n_dropped or not np.array_equal(result.samples, self.online.samples):
@@ -342,9 +354,9 @@ class Follower:
         self.progress["judged"] = dict(sigma=result.run.noise_sigma, size_factor=result.run.noise_size_factor)
         return _Steps(
             informative=result.informative,
-            ic=result.ic,
-            ci=result.ci,
-            median=result.median,
+            ic=ic,
+            ci=ci,
+            median=median,
             best=result.best_mae,
             discrimination=result.discrimination,
             spread=result.behavioural_spread,

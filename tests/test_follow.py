@@ -17,6 +17,7 @@ import pytest
 import sqlalchemy as sa
 
 import dynia
+import dynia.follow
 from dynia.errors import DataError, SettingsError
 from dynia.follow import Follower, FollowerSettings
 from dynia.io.csv import load_csv
@@ -408,3 +409,15 @@ def test_a_model_that_cannot_step_is_refused_in_one_line(tmp_path):
     source = Source(engine, "plant", time="time", inputs=["u"], output="y")
     with pytest.raises(dynia.errors.ModelError, match="cannot step one sample at a time"):
         Follower(engine, source, whole, {"K": (0, 5)}, settings()).poll()
+
+
+def test_a_backlog_too_large_for_memory_keeps_its_gradient_on_disk(tmp_path, monkeypatch):
+    """The batch engine writes the gradient, which the follower does not keep, to a temporary file: same rows."""
+    monkeypatch.setattr(dynia.follow, "BACKLOG_GRADIENT_BYTES", 0)
+    engine = connect(f"sqlite:///{tmp_path}/plant.db")
+    u, y = record(400)
+    insert(engine, wide_table(engine), np.arange(400.0), u, y)
+    following = follower(engine)
+    following.poll()
+    following.judge()
+    assert_equal_to_batch(engine, u, y)
