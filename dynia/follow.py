@@ -73,6 +73,7 @@ from .pipeline import KernelSimulated, compiled_simulation, run
 from .quality import screen
 from .result import DyniaResult
 from .settings import RunRecord
+from .suggestion import window_half_width
 from .verdicts import assess
 
 __all__ = ["VERDICT_CHANGE", "Follower", "FollowerSettings"]
@@ -107,6 +108,9 @@ class FollowerSettings:
     seed : int
     window_seconds : float or None
         A window given as a duration, made a half window once ``dt`` is known.
+    min_points : int
+        As the analysis's, for a window given as a duration (checked once
+        the window is known).
     offset, input_offset : "none", "first" or float
     quality : bool
         Screen the record when judging it (:mod:`dynia.quality`).
@@ -120,6 +124,7 @@ class FollowerSettings:
     analysis: object
     seed: int
     window_seconds: float | None = None
+    min_points: int = 1
     offset: object = "none"
     input_offset: object = "none"
     quality: bool = True
@@ -164,7 +169,7 @@ class Follower:
             saved = self.tables.load_state(connection)
             self._history = _History(len(bounds), len(source.inputs))
             if saved is None:
-                self.progress = _fresh_progress(settings)
+                self.progress = _fresh_progress(settings, len(source.inputs))
                 self.online, self.totals, self._shared = None, None, SharedArrays()
             else:
                 self._resume(connection, *saved)
@@ -260,8 +265,7 @@ class Follower:
             return 0
         grid = copy.deepcopy(self._grid)  # a look ahead: the follower's own grid takes the rows as they commit
         points = [self._gridded(grid, rows, record=False) for rows in chunks]
-        u = np.concatenate([p.u for p in points]) if points else np.empty((0, len(self.source.inputs)))
-        y = np.concatenate([p.y for p in points])
+        u, y = np.concatenate([p.u for p in points]), np.concatenate([p.y for p in points])
         if y.size == 0:
             return self._commit_chunks(chunks, None, stop)
         self._start(grid.dt, u, y)
@@ -307,14 +311,13 @@ class Follower:
         settings, progress = self.settings, self.progress
         analysis = settings.analysis.replace(dt=dt)
         if settings.window_seconds is not None:
-            from .suggestion import window_half_width
-
-            analysis = analysis.replace(n=window_half_width(settings.window_seconds, dt, max(y.size, 1), "--window"))
+            # The record grows: no length of it bounds the window.
+            n = window_half_width(settings.window_seconds, dt, math.inf, "--window")
+            analysis = analysis.replace(n=n, min_points=settings.min_points)
         progress["offset"] = _first_value(settings.offset, y, "--offset", "output")
         progress["input_offset"] = [
             _first_value(settings.input_offset, column, "--input-offset", "input") for column in u.T
         ]
-        progress["analysis"] = analysis.to_dict()
         self.online = OnlineDynia(self.model, self.bounds, settings=analysis, rng=settings.seed)
         self.totals = np.zeros(self.online.samples.shape[0])
 
@@ -379,9 +382,7 @@ class Follower:
                 self.online.advance(_inputs(u), y, self.totals)
             else:
                 steps = self._updated(u, y)
-            times = [
-                self._time(k, seconds, record) for k, seconds, record in zip(points.index, points.time, points.record)
-            ]
+            times = [self._time(seconds, record) for seconds, record in zip(points.time, points.record)]
             informative = self._informative(steps) if steps.informative is None else steps.informative.tolist()
             self._write(connection, first, times, u, y, steps, informative)
             self._history.append(times, u, y, steps, informative)
@@ -393,7 +394,7 @@ class Follower:
         online, totals = self.online, self.totals
         n_params = len(online.names)
         steps = _Steps.empty(n_params, y.size)
-        for k, (u_t, y_t) in enumerate(zip((_inputs(u)).tolist(), y.tolist())):
+        for k, (u_t, y_t) in enumerate(zip(_inputs(u).tolist(), y.tolist())):
             scale = online.error_scale
             ic, ci, _ = online.update(u_t, y_t)
             if online.error_scale != scale:
@@ -405,7 +406,7 @@ class Follower:
             steps.points[k] = points
         return steps
 
-    def _time(self, index, seconds, record):
+    def _time(self, seconds, record):
         """A step's time as the source writes it: the row's own time on a row, else the grid's."""
         saved = self.progress["record_times"].get(str(int(record))) if record >= 0 else None
         clock = self._clock
@@ -652,12 +653,8 @@ def _inputs(u):
     return u[:, 0] if u.shape[1] == 1 else u
 
 
-def _fresh_progress(settings):
-    grid = StreamGrid(
-        len(settings.options.get("--input") or [None]),
-        settings.analysis.dt if settings.dt_given else None,
-        settings.max_gap,
-    )
+def _fresh_progress(settings, n_inputs):
+    grid = StreamGrid(n_inputs, settings.analysis.dt if settings.dt_given else None, settings.max_gap)
     return dict(
         clock=None,
         last_time=None,
@@ -667,7 +664,6 @@ def _fresh_progress(settings):
         record_times={},
         offset=None,
         input_offset=None,
-        analysis=None,
         judged=None,
         verdicts={},
     )

@@ -362,6 +362,17 @@ def test_started_again_with_other_settings_the_command_refuses_in_one_line(datab
     assert subprocess.run([*other, "--restart"], capture_output=True).returncode == 0
 
 
+def test_a_window_given_as_a_duration(database_url):
+    engine = connect(database_url)
+    u, y = record(200)
+    insert(engine, wide_table(engine), np.arange(200.0), u, y)
+    by_duration = [word if word != "--n" else "--window" for word in command(database_url, "--once")]
+    by_duration[by_duration.index("--window") + 1] = "10s"  # n = 10 s / (2 x 1 s) = 5, as --n 5
+    done = subprocess.run(by_duration, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert_equal_to_batch(engine, u, y)
+
+
 @pytest.mark.parametrize(
     ("extra", "message"),
     [

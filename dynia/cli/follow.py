@@ -83,6 +83,7 @@ def follow(options, command_line, caught):
         analysis=analysis,
         seed=options["seed"],
         window_seconds=options.get("window_seconds"),
+        min_points=options["min_points"],
         offset=options["offset"],
         input_offset=options["input_offset"],
         quality=options["quality"],
