@@ -293,18 +293,28 @@ class Follower:
         return written
 
     def _gridded(self, grid, rows, record=True):
-        """The grid points ``rows`` complete on ``grid``; with ``record``, their source times are kept."""
+        """The grid points ``rows`` complete on ``grid``; with ``record``, also their times as the source writes them.
+
+        A point on a row keeps that row's own time (a number, a date-time or
+        the text as stored); a point between rows gets the grid's time. Rows a
+        later point may still lie on are remembered in the progress.
+        """
         clock = self._clock or Clock.of(self.source.kind, rows.times[0], self.source.time_format)
         first = grid.records
         seconds = clock.seconds(rows.times)
         inputs = [(clock.seconds(times), values) for times, values in rows.inputs]
         points = grid.feed_logs(seconds, inputs, (clock.seconds(rows.output[0]), rows.output[1]))
-        if record:
-            times = self.progress["record_times"]
-            times.update({str(first + k): clock.to_json(time) for k, time in enumerate(rows.times)})
-            kept = grid.first_record
-            self.progress["record_times"] = {key: value for key, value in times.items() if int(key) >= kept}
-        return points
+        if not record:
+            return points
+        known = self.progress["record_times"]
+        known.update({str(first + k): clock.to_json(time) for k, time in enumerate(rows.times)})
+        times = [
+            clock.from_json(known[str(int(at))]) if at >= 0 else clock.value(float(moment))
+            for moment, at in zip(points.time, points.record)
+        ]
+        kept = grid.first_record
+        self.progress["record_times"] = {key: value for key, value in known.items() if int(key) >= kept}
+        return points, times
 
     def _start(self, dt, u, y):
         """Fix the window, the offsets and the sample from the first grid points (the first start only)."""
@@ -368,13 +378,12 @@ class Follower:
 
     def _commit(self, connection, rows, backlog=None):
         """Grid ``rows``, analyse the steps they complete, write them with the checkpoint; the steps written."""
-        grid = self._grid
-        points = self._gridded(grid, rows)
+        points, times = self._gridded(self._grid, rows)
         self.progress["last_time"] = self._clock.to_json(rows.times[-1])
         self.progress["consumed"] += rows.count
         if points.index.size:
             if self.online is None:
-                self._start(grid.dt, points.u, points.y)
+                self._start(self._grid.dt, points.u, points.y)
             u, y = self._offset(points.u, points.y)
             first = self.steps
             if backlog is not None:
@@ -382,7 +391,6 @@ class Follower:
                 self.online.advance(_inputs(u), y, self.totals)
             else:
                 steps = self._updated(u, y)
-            times = [self._time(seconds, record) for seconds, record in zip(points.time, points.record)]
             informative = self._informative(steps) if steps.informative is None else steps.informative.tolist()
             self._write(connection, first, times, u, y, steps, informative)
             self._history.append(times, u, y, steps, informative)
@@ -405,12 +413,6 @@ class Follower:
             steps.best[k], steps.discrimination[k], steps.spread[k] = best, upper - best, threshold - best
             steps.points[k] = points
         return steps
-
-    def _time(self, seconds, record):
-        """A step's time as the source writes it: the row's own time on a row, else the grid's."""
-        saved = self.progress["record_times"].get(str(int(record))) if record >= 0 else None
-        clock = self._clock
-        return clock.from_json(saved) if saved is not None else clock.value(float(seconds))
 
     def _informative(self, steps):
         """The new steps' noise-floor verdict with the last judgement's noise level; None before the first."""

@@ -432,3 +432,27 @@ def test_a_backlog_too_large_for_memory_keeps_its_gradient_on_disk(tmp_path, mon
     following.poll()
     following.judge()
     assert_equal_to_batch(engine, u, y)
+
+
+def test_iso_text_times_and_repeated_rows_averaged(database_url):
+    """Times stored as ISO 8601 text, and rows repeated at a time averaged (--duplicates mean), as load_csv does."""
+    engine = connect(database_url)
+    u, y = record(150)
+    start = datetime.datetime(2024, 3, 1, 6, 0, 0, tzinfo=datetime.timezone.utc)
+    times = [(start + datetime.timedelta(seconds=k)).isoformat().replace("+00:00", "Z") for k in range(150)]
+    table = wide_table(engine, kind=sa.String(32))
+    insert(engine, table, times, u, y)
+    insert(engine, table, times[40:41], u[40:41], y[40:41] + 1.0)  # logged twice: the mean is y + 0.5
+    source = Source(engine, "plant", time="time", inputs=["u"], output="y", duplicates="mean")
+    following = Follower(engine, source, MODEL, BOUNDS, settings())
+    following.poll()
+    following.judge()
+    averaged = y.copy()
+    averaged[40] += 0.5
+    arrays, stored_times, _ = stored(engine)
+    assert stored_times == times
+    np.testing.assert_allclose(arrays["ic"], batch(u, averaged).ic, rtol=1e-9, atol=1e-12, equal_nan=True)
+    with pytest.raises(DataError, match="several rows at time"):
+        Follower(
+            engine, Source(engine, "plant", time="time", inputs=["u"], output="y"), MODEL, BOUNDS, settings(), "other"
+        ).poll()
