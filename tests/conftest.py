@@ -14,6 +14,20 @@ import pytest
 import dynia
 
 
+def pytest_sessionstart(session):
+    """A pytest-xdist worker first compiles its share of the engine's kernels into numba's cache: warm_kernels.py.
+
+    Its folder of markers is in the run's base temporary directory, the parent of every worker's own.
+    """
+    workerinput = getattr(session.config, "workerinput", None)
+    if workerinput is not None:
+        import warm_kernels
+
+        worker = int(workerinput["workerid"].removeprefix("gw"))
+        folder = Path(session.config.option.basetemp).parent / "warm-kernels"
+        warm_kernels.warm(worker, int(workerinput["workercount"]), folder)
+
+
 @pytest.hookimpl(tryfirst=True)
 def pytest_runtest_setup(item):
     """Notebook kernels start in the environment of tests/notebook.env, as make's notebooks do.

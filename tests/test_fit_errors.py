@@ -10,6 +10,7 @@ from dynia.cli import main
 from dynia.fit import fit_segments
 from dynia.identification import identify
 from dynia.models import FirstOrder
+from dynia.pipeline import KernelSimulated
 
 TRUTH = {"K": 2.0, "T": 20.0}
 BOUNDS = {"K": (0, 5), "T": (1, 60)}
@@ -27,16 +28,22 @@ def ar1_noise(rng, n_steps, phi, sd):
 
 
 def coverage(phi, draws=100, n_steps=2000, seed=1):
-    """Share of draws whose estimate +- 1.96 SE covers the truth, robust and classical, per parameter."""
+    """Share of draws whose estimate +- 1.96 SE covers the truth, robust and classical, per parameter.
+
+    The fits simulate through the compiled kernel (KernelSimulated): the outputs of FirstOrder's recursion bit for
+    bit, so the same fits and coverages, without its Python loop over 2000 steps in each of some 1400 simulations
+    (52 s, now 2 s).
+    """
     u = square_wave(n_steps)
     clean = FirstOrder().simulate([[TRUTH["K"], TRUTH["T"]]], u)[0]
+    model = KernelSimulated(FirstOrder())
     rng = np.random.default_rng(seed)
     robust = {name: 0 for name in TRUTH}
     classical = {name: 0 for name in TRUTH}
     lags = []
     for _ in range(draws):
         y = clean + ar1_noise(rng, n_steps, phi, 0.1)
-        fit = fit_segments(u, y, FirstOrder(), [(0, n_steps)], bounds=BOUNDS, x0="zero", initial=TRUTH)
+        fit = fit_segments(u, y, model, [(0, n_steps)], bounds=BOUNDS, x0="zero", initial=TRUTH)
         lags.append(fit.hac_lags)
         for name, truth in TRUTH.items():
             error = abs(fit.parameters[name] - truth)
