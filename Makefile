@@ -53,8 +53,10 @@ test: $(INSTALLED)
 	$(PY) -m ruff format --check dynia tests benchmarks
 	$(MAKE) --no-print-directory -j3 --output-sync=target pytest docs check-wheel
 
+# pytest runs with a throwaway PostgreSQL server, started and stopped by .ci/with-postgres (its URL in
+# DYNIA_TEST_POSTGRES_URL; a server named there already is used instead). Its binaries: apt-get install postgresql.
 pytest: $(INSTALLED)
-	$(PY) -m pytest
+	.ci/with-postgres $(PY) -m pytest
 
 # The wheel a user installs, used from outside the checkout (see .ci/check-wheel).
 check-wheel: $(INSTALLED)

@@ -45,6 +45,13 @@ process so that its peak resident memory (``ru_maxrss``) is its own.
     :func:`dynia.run` in samples, steps and half window n (log-log slopes
     over a factor of 4; goal about 1, 1 and 0).
 
+12. ``dynia follow`` (:mod:`dynia.follow`) on an SQLite file: a backlog of
+    10^5 rows (2 000 samples, n = 10, ``--once``) against ``dynia analyse``
+    of the same rows as CSV, CPU time in one process after both compiled on
+    a short record (goal: at most 2x); then one new row at a time, each
+    followed by a poll (the per-step update, the database's round trip and
+    the checkpoint), CPU and wall time per row (goal: at most 5 ms).
+
 ``long-record``: a year of 1 Hz data in bounded memory, :func:`dynia.run`
 with ``dtype="float32"`` and ``store`` (a netCDF file in a temporary folder)
 on 10^4 samples x 3x10^7 steps (``--long-samples``, ``--long-steps``; about
@@ -544,6 +551,117 @@ def _loglog_slope(x, seconds):
     return float(np.polyfit(np.log(x), np.log(seconds), 1)[0])
 
 
+def _follow_plant(n_rows, seed=1):
+    """A first-order loop logged at 1 s: random levels held 200 s, noise 0.5."""
+    from dynia.models import FirstOrder
+
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.choice([0.0, 10.0, 20.0, 30.0], n_rows // 200 + 1), 200)[:n_rows]
+    return u, FirstOrder().simulate([[2.0, 25.0]], u)[0] + rng.normal(0, 0.5, n_rows)
+
+
+def _case_follow(n_rows=100_000, steady_rows=300, n_samples=2_000):
+    """dynia follow: a backlog against dynia analyse on the same rows, then the cost of one new row (CPU, wall)."""
+    import tempfile
+
+    import sqlalchemy as sa
+
+    from dynia.cli import main as cli_main
+    from dynia.io.database import connect
+
+    u, y = _follow_plant(n_rows + steady_rows)
+    common = ["--time", "time", "--input", "u", "--output", "y", "--model", "first-order", "--param", "K=0:5"]
+    common += ["--param", "T=0:50", "--samples", str(n_samples), "--n", "10", "--seed", "1", "--quiet"]
+    with tempfile.TemporaryDirectory() as folder:
+        data = Path(folder, "plant.csv")
+        np.savetxt(
+            data,
+            np.column_stack([np.arange(n_rows), u[:n_rows], y[:n_rows]]),
+            delimiter=",",
+            fmt=["%d", "%.17g", "%.17g"],
+            header="time,u,y",
+            comments="",
+        )
+        url = f"sqlite:///{folder}/plant.db"
+        engine = connect(url)
+        table = sa.Table(
+            "plant",
+            sa.MetaData(),
+            sa.Column("time", sa.Float, index=True),
+            sa.Column("u", sa.Float),
+            sa.Column("y", sa.Float),
+        )
+        table.create(engine)
+
+        def log(first, stop):
+            with engine.begin() as connection:
+                connection.execute(
+                    table.insert(), [dict(time=float(k), u=float(u[k]), y=float(y[k])) for k in range(first, stop)]
+                )
+
+        log(0, n_rows)
+        # Both compile first on a short record, so that the comparison is of the work, not of the compilation.
+        warm = Path(folder, "warm.csv")
+        np.savetxt(
+            warm,
+            np.column_stack([np.arange(2000), u[:2000], y[:2000]]),
+            delimiter=",",
+            fmt="%.17g",
+            header="time,u,y",
+            comments="",
+        )
+        cli_main(["analyse", str(warm), *common, "--no-plots", "--out", str(Path(folder, "warm"))])
+        cpu, wall = time.process_time(), time.perf_counter()
+        analyse_status = cli_main(["analyse", str(data), *common, "--out", str(Path(folder, "out"))])
+        analyse_cpu, analyse_wall = time.process_time() - cpu, time.perf_counter() - wall
+        cpu, wall = time.process_time(), time.perf_counter()
+        follow_status = cli_main(["follow", url, "--table", "plant", *common, "--once"])
+        follow_cpu, follow_wall = time.process_time() - cpu, time.perf_counter() - wall
+        steady = _follow_steady(url, engine, log, n_rows, steady_rows, n_samples)
+    return dict(
+        rows=n_rows,
+        n_samples=n_samples,
+        analyse_status=analyse_status,
+        follow_status=follow_status,
+        analyse_cpu_s=analyse_cpu,
+        analyse_wall_s=analyse_wall,
+        follow_cpu_s=follow_cpu,
+        follow_wall_s=follow_wall,
+        ratio_cpu=follow_cpu / analyse_cpu,
+        machine=_machine(),
+        **steady,
+    )
+
+
+def _follow_steady(url, engine, log, first, rows, n_samples):
+    """One new row at a time, each followed by a poll of the follower: CPU and wall time per row."""
+    from dynia.follow import Follower, FollowerSettings
+    from dynia.io.database import Source
+    from dynia.models import FirstOrder
+    from dynia.settings import AnalysisSettings
+
+    source = Source(engine, "plant", time="time", inputs=["u"], output="y")
+    settings = FollowerSettings(
+        options={}, analysis=AnalysisSettings(window="trailing", n_samples=n_samples, n=10), seed=1
+    )
+    follower = Follower(engine, source, FirstOrder(), {"K": (0, 5), "T": (0, 50)}, settings, "steady")
+    follower.poll()
+    cpu, wall = [], []
+    for k in range(first, first + rows):
+        log(k, k + 1)
+        started_cpu, started_wall = time.process_time(), time.perf_counter()
+        follower.poll()
+        cpu.append(time.process_time() - started_cpu)
+        wall.append(time.perf_counter() - started_wall)
+    cpu, wall = np.array(cpu[20:]) * 1e3, np.array(wall[20:]) * 1e3  # the first polls warm the caches
+    return dict(
+        row_cpu_ms=float(cpu.mean()),
+        row_wall_ms=float(wall.mean()),
+        row_wall_p99_ms=float(np.percentile(wall, 99)),
+        steady_rows=int(cpu.size),
+    )
+
+
 def _machine():
     """What the ratios were measured on: processor, cores, load."""
     model = "unknown processor"
@@ -571,6 +689,7 @@ CASES = {
     "ic-error-honesty": _case_ic_error_honesty,
     "long-record": _case_long_record,
     "yardstick": _case_yardstick,
+    "follow": _case_follow,
 }
 
 
@@ -757,7 +876,20 @@ def _describe_sampling_example1(r):
     )
 
 
+def _describe_follow(r):
+    m = r["machine"]
+    return (
+        f"dynia follow on SQLite ({m['processor']}, {m['cores']} cores, load {m['load_average']:.1f}): a backlog of "
+        f"{r['rows']} rows at {r['n_samples']} samples, n = 10, --once: {r['follow_cpu_s']:.1f} CPU-s "
+        f"({r['follow_wall_s']:.1f} s wall) against dynia analyse on the same rows {r['analyse_cpu_s']:.1f} CPU-s "
+        f"({r['analyse_wall_s']:.1f} s wall) -> {r['ratio_cpu']:.2f}x (goal <= 2x); then one new row per poll: "
+        f"{r['row_cpu_ms']:.2f} CPU-ms, {r['row_wall_ms']:.2f} ms wall (p99 {r['row_wall_p99_ms']:.1f} ms) a row, "
+        f"database included, over {r['steady_rows']} rows (goal <= 5 ms)"
+    )
+
+
 _DESCRIPTIONS = {
+    "follow": _describe_follow,
     "yardstick": _describe_yardstick,
     "ic-error-cost": _describe_ic_error_cost,
     "ic-error-honesty": _describe_ic_error_honesty,

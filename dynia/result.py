@@ -103,6 +103,11 @@ class DyniaResult:
     behavioural_floor : ndarray (n_steps,) or None
         What noise alone keeps the behavioural spread below
         (``run.behavioural_multiple`` of the same standard deviations).
+    best_mae : ndarray (n_steps,) or None
+        Every window's lowest mean absolute error, from which the noise
+        level ``run.noise_sigma`` is estimated; with ``discrimination`` and
+        ``behavioural_spread`` the three MAEs the floor tests
+        (:class:`dynia.engine.noise.NoiseFloor`). None where the floor is.
     median : ndarray (n_params, n_steps) or None
         CLD median of each window's behavioural values, read off as the
         limits are, so it lies in the band: the first sorted value whose
@@ -133,6 +138,7 @@ class DyniaResult:
     noise_floor: np.ndarray | None = None
     behavioural_spread: np.ndarray | None = None
     behavioural_floor: np.ndarray | None = None
+    best_mae: np.ndarray | None = None
     median: np.ndarray | None = None
 
     def __post_init__(self):

@@ -1,6 +1,11 @@
-"""Shared test data: the thesis's example 1, simulated independently of dynia.models; the notebooks' environment."""
+"""Shared test data: the thesis's example 1, simulated independently of dynia.models; the notebooks' environment;
+the databases (SQLite, and a real PostgreSQL server) that dynia follow writes to."""
 
 import os
+import shutil
+import subprocess
+import tempfile
+import uuid
 from pathlib import Path
 
 import numpy as np
@@ -115,3 +120,67 @@ def compiled_window_costs(y, sims, n, window="centred", chunk_steps=None):
             with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
                 costs.append((total / present) ** 2)
     return np.array(costs)
+
+
+# A throwaway PostgreSQL server: see .ci/postgres. Its exit status when the server binaries are not installed.
+POSTGRES_SCRIPT = Path(__file__).resolve().parent.parent / ".ci" / "postgres"
+NO_POSTGRES_SERVER = 3
+
+
+@pytest.fixture(scope="session")
+def postgres_url():
+    """The SQLAlchemy URL of a real PostgreSQL server for this test session.
+
+    The one in DYNIA_TEST_POSTGRES_URL when set (make test starts one through .ci/with-postgres); otherwise a
+    throwaway cluster of this session's own (.ci/postgres start, stopped at the session's end), so that a plain
+    `pytest` gets a real server too. Skips when no PostgreSQL server is installed. Under pytest-xdist every worker
+    without DYNIA_TEST_POSTGRES_URL starts a server of its own, each on its own port.
+    """
+    url = os.environ.get("DYNIA_TEST_POSTGRES_URL")
+    if url:
+        yield url
+        return
+    # Under /tmp, not pytest's tmp_path: as root the cluster belongs to the postgres user, who must reach it.
+    directory = tempfile.mkdtemp(prefix="dynia-postgres.", dir="/tmp")
+    started = subprocess.run([POSTGRES_SCRIPT, "start", directory], capture_output=True, text=True)
+    if started.returncode != 0:
+        shutil.rmtree(directory, ignore_errors=True)
+        if started.returncode == NO_POSTGRES_SERVER:
+            # The script's one line says which binaries are missing and how to install them.
+            pytest.skip(f"no PostgreSQL server to test against: {started.stderr.strip()}")
+        pytest.fail(f".ci/postgres start failed (exit {started.returncode}):\n{started.stderr}", pytrace=False)
+    try:
+        yield started.stdout.strip()
+    finally:
+        subprocess.run([POSTGRES_SCRIPT, "stop", directory], check=True)
+
+
+@pytest.fixture(params=["sqlite", "postgresql"])
+def database_url(request, tmp_path):
+    """A fresh, empty database for one test, as a SQLAlchemy URL: an SQLite file, and a database on the session's
+    PostgreSQL server (postgres_url).
+
+    The PostgreSQL one is made for the test under a unique name, so that tests (and pytest-xdist workers) sharing a
+    server never meet, and dropped after it, connections still open or not.
+    """
+    if request.param == "sqlite":
+        yield f"sqlite:///{tmp_path}/plant.db"
+        return
+    import sqlalchemy as sa
+    from sqlalchemy.pool import NullPool
+
+    server = sa.make_url(request.getfixturevalue("postgres_url"))
+    name = f"dynia_test_{uuid.uuid4().hex}"
+    # CREATE and DROP DATABASE cannot run inside a transaction; from the maintenance database, not template1, which
+    # CREATE DATABASE copies and so wants nobody connected to.
+    admin = sa.create_engine(server.set(database="postgres"), isolation_level="AUTOCOMMIT", poolclass=NullPool)
+    try:
+        with admin.connect() as connection:
+            connection.execute(sa.text(f'CREATE DATABASE "{name}"'))
+        try:
+            yield server.set(database=name).render_as_string(hide_password=False)
+        finally:
+            with admin.connect() as connection:
+                connection.execute(sa.text(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)'))
+    finally:
+        admin.dispose()

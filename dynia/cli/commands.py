@@ -51,9 +51,13 @@ from ..suggestion import parse_duration, parse_size, suggest, window_half_width
 from ..verdicts import assess
 from . import report
 from .figures import Labels
+from .follow import follow
 from .parser import OPTIONS, RETIRED, WRITING_OPTIONS, UsageError, retired, setting_options, unwritten
 
 __all__ = ["execute"]
+
+# The most rows dynia follow reads into one transaction: some hundred bytes a row in memory.
+_MOST_BATCH_ROWS = 10_000_000
 
 MODELS = {"first-order": models.FirstOrder, "fopdt": models.FOPDT, "second-order-delay": models.SecondOrderDelay}
 
@@ -63,7 +67,7 @@ def execute(args, command_line, caught):
 
     ``caught`` collects the warnings of the run, which the command reports itself.
     """
-    run_command = {"analyse": _analyse, "identify": _identify, "suggest": _suggest}[args.command]
+    run_command = {"analyse": _analyse, "identify": _identify, "suggest": _suggest, "follow": follow}[args.command]
     with _named_as_options(args.command):
         return run_command(_options(args), command_line, caught)
 
@@ -120,9 +124,9 @@ def _options(args):
     if options.get("seed") is None:
         options["seed"] = int(np.random.SeedSequence().entropy % 2**63)
     # Every file the run reads is an input that --out must not replace: the model's source file too.
-    sources = (options["data"], options.get("output_file"), options.get("config"), _model_file(options["model"]))
+    sources = (options.get("data"), options.get("output_file"), options.get("config"), _model_file(options["model"]))
     options["inputs"] = [path for path in sources if path]
-    if command != "suggest":
+    if command in ("analyse", "identify"):
         # Checked now, before the data are read: an --out that could cost the user files is refused at once.
         options["destination"] = OutputDirectory(
             options["out"], overwrite=options["overwrite"], inputs=options["inputs"], command=command
@@ -207,11 +211,20 @@ def _merged_options(args, command):
     return options, set(given) | set(configured)
 
 
+# What each command cannot run without (the model's ranges are checked apart).
+_REQUIRED = {
+    "analyse": ("data", "time", "input", "output", "model", "out"),
+    "identify": ("data", "time", "input", "output", "model", "out"),
+    "suggest": ("data", "time", "input", "output", "model"),
+    "follow": ("url", "table", "time", "input", "output", "model"),
+}
+
+
 def _check_required(options, command):
     """Raise unless the data, its columns, the model, its ranges and (but for suggest) --out are given."""
-    for key in ("data", "time", "input", "output", "model") + (("out",) if command != "suggest" else ()):
+    for key in _REQUIRED[command]:
         if not options.get(key):
-            option = "DATA.csv" if key == "data" else f"--{key}"
+            option = OPTIONS[command][key].flag
             raise UsageError(f"{option} is required (on the command line or in --config)")
     _check_columns(options)
     if not options.get("param"):
@@ -365,6 +378,7 @@ def _check_command_options(options):
         raise UsageError(f"--narrow-margin must be >= 0; got {options['narrow_margin']:g}")
     if options.get("seed") is not None and options["seed"] < 0:
         raise UsageError(f"--seed must be a whole number >= 0; got {options['seed']}")
+    _check_follow_options(options)
     if "starts" in options and options["starts"] < 1:
         raise UsageError(f"--starts must be a whole number >= 1; got {options['starts']}")
     if options.get("min_length") is not None:
@@ -378,6 +392,18 @@ def _check_command_options(options):
         raise UsageError(
             f"--max-gap is a multiple of the grid step above 1 (a gap longer than that many steps is "
             f"left missing); got {options['max_gap']:g}"
+        )
+
+
+def _check_follow_options(options):
+    """dynia follow's own: the poll and judgement intervals, the rows per transaction."""
+    for key, low, high, unit in (("poll", 0, 86_400, "seconds"), ("judge_every", 0, 86_400 * 365, "seconds")):
+        if key in options and not low < options[key] <= high:
+            raise UsageError(f"--{key.replace('_', '-')} must lie in ({low}, {high}] {unit}; got {options[key]:g}")
+    if "batch" in options and not 1 <= options["batch"] <= _MOST_BATCH_ROWS:
+        raise UsageError(
+            f"--batch must be a whole number of rows in [1, {_MOST_BATCH_ROWS}] (a transaction holds them all in "
+            f"memory); got {options['batch']}"
         )
 
 

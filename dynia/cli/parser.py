@@ -87,7 +87,7 @@ class Option:
     @property
     def flag(self):
         """The option as typed: ``--key`` with dashes, or ``DATA.csv`` for the data file."""
-        return "DATA.csv" if self.key == "data" else "--" + self.key.replace("_", "-")
+        return _POSITIONAL.get(self.key) or "--" + self.key.replace("_", "-")
 
     @property
     def is_setting(self):
@@ -105,8 +105,8 @@ class Option:
 
     def add_to(self, group):
         """Add the option to an argparse group (defaults stay None: a given value is one that is not None)."""
-        if self.key == "data":
-            group.add_argument("data", nargs="?", metavar=self.metavar, help=self.text())
+        if self.key in _POSITIONAL:
+            group.add_argument(self.key, nargs="?", metavar=self.metavar, help=self.text())
             return
         how = dict(help=self.text().replace("%", "%%"))
         if self.kind == "flag":
@@ -118,6 +118,9 @@ class Option:
         how.update({name: value for name, value in (("metavar", self.metavar), ("choices", self.choices)) if value})
         group.add_argument(self.flag, **how)
 
+
+# The options given without a name, as their place in the command line is shown.
+_POSITIONAL = {"data": "DATA.csv", "url": "URL"}
 
 _FIELDS = {field.name: field for field in dataclasses.fields(AnalysisSettings)}
 
@@ -419,6 +422,67 @@ _SUGGEST_ANALYSIS_TEXT = (
     "otherwise propose: it keeps the value given, proposes the rest around it and says what the record asks for"
 )
 
+# dynia follow reads a table of a database: the data options of analyse but the file's own.
+_FOLLOW_SOURCE = (
+    Option(
+        "url",
+        "text",
+        "the database: sqlite:///plant.db (built in), or postgresql://user@host:5432/plant after "
+        'pip install "dynia[postgres]"; any SQLAlchemy URL whose driver is installed',
+        metavar="URL",
+    ),
+    Option(
+        "table", "text", "the table of logged data: wide (time, input and output columns) or --long", metavar="NAME"
+    ),
+    *(option for option in _DATA if option.key not in ("data", "output_file")),
+)
+
+_FOLLOW_METHOD = (
+    setting_option("n_samples"),
+    setting_option("sampler"),
+    setting_option("n"),
+    Option("window", "text", _WINDOW_HELP, metavar="DURATION"),
+    setting_option("percentage"),
+    setting_option("bins"),
+    setting_option("conf_level"),
+    setting_option("flavour"),
+    setting_option("min_points"),
+    _SEED,
+)
+
+_FOLLOW_RUN = (
+    Option(
+        "results", "text", "the results table: a row per step and parameter", default="dynia_results", metavar="NAME"
+    ),
+    Option(
+        "events", "text", "the table of verdict changes, shared by followers", default="dynia_events", metavar="NAME"
+    ),
+    Option("poll", "number", "seconds between looks at the table for new rows", default=10.0, metavar="SECONDS"),
+    Option("once", "flag", "analyse every row present, judge the record, commit and exit (for cron and tests)"),
+    Option(
+        "batch",
+        "whole",
+        "rows read and committed per transaction: the most a kill can make the follower redo",
+        default=10_000,
+        metavar="ROWS",
+    ),
+    Option(
+        "judge_every",
+        "number",
+        "seconds between judgements of the whole record (noise floor, informative windows, verdicts); also on "
+        "--once and on exit",
+        default=60.0,
+        metavar="SECONDS",
+    ),
+    Option("restart", "flag", "drop this follower's results, steps and state, and start over from the first row"),
+    Option(
+        "quiet",
+        "flag",
+        "no progress lines on stderr (steps written per poll); verdict changes, late rows, warnings and errors "
+        "still print",
+    ),
+)
+
 # Each command's option groups, in the order of its --help.
 _GROUPS = {
     "analyse": (("data", _DATA), ("model", _MODEL), ("method", _ANALYSE_METHOD), ("output", _OUTPUT)),
@@ -434,6 +498,7 @@ _GROUPS = {
         ("analysis (carried into the proposed command)", _SUGGEST_ANALYSIS),
         ("pilot and output", _SUGGEST_PILOT),
     ),
+    "follow": (("source", _FOLLOW_SOURCE), ("model", _MODEL), ("method", _FOLLOW_METHOD), ("follower", _FOLLOW_RUN)),
 }
 
 # What --help says under a group's title, where the title does not say it all.
@@ -525,11 +590,29 @@ example (proposes --n, --percentage and --samples for dynia analyse, with the re
   samples for it; --flavour mcat, --conf-level 95, ... go into the proposed command.
 """,
     ),
+    "follow": dict(
+        help="keep a results table current as a database table of logged data grows (thesis 4.3)",
+        description="Sample the parameters once, then analyse every new row of a database table as the logging "
+        "system writes it: one trailing window per step (the batch engine for a first backlog), a row per step and "
+        "parameter in the results table, verdict changes in the events table and as log lines. Killed at any moment "
+        "and started again, it goes on where its last transaction ended; started with other settings, it refuses.",
+        epilog="""\
+example (the heating-system record loaded into SQLite as table heating, then followed):
+  dynia follow sqlite:///plant.db --table heating --time time --input u --output y \\
+      --model first-order --param K=0:40 --param T=0:200 \\
+      --input-offset 6 --offset first --x0 zero --seed 1 --once
+
+  writes table dynia_results (time, parameter, ic, lower, upper, estimate, informative),
+  dynia_events (verdict changes) and the follower's own dynia_results_steps and
+  dynia_results_state. Without --once it polls every --poll seconds until SIGINT or
+  SIGTERM, which commit and exit 0.
+""",
+    ),
 }
 
 
 def parser():
-    """The argparse parser of the ``dynia`` command and its three commands."""
+    """The argparse parser of the ``dynia`` command and its commands."""
     top = _Parser(
         prog="dynia",
         description="Dynamic Identifiability Analysis (DYNIA) of process data: "

@@ -173,6 +173,7 @@ Examples
 """
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass
 
@@ -231,6 +232,11 @@ class NoiseFloor:
     behavioural_floor : ndarray (n_steps,)
         The same as ``floor`` with ``behavioural_multiple``: the behavioural
         set ties within noise where ``behavioural_spread`` is at most this.
+    best : ndarray (n_steps,)
+        Every window's best MAE, what ``sigma`` is estimated from; NaN where
+        no result. With ``discrimination`` and ``behavioural_spread`` it
+        gives back the three MAEs, so that a record that grows (``dynia
+        follow``) can be judged again without analysing its windows again.
     sigma : float
         The noise level estimated from the best fits (NaN when no window
         could give it).
@@ -255,6 +261,7 @@ class NoiseFloor:
     floor: np.ndarray
     behavioural_spread: np.ndarray
     behavioural_floor: np.ndarray
+    best: np.ndarray
     sigma: float
     multiple: float
     behavioural_multiple: float
@@ -294,6 +301,8 @@ def window_points(y, before, after):
     return (measured[last] - measured[first]).astype(float)
 
 
+# A follower judges every new step with the multiple of its record's windows so far: the same few values, again.
+@functools.lru_cache(maxsize=256)
 def critical_multiple(quantile, n_samples, n_windows, level=FAMILY_LEVEL):
     """Sampling standard deviations of a noise-only MAE that the MAE at ``quantile`` minus the best must exceed.
 
@@ -674,6 +683,7 @@ def noise_floor(
         floor=floor,
         behavioural_spread=threshold - best,
         behavioural_floor=np.multiply(noise_sd, behavioural_multiple, out=noise_sd),
+        best=best,
         sigma=sigma,
         multiple=multiple,
         behavioural_multiple=behavioural_multiple,
@@ -733,4 +743,5 @@ def floor_fields(floor):
         noise_floor=floor.floor,
         behavioural_spread=floor.behavioural_spread,
         behavioural_floor=floor.behavioural_floor,
+        best_mae=floor.best,
     )

@@ -15,8 +15,8 @@ result has its CLD median, ``median`` (parameter, time) (files written
 before it existed load with ``median`` None); when the
 result has its Monte Carlo errors, ``ic_se`` (parameter, time) and ``ci_se``
 (parameter, time, side) too; when it has its noise floor, ``informative``,
-``discrimination``, ``noise_floor``, ``behavioural_spread`` and
-``behavioural_floor`` (time), the mask as int8 in the file (netCDF has no
+``discrimination``, ``noise_floor``, ``behavioural_spread``,
+``behavioural_floor`` and ``best_mae`` (time), the mask as int8 in the file (netCDF has no
 booleans) and bool in the Dataset and when loaded; files without them, and
 files of the older floor (``mae_spread``, whose mask tested the behavioural
 spread), load with None there. Coordinates: ``parameter`` (the names),
@@ -125,7 +125,7 @@ OPTIONAL_ARRAYS = {name: TIME_VARIABLES[name] for name in ("median", "ic_se", "c
 # The noise floor along time (see dynia.engine.noise), written when the result has it. Part of the
 # metadata, so that a result written block by block (dynia.io.arrays) gets it too; the mask is int8 in a
 # file, since netCDF has no booleans, and bool again when loaded.
-NOISE_FLOOR = ("informative", "discrimination", "noise_floor", "behavioural_spread", "behavioural_floor")
+NOISE_FLOOR = ("informative", "discrimination", "noise_floor", "behavioural_spread", "behavioural_floor", "best_mae")
 COORDINATES = ("parameter", "time", "side", "timestamp", "elapsed")
 SIDES = ("lower", "upper")
 
@@ -153,7 +153,7 @@ def metadata(result, reserved):
     ndarray (``weights``) becomes a variable of its name, ``(dims, values)``, which must not be one of the
     names ``reserved`` for the result's own variables; so does the noise
     floor (``informative`` as int8, then ``discrimination``, ``noise_floor``,
-    ``behavioural_spread``, ``behavioural_floor``), when the result has it.
+    ``behavioural_spread``, ``behavioural_floor``, ``best_mae``), when the result has it.
 
     Raises
     ------

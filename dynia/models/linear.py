@@ -244,9 +244,14 @@ class Stepper:
         self._recursion = None
         self.steps = 0
 
+    def __getstate__(self):
+        # The output buffer holds the last step's output only: a copy (or a checkpoint) gets a fresh one.
+        return {key: value for key, value in self.__dict__.items() if key not in ("_output", "_view")}
+
     def __setstate__(self, state):
         # A copy (or an unpickled stepper) gets its own arrays; its view must look at its own output.
         self.__dict__.update(state)
+        self._output = np.empty(self._system.c.shape[1])
         self._view = self._output.view()
         self._view.flags.writeable = False
 
@@ -816,11 +821,21 @@ class _Recursion:
             source >= first_prev for terms in [*self._state_terms, self._output_terms] for _, source in terms
         )
         self._current, self._upcoming = list(state), list(np.empty_like(state))
+        self._n_samples = n_samples
         self._scratch = np.empty(n_samples)
+
+    def __getstate__(self):
+        # The next state and the scratch row are written in full before they are read: a copy needs neither.
+        return {key: value for key, value in self.__dict__.items() if key not in ("_upcoming", "_scratch")}
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._upcoming = [np.empty_like(row) for row in self._current]
+        self._scratch = np.empty(self._n_samples)
 
     def state(self) -> np.ndarray:
         """A copy of the current state, (n_states, n_samples)."""
-        return np.array(self._current).reshape(len(self._current), self._scratch.shape[0])
+        return np.array(self._current).reshape(len(self._current), self._n_samples)
 
     def step(self, out: np.ndarray, inputs: list, advance: bool = True) -> None:
         """Write y[k] into ``out`` and, if ``advance``, move the state to x[k+1].
