@@ -273,6 +273,18 @@ class OnlineDynia:
                 if self._measured[slot]:
                     self._window_errors(simulated, self._recent_y[slot], self._errors[slot])
 
+    def _mark_diverged(self, finite, step):
+        """Mark the sets not ``finite`` (n_samples,) as diverged; refuse when none is left by ``step``."""
+        if finite.all():
+            return
+        self._diverged |= ~finite
+        if self._diverged.all():
+            # As dynia.run: nothing is left to rank, and NaN results would pass for a quiet window.
+            raise ModelError(
+                f"{self._model!r}: the simulation of every one of the {self._diverged.size} parameter sets is not "
+                f"finite (NaN or overflow) by step {step}; check the model and the parameter ranges"
+            )
+
     def _window_errors(self, simulated, y_t, errors):
         """The scaled absolute errors of ``simulated`` against a measured ``y_t``, into ``errors``."""
         np.subtract(simulated, y_t, out=errors)  # |s - y| == |y - s| bit for bit
@@ -326,10 +338,10 @@ class OnlineDynia:
         self._scaled_by = None  # (step, y_t) of the measured value that fixed the scale
         self._largest = 0.0  # the largest |y| measured so far
 
-    def _fix_scale(self, y_t):
-        """Fix the error scale from ``y_t``, the first measured value that is not zero; rescale the window's errors."""
+    def _fix_scale(self, y_t, step):
+        """Fix the error scale from ``y_t``, the first measured value not zero (at ``step``); rescale the window."""
         self.error_scale = error_scale([y_t])
-        self._scaled_by = (self.steps, y_t)
+        self._scaled_by = (step, y_t)
         if self.error_scale != 1.0:
             self._errors *= self.error_scale  # exact: a power of two; errors against zeros so far
 
@@ -401,15 +413,7 @@ class OnlineDynia:
             for row in behind:
                 self._lagged.step(self._stepper_input(row))
             self._same.check(outputs.T, last=False)
-            finite = np.isfinite(outputs).all(axis=0)
-            if not finite.all():
-                self._diverged |= ~finite
-                if self._diverged.all():
-                    raise ModelError(
-                        f"{self._model!r}: the simulation of every one of the {self._diverged.size} parameter "
-                        f"sets is not finite (NaN or overflow) by step {self.steps + count - 1}; check the model and "
-                        "the parameter ranges"
-                    )
+            self._mark_diverged(np.isfinite(outputs).all(axis=0), self.steps + count - 1)
             measured = ~np.isnan(y)
             errors = np.abs(np.subtract(outputs, y[:, None], out=outputs), out=outputs)  # |s - y| == |y - s|
             errors[~measured] = 0.0
@@ -421,8 +425,6 @@ class OnlineDynia:
                 totals *= self.error_scale
             if self.error_scale != 1.0:
                 errors[fixed_at or 0 :] *= self.error_scale
-                if fixed_at is not None:
-                    self._errors *= self.error_scale  # the ring's errors so far were against zeros
             if totals is not None:
                 add_record_errors(totals, errors[fixed_at or 0 :])
         for k in range(max(count - width, 0), count):
@@ -439,8 +441,7 @@ class OnlineDynia:
         if not nonzero.size:
             return None
         first = int(nonzero[0])
-        self.error_scale = error_scale([y[first]])
-        self._scaled_by = (self.steps + first, float(y[first]))
+        self._fix_scale(float(y[first]), self.steps + first)
         return first
 
     @property
@@ -558,22 +559,14 @@ class OnlineDynia:
             simulated = self._stepper.step(u_t)
             self._same.check(simulated[:, None], last=False)  # refused by replay, which sees the whole record
             np.isfinite(simulated, out=self._finite)
-            if not self._finite.all():
-                self._diverged |= ~self._finite
-                if self._diverged.all():
-                    # As dynia.run: nothing is left to rank, and NaN results would pass for a quiet window.
-                    raise ModelError(
-                        f"{self._model!r}: the simulation of every one of the {self._diverged.size} parameter "
-                        f"sets is not finite (NaN or overflow) by step {self.steps}; check the model and the "
-                        "parameter ranges"
-                    )
+            self._mark_diverged(self._finite, self.steps)
             if self.steps >= width:  # the lagged models take the step leaving the ring
                 self._lagged.step(self._stepper_input(self._recent_u[slot]))
             self._recent_u[slot], self._recent_y[slot] = u_t, y_t
             self._measured[slot] = y_t == y_t
             if self._measured[slot]:
                 if self._scaled_by is None and y_t != 0.0:
-                    self._fix_scale(y_t)
+                    self._fix_scale(y_t, self.steps)
                 self._largest = max(self._largest, abs(y_t))
                 self._window_errors(simulated, y_t, errors)
             else:

@@ -437,17 +437,12 @@ _FOLLOW_SOURCE = (
     *(option for option in _DATA if option.key not in ("data", "output_file")),
 )
 
-_FOLLOW_METHOD = (
-    setting_option("n_samples"),
-    setting_option("sampler"),
-    setting_option("n"),
-    Option("window", "text", _WINDOW_HELP, metavar="DURATION"),
-    setting_option("percentage"),
-    setting_option("bins"),
-    setting_option("conf_level"),
-    setting_option("flavour"),
-    setting_option("min_points"),
-    _SEED,
+# A follower analyses one trailing window a step, with no Monte Carlo error and nothing written but its tables.
+_FOLLOW_METHOD = tuple(
+    option
+    for option in _ANALYSE_METHOD
+    if option.key
+    in ("samples", "sampler", "n", "window", "percentage", "bins", "conf_level", "flavour", "min_points", "seed")
 )
 
 _FOLLOW_RUN = (
