@@ -161,6 +161,8 @@ class Follower:
         self.engine, self.source, self.model = engine, source, model
         self.bounds, self.settings = dict(bounds), settings
         self.tables = FollowerTables(engine, results, events, source.time_type, len(source.inputs))
+        with engine.connect() as connection:
+            self.tables.check_owned(connection, source)
         if restart:
             with engine.begin() as connection:
                 self.tables.drop(connection)
@@ -187,8 +189,7 @@ class Follower:
                 raise SettingsError(
                     f"the follower {self.tables.name!r} was started with {option} {_shown(options.get(option))}; "
                     f"this command gives {_shown(value)}: give its settings again, or --restart to start over "
-                    "(its results are dropped)",
-                    "restart",
+                    "(its results are dropped)"
                 )
         self.settings = dataclasses.replace(self.settings, seed=options["--seed"])
         self.progress = progress

@@ -461,3 +461,22 @@ def test_iso_text_times_and_repeated_rows_averaged(database_url):
         Follower(
             engine, Source(engine, "plant", time="time", inputs=["u"], output="y"), MODEL, BOUNDS, settings(), "other"
         ).poll()
+
+
+def test_tables_that_are_not_the_followers_are_neither_filled_nor_dropped(tmp_path):
+    """--results naming the source, or a table of the user's own, is refused, --restart or not: nothing is lost."""
+    engine = connect(f"sqlite:///{tmp_path}/plant.db")
+    u, y = record(100)
+    insert(engine, wide_table(engine), np.arange(100.0), u, y)
+    own = sa.Table("orders", sa.MetaData(), sa.Column("a", sa.Integer))
+    own.create(engine)
+    with engine.begin() as connection:
+        connection.execute(own.insert(), [dict(a=1)])
+    source = Source(engine, "plant", time="time", inputs=["u"], output="y")
+    for results, message in (("plant", "names the source table"), ("orders", "is not a dynia follow table")):
+        for restart in (False, True):
+            with pytest.raises(SettingsError, match=message):
+                Follower(engine, source, MODEL, BOUNDS, settings(), results, restart=restart)
+    with engine.connect() as connection:
+        assert connection.execute(sa.text("select count(*) from plant")).scalar_one() == 100
+        assert connection.execute(sa.text("select count(*) from orders")).scalar_one() == 1

@@ -535,6 +535,27 @@ class FollowerTables:
         """Make the tables that do not exist yet (one transaction)."""
         self._metadata.create_all(self.engine)
 
+    def check_owned(self, connection, source):
+        """Refuse tables this follower would write into that are not a follower's: the source, or a user's own.
+
+        A follower's results and steps tables come with its state table; a
+        results or steps table without one is somebody else's, which the
+        follower must neither fill nor drop (``--restart``).
+        """
+        for option, table in (("--results", self.results), ("--events", self.events)):
+            if table.name == source.name:
+                raise SettingsError(f"{option} names the source table {source.name!r}; give the follower its own")
+        inspector = _sqlalchemy().inspect(connection)
+        if inspector.has_table(self.state.name):
+            return
+        for table in (self.results, self.steps):
+            if inspector.has_table(table.name):
+                raise SettingsError(
+                    f"table {table.name!r} exists but is not a dynia follow table (there is no {self.state.name!r}); "
+                    "give --results another name",
+                    "results",
+                )
+
     def drop(self, connection):
         """Remove this follower: its results, steps and state tables and its rows of the events table."""
         for table in (self.results, self.steps, self.state):
