@@ -11,8 +11,16 @@ endif
 PY := $(ENV_DIR)/bin/python
 INSTALLED := $(ENV_DIR)/.dynia-installed
 
+# Every target runs on every core without the user asking for it (`make figures` renders the reports side by side),
+# each target's output printed whole when it ends so that the reports' logs do not interleave.
+CORES := $(shell nproc 2>/dev/null || echo 2)
+MAKEFLAGS += --jobs=$(CORES) --output-sync=target
+
 PACKAGE := $(wildcard dynia/*.py dynia/*/*.py)
 NOTEBOOKS := $(wildcard notebooks/*.py)
+# The reports that take longest start first, so that the cores are not left to one long report at the end.
+SLOWEST_FIRST := ch5_sampling_benchmark ch4_reidentification ch3_case_study_thesis_code ch4_window_and_complexity \
+	ch5_nonlinear_models ch3_case_study logging_system
 REPORTS := $(patsubst notebooks/%.py,reports/%.html,$(NOTEBOOKS))
 # The chapter-3 notebooks once more with code_path "thesis", each identifiability figure drawn as the
 # thesis's code draws it: reports/NAME_thesis_code.html, its figures in reports/figures/thesis_code/.
@@ -71,7 +79,8 @@ docs: $(INSTALLED)
 bench: $(INSTALLED)
 	$(PY) -m benchmarks.bench
 
-figures: $(REPORTS) $(THESIS_CODE_REPORTS)
+figures: $(foreach name,$(SLOWEST_FIRST),$(filter reports/$(name).html,$(REPORTS) $(THESIS_CODE_REPORTS))) \
+	$(REPORTS) $(THESIS_CODE_REPORTS)
 
 # Executed notebook and its HTML (input cells hidden) are redone only when the
 # notebook, the package or the parameter file changed.

@@ -263,7 +263,8 @@ for ax, name in zip(axes, ORDER):
     ax.set_ylim(0, 1)
     ax.set_ylabel(f"IC of {name}" + ("\n(narrowed in run 2)" if name in narrowed else ""))
     rain_axis = ax.twinx()
-    rain_axis.bar(days, rain, width=1.0, color="tab:cyan", alpha=0.5)
+    # one filled outline, not a bar per day: thousands of bars took most of the notebook's time to lay out and draw
+    rain_axis.stairs(rain, np.r_[days, days[-1] + 1] - 0.5, fill=True, color="tab:cyan", alpha=0.5)
     rain_axis.set_ylim(4 * rain.max(), 0)  # rain hangs from the top, out of the way of the IC
     rain_axis.set_ylabel("rain (mm/day)", fontsize="small")
 axes[0].legend(loc="upper left", fontsize="small", ncol=5)
