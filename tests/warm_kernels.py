@@ -1,6 +1,6 @@
 """Fill numba's on-disk cache of the engine's kernels once per run of the suite, its compile shared by the workers.
 
-On a fresh clone the cache is empty, and the first use of the kernels compiles them: some 75 s of one core. Under
+On a fresh clone the cache is empty, and the first use of the kernels compiles them: some 50 s of one core. Under
 pytest-xdist every worker, and every notebook kernel and command-line subprocess started before the cache is written,
 would compile the same kernels at once. Instead each worker, before its first test (tests/conftest.py), compiles its
 share of them, and loads the others' from the cache once they are written: the compile takes half the time on two
@@ -20,49 +20,55 @@ import numpy as np
 PATIENCE = 600
 
 
-def _record():
-    from dynia.models import FirstOrder
+def _records():
+    """A short record of each kind of linear model the kernels take apart: a lag model and a two-state one."""
+    from dynia.models import FirstOrder, SecondOrderDelay
 
     u = np.r_[np.zeros(5), np.ones(25)]
-    params = np.random.default_rng(0).uniform([0.5, 0.5], [4.0, 6.0], (40, 2))
-    y = FirstOrder().simulate([[2.0, 3.0]], u)[0]
-    return FirstOrder(), u, y, params
+    generator = np.random.default_rng(0)
+    lag = FirstOrder(), generator.uniform([0.5, 0.5], [4.0, 6.0], (200, 2)), [2.0, 3.0]
+    two_states = SecondOrderDelay(), generator.uniform([0.5, 0.5, 0.5, 0.0], [4.0, 6.0, 6.0, 2.0], (200, 4)), None
+    for model, params, truth in (lag, two_states):
+        yield model, u, model.simulate([truth if truth else params[0]], u)[0], params
 
 
 def _windows():
-    """kernels.analyse_windows (and analyse_windows_batched, which it calls): the windows of every run."""
+    """kernels.analyse_windows and analyse_windows_batched (with ic_error): the windows of every run."""
     from dynia.engine.windows import moving_window
 
-    model, u, y, params = _record()
-    moving_window(y, model.simulate(params, u), params, [[0.5, 4.0], [0.5, 6.0]], n=3, engine="numba", workers=1)
+    model, u, y, params = next(_records())
+    bounds = [[0.5, 4.0], [0.5, 6.0]]
+    for ic_error in (False, True):
+        moving_window(y, model.simulate(params, u), params, bounds, n=3, engine="numba", workers=1, ic_error=ic_error)
 
 
 def _fused_simulation():
     """kernels.simulate_window_sums: a linear model's simulation fused with the window sums, as dynia.run does it."""
     from dynia.engine.kernels import CompiledErrors
 
-    model, u, y, params = _record()
-    source = CompiledErrors(model, params, u, y, dt=1.0, x0="zero", workers=1)
-    try:
-        source.window_sums(0, u.size, (3, 3), np.zeros(params.shape[0]))
-    finally:
-        source.close()
+    for model, u, y, params in _records():
+        source = CompiledErrors(model, params, u, y, dt=1.0, x0="zero", workers=1)
+        try:
+            source.window_sums(0, u.size, (3, 3), np.zeros(params.shape[0]))
+        finally:
+            source.close()
 
 
 def _simulation():
     """kernels.simulate_errors: a linear model's outputs or error rows, for the fits and the other error sources."""
     from dynia.engine.kernels import CompiledErrors
 
-    model, u, y, params = _record()
-    source = CompiledErrors(model, params, u, y, dt=1.0, x0="zero", workers=1)
-    try:
-        list(source.output_chunks(u.size))
-    finally:
-        source.close()
+    for model, u, y, params in _records():
+        source = CompiledErrors(model, params, u, y, dt=1.0, x0="zero", workers=1)
+        try:
+            list(source.output_chunks(u.size))
+        finally:
+            source.close()
 
 
-# Worker i compiles shares i, i + n, ...: the windows (about 40 s) on one worker, the two simulations (about 30 s)
-# on the other, when there are two.
+# Worker i compiles shares i, i + n, ...: the windows (about 30 s) on one worker, the two simulations (about 20 s)
+# on the other, when there
+# are two. Each kernel compiles a lag model's path and the general one apart (a run compiles only the one it uses).
 SHARES = (_windows, _fused_simulation, _simulation)
 
 

@@ -76,17 +76,25 @@ __all__ = [
 ]
 
 
-def _jit(function):
+def _jit(function, **options):
     if not AVAILABLE:
         return function
     try:
         # Compiled once, then loaded from numba's on-disk cache: next to this module, else the user's cache directory.
-        return numba.njit(nogil=True, cache=True)(function)
+        return numba.njit(nogil=True, cache=True, **options)(function)
     except RuntimeError:  # neither is writable (a read-only install, no home): compile in every process instead
-        return numba.njit(nogil=True)(function)
+        return numba.njit(nogil=True, **options)(function)
 
 
-@_jit
+def _inner(function):
+    """:func:`_jit` for a helper that only compiled code calls: no wrappers for calls from Python.
+
+    Each wrapper is compiled with the function; leaving them out takes about a seventh off a first run's compile.
+    """
+    return _jit(function, no_cpython_wrapper=True, no_cfunc_wrapper=True)
+
+
+@_inner
 def _add_term(target, coefficient, source, first, start, stop):
     """target = coefficient*source (first term) or target += coefficient*source, over [start, stop)."""
     if first:
@@ -97,7 +105,7 @@ def _add_term(target, coefficient, source, first, start, stop):
             target[s] = target[s] + coefficient[s] * source[s]
 
 
-@_jit
+@_inner
 def _combine(target, coefficients, used, sources, start, stop):
     """target = sum of coefficients[term] * sources[term] over the used terms, in term order."""
     first = True
@@ -109,7 +117,6 @@ def _combine(target, coefficients, used, sources, start, stop):
         target[start:stop] = 0.0
 
 
-@_jit
 def simulate_errors(
     phi,
     gamma_now,
@@ -141,15 +148,14 @@ def simulate_errors(
     (sources: the states, then u[k-d], then u[k-d-1]). The loop runs over
     time outside and samples inside, as the numpy path does, so each pass
     is a contiguous vector loop. Returns the first (step, sample) whose
-    output is not finite, or (-1, -1).
+    output is not finite, or (-1, -1). One state and one common dead time (the lag models) take
+    :func:`_simulate_lag`, the others :func:`_general_errors`; chosen here, so that a run compiles
+    only the one it uses.
     """
-    n_states, n_samples = c.shape
-    lo, hi = sample_start, sample_stop
-    common_delay = delays.shape[0] == 1
-    # The fused lag loop assumes the state carries over; when every sample's pole
-    # underflows to 0 (a time constant far below dt) the general loop, which
-    # skips unused terms as the numpy path does, gives the same numbers.
-    if n_states == 1 and common_delay and state_terms[0, 0] and output_terms[0]:
+    # When every sample's pole underflows to 0 (a time constant far below dt) the general loop, which skips
+    # unused terms as the numpy path does, gives the same numbers as the lag loop, which assumes the state
+    # carries over.
+    if c.shape[0] == 1 and delays.shape[0] == 1 and state_terms[0, 0] and output_terms[0]:
         return _simulate_lag(
             phi[0, 0],
             gamma_now[0],
@@ -166,16 +172,61 @@ def simulate_errors(
             last_step,
             state[0],
             errors,
-            lo,
-            hi,
+            sample_start,
+            sample_stop,
             outputs,
         )
+    return _general_errors(
+        phi,
+        gamma_now,
+        gamma_prev,
+        c,
+        feed_now,
+        feed_prev,
+        delays,
+        state_terms,
+        output_terms,
+        padded_input,
+        measured,
+        first_step,
+        last_step,
+        state,
+        errors,
+        sample_start,
+        sample_stop,
+        outputs,
+    )
+
+
+@_jit
+def _general_errors(
+    phi,
+    gamma_now,
+    gamma_prev,
+    c,
+    feed_now,
+    feed_prev,
+    delays,
+    state_terms,
+    output_terms,
+    padded_input,
+    measured,
+    first_step,
+    last_step,
+    state,
+    errors,
+    sample_start,
+    sample_stop,
+    outputs,
+):
+    """:func:`simulate_errors` of any linear model but the lag models: term by term, as the numpy path."""
+    n_states, n_samples = c.shape
+    lo, hi = sample_start, sample_stop
     output_coefficients, state_coefficients = _coefficient_tables(phi, gamma_now, gamma_prev, c, feed_now, feed_prev)
     sources = np.empty((n_states + 2, n_samples))
     upcoming = np.empty((n_states, n_samples))
     output = np.empty(n_samples)
-    for i in range(n_states):
-        sources[i, lo:hi] = state[i, lo:hi]
+    _copy_states(sources, state, n_states, lo, hi)
     bad_step, bad_sample = -1, -1
     for j in range(errors.shape[0]):
         k = first_step + j
@@ -195,9 +246,16 @@ def simulate_errors(
             for s in range(lo, hi):
                 x = upcoming[i, s]
                 sources[i, s] = x if abs(x) >= FLUSH_BELOW else 0.0
-    for i in range(n_states):
-        state[i, lo:hi] = sources[i, lo:hi]
+    _copy_states(state, sources, n_states, lo, hi)
     return bad_step, bad_sample
+
+
+@_inner
+def _copy_states(target, source, n_states, lo, hi):
+    """target[:n_states, lo:hi] = source[:n_states, lo:hi], element by element: no shape check to compile."""
+    for i in range(n_states):
+        for s in range(lo, hi):
+            target[i, s] = source[i, s]
 
 
 # Samples a block of the fused kernel holds: its states, coefficients and sums (a dozen arrays of this length for one
@@ -207,7 +265,6 @@ def simulate_errors(
 FUSED_BLOCK = 1024
 
 
-@_jit
 def simulate_window_sums(
     phi,
     gamma_now,
@@ -232,6 +289,9 @@ def simulate_window_sums(
 ):
     """Simulate, error and window-sum samples [sample_start, sample_stop) in blocks, fused: no error matrix.
 
+    One state and one common dead time (the lag models) take :func:`_lag_window_sums`, the others
+    :func:`_general_window_sums`; chosen here, so that a run compiles only the one it uses.
+
     Runs the window ends e in ``steps`` = (from, to): step e (while inside
     the record) is simulated as :func:`simulate_errors` does, term by term,
     and its absolute error (0 where ``y`` is NaN) times ``scale`` enters the
@@ -248,58 +308,149 @@ def simulate_window_sums(
     :func:`dynia.engine.noise.add_record_errors` does. Returns the first
     (step, sample) whose output is not finite, or (-1, -1).
     """
-    n_states = c.shape[0]
+    if c.shape[0] == 1 and delays.shape[0] == 1 and state_terms[0, 0] and output_terms[0]:
+        return _lag_window_sums(
+            (phi[0, 0], gamma_now[0], gamma_prev[0], c[0], feed_now, feed_prev),
+            delays[0],
+            state_terms[0],
+            output_terms,
+            padded_input,
+            y,
+            scale,
+            steps,
+            first_end,
+            state[0],
+            ring,
+            sums,
+            totals,
+            sample_start,
+            sample_stop,
+        )
+    return _general_window_sums(
+        phi,
+        gamma_now,
+        gamma_prev,
+        c,
+        feed_now,
+        feed_prev,
+        delays,
+        state_terms,
+        output_terms,
+        padded_input,
+        y,
+        scale,
+        steps,
+        first_end,
+        state,
+        ring,
+        sums,
+        totals,
+        sample_start,
+        sample_stop,
+    )
+
+
+@_jit
+def _lag_window_sums(
+    coefficients,
+    delay,
+    state_terms,
+    output_terms,
+    padded_input,
+    y,
+    scale,
+    steps,
+    first_end,
+    state,
+    ring,
+    sums,
+    totals,
+    sample_start,
+    sample_stop,
+):
+    """:func:`simulate_window_sums` of a lag model, block by block (:func:`_fused_lag_block`)."""
     bad_step, bad_sample = -1, -1
     for block_start in range(sample_start, sample_stop, FUSED_BLOCK):
         block_stop = min(block_start + FUSED_BLOCK, sample_stop)
-        if n_states == 1 and delays.shape[0] == 1 and state_terms[0, 0] and output_terms[0]:
-            step, sample = _fused_lag_block(
-                (phi[0, 0], gamma_now[0], gamma_prev[0], c[0], feed_now, feed_prev),
-                delays[0],
-                state_terms[0],
-                output_terms,
-                padded_input,
-                y,
-                scale,
-                steps,
-                first_end,
-                state[0],
-                ring,
-                sums,
-                totals,
-                block_start,
-                block_stop,
-            )
-        else:
-            step, sample = _fused_block(
-                phi,
-                gamma_now,
-                gamma_prev,
-                c,
-                feed_now,
-                feed_prev,
-                delays,
-                state_terms,
-                output_terms,
-                padded_input,
-                y,
-                scale,
-                steps,
-                first_end,
-                state,
-                ring,
-                sums,
-                totals,
-                block_start,
-                block_stop,
-                n_states,
-            )
+        step, sample = _fused_lag_block(
+            coefficients,
+            delay,
+            state_terms,
+            output_terms,
+            padded_input,
+            y,
+            scale,
+            steps,
+            first_end,
+            state,
+            ring,
+            sums,
+            totals,
+            block_start,
+            block_stop,
+        )
         if step >= 0 and (bad_step < 0 or step < bad_step):
             bad_step, bad_sample = step, sample
     return bad_step, bad_sample
 
 
 @_jit
+def _general_window_sums(
+    phi,
+    gamma_now,
+    gamma_prev,
+    c,
+    feed_now,
+    feed_prev,
+    delays,
+    state_terms,
+    output_terms,
+    padded_input,
+    y,
+    scale,
+    steps,
+    first_end,
+    state,
+    ring,
+    sums,
+    totals,
+    sample_start,
+    sample_stop,
+):
+    """:func:`simulate_window_sums` of any other linear model, block by block (:func:`_fused_block`)."""
+    n_states = c.shape[0]
+    bad_step, bad_sample = -1, -1
+    for block_start in range(sample_start, sample_stop, FUSED_BLOCK):
+        block_stop = min(block_start + FUSED_BLOCK, sample_stop)
+        step, sample = _fused_block(
+            phi,
+            gamma_now,
+            gamma_prev,
+            c,
+            feed_now,
+            feed_prev,
+            delays,
+            state_terms,
+            output_terms,
+            padded_input,
+            y,
+            scale,
+            steps,
+            first_end,
+            state,
+            ring,
+            sums,
+            totals,
+            block_start,
+            block_stop,
+            n_states,
+        )
+        if step >= 0 and (bad_step < 0 or step < bad_step):
+            bad_step, bad_sample = step, sample
+    return bad_step, bad_sample
+
+
+@_inner
 def _fused_block(
     phi,
     gamma_now,
@@ -354,7 +505,7 @@ def _fused_block(
     return bad_step, bad_sample
 
 
-@_jit
+@_inner
 def _fused_lag_block(
     coefficients,
     delay,
@@ -415,12 +566,14 @@ def _fused_lag_block(
                 if not np.isfinite(window[i]):
                     high[i], low[i] = _window_sum(block_ring, (e + 1) % slots, slots, slots, i)
                     window[i] = high[i] + low[i]
-    state[lo:hi] = x_block
-    totals[lo:hi] = total
+    # Element by element: a slice assignment would compile numba's shape check and its message, seconds of a first run.
+    for i in range(width):
+        state[lo + i] = x_block[i]
+        totals[lo + i] = total[i]
     return bad_step, bad_sample
 
 
-@_jit
+@_inner
 def _lag_samples(coefficients, flags, inputs, lo, x_block, total, error, high, low, leaving, window):
     """One step of :func:`_fused_lag_block` for its samples: simulate, err, advance and, when sliding, slide.
 
@@ -458,7 +611,7 @@ def _lag_samples(coefficients, flags, inputs, lo, x_block, total, error, high, l
     return finite, bad
 
 
-@_jit
+@_inner
 def _fused_step(tables, sources, upcoming, output, error, padded_input, delays, y, e, scale, total):
     """Step e of a fused block: its scaled errors into ``error``, added to ``total``; the states advanced.
 
@@ -488,7 +641,7 @@ def _fused_step(tables, sources, upcoming, output, error, padded_input, delays, 
     return bad
 
 
-@_jit
+@_inner
 def _fused_sums(ring, lo, hi, e, first_end, error, high, low, sums):
     """Step e's ``error`` of samples [lo, hi) into the ring and the window sums ending at e (see the caller)."""
     width = hi - lo
@@ -515,7 +668,7 @@ def _fused_sums(ring, lo, hi, e, first_end, error, high, low, sums):
         _round_sums(ring[:, lo:hi], (e + 1) % slots, slots, slots, high, low, sums[e - first_end, lo:hi])
 
 
-@_jit
+@_inner
 def _coefficient_tables(phi, gamma_now, gamma_prev, c, feed_now, feed_prev):
     """The recursion's coefficients per source (the states, then u[k-d], then u[k-d-1]), every sample's.
 
@@ -524,20 +677,21 @@ def _coefficient_tables(phi, gamma_now, gamma_prev, c, feed_now, feed_prev):
     """
     n_states, n_samples = c.shape
     output_coefficients = np.empty((n_states + 2, n_samples))
-    for i in range(n_states):
-        output_coefficients[i] = c[i]
-    output_coefficients[n_states] = feed_now
-    output_coefficients[n_states + 1] = feed_prev
     state_coefficients = np.empty((n_states, n_states + 2, n_samples))
-    for i in range(n_states):
-        for j in range(n_states):
-            state_coefficients[i, j] = phi[i, j]
-        state_coefficients[i, n_states] = gamma_now[i]
-        state_coefficients[i, n_states + 1] = gamma_prev[i]
+    # Element by element: row assignments would compile numba's shape check and its message, seconds of a first run.
+    for s in range(n_samples):
+        for i in range(n_states):
+            output_coefficients[i, s] = c[i, s]
+            for j in range(n_states):
+                state_coefficients[i, j, s] = phi[i, j, s]
+            state_coefficients[i, n_states, s] = gamma_now[i, s]
+            state_coefficients[i, n_states + 1, s] = gamma_prev[i, s]
+        output_coefficients[n_states, s] = feed_now[s]
+        output_coefficients[n_states + 1, s] = feed_prev[s]
     return output_coefficients, state_coefficients
 
 
-@_jit
+@_inner
 def _delayed_inputs(now, previous, padded_input, delays, k, lo, hi):
     """u[k-d] into ``now`` and u[k-d-1] into ``previous`` for samples [lo, hi): one dead time, or one each."""
     if delays.shape[0] == 1:
@@ -549,7 +703,7 @@ def _delayed_inputs(now, previous, padded_input, delays, k, lo, hi):
             previous[s] = padded_input[max(k - delays[s] - 1, -1) + 1]
 
 
-@_jit
+@_inner
 def _output_row(row, output, y, lo, hi, outputs):
     """``row[lo:hi]`` = the ``output`` itself, or (without ``outputs``) its error (see :func:`_absolute_errors`)."""
     if outputs:
@@ -558,7 +712,7 @@ def _output_row(row, output, y, lo, hi, outputs):
         _absolute_errors(row, output, y, lo, hi)
 
 
-@_jit
+@_inner
 def _absolute_errors(row, output, y, lo, hi):
     """``row[lo:hi]`` = |output - y|, or 0 where the measurement ``y`` is missing (NaN)."""
     if np.isnan(y):
@@ -636,7 +790,7 @@ def _simulate_lag(
     return bad_step, bad_sample
 
 
-@_jit
+@_inner
 def _select(values, length, k):
     """Rearrange ``values[:length]`` so that position k holds its k-th smallest; return it.
 
@@ -784,7 +938,7 @@ def _costs(sums, present, cost):
         cost[s] = mae * mae
 
 
-@_jit
+@_inner
 def _stable_argsort(values, length, order, buffer):
     """``order[:length]`` = stable ascending argsort of ``values[:length]`` (bottom-up merge sort)."""
     for i in range(length):
@@ -819,7 +973,7 @@ def _stable_argsort(values, length, order, buffer):
             order[i] = source[i]
 
 
-@_jit
+@_inner
 def _two_sum(a, b):
     """``a + b`` rounded, and its rounding error exactly (Knuth's TwoSum): the two add up to a + b exactly."""
     total = a + b
@@ -827,7 +981,7 @@ def _two_sum(a, b):
     return total, (a - (total - virtual)) + (b - virtual)
 
 
-@_jit
+@_inner
 def _slide(high, low, entering, leaving):
     """The compensated window sum (``high``, ``low``) with one step entering and one leaving."""
     high, first = _two_sum(high, entering)
@@ -835,7 +989,7 @@ def _slide(high, low, entering, leaving):
     return high, low + (first + second)
 
 
-@_jit
+@_inner
 def _window_sum(rows, first, period, slots, s):
     """Sample s's compensated sum of ``slots`` rows from ``first`` (row indices modulo ``period``), as (high, low).
 
@@ -855,7 +1009,7 @@ def _window_sum(rows, first, period, slots, s):
     return plain, 0.0
 
 
-@_jit
+@_inner
 def _window_sums(rows, measured, t, slots, present, running):
     """Window t's error sums and measured points: row t of given sums (``slots`` = 0), or the running sums.
 
@@ -898,7 +1052,7 @@ def _next_window(errors, measured, t, slots, present, high, low, total):
     return present + measured[t + slots - 1] - measured[t - 1]
 
 
-@_jit
+@_inner
 def _round_sums(rows, first, period, slots, high, low, total):
     """``total`` = high + low, rounded once; a sum gone non-finite is redone from the window's rows.
 
@@ -919,7 +1073,7 @@ def _round_sums(rows, first, period, slots, high, low, total):
                 total[s] = high[s] + low[s]
 
 
-@_jit
+@_inner
 def _read_off(cost, count, candidates, found, threshold, rules, positions, t, ic, ci, median, gradient, whole, work):
     """Behavioural set of one window's ``cost`` and what it gives: ``ic``, ``ci``, ``median`` and ``gradient`` at t.
 
@@ -974,7 +1128,7 @@ def _read_off(cost, count, candidates, found, threshold, rules, positions, t, ic
 _ONE = np.uint64(1)
 
 
-@_jit
+@_inner
 def _popcount(word):
     """How many bits of the uint64 ``word`` are set (the bit-parallel count: pairs, nibbles, bytes, then a sum)."""
     word = word - ((word >> _ONE) & np.uint64(0x5555555555555555))
@@ -999,14 +1153,14 @@ def _ranked_order_statistics(ranks, ordered, selected, count, positions, words):
         rank = ranks[selected[i]]
         words[rank >> 6] |= _ONE << np.uint64(rank & 63)
     # Ascending targets: each walk goes on from the word the last one stopped in.
-    lower, w, seen = _set_bit_at(words, positions[0], 0, 0)
+    lower, w, seen = _set_bit_at(words, positions[0], np.int64(0), np.int64(0))  # not literals: one compile
     middle, w, seen = _set_bit_at(words, (count - 1) // 2, w, seen)
     upper, w, seen = _set_bit_at(words, positions[1], w, seen)
     words[:] = 0
     return ordered[lower], ordered[upper], ordered[middle]
 
 
-@_jit
+@_inner
 def _set_bit_at(words, target, w, seen):
     """Where the ``target``-th set bit (0-based) of ``words`` lies, counted on from word ``w`` after ``seen`` bits.
 
@@ -1026,7 +1180,7 @@ def _set_bit_at(words, target, w, seen):
         bit += 1
 
 
-@_jit
+@_inner
 def _likelihood_weights(chosen, count, weights):
     """``weights[:count]`` = the normalised likelihoods 1 - cost of the set's costs ``chosen``; returns the smallest.
 
@@ -1055,7 +1209,7 @@ def _likelihood_weights(chosen, count, weights):
     return smallest
 
 
-@_jit
+@_inner
 def _gradient_column(bin_of, selected, weights, count, column):
     """The likelihood mass of the set ``selected[:count]`` in each bin (``bin_of``, every sample's), into ``column``."""
     column[:] = 0.0
@@ -1063,7 +1217,7 @@ def _gradient_column(bin_of, selected, weights, count, column):
         column[bin_of[selected[i]]] += weights[i]
 
 
-@_jit
+@_inner
 def _bin_indices(columns, lows, highs, bins):
     """Every sample's bin of the gradient map, per parameter: which of ``bins`` equal bins of [low, high] holds it."""
     n_params, n_samples = columns.shape
@@ -1076,7 +1230,7 @@ def _bin_indices(columns, lows, highs, bins):
     return bin_of
 
 
-@_jit
+@_inner
 def _cld_read_off(values, weights, order, count, level):
     """The first of ``values[:count]``, sorted by ``order``, whose cumulative likelihood reaches ``level``."""
     cumulative = 0.0
@@ -1093,7 +1247,7 @@ def _cld_read_off(values, weights, order, count, level):
 _FEW = 12
 
 
-@_jit
+@_inner
 def _keep(buffer, size, seen, value, larger):
     """Insert ``value``, the ``seen``-th value met, into ``buffer[:size]``: the smallest met so far, ascending.
 
@@ -1108,7 +1262,7 @@ def _keep(buffer, size, seen, value, larger):
         buffer[j + 1] = value
 
 
-@_jit
+@_inner
 def _extreme_order_statistics(values, count, first, last, scratch):
     """The ``first``-th smallest and ``last``-th smallest of ``values[:count]``, both within ``_FEW`` of an end.
 
@@ -1125,7 +1279,7 @@ def _extreme_order_statistics(values, count, first, last, scratch):
     return low[small - 1], high[large - 1], np.nan
 
 
-@_jit
+@_inner
 def _order_statistics(values, count, positions, with_median, scratch):
     """The ``positions[0]``-th and ``positions[1]``-th smallest of ``values[:count]``, and the median's if asked.
 
@@ -1220,47 +1374,73 @@ def analyse_windows_batched(
     the candidates of the behavioural set (the batches' among them) and of
     the noise floor's quantile.
     """
-    n_samples = rows.shape[1]
     n_batches = batch_counts.shape[0]
-    total, cost, scratch = np.empty(n_samples), np.empty(n_samples), np.empty(n_samples)
-    high, low = np.empty(n_samples), np.empty(n_samples)
-    candidates = (np.empty(n_samples, dtype=np.int64), np.empty(n_samples))
-    rules = (columns, lows, highs, levels, weighted, ranks, ordered, _bin_indices(columns, lows, highs, bins))
-    work = _workspace(n_samples, count)
-    bracket = (np.nan, np.nan)
-    quantile_bracket = (np.nan, np.nan)
-    last_threshold = np.nan
-    last_upper = np.nan
+    window = _window_state(rows.shape[1], count, columns, lows, highs, bins, levels, weighted, ranks, ordered)
+    cost, candidates, work, track = window[1], window[2], window[4], window[5]
+    results = (ic, ci, median, gradient, extreme_costs)
     batches = _batch_state(batch_counts, batch_positions, ranks)
     batch_brackets = batches[5]
     present = 0.0
     for t in range(m):
-        sums, present = _window_sums(rows, measured, t, slots, present, (high, low, total))
+        sums, present = _window_sums(rows, measured, t, slots, present, window[0])
         if present < min_points:
-            _blank_window(t, ic, ci, median, gradient, extreme_costs, batch_ic, batch_ci)
+            _blank_window(t, results, batch_ic, batch_ci)
             continue
         _costs(sums, present, cost)
         # The candidates reach the bracket's top, and every batch's, so that they hold the batches' sets too.
-        bound = bracket[1]
+        bound = track[1]
         for b in range(n_batches):
             bound = max(bound, batch_brackets[b, 1]) if batch_brackets[b, 1] == batch_brackets[b, 1] else bound
-        found = _candidates(cost, 0, 1, count, bound, candidates)
-        threshold, density = _select_near(candidates[1], found, count - 1, bracket, scratch)
-        smallest = _read_off(
-            cost, count, candidates, found, threshold, rules, positions, t, ic, ci, median, gradient, True, work
-        )
-        upper, quantile_density = _select_near(cost, n_samples, upper_position, quantile_bracket, scratch)
-        bracket, last_threshold = _next_bracket(threshold, last_threshold, density), threshold
-        quantile_bracket, last_upper = _next_bracket(upper, last_upper, quantile_density), upper
-        extreme_costs[0, t] = smallest
-        extreme_costs[1, t] = threshold
-        extreme_costs[2, t] = upper
-        if n_batches == 0:
-            continue
-        _read_off_batches(cost, candidates, found, batches, rules, t, batch_ic, batch_ci, median, gradient, work)
+        found = _analyse_window(t, bound, count, upper_position, positions, window, results)
+        _read_off_batches(cost, candidates, found, batches, window[3], t, batch_ic, batch_ci, median, gradient, work)
 
 
-@_jit
+@_inner
+def _window_state(n_samples, count, columns, lows, highs, bins, levels, weighted, ranks, ordered):
+    """What :func:`_analyse_window` works in and carries from window to window, made once a block.
+
+    (running, cost, candidates, rules, work, track): the running sums
+    (high, low, total) of :func:`_window_sums`; a window's costs; its
+    candidates (indices, costs); the read-off's rules (see
+    :func:`_read_off`); its workspace (:func:`_workspace`); and ``track``,
+    the brackets of the threshold and of the quantile (see
+    :func:`_next_bracket`) and their last values, NaN before the first window.
+    """
+    running = (np.empty(n_samples), np.empty(n_samples), np.empty(n_samples))
+    candidates = (np.empty(n_samples, dtype=np.int64), np.empty(n_samples))
+    rules = (columns, lows, highs, levels, weighted, ranks, ordered, _bin_indices(columns, lows, highs, bins))
+    track = np.full(6, np.nan)
+    return running, np.empty(n_samples), candidates, rules, _workspace(n_samples, count), track
+
+
+@_inner
+def _analyse_window(t, bound, count, upper_position, positions, window, results):
+    """Window t from its costs (``window[1]``): its behavioural set, read-off and extreme costs, into ``results``.
+
+    The candidates are every cost up to ``bound`` (at least the bracket's
+    top, which the threshold is searched within); ``window`` is
+    :func:`_window_state`'s, whose brackets move on. Returns how many
+    candidates there were.
+    """
+    _, cost, candidates, rules, work, track = window
+    ic, ci, median, gradient, extreme_costs = results
+    scratch = work[0]
+    found = _candidates(cost, 0, 1, count, bound, candidates)
+    threshold, density = _select_near(candidates[1], found, count - 1, (track[0], track[1]), scratch)
+    smallest = _read_off(
+        cost, count, candidates, found, threshold, rules, positions, t, ic, ci, median, gradient, True, work
+    )
+    upper, quantile_density = _select_near(cost, cost.shape[0], upper_position, (track[2], track[3]), scratch)
+    track[0], track[1] = _next_bracket(threshold, track[4], density)
+    track[2], track[3] = _next_bracket(upper, track[5], quantile_density)
+    track[4], track[5] = threshold, upper
+    extreme_costs[0, t] = smallest
+    extreme_costs[1, t] = threshold
+    extreme_costs[2, t] = upper
+    return found
+
+
+@_inner
 def _batch_state(counts, positions, ranks):
     """What :func:`_read_off_batches` carries from window to window, for batches of these ``counts``.
 
@@ -1292,7 +1472,7 @@ def _batch_state(counts, positions, ranks):
     )
 
 
-@_jit
+@_inner
 def _read_off_batches(cost, candidates, found, batches, rules, t, batch_ic, batch_ci, median, gradient, work):
     """Every Monte Carlo batch's IC and limits at window t, from the population's ``candidates``.
 
@@ -1346,7 +1526,7 @@ def _read_off_batches(cost, candidates, found, batches, rules, t, batch_ic, batc
             batch_ic[b, p, t] = 1 - (limits[b, 1] - limits[b, 0]) / (highs[p] - lows[p])
 
 
-@_jit
+@_inner
 def _batch_limits(selected, counts, positions, ranks, ordered, at_rank, words, limits):
     """Every batch's thesis limits for one parameter, into ``limits`` (n_batches, 2): order statistics of its set.
 
@@ -1366,7 +1546,7 @@ def _batch_limits(selected, counts, positions, ranks, ordered, at_rank, words, l
     words[:] = 0
 
 
-@_jit
+@_inner
 def _walk_to_limits(words, at_rank, ordered, targets, upward, limits):
     """``limits[b]`` = ``ordered`` at batch b's ``targets[b]``-th set rank (0-based) of ``words``, every batch.
 
@@ -1392,7 +1572,7 @@ def _walk_to_limits(words, at_rank, ordered, targets, upward, limits):
                 seen[b] += 1
 
 
-@_jit
+@_inner
 def _workspace(n_samples, count):
     """The scratch arrays of :func:`_read_off`, made once a block.
 
@@ -1414,7 +1594,7 @@ def _workspace(n_samples, count):
     )
 
 
-@_jit
+@_inner
 def _batch_of(n_samples, n_batches):
     """The batch of every sample: sample s belongs to batch s mod n_batches (none without batches)."""
     batch_of = np.empty(n_samples if n_batches else 0, dtype=np.int64)
@@ -1424,9 +1604,10 @@ def _batch_of(n_samples, n_batches):
     return batch_of
 
 
-@_jit
-def _blank_window(t, ic, ci, median, gradient, extreme_costs, batch_ic, batch_ci):
+@_inner
+def _blank_window(t, results, batch_ic, batch_ci):
     """NaN for every result of window t, which has too few measured points."""
+    ic, ci, median, gradient, extreme_costs = results
     ic[:, t] = np.nan
     ci[:, t, :] = np.nan
     median[:, t] = np.nan
@@ -1437,7 +1618,7 @@ def _blank_window(t, ic, ci, median, gradient, extreme_costs, batch_ic, batch_ci
         batch_ci[b, :, t, :] = np.nan
 
 
-@_jit
+@_inner
 def _deal_candidates(candidates, found, batch_of, batch_candidates, batch_found):
     """Deal the population's ``candidates`` (indices, costs) to their batches: row b of ``batch_candidates``'s.
 
@@ -1503,34 +1684,17 @@ def analyse_windows(
     (0-based, the noise floor's population quantile) of every window;
     windows with fewer than ``min_points`` measured points get NaN.
     """
-    n_params = columns.shape[0]
-    analyse_windows_batched(
-        rows,
-        measured,
-        m,
-        slots,
-        count,
-        upper_position,
-        columns,
-        ranks,
-        ordered,
-        lows,
-        highs,
-        bins,
-        positions,
-        levels,
-        weighted,
-        min_points,
-        ic,
-        ci,
-        median,
-        gradient,
-        extreme_costs,
-        np.empty(0, dtype=np.int64),
-        np.empty((0, 2), dtype=np.int64),
-        np.empty((0, n_params, m)),
-        np.empty((0, n_params, m, 2)),
-    )
+    window = _window_state(rows.shape[1], count, columns, lows, highs, bins, levels, weighted, ranks, ordered)
+    results = (ic, ci, median, gradient, extreme_costs)
+    no_batches = (np.empty((0, 1, 1)), np.empty((0, 1, 1, 2)))
+    present = 0.0
+    for t in range(m):
+        sums, present = _window_sums(rows, measured, t, slots, present, window[0])
+        if present < min_points:
+            _blank_window(t, results, *no_batches)
+            continue
+        _costs(sums, present, window[1])
+        _analyse_window(t, window[5][1], count, upper_position, positions, window, results)
 
 
 def parameter_ranks(columns):
@@ -1771,5 +1935,12 @@ def compiled():
     """
     return AVAILABLE and any(
         kernel.signatures
-        for kernel in (simulate_errors, simulate_window_sums, analyse_windows, analyse_windows_batched)
+        for kernel in (
+            _simulate_lag,
+            _general_errors,
+            _lag_window_sums,
+            _general_window_sums,
+            analyse_windows,
+            analyse_windows_batched,
+        )
     )
