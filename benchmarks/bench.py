@@ -52,6 +52,11 @@ process so that its peak resident memory (``ru_maxrss``) is its own.
     followed by a poll (the per-step update, the database's round trip and
     the checkpoint), CPU and wall time per row (goal: at most 5 ms).
 
+13. The first run: the README's quick start in a fresh process with numba's
+    cache in an empty folder, then again with it filled, CPU time of the
+    child processes beside the wall clock; goal <= 10 and <= 2 CPU-s. And
+    ``dynia --help`` / ``dynia analyse --help`` there, which compile nothing.
+
 ``long-record``: a year of 1 Hz data in bounded memory, :func:`dynia.run`
 with ``dtype="float32"`` and ``store`` (a netCDF file in a temporary folder)
 on 10^4 samples x 3x10^7 steps (``--long-samples``, ``--long-steps``; about
@@ -662,6 +667,55 @@ def _follow_steady(url, engine, log, first, rows, n_samples):
     )
 
 
+# The README's quick start, as a newcomer runs it in a fresh process.
+QUICK_START = """
+import numpy as np
+import dynia
+
+u = np.r_[np.zeros(50), np.full(150, 35.0), np.zeros(100)]
+y = dynia.models.FirstOrder().simulate([[2.0, 3.0]], u)[0]
+y = y + np.random.default_rng(0).normal(0, 0.5, y.size)
+res = dynia.run(u, y, dynia.models.FirstOrder(), {"K": (0, 7), "T": (0, 7)}, n_samples=2000, n=10, percentage=10, rng=1)
+assert res.ic.shape == (2, 300)
+"""
+
+
+def _child_seconds(command, cache):
+    """CPU (user + system) and wall seconds of ``command`` in a fresh process, numba's cache in ``cache``."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    subprocess.run(command, check=True, capture_output=True, env={**os.environ, "NUMBA_CACHE_DIR": str(cache)})
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime, wall
+
+
+def _case_cold_start():
+    """The quick start in a fresh process with an empty numba cache, then with it filled; the help compiles nothing."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as folder:
+        cache = Path(folder) / "numba"
+        cache.mkdir()
+        script = Path(folder) / "quick_start.py"
+        script.write_text(QUICK_START)
+        helps = [
+            _child_seconds([sys.executable, "-m", "dynia.cli", *words, "--help"], cache) for words in ([], ["analyse"])
+        ]
+        help_files = sum(1 for _ in cache.rglob("*"))
+        cold = _child_seconds([sys.executable, str(script)], cache)
+        warm = _child_seconds([sys.executable, str(script)], cache)
+    return dict(
+        cold_cpu_s=cold[0],
+        cold_wall_s=cold[1],
+        warm_cpu_s=warm[0],
+        warm_wall_s=warm[1],
+        help_cpu_s=[cpu for cpu, _ in helps],
+        files_cached_by_help=help_files,
+        machine=_machine(),
+    )
+
+
 def _machine():
     """What the ratios were measured on: processor, cores, load."""
     model = "unknown processor"
@@ -690,6 +744,7 @@ CASES = {
     "long-record": _case_long_record,
     "yardstick": _case_yardstick,
     "follow": _case_follow,
+    "cold-start": _case_cold_start,
 }
 
 
@@ -888,6 +943,17 @@ def _describe_follow(r):
     )
 
 
+def _describe_cold_start(r):
+    m = r["machine"]
+    return (
+        f"first run, the README's quick start (2 000 samples x 300 steps) in a fresh process "
+        f"({m['processor']}, load {m['load_average']:.1f}): empty numba cache {r['cold_cpu_s']:.1f} CPU-s "
+        f"({r['cold_wall_s']:.1f} s wall; goal <= 10 CPU-s), cache filled {r['warm_cpu_s']:.1f} CPU-s "
+        f"({r['warm_wall_s']:.1f} s wall; goal <= 2); `dynia --help` and `dynia analyse --help` "
+        f"{r['help_cpu_s'][0]:.1f} and {r['help_cpu_s'][1]:.1f} CPU-s, {r['files_cached_by_help']} files compiled"
+    )
+
+
 _DESCRIPTIONS = {
     "follow": _describe_follow,
     "yardstick": _describe_yardstick,
@@ -902,6 +968,7 @@ _DESCRIPTIONS = {
     "long-record": _describe_long_record,
     "cli-500000-rows": _describe_cli_500000_rows,
     "sampling-example1": _describe_sampling_example1,
+    "cold-start": _describe_cold_start,
 }
 
 

@@ -1125,13 +1125,13 @@ def _shows_progress(options):
 def _announce_compilation(options, settings):
     """Say so before a run that may compile the numba kernels: the first of a process, on the compiled engine.
 
-    numba alone finds out whether its on-disk cache holds them (a second or so) or they compile (seconds to a
-    minute, once after dynia or numba changes), hence "unless cached".
+    numba alone finds out whether its on-disk cache holds them (a second or so) or they compile (20-30 s of one core
+    here, once after dynia or numba changes), hence "unless cached".
     """
     if _shows_progress(options) and not kernels.compiled() and compiled_engine(settings.engine, settings.flavour):
         print(
             "dynia: compiling the analysis kernels unless numba cached them "
-            "(once after installing or upgrading dynia: up to a minute)...",
+            "(once after installing or upgrading dynia: 20-30 s)...",
             file=sys.stderr,
         )
 

@@ -1930,7 +1930,7 @@ def compiled():
     """Whether a kernel of the run has been compiled, or loaded from numba's cache, in this process already.
 
     False without numba. Before that, the first run either loads the kernels from the on-disk cache that an
-    earlier process left (about a second) or compiles them (seconds to a minute, once after dynia or numba
+    earlier process left (about a second) or compiles them (20-30 s of one core, once after dynia or numba
     changes); which of the two, only numba finds out.
     """
     return AVAILABLE and any(
