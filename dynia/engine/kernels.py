@@ -577,17 +577,18 @@ def _fused_lag_block(
 def _lag_samples(coefficients, flags, inputs, lo, x_block, total, error, high, low, leaving, window):
     """One step of :func:`_fused_lag_block` for its samples: simulate, err, advance and, when sliding, slide.
 
+    Three passes over the samples, each writing at most four arrays: a single loop writing all seven
+    compiled to scalar code, the passes vectorise. Each sample's arithmetic is the single loop's.
     Returns whether every output was finite and how many window sums were not.
     """
     phi, gamma_now, gamma_prev, c, feed_now, feed_prev = coefficients
     now_out, prev_out, now_state, prev_state = flags
     now, previous, y_e, missing, advance, sliding, scale = inputs
+    width = x_block.shape[0]
     finite = True
-    bad = 0
-    for i in range(x_block.shape[0]):
+    for i in range(width):
         s = lo + i
-        x = x_block[i]
-        output = c[s] * x
+        output = c[s] * x_block[i]
         if now_out:
             output = output + feed_now[s] * now
         if prev_out:
@@ -596,16 +597,20 @@ def _lag_samples(coefficients, flags, inputs, lo, x_block, total, error, high, l
         value = (0.0 if missing else abs(output - y_e)) * scale
         error[i] = value
         total[i] = total[i] + value
-        if advance:
-            x = phi[s] * x
+    if advance:
+        for i in range(width):
+            s = lo + i
+            x = phi[s] * x_block[i]
             if now_state:
                 x = x + gamma_now[s] * now
             if prev_state:
                 x = x + gamma_prev[s] * previous
             x_block[i] = x if abs(x) >= FLUSH_BELOW else 0.0
-        if sliding:
-            high[i], low[i] = _slide(high[i], low[i], value, leaving[i])
-            leaving[i] = value
+    bad = 0
+    if sliding:
+        for i in range(width):
+            high[i], low[i] = _slide(high[i], low[i], error[i], leaving[i])
+            leaving[i] = error[i]
             window[i] = high[i] + low[i]
             bad += not np.isfinite(window[i])
     return finite, bad
