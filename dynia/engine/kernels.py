@@ -49,6 +49,15 @@ sorted once per run (a small set's by selection).
 
 The kernels release the GIL, so the engine's thread pool runs them on every
 core. This module needs numba; :data:`AVAILABLE` says whether it imported.
+
+A process compiles only what its runs use, since a newcomer's first run
+waits for it: the lag models' kernels and the general ones are picked in
+Python, not by a branch that would compile both; the Monte Carlo batches'
+read-off compiles with ``ic_error`` only; helpers that only compiled code
+calls have no Python wrappers; and no kernel assigns one array slice to
+another, which would compile numba's shape check and its message. The
+README's quick start compiles in about 20 CPU-s (``make bench``,
+``cold-start``).
 """
 
 import numpy as np
@@ -149,7 +158,7 @@ def simulate_errors(
     time outside and samples inside, as the numpy path does, so each pass
     is a contiguous vector loop. Returns the first (step, sample) whose
     output is not finite, or (-1, -1). One state and one common dead time (the lag models) take
-    :func:`_simulate_lag`, the others :func:`_general_errors`; chosen here, so that a run compiles
+    ``_simulate_lag``, the others ``_general_errors``; chosen here, so that a run compiles
     only the one it uses.
     """
     # When every sample's pole underflows to 0 (a time constant far below dt) the general loop, which skips
@@ -289,8 +298,8 @@ def simulate_window_sums(
 ):
     """Simulate, error and window-sum samples [sample_start, sample_stop) in blocks, fused: no error matrix.
 
-    One state and one common dead time (the lag models) take :func:`_lag_window_sums`, the others
-    :func:`_general_window_sums`; chosen here, so that a run compiles only the one it uses.
+    One state and one common dead time (the lag models) take ``_lag_window_sums``, the others
+    ``_general_window_sums``; chosen here, so that a run compiles only the one it uses.
 
     Runs the window ends e in ``steps`` = (from, to): step e (while inside
     the record) is simulated as :func:`simulate_errors` does, term by term,
@@ -488,7 +497,8 @@ def _fused_block(
     high, low = np.zeros(width), np.zeros(width)
     total = totals[lo:hi].copy()
     for i in range(n_states):
-        sources[i] = state[i, lo:hi]
+        for s in range(width):
+            sources[i, s] = state[i, lo + s]
     bad_step, bad_sample = -1, -1
     for e in range(steps[0], steps[1]):
         if e <= last_step:
@@ -499,9 +509,10 @@ def _fused_block(
         else:
             error[:] = 0.0
         _fused_sums(ring, lo, hi, e, first_end, error, high, low, sums)
-    for i in range(n_states):
-        state[i, lo:hi] = sources[i]
-    totals[lo:hi] = total
+    for s in range(width):
+        for i in range(n_states):
+            state[i, lo + s] = sources[i, s]
+        totals[lo + s] = total[s]
     return bad_step, bad_sample
 
 
@@ -712,7 +723,8 @@ def _delayed_inputs(now, previous, padded_input, delays, k, lo, hi):
 def _output_row(row, output, y, lo, hi, outputs):
     """``row[lo:hi]`` = the ``output`` itself, or (without ``outputs``) its error (see :func:`_absolute_errors`)."""
     if outputs:
-        row[lo:hi] = output[lo:hi]
+        for s in range(lo, hi):
+            row[s] = output[s]
     else:
         _absolute_errors(row, output, y, lo, hi)
 
