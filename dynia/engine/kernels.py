@@ -1765,7 +1765,7 @@ class CompiledErrors:
         dt, x0 = check_dt(dt), check_x0(x0)
         system = model.discretise(params, dt, u.shape[0], steady=x0 == "steady")
         # A writable record always: numba types a read-only array (a pandas column under copy-on-write, pandas >= 3)
-        # apart, and would compile simulate_errors and simulate_window_sums a second time for it (half a minute).
+        # apart, and would compile the simulation kernels a second time for it.
         self.y = y if y.flags.writeable else y.copy()
         self._system = system
         n_states, n_samples = system.c.shape
