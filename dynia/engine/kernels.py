@@ -537,9 +537,10 @@ def _fused_lag_block(
     """:func:`_fused_block` for one state and one common dead time (the lag models): one loop per step.
 
     The recursion's arithmetic is :func:`_simulate_lag`'s, the sums'
-    :func:`_fused_sums`'; each step's samples run through one loop that
-    simulates, errs, slides the window sum and writes it, except at the
-    block's first window and past the record, which take :func:`_fused_sums`.
+    :func:`_fused_sums`'; each step's samples run through a few vector loops
+    (:func:`_lag_samples`) that simulate, err, slide the window sum and
+    write it, except at the block's first window and past the record, which
+    take :func:`_fused_sums`.
     """
     flags = (output_terms[1], output_terms[2], state_terms[1], state_terms[2])
     width = hi - lo
@@ -588,43 +589,47 @@ def _fused_lag_block(
 def _lag_samples(coefficients, flags, inputs, lo, x_block, total, error, high, low, leaving, window):
     """One step of :func:`_fused_lag_block` for its samples: simulate, err, advance and, when sliding, slide.
 
-    Three passes over the samples, each writing at most four arrays: a single loop writing all seven
-    compiled to scalar code, the passes vectorise. Each sample's arithmetic is the single loop's.
     Returns whether every output was finite and how many window sums were not.
     """
     phi, gamma_now, gamma_prev, c, feed_now, feed_prev = coefficients
     now_out, prev_out, now_state, prev_state = flags
     now, previous, y_e, missing, advance, sliding, scale = inputs
     width = x_block.shape[0]
-    finite = True
+    hi = lo + width
+    # Views from 0, so that every loop indexes with a counter LLVM knows to be non-negative: an index it cannot
+    # (lo + i) gets numba's wraparound and the loop no longer vectorises.
+    phi, gamma_now, gamma_prev = phi[lo:hi], gamma_now[lo:hi], gamma_prev[lo:hi]
+    c, feed_now, feed_prev = c[lo:hi], feed_now[lo:hi], feed_prev[lo:hi]
+    not_finite = 0
     for i in range(width):
-        s = lo + i
-        output = c[s] * x_block[i]
+        x = x_block[i]
+        output = c[i] * x
         if now_out:
-            output = output + feed_now[s] * now
+            output = output + feed_now[i] * now
         if prev_out:
-            output = output + feed_prev[s] * previous
-        finite &= np.isfinite(output)
+            output = output + feed_prev[i] * previous
+        not_finite += not np.isfinite(output)
         value = (0.0 if missing else abs(output - y_e)) * scale
         error[i] = value
         total[i] = total[i] + value
-    if advance:
-        for i in range(width):
-            s = lo + i
-            x = phi[s] * x_block[i]
+        if advance:
+            x = phi[i] * x
             if now_state:
-                x = x + gamma_now[s] * now
+                x = x + gamma_now[i] * now
             if prev_state:
-                x = x + gamma_prev[s] * previous
+                x = x + gamma_prev[i] * previous
             x_block[i] = x if abs(x) >= FLUSH_BELOW else 0.0
     bad = 0
     if sliding:
+        # Apart from the loop above, and the slide apart from the copies: LLVM vectorises a loop only while the arrays
+        # it writes are few enough to check for overlap at run time (about four).
         for i in range(width):
             high[i], low[i] = _slide(high[i], low[i], error[i], leaving[i])
+        for i in range(width):
             leaving[i] = error[i]
             window[i] = high[i] + low[i]
             bad += not np.isfinite(window[i])
-    return finite, bad
+    return not_finite == 0, bad
 
 
 @_inner
