@@ -9,51 +9,61 @@ default, or a cluster of many machines. Arrays follow the shape convention of
 How the work is split
 ---------------------
 The samples are drawn on the client exactly as :func:`dynia.run` draws them
-(same ``rng``, same samples), then cut into chunks of ``sample_chunks``
-consecutive samples, and time into chunks of ``time_chunks`` steps.
+(same ``rng``, same samples) and cut into chunks of ``sample_chunks``
+consecutive samples; time is cut into chunks of ``time_chunks`` steps.
+A window's behavioural set is selected among all samples at once, so the
+analysis of a window needs every sample in one place, but the simulation
+of a sample needs only its own state. Hence:
 
 0. One task per sample chunk asks the model which of its samples simulate to
    finite output (:meth:`dynia.models.base.Model.finite_samples`); the others are
    dropped, as :func:`dynia.run` drops them.
-1. The samples kept are simulated chunk by chunk of time as well: one task
-   per (sample chunk, time chunk) resumes the simulation of its samples
-   from the state the task of the previous time chunk left
-   (:meth:`dynia.models.base.Model.simulate_span`, bit for bit one uninterrupted
-   simulation), simulates the steps the time chunk's windows reach that no
-   earlier task simulated, and cuts, with the engine's own code, the time
-   chunk's window inputs: the absolute errors over the chunk and its halo
-   for the compiled engine, the window means for the numpy engine (a
-   sample's window mean depends on its own errors only, so those of a
-   sample chunk are the single-process engine's). It hands on the model's
-   state and the errors of the halo the next time chunk shares.
-2. One task per time chunk joins these blocks of all sample chunks, in
-   sample order, and runs the flavour's analysis: the behavioural set is
-   selected among all samples of a window at once. MCAT's likelihood carries
-   state from window to window, so for ``flavour="mcat"`` these tasks form a
-   chain, each taking the state the previous one left.
+1. The state pass: one task per sample chunk simulates the record once
+   (:meth:`dynia.models.base.Model.simulate_span`, bit for bit one
+   uninterrupted simulation) and keeps only every sample's state at the
+   step where each time chunk's windows begin, ``n`` steps before the
+   chunk (``2n`` for trailing windows), and its record total of absolute
+   error, added step by step as :func:`dynia.run` adds it (the noise floor
+   picks the record-best set by it). For the single-input linear models on
+   the compiled engine the pass is the engine's recursion in compiled code
+   without the window sums, the least work an analysis does.
+2. One task per time chunk resumes every sample from those states and
+   analyses its chunk whole, with :func:`dynia.run`'s own code, cut where
+   :func:`dynia.run` cuts the record: the fused kernel's window sums
+   (:class:`~dynia.engine.kernels.CompiledErrors`) for those linear models,
+   the errors of the resumed simulations otherwise; each re-simulates only
+   the ``2n`` steps of the halo. Its per-window results, (n_params, chunk
+   steps) and (n_params, n_bins, chunk steps), are all that travels back.
+   MCAT's likelihood carries state from window to window, so for
+   ``flavour="mcat"`` these tasks form a chain, each taking the state the
+   previous one left.
 
-Only the results, (n_params, n_steps) and (n_params, n_bins, n_steps), are
-gathered on the client. Time chunks are submitted as the analysis goes,
-at most two per worker thread submitted and not yet analysed, and each
-chunk's blocks are released once analysed; so the cluster holds the blocks
-of a few time chunks at a time, 8 x n_samples x time_chunks bytes each
-(plus the halos), never a sample chunk's whole record. ``python -m
-benchmarks.bench --case distributed`` runs 1e4 samples x 1e6 steps (a first-order
-model, default chunks: 400 steps per time chunk) on a local cluster: a
-worker's resident memory peaked at 565 MB with one worker and at 453 and
-449 MB with two (limit 1 GB each). Two workers were not faster than one on
-a 2-core machine shared with other jobs (load average 6): 459 s against
-298 s. The workers got about 0.6 of a core in all either way (181 s of CPU
-in 298 s; 157 + 91 s in 459 s), and two needed more CPU than one: each
-time chunk's analysis receives the other sample chunk's block from the
-other worker, and there are twice the stage-1 tasks.
+By default there is one sample chunk per worker thread and about four time
+chunks (at most 4e6 result values each), whole multiples of
+:func:`dynia.run`'s chunks of time. A task holds its chunk's results and
+:func:`dynia.run`'s working arrays of one of its chunks of time, never a
+sample's record: memory does not grow with the record.
+
+``python -m benchmarks.bench --case distributed`` runs 4 000 samples x 200
+000 steps (a first-order model) with :func:`dynia.run` in one thread and on
+local clusters of one and of two single-threaded workers, every process
+computing in one thread: on a 2-core AMD EPYC shared with other jobs (load
+average 10 to 11), :func:`dynia.run` took 51 s (20 s of CPU), one worker 75
+s (29 s of CPU, the client's 4.3 s included), two workers 58 s (28 s: 4.1 +
+11.8 + 11.8); one worker needed 1.47 times the CPU of :func:`dynia.run`, two
+0.96 times one's. Wall clock on that machine says little: two workers and
+the other jobs shared its two cores. A worker's resident memory peaked at
+400 MB with one worker and at 352 MB with two. The results equalled
+:func:`dynia.run`'s bit for bit.
 
 A model that cannot pause and resume (``model.resumable`` false: a
 :class:`~dynia.models.FunctionModel` without ``state=``, whose function
 answers for the whole record at once) is still run, the old way: one task
 per sample chunk simulates it over the whole record and keeps every time
-chunk's block on its worker until analysed, 8 x n_samples x n_steps bytes
-in all (dask spills to disk what does not fit in a worker's memory limit).
+chunk's block of errors on its worker until one task per time chunk has
+joined the blocks of all sample chunks and analysed them, 8 x n_samples x
+n_steps bytes in all (dask spills to disk what does not fit in a worker's
+memory limit).
 
 An existing cluster
 -------------------
@@ -86,6 +96,7 @@ import itertools
 import math
 import operator
 import os
+from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass
 
@@ -199,14 +210,14 @@ def run(
         The cluster to run on; left open. By default a local cluster of one
         single-threaded worker process per core is started and closed.
     sample_chunks : int, optional
-        Samples per simulation task (default: the samples shared evenly
-        among the worker threads).
+        Samples per task of the state pass (default: the samples shared
+        evenly among the worker threads).
     time_chunks : int, optional
-        Time steps per simulation and analysis task (default: about four
-        tasks per worker thread, and at most about 4e6 values per analysis
-        task). Any size works, also one below the window's reach ``n``.
-        Memory on the cluster grows with it (see the module docstring),
-        not with the record.
+        Time steps per analysis task (default: about four tasks per worker
+        thread, whole multiples of :func:`dynia.run`'s chunks of time, at
+        most about 4e6 result values per task). Any size works, also one
+        below the window's reach ``n``. Memory on the cluster grows with it
+        (see the module docstring), not with the record.
     settings, dt, n_samples, n, percentage, bins, conf_level, flavour, x0, rng, progress, min_points, window
         As :func:`dynia.run`; ``settings.workers`` must be None (the
         cluster's workers do the work).
@@ -301,7 +312,13 @@ def run(
     # first sample) when called, so mistakes surface here, before any cluster.
     model.simulate_chunks(samples[:1, model_order], u, dt=settings.dt, x0=settings.x0)
 
-    with _connected(client, distributed) as client, _worker_loss_explained(client, distributed) as need:
+    with (
+        ThreadPoolExecutor(max_workers=1) as aside,
+        _connected(client, distributed) as client,
+        _worker_loss_explained(client, distributed) as need,
+    ):
+        # The record's screening needs nothing of the analysis: the client does it while the cluster works.
+        screened = aside.submit(screening, u, y, settings)
         samples, flavour_impl, analysed, totals = _on_cluster(
             client,
             need,
@@ -316,7 +333,8 @@ def run(
             (sample_chunks, time_chunks),
             progress,
         )
-    result = _result(u, y, model, names, box, samples, settings, flavour_impl, windows, analysed, totals)
+        screened = screened.result()
+    result = _result(u, y, model, names, box, samples, settings, flavour_impl, windows, analysed, totals, screened)
     # The least squares simulates a few sets at a time, some ten times: through the kernel where dynia.run does.
     result = record_least_squares(result, u, y, KernelSimulated(model) if windows.fused else model)
     return result if timestamps is None else dataclasses.replace(result, timestamps=timestamps)
@@ -432,8 +450,11 @@ def _resumed_time_chunks(n_steps, threads, chunk_steps, per_step):
     return min(math.ceil(wanted / chunk_steps) * chunk_steps, ceiling)
 
 
-def _result(u, y, model, names, box, samples, settings, flavour_impl, windows, analysed, totals):
-    """The result of the analysed windows, with the noise floor and the same record as dynia.run's."""
+def _result(u, y, model, names, box, samples, settings, flavour_impl, windows, analysed, totals, screened):
+    """The result of the analysed windows, with the noise floor and the same record as dynia.run's.
+
+    ``screened`` is the record's screening (:func:`dynia.quality.screening`).
+    """
     ic, ci, median, gradient, best, upper, threshold, ic_se, ci_se, overflowed = analysed
     n_steps, n_samples, dt = y.size, settings.n_samples, settings.dt
     report_overflowed(overflowed, best, np.arange(n_steps) * float(dt), y)
@@ -466,7 +487,7 @@ def _result(u, y, model, names, box, samples, settings, flavour_impl, windows, a
         RunRecord.of(model, n_sampled=n_samples, n_dropped=n_samples - samples.shape[0]),
         n_behavioural=flavour_impl.count,
         ic_batches=flavour_impl.batches if settings.ic_error else None,
-        screened=screening(u, y, settings),
+        screened=screened,
         **floor_settings(floor),
     )
     return DyniaResult(

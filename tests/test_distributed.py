@@ -238,7 +238,7 @@ def tank_record():
     return u, y
 
 
-# (first step, steps) of every call of lag_chunk: what each task of stage 1 simulated.
+# (first step, steps) of every call of lag_chunk: what each call of the model simulated.
 LAG_CALLS = []
 
 
@@ -312,7 +312,7 @@ def test_streaming_function_model_is_simulated_in_time_chunks_from_the_states_of
 
 
 def test_a_model_that_cannot_resume_is_simulated_over_the_whole_record(client, record):
-    """A FunctionModel without state= answers for the whole record: stage 1 takes the old path."""
+    """A FunctionModel without state= answers for the whole record: it takes the whole-record path."""
     u, y = record
     model = FunctionModel(whole_record_lag, ["K", "T"])
     assert not model.resumable
