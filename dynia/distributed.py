@@ -9,51 +9,61 @@ default, or a cluster of many machines. Arrays follow the shape convention of
 How the work is split
 ---------------------
 The samples are drawn on the client exactly as :func:`dynia.run` draws them
-(same ``rng``, same samples), then cut into chunks of ``sample_chunks``
-consecutive samples, and time into chunks of ``time_chunks`` steps.
+(same ``rng``, same samples) and cut into chunks of ``sample_chunks``
+consecutive samples; time is cut into chunks of ``time_chunks`` steps.
+A window's behavioural set is selected among all samples at once, so the
+analysis of a window needs every sample in one place, but the simulation
+of a sample needs only its own state. Hence:
 
 0. One task per sample chunk asks the model which of its samples simulate to
    finite output (:meth:`dynia.models.base.Model.finite_samples`); the others are
    dropped, as :func:`dynia.run` drops them.
-1. The samples kept are simulated chunk by chunk of time as well: one task
-   per (sample chunk, time chunk) resumes the simulation of its samples
-   from the state the task of the previous time chunk left
-   (:meth:`dynia.models.base.Model.simulate_span`, bit for bit one uninterrupted
-   simulation), simulates the steps the time chunk's windows reach that no
-   earlier task simulated, and cuts, with the engine's own code, the time
-   chunk's window inputs: the absolute errors over the chunk and its halo
-   for the compiled engine, the window means for the numpy engine (a
-   sample's window mean depends on its own errors only, so those of a
-   sample chunk are the single-process engine's). It hands on the model's
-   state and the errors of the halo the next time chunk shares.
-2. One task per time chunk joins these blocks of all sample chunks, in
-   sample order, and runs the flavour's analysis: the behavioural set is
-   selected among all samples of a window at once. MCAT's likelihood carries
-   state from window to window, so for ``flavour="mcat"`` these tasks form a
-   chain, each taking the state the previous one left.
+1. The state pass: one task per sample chunk simulates the record once
+   (:meth:`dynia.models.base.Model.simulate_span`, bit for bit one
+   uninterrupted simulation) and keeps only every sample's state at the
+   step where each time chunk's windows begin, ``n`` steps before the
+   chunk (``2n`` for trailing windows), and its record total of absolute
+   error, added step by step as :func:`dynia.run` adds it (the noise floor
+   picks the record-best set by it). For the single-input linear models on
+   the compiled engine the pass is the engine's recursion in compiled code
+   without the window sums, the least work an analysis does.
+2. One task per time chunk resumes every sample from those states and
+   analyses its chunk whole, with :func:`dynia.run`'s own code, cut where
+   :func:`dynia.run` cuts the record: the fused kernel's window sums
+   (:class:`~dynia.engine.kernels.CompiledErrors`) for those linear models,
+   the errors of the resumed simulations otherwise; each re-simulates only
+   the ``2n`` steps of the halo. Its per-window results, (n_params, chunk
+   steps) and (n_params, n_bins, chunk steps), are all that travels back.
+   MCAT's likelihood carries state from window to window, so for
+   ``flavour="mcat"`` these tasks form a chain, each taking the state the
+   previous one left.
 
-Only the results, (n_params, n_steps) and (n_params, n_bins, n_steps), are
-gathered on the client. Time chunks are submitted as the analysis goes,
-at most two per worker thread submitted and not yet analysed, and each
-chunk's blocks are released once analysed; so the cluster holds the blocks
-of a few time chunks at a time, 8 x n_samples x time_chunks bytes each
-(plus the halos), never a sample chunk's whole record. ``python -m
-benchmarks.bench --case distributed`` runs 1e4 samples x 1e6 steps (a first-order
-model, default chunks: 400 steps per time chunk) on a local cluster: a
-worker's resident memory peaked at 565 MB with one worker and at 453 and
-449 MB with two (limit 1 GB each). Two workers were not faster than one on
-a 2-core machine shared with other jobs (load average 6): 459 s against
-298 s. The workers got about 0.6 of a core in all either way (181 s of CPU
-in 298 s; 157 + 91 s in 459 s), and two needed more CPU than one: each
-time chunk's analysis receives the other sample chunk's block from the
-other worker, and there are twice the stage-1 tasks.
+By default there is one sample chunk per worker thread and about four time
+chunks (at most 4e6 result values each), whole multiples of
+:func:`dynia.run`'s chunks of time. A task holds its chunk's results and
+:func:`dynia.run`'s working arrays of one of its chunks of time, never a
+sample's record: memory does not grow with the record.
+
+``python -m benchmarks.bench --case distributed`` runs 4 000 samples x 200
+000 steps (a first-order model) with :func:`dynia.run` in one thread and on
+local clusters of one and of two single-threaded workers, every process
+computing in one thread: on a 2-core AMD EPYC shared with other jobs (load
+average 10 to 11), :func:`dynia.run` took 51 s (20 s of CPU), one worker 75
+s (29 s of CPU, the client's 4.3 s included), two workers 58 s (28 s: 4.1 +
+11.8 + 11.8); one worker needed 1.47 times the CPU of :func:`dynia.run`, two
+0.96 times one's. Wall clock on that machine says little: two workers and
+the other jobs shared its two cores. A worker's resident memory peaked at
+400 MB with one worker and at 352 MB with two. The results equalled
+:func:`dynia.run`'s bit for bit.
 
 A model that cannot pause and resume (``model.resumable`` false: a
 :class:`~dynia.models.FunctionModel` without ``state=``, whose function
 answers for the whole record at once) is still run, the old way: one task
 per sample chunk simulates it over the whole record and keeps every time
-chunk's block on its worker until analysed, 8 x n_samples x n_steps bytes
-in all (dask spills to disk what does not fit in a worker's memory limit).
+chunk's block of errors on its worker until one task per time chunk has
+joined the blocks of all sample chunks and analysed them, 8 x n_samples x
+n_steps bytes in all (dask spills to disk what does not fit in a worker's
+memory limit).
 
 An existing cluster
 -------------------
@@ -86,13 +96,16 @@ import itertools
 import math
 import operator
 import os
+from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
 
 from . import _checks
-from .engine.flavours import compiled_engine, flavour_analysis, monte_carlo_errors
+from .engine import kernels
+from .engine.flavours import WindowResults, compiled_engine, flavour_analysis, monte_carlo_errors
+from .engine.kernels import CompiledErrors
 from .engine.noise import (
     RESIDUAL_CHUNK,
     add_record_errors,
@@ -107,6 +120,7 @@ from .engine.windows import (
     ScaledErrors,
     StreamedErrors,
     blank_overflowed,
+    default_chunk_steps,
     error_scale,
     report_overflowed,
     window_halos,
@@ -116,7 +130,8 @@ from .engine.windows import (
 from .errors import DataError, DyniaError, ModelError, SettingsError
 from .fit import record_least_squares
 from .io.frames import unpack
-from .pipeline import warn_dropped
+from .models.base import FLUSH_BELOW
+from .pipeline import KernelSimulated, compiled_simulation, warn_dropped
 from .progress import progress_bar, shows_progress
 from .quality import screening
 from .result import DyniaResult
@@ -129,13 +144,26 @@ __all__ = ["run"]
 # Flavours whose analysis of a window depends on the windows before it.
 _STATEFUL_FLAVOURS = ("mcat",)
 
-# Default ceiling on the values of one time chunk's blocks: 4e6 float64 = 32 MB.
+# Time chunks per worker thread by default: enough for a worker that finishes early (another job on its core) to
+# take over a share of the rest, few enough that a task's fixed costs (its halo simulated twice, the flavour and
+# model sent, the results returned) stay a fraction of a percent of its work.
+_CHUNKS_PER_THREAD = 4
+
+# Ceiling on the result values of one time chunk (IC, limits, median, gradient...): 4e6 float64 = 32 MB, which the
+# task holds and sends back.
+_RESULT_VALUES = 4_000_000
+
+# Without resuming, default ceiling on the values of one time chunk's blocks: 4e6 float64 = 32 MB.
 _BLOCK_VALUES = 4_000_000
 
-# Time chunks submitted and not yet analysed, per worker thread: enough to
-# keep every worker busy while the next chunk's stage 1 runs, few enough
-# that the blocks waiting on the cluster stay a few time chunks' worth.
+# Without resuming, time chunks submitted and not yet analysed, per worker thread: enough to keep every worker
+# busy while the next chunk's blocks are cut, few enough that the blocks waiting on the cluster stay a few time
+# chunks' worth.
 _CHUNKS_AHEAD_PER_THREAD = 2
+
+# Samples the state pass of a lag model runs through every step at a time: their eight arrays (2 kB each) stay in
+# the L1 cache.
+_STATE_BLOCK = 256
 
 
 def run(
@@ -182,14 +210,14 @@ def run(
         The cluster to run on; left open. By default a local cluster of one
         single-threaded worker process per core is started and closed.
     sample_chunks : int, optional
-        Samples per simulation task (default: the samples shared evenly
-        among the worker threads).
+        Samples per task of the state pass (default: the samples shared
+        evenly among the worker threads).
     time_chunks : int, optional
-        Time steps per simulation and analysis task (default: about four
-        tasks per worker thread, and at most about 4e6 values per analysis
-        task). Any size works, also one below the window's reach ``n``.
-        Memory on the cluster grows with it (see the module docstring),
-        not with the record.
+        Time steps per analysis task (default: about four tasks per worker
+        thread, whole multiples of :func:`dynia.run`'s chunks of time, at
+        most about 4e6 result values per task). Any size works, also one
+        below the window's reach ``n``. Memory on the cluster grows with it
+        (see the module docstring), not with the record.
     settings, dt, n_samples, n, percentage, bins, conf_level, flavour, x0, rng, progress, min_points, window
         As :func:`dynia.run`; ``settings.workers`` must be None (the
         cluster's workers do the work).
@@ -265,11 +293,14 @@ def run(
     )
     names, box = parameter_box(bounds, model.names, type(model).__name__)
     settings.check_record(y.size)
+    compiled = compiled_engine(settings.engine, settings.flavour)
     windows = _Windows(
         *window_halos(settings.n, settings.window),
         settings.min_points,
-        compiled_engine(settings.engine, settings.flavour),
+        compiled,
         error_scale(y),
+        # The single-input linear models run dynia.run's fused kernel, simulation and window sums in one.
+        compiled and compiled_simulation(model),
     )
     if sample_chunks is not None:
         sample_chunks = _checks.whole_number(sample_chunks, "sample_chunks", minimum=1)
@@ -281,7 +312,13 @@ def run(
     # first sample) when called, so mistakes surface here, before any cluster.
     model.simulate_chunks(samples[:1, model_order], u, dt=settings.dt, x0=settings.x0)
 
-    with _connected(client, distributed) as client, _worker_loss_explained(client, distributed) as need:
+    with (
+        ThreadPoolExecutor(max_workers=1) as aside,
+        _connected(client, distributed) as client,
+        _worker_loss_explained(client, distributed) as need,
+    ):
+        # The record's screening needs nothing of the analysis: the client does it while the cluster works.
+        screened = aside.submit(screening, u, y, settings)
         samples, flavour_impl, analysed, totals = _on_cluster(
             client,
             need,
@@ -296,13 +333,15 @@ def run(
             (sample_chunks, time_chunks),
             progress,
         )
-    result = _result(u, y, model, names, box, samples, settings, flavour_impl, windows, analysed, totals)
-    result = record_least_squares(result, u, y, model)
+        screened = screened.result()
+    result = _result(u, y, model, names, box, samples, settings, flavour_impl, windows, analysed, totals, screened)
+    # The least squares simulates a few sets at a time, some ten times: through the kernel where dynia.run does.
+    result = record_least_squares(result, u, y, KernelSimulated(model) if windows.fused else model)
     return result if timestamps is None else dataclasses.replace(result, timestamps=timestamps)
 
 
 def _on_cluster(client, need, model, u, y, box, samples, model_order, settings, windows, chunk_sizes, progress):
-    """Stages 0 to 2 on the cluster: the samples kept, the flavour, the analysed windows and the record totals.
+    """Everything on the cluster: the samples kept, the flavour, the analysed windows and the record totals.
 
     ``chunk_sizes`` are the sample and time chunks given (None: set here for
     the cluster's worker threads); ``need`` is filled with what one time
@@ -311,11 +350,9 @@ def _on_cluster(client, need, model, u, y, box, samples, model_order, settings, 
     sample_chunks, time_chunks = chunk_sizes
     threads = max(1, sum(client.nthreads().values()))
     sample_chunks = sample_chunks or math.ceil(settings.n_samples / threads)
-    # What one time chunk needs, should a worker be lost before the chunks are set (as below, all sets kept).
-    need.update(
-        samples=settings.n_samples,
-        steps=(time_chunks or _time_chunks(y.size, threads, settings.n_samples)) + windows.slots - 1,
-    )
+    n_steps = y.size
+    # Should a worker be lost before the chunks are set: what a chunk of every sample needs, as below.
+    need.update(_chunk_need(model, settings, windows, settings.n_samples, time_chunks, threads, n_steps))
     u_data, y_data = client.scatter([u, y], broadcast=True, hash=False)
     samples = _finite_samples(client, model, samples, model_order, u_data, u, settings, sample_chunks)
     flavour_impl = flavour_analysis(
@@ -329,46 +366,111 @@ def _on_cluster(client, need, model, u, y, box, samples, model_order, settings, 
         settings.min_points,
         ic_error=settings.ic_error,
     )
-    time_chunks = time_chunks or _time_chunks(y.size, threads, samples.shape[0])
-    need.update(samples=samples.shape[0], steps=time_chunks + windows.slots - 1)
+    need.update(_chunk_need(model, settings, windows, samples.shape[0], time_chunks, threads, n_steps))
+    time_chunks = need["steps"]
+    spans = [(start, min(start + time_chunks, n_steps)) for start in range(0, n_steps, time_chunks)]
     row_chunks = list(_scatter_rows(client, samples[:, model_order], sample_chunks))
+    stateful = settings.flavour in _STATEFUL_FLAVOURS
     if model.resumable:
-        blocks = _ChainedBlocks(client, model, row_chunks, u_data, y_data, settings, windows)
+        # dynia.run's chunks of time: each task cuts its own where dynia.run cuts, so its window sums are dynia.run's.
+        chunk_steps = default_chunk_steps(samples.shape[0], 2 * settings.n)
+        resumed_at = [max(start - windows.before, 0) for start, _ in spans]
+        states = [
+            client.submit(
+                _state_pass, model, rows, first, u_data, y_data, settings, windows, resumed_at, chunk_steps, pure=False
+            )
+            for first, rows in row_chunks
+        ]
+
+        def submit(flavour, k, start, stop):
+            return client.submit(
+                _analyse_resumed,
+                flavour,
+                windows,
+                model,
+                row_chunks,
+                states,
+                k,
+                (start, stop),
+                chunk_steps,
+                u_data,
+                y_data,
+                settings,
+                pure=False,
+            )
+
+        # Every chunk at once: a task holds no more than its chunk's results, so the scheduler may see them all.
+        ahead = len(spans)
+        totals = [client.submit(operator.getitem, output, 1, pure=False) for output in states]
     else:
-        blocks = _WholeRecordBlocks(client, model, row_chunks, u_data, y_data, settings, windows, y.size, time_chunks)
+        blocks = _WholeRecordBlocks(client, model, row_chunks, u_data, y_data, settings, windows, n_steps, time_chunks)
+
+        def submit(flavour, k, start, stop):
+            return client.submit(_analyse_blocks, flavour, windows, blocks(k), stop - start, pure=False)
+
+        ahead = _CHUNKS_AHEAD_PER_THREAD * threads
+        totals = blocks.totals()
     analysed = _analyse_on_cluster(
-        client,
-        blocks,
-        flavour_impl,
-        windows,
-        [(start, min(start + time_chunks, y.size)) for start in range(0, y.size, time_chunks)],
-        stateful=settings.flavour in _STATEFUL_FLAVOURS,
-        progress=progress,
-        ahead=_CHUNKS_AHEAD_PER_THREAD * threads,
+        client, submit, flavour_impl, spans, stateful=stateful, progress=progress, ahead=ahead
     )
     # Every sample's record total absolute error, added step by step as dynia.run adds them.
-    totals = np.concatenate(client.gather(blocks.totals()))
-    return samples, flavour_impl, analysed, totals
+    return samples, flavour_impl, analysed, np.concatenate(client.gather(totals))
 
 
-def _result(u, y, model, names, box, samples, settings, flavour_impl, windows, analysed, totals):
-    """The result of the analysed windows, with the noise floor and the same record as dynia.run's."""
+def _chunk_need(model, settings, windows, n_samples, time_chunks, threads, n_steps):
+    """The steps of a time chunk (``time_chunks``, or the default) and the memory its task needs, in MB.
+
+    Resumed, a task holds its chunk's results and dynia.run's working arrays of one chunk of time; otherwise it
+    joins every sample's errors over the time chunk and its halo, and holds the window sums and the flavour's
+    working copies of them: about three such arrays.
+    """
+    n_bins = settings.bins + (settings.flavour == "mcat")
+    # Per step: IC, two limits, median and the gradient of every parameter, three MAEs, and with ic_error the IC
+    # and limits of each of at most ten batches.
+    per_step = len(model.names) * (4 + n_bins + (30 if settings.ic_error else 0)) + 3
+    if model.resumable:
+        chunk_steps = default_chunk_steps(n_samples, 2 * settings.n)
+        time_chunks = time_chunks or _resumed_time_chunks(n_steps, threads, chunk_steps, per_step)
+        values = per_step * time_chunks + 3 * n_samples * (chunk_steps + windows.slots - 1)
+        what = (
+            f"{time_chunks} steps of results, dynia.run's working arrays of {chunk_steps} steps x {n_samples} samples"
+        )
+    else:
+        time_chunks = time_chunks or _time_chunks(n_steps, threads, n_samples)
+        values = 3 * n_samples * (time_chunks + windows.slots - 1)
+        what = f"{n_samples} samples x {time_chunks + windows.slots - 1} steps with its halo"
+    return dict(steps=time_chunks, what=what, mb=8 * values / 2**20)
+
+
+def _resumed_time_chunks(n_steps, threads, chunk_steps, per_step):
+    """Steps per time chunk of a resumed run: about ``_CHUNKS_PER_THREAD`` per worker thread, in whole chunks of
+    dynia.run's ``chunk_steps``, and at most ``_RESULT_VALUES`` values of results."""
+    wanted = math.ceil(n_steps / (_CHUNKS_PER_THREAD * threads))
+    ceiling = max(chunk_steps, _RESULT_VALUES // per_step // chunk_steps * chunk_steps)
+    return min(math.ceil(wanted / chunk_steps) * chunk_steps, ceiling)
+
+
+def _result(u, y, model, names, box, samples, settings, flavour_impl, windows, analysed, totals, screened):
+    """The result of the analysed windows, with the noise floor and the same record as dynia.run's.
+
+    ``screened`` is the record's screening (:func:`dynia.quality.screening`).
+    """
     ic, ci, median, gradient, best, upper, threshold, ic_se, ci_se, overflowed = analysed
     n_steps, n_samples, dt = y.size, settings.n_samples, settings.dt
     report_overflowed(overflowed, best, np.arange(n_steps) * float(dt), y)
     for extreme in (best, upper, threshold):
         extreme /= windows.scale  # exact: a power of two
-    # The record-best set and its neighbours are simulated once more here, as dynia.run does.
+    # The record-best set and its neighbours are simulated once more here, as dynia.run does: through the kernel
+    # where its analysis ran on it, which gives the model's outputs bit for bit without a Python loop over the steps.
     model_order = [names.index(name) for name in model.names]
-    fit = record_fit(
-        y,
-        samples,
-        box,
-        totals,
-        lambda rows: model.simulate_chunks(
-            samples[rows][:, model_order], u, dt=dt, x0=settings.x0, chunk_steps=RESIDUAL_CHUNK
-        ),
-    )
+
+    def simulations(rows):
+        params = samples[rows][:, model_order]
+        if windows.fused:
+            return CompiledErrors(model, params, u, y, dt=dt, x0=settings.x0, workers=1).output_chunks(RESIDUAL_CHUNK)
+        return model.simulate_chunks(params, u, dt=dt, x0=settings.x0, chunk_steps=RESIDUAL_CHUNK)
+
+    fit = record_fit(y, samples, box, totals, simulations)
     floor = record_noise_floor(
         best,
         upper,
@@ -385,7 +487,7 @@ def _result(u, y, model, names, box, samples, settings, flavour_impl, windows, a
         RunRecord.of(model, n_sampled=n_samples, n_dropped=n_samples - samples.shape[0]),
         n_behavioural=flavour_impl.count,
         ic_batches=flavour_impl.batches if settings.ic_error else None,
-        screened=screening(u, y, settings),
+        screened=screened,
         **floor_settings(floor),
     )
     return DyniaResult(
@@ -407,12 +509,12 @@ def _result(u, y, model, names, box, samples, settings, flavour_impl, windows, a
 
 
 def _time_chunks(n_steps, threads, n_samples):
-    """Steps per time chunk when none are given: about four per worker thread, at most ``_BLOCK_VALUES`` values."""
+    """Steps per time chunk without resuming: about four per worker thread, at most ``_BLOCK_VALUES`` values."""
     return max(1, min(math.ceil(n_steps / (4 * threads)), _BLOCK_VALUES // n_samples))
 
 
 def _finite_samples(client, model, samples, model_order, u_data, u, settings, sample_chunks):
-    """Stage 0: the samples whose simulation is finite over the record; the others dropped (and warned about)."""
+    """The samples whose simulation is finite over the record; the others dropped (and warned about)."""
     finite = np.concatenate(
         client.gather(
             [
@@ -432,17 +534,15 @@ def _finite_samples(client, model, samples, model_order, u_data, u, settings, sa
     return samples
 
 
-def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, progress, ahead):
-    """Stage 2, fed by stage 1: one task per time chunk; its results (with best, upper, threshold MAE) to the client.
+def _analyse_on_cluster(client, submit, flavour, spans, *, stateful, progress, ahead):
+    """One task per time chunk; its results (with best, upper, threshold MAE) to the client.
 
-    ``blocks(start, stop)`` submits stage 1 of the time chunk [start, stop)
-    and returns the futures of its outputs, (block, what it hands on) per
-    sample chunk, in sample order; it is called in time order. At most
-    ``ahead`` time chunks are submitted and not yet analysed, so the blocks
-    on the cluster stay those of a few time chunks; a chunk's blocks are
-    released once it is analysed. A stateful
-    flavour's tasks form a chain in time order, each starting from the
-    state the one before left.
+    ``submit(flavour, k, start, stop)`` submits the task of the k-th time
+    chunk [start, stop), which starts from ``flavour`` (or the future of
+    one), and returns the future of its WindowResults and the flavour after
+    it; it is called in time order. At most ``ahead`` time chunks are
+    submitted and not yet analysed. A stateful flavour's tasks form a chain
+    in time order, each starting from the state the one before left.
     """
     from distributed import as_completed
 
@@ -461,18 +561,18 @@ def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, pr
     chunk_spans = {}
     finished = as_completed(loop=client.loop)
 
-    def submit(start, stop):
+    def submit_chunk(k, start, stop):
         nonlocal state
-        analysed = client.submit(_analyse_stage_one, state, windows, blocks(start, stop), stop - start, pure=False)
+        analysed = submit(state, k, start, stop)
         chunk = client.submit(operator.getitem, analysed, 0, pure=False)
         chunk_spans[chunk] = (start, stop)
         finished.add(chunk)
         if stateful:
             state = client.submit(operator.getitem, analysed, 1, pure=False)
 
-    waiting = iter(spans)
-    for start, stop in itertools.islice(waiting, ahead):
-        submit(start, stop)
+    waiting = iter(enumerate(spans))
+    for k, (start, stop) in itertools.islice(waiting, ahead):
+        submit_chunk(k, start, stop)
     bar = progress_bar(progress, total=len(spans), desc="DYNIA windows", unit="chunk")
     for future in finished:
         start, stop = chunk_spans.pop(future)
@@ -485,7 +585,7 @@ def _analyse_on_cluster(client, blocks, flavour, windows, spans, *, stateful, pr
             ic_se[:, start:stop], ci_se[:, start:stop] = monte_carlo_errors(results.batch_ic, results.batch_ci)
         following = next(waiting, None)
         if following is not None:
-            submit(*following)
+            submit_chunk(following[0], *following[1])
         if bar is not None:
             bar.update()
     if bar is not None:
@@ -522,8 +622,8 @@ def _connected(client, distributed):
 def _worker_loss_explained(client, distributed):
     """Turn a worker lost mid-run (killed at its memory limit, mostly) into a SettingsError saying what one chunk needs.
 
-    Yields a dict the caller fills with ``samples`` and ``steps``, the size
-    of one time chunk's errors and halo, which stage 2 joins on one worker.
+    Yields a dict the caller fills with ``what`` one time chunk's task
+    holds and the ``mb`` it needs (:func:`_chunk_need`).
     """
     limits = [info.get("memory_limit") or 0 for info in client.scheduler_info().get("workers", {}).values()]
     need = {}
@@ -538,14 +638,7 @@ def _worker_loss_explained(client, distributed):
             limit = f"the smallest worker memory limit is {min(limits) / 2**20:.0f} MB"
         else:
             limit = "the workers have no memory limit, so the machine's memory ran out"
-        chunk = ""
-        if need:
-            # The joined errors, their window sums and the flavour's working copies: about three arrays of it.
-            size = 3 * 8 * need["samples"] * need["steps"] / 2**20
-            chunk = (
-                f"; one time chunk ({need['samples']} samples x {need['steps']} steps with its halo) needs about "
-                f"{size:.0f} MB on one worker"
-            )
+        chunk = f"; one time chunk ({need['what']}) needs about {need['mb']:.0f} MB on one worker" if need else ""
         raise SettingsError(
             f"a worker of the cluster was lost ({type(error).__name__}), most likely killed at its memory limit: "
             f"{limit}{chunk}; give a smaller time_chunks or sample_chunks, or the workers more memory",
@@ -572,7 +665,7 @@ def _sample_chunk_context(first, count):
 
 
 def _finite_rows(model, params, u, settings, first):
-    """Stage 0: which samples of one chunk simulate to finite output, (rows,) bool."""
+    """Which samples of one chunk simulate to finite output, (rows,) bool."""
     with _sample_chunk_context(first, params.shape[0]):
         return model.finite_samples(params, u, dt=settings.dt, x0=settings.x0)
 
@@ -581,11 +674,13 @@ def _finite_rows(model, params, u, settings, first):
 class _Windows:
     """The windows' reach and the engine's path from simulated errors to a flavour's analysis.
 
-    The compiled path hands the analysis the absolute errors of a time
-    chunk and its halo, time-major (m + slots - 1, rows), and forms the
+    The compiled path hands the analysis the absolute errors of a chunk of
+    time and its halo, time-major (m + slots - 1, rows), and forms the
     window sums inside its kernel; the numpy path hands it the window means
     (m, rows). Either block has the samples on axis 1, so the blocks of
-    consecutive sample chunks join along it.
+    consecutive sample chunks join along it. The fused path (``fused``, the
+    single-input linear models on the compiled engine) simulates and sums
+    in one kernel, as :func:`dynia.run` does, and hands on the window sums.
     """
 
     before: int
@@ -593,125 +688,286 @@ class _Windows:
     min_points: int
     compiled: bool
     scale: float = 1.0  # the errors' factor, dynia.engine.windows.error_scale
+    fused: bool = False
 
     @property
     def slots(self):
         """Steps per window."""
         return self.before + self.after + 1
 
-    def block(self, errors, start, stop, n_steps, totals):
-        """One sample chunk's input to the windows at steps [start, stop), with its measured counts.
-
-        The chunk's own steps' errors are added to ``totals``, its samples' record totals, as the engine adds them.
-        """
+    def inputs(self, errors, start, stop, n_steps):
+        """The windows' input at steps [start, stop) from the error source ``errors``: errors and measured counts."""
         if self.scale != 1.0:
             errors = ScaledErrors(errors, self.scale)
-        window_errors, measured = window_inputs(
-            errors, start, stop, self.before, self.after, n_steps, time_major=self.compiled
-        )
-        m = stop - start
-        add_record_errors(
-            totals,
-            window_errors[self.before : self.before + m]
-            if self.compiled
-            else window_errors[:, self.before : self.before + m].T,
-        )
+        return window_inputs(errors, start, stop, self.before, self.after, n_steps, time_major=self.compiled)
+
+    def own_errors(self, window_errors, m):
+        """The errors of the m steps [start, stop) themselves, time-major, among the window errors of ``inputs``."""
+        if self.compiled:
+            return window_errors[self.before : self.before + m]
+        return window_errors[:, self.before : self.before + m].T
+
+    def block(self, window_errors, measured, m):
+        """What the analysis of m windows takes of one sample chunk: the error rows (compiled) or the window means."""
         if self.compiled:
             return window_errors, measured
-        return window_mean(window_errors, measured, stop - start, self.slots)
+        return window_mean(window_errors, measured, m, self.slots)
 
-    def analyse(self, flavour, blocks, m):
-        """The flavour's :class:`~dynia.engine.flavours.WindowResults` of m windows from every sample chunk's block."""
-        joined = np.concatenate([block for block, _ in blocks], axis=1)
-        counts = blocks[0][1]
+    def analyse(self, flavour, block, counts, m):
+        """The flavour's :class:`~dynia.engine.flavours.WindowResults` of m windows from a block of every sample."""
         if self.compiled:
-            return flavour.analyse_rows(joined, counts, m, self.slots)
-        return flavour.analyse(joined, counts >= self.min_points)
+            return flavour.analyse_rows(block, counts, m, self.slots)
+        return flavour.analyse(block, counts >= self.min_points)
 
 
-class _ChainedBlocks:
-    """Stage 1 for a model that can pause and resume: per time chunk, one task per sample chunk.
+def _state_pass(model, params, first, u, y, settings, windows, resumed_at, chunk_steps):
+    """One sample chunk simulated over the record: its state at each step of ``resumed_at`` and its record totals.
 
-    The task of a sample chunk's time chunk resumes from what the task of
-    its previous time chunk handed on, so the tasks of a sample chunk form
-    a chain in time and none simulates more than a time chunk and its halo.
+    ``resumed_at`` holds, in time order, the steps the time chunks' tasks
+    resume from. The totals add every step's absolute error (times the
+    errors' scale) in time order, as :func:`dynia.run` adds them, which only
+    a pass over the whole record can. Returns the states, one per step of
+    ``resumed_at`` (the model's :class:`~dynia.models.base.SimulationState`,
+    or the fused kernel's (n_states, rows) array), and the totals (rows,).
     """
-
-    def __init__(self, client, model, row_chunks, u, y, settings, windows):
-        self._client = client
-        self._arguments = (model, u, y, settings, windows)
-        self._row_chunks = row_chunks
-        self._previous = [None] * len(row_chunks)
-
-    def __call__(self, start, stop):
-        """Submit the time chunk [start, stop), the one after the last submitted; its outputs' futures."""
-        # The tasks take the whole output of the one before and pick what they need on the worker:
-        # splitting the outputs on the cluster would double the number of tasks.
-        self._previous = [
-            self._client.submit(
-                _chained_window_inputs, rows, first, previous, start, stop, *self._arguments, pure=False
-            )
-            for (first, rows), previous in zip(self._row_chunks, self._previous)
-        ]
-        return self._previous
-
-    def totals(self):
-        """Futures of every sample chunk's record totals, once the last time chunk is submitted."""
-        return [self._client.submit(_handed_totals, previous, pure=False) for previous in self._previous]
-
-
-def _handed_totals(output):
-    """The record totals a chained task hands on."""
-    return output[1][2]
-
-
-def _chained_window_inputs(params, first, previous, start, stop, model, u, y, settings, windows):
-    """Stage 1, resumable: one sample chunk's window inputs at steps [start, stop), and what to hand on.
-
-    ``previous`` is the output of the task of the previous time chunk (None
-    for the first), whose second part it handed on: the simulation's state,
-    the errors from where this chunk's windows reach back to up to that
-    state's step and the samples' record totals of absolute error so far.
-    The steps the windows reach beyond it are simulated here. Errors are
-    kept time-major, the compiled windows' layout, which a linear model
-    simulates in without transposing.
-    """
-    n_steps = y.size
-    reach_back, reach_ahead = max(start - windows.before, 0), min(stop + windows.after, n_steps)
     with _sample_chunk_context(first, params.shape[0]):
-        if previous is None:
-            state = model.start_simulation(params, u, dt=settings.dt, x0=settings.x0)
-            errors = np.empty((0, params.shape[0]))
-            totals = np.zeros(params.shape[0])
-        else:
-            _, (state, errors, totals) = previous
-            totals = totals.copy()  # the previous output may be shared with other tasks
-        if reach_ahead > state.step:
-            simulated_from = state.step
-            sims, state = model.simulate_span(state, u, reach_ahead, time_major=True)
-            try:
-                # The transposed view makes the errors come out time-major (numpy keeps the input's layout).
-                fresh = ArrayErrors(y[simulated_from:reach_ahead], sims.T).columns(0, sims.shape[0]).T
-            except DataError as error:
-                raise DataError(f"{error} (steps counted from step {simulated_from})") from error
-            errors = np.concatenate([errors, fresh]) if errors.shape[0] else fresh
-        block = windows.block(_ErrorSpan(y, reach_back, errors), start, stop, n_steps, totals)
-        shared = max(stop - windows.before, 0)  # where the next time chunk's windows reach back to
-        # A copy, so that the errors of this chunk are freed with its block.
-        return block, (state, errors[shared - reach_back :].copy(), totals)
+        if windows.fused:
+            source = _ResumableErrors(model, params, u, y, dt=settings.dt, x0=settings.x0, workers=1)
+            return source.states_at(resumed_at, windows.scale, chunk_steps)
+        state = model.start_simulation(params, u, dt=settings.dt, x0=settings.x0)
+        totals = np.zeros(params.shape[0])
+        kept = {}
+        for at, stop in _cuts(resumed_at, y.size, chunk_steps):
+            kept[at] = state
+            sims, state = model.simulate_span(state, u, stop, time_major=True)
+            errors = _time_major_errors(y, at, sims)
+            add_record_errors(totals, errors * windows.scale if windows.scale != 1.0 else errors)
+        return [kept[at] for at in resumed_at], totals
 
 
-class _ErrorSpan:
-    """Time-major absolute errors of consecutive steps from ``first`` on, an error source of ``window_inputs``."""
+def _cuts(resumed_at, n_steps, chunk_steps):
+    """The record in pieces of at most ``chunk_steps``, cut at every step of ``resumed_at`` too: (from, to) pairs."""
+    cuts = sorted({*resumed_at, *range(0, n_steps, chunk_steps), n_steps})
+    return zip(cuts[:-1], cuts[1:])
 
-    def __init__(self, y, first, errors):
+
+def _time_major_errors(y, at, sims):
+    """|y - sims| of time-major simulations (m, rows) of the steps from ``at`` on, time-major; 0 where y is missing."""
+    try:
+        # The transposed view makes the errors come out time-major (numpy keeps the input's layout).
+        return ArrayErrors(y[at : at + sims.shape[0]], sims.T).columns(0, sims.shape[0]).T
+    except DataError as error:
+        raise DataError(f"{error} (steps counted from step {at})") from error
+
+
+def _analyse_resumed(flavour, windows, model, row_chunks, states, k, span, chunk_steps, u, y, settings):
+    """The k-th time chunk, ``span`` = [start, stop), analysed whole from every sample's state where its windows begin.
+
+    ``row_chunks`` are the sample chunks, (first sample, rows) pairs, and
+    ``states`` the state pass's outputs for them. The chunk is cut where :func:`dynia.run`
+    cuts the record (:func:`_pieces`) and each piece analysed with its code:
+    the fused kernel's window sums, or the errors of the resumed
+    simulations. Returns the chunk's
+    :class:`~dynia.engine.flavours.WindowResults` and the flavour after it,
+    whose state the next chunk of a stateful flavour starts from.
+    """
+    start, stop = span
+    n_steps = y.size
+    # A worker hands the same object to every task that needs it; analysing
+    # must not change the state other tasks start from.
+    flavour = copy.deepcopy(flavour)
+    pieces = _pieces(start, stop, chunk_steps)
+    if windows.fused:
+        params = np.concatenate([rows for _, rows in row_chunks])
+        source = _ResumableErrors(model, params, u, y, dt=settings.dt, x0=settings.x0, workers=1)
+        state = np.concatenate([output[0][k] for output in states], axis=1)
+        halos = (windows.before, windows.after)
+        source.resume(state, start, halos, windows.scale)
+        # The record totals are the state pass's: the ones this source adds up are dropped.
+        ignored = np.zeros(params.shape[0])
+        parts = [
+            flavour.analyse_sums(*source.window_sums(first, last, halos, ignored, windows.scale))
+            for first, last in pieces
+        ]
+    else:
+        resumed = [output[0][k] for output in states]
+        errors = _ResumedErrors(model, resumed, [first for first, _ in row_chunks], u, y)
+        parts = []
+        for first, last in pieces:
+            window_errors, measured = windows.inputs(errors, first, last, n_steps)
+            parts.append(windows.analyse(flavour, *windows.block(window_errors, measured, last - first), last - first))
+    return _joined(parts), flavour
+
+
+def _pieces(start, stop, chunk_steps):
+    """[start, stop) cut where dynia.run cuts the record, at the multiples of ``chunk_steps``: (from, to) pairs."""
+    cuts = [start, *range((start // chunk_steps + 1) * chunk_steps, stop, chunk_steps), stop]
+    return list(zip(cuts[:-1], cuts[1:]))
+
+
+# The axis of time of each WindowResults field.
+_TIME_AXES = WindowResults(ic=1, ci=1, median=1, gradient=2, best=0, threshold=0, upper=0, batch_ic=2, batch_ci=2)
+
+
+def _joined(parts):
+    """The WindowResults of consecutive pieces of time joined into one."""
+    if len(parts) == 1:
+        return parts[0]
+    return WindowResults(
+        *(
+            None if pieces[0] is None else np.concatenate(pieces, axis=axis)
+            for pieces, axis in zip(zip(*parts), _TIME_AXES)
+        )
+    )
+
+
+class _ResumableErrors(CompiledErrors):
+    """:func:`dynia.run`'s fused source, which also tells its samples' state at chosen steps and resumes from one.
+
+    :class:`~dynia.engine.kernels.CompiledErrors` has no public way to do
+    either; the attributes read and set here are the ones its own methods
+    keep: the discretised system and its term tables, the samples' state,
+    the ring of the last window's errors and the step of the next window.
+    """
+
+    def states_at(self, steps, scale, chunk_steps):
+        """Every sample's state at each of ``steps`` (ascending) and the record totals (n_samples,): one pass.
+
+        The states are (n_states, n_samples) arrays; the totals add every
+        step's absolute error times ``scale``, as :meth:`window_sums` adds them.
+        """
+        system, n_samples = self._system, self._n_samples
+        totals = np.zeros(n_samples)
+        if system.c.shape[0] == 1 and self._delays.shape[0] == 1 and self._state_terms[0, 0] and self._output_terms[0]:
+            states = np.empty((len(steps), 1, n_samples))
+            _lag_states(
+                (system.phi[0, 0], system.gamma_now[0], system.gamma_prev[0], system.c[0])
+                + (system.feed_now, system.feed_prev),
+                (bool(self._output_terms[1]), bool(self._output_terms[2]))
+                + (bool(self._state_terms[0, 1]), bool(self._state_terms[0, 2])),
+                int(self._delays[0]),
+                self._padded_input,
+                self.y,
+                scale,
+                np.asarray(steps, dtype=np.int64),
+                self._state[0],
+                totals,
+                states[:, 0],
+            )
+            return list(states), totals
+        # More states or dead times: the error rows of the engine's kernel, a chunk of time at a time.
+        kept = {}
+        for at, stop in _cuts(steps, self.y.shape[0], chunk_steps):
+            kept[at] = self._state.copy()
+            errors = self.rows(at, stop)
+            add_record_errors(totals, errors * scale if scale != 1.0 else errors)
+        return [kept[at] for at in steps], totals
+
+    def resume(self, state, start, halos, scale):
+        """Stand where serving the window sums up to step ``start`` would have left the source.
+
+        ``state`` holds every sample's state at step ``start - before``
+        (``halos`` = (before, after)), where the window at ``start`` begins;
+        from there the steps up to its end are simulated into the ring of
+        the last window's errors (the sums of the windows before ``start`` are
+        formed and dropped). Near the record's start it starts from step 0.
+        """
+        before, after = halos
+        warm_from = start - before - after
+        if warm_from > 0:
+            self._state = np.array(state, dtype=float)
+            self._ring = np.zeros((before + after + 1, self._n_samples))
+            self._next = warm_from
+        if start:
+            self.window_sums(max(warm_from, 0), start, halos, np.zeros(self._n_samples), scale)
+
+
+def _lag_states(coefficients, flags, delay, padded_input, y, scale, steps, state, totals, states):
+    """One-state recursions with one dead time (the lags) through the record, without window sums: states and totals.
+
+    Every sample runs from ``state`` (its state at step 0) to the end;
+    ``states[j]`` receives its state at step ``steps[j]`` (ascending), and
+    ``totals`` adds each step's absolute error (0 where ``y`` is missing)
+    times ``scale``, in time order. The products and sums are those of the
+    recursion of :mod:`dynia.engine.kernels`, term by term and in the same
+    order, so the states and totals are bit for bit those of
+    :func:`dynia.run`. A block of samples at a time runs through every step,
+    in the L1 cache and vectorised: the least work of an analysis.
+    """
+    phi, gamma_now, gamma_prev, c, feed_now, feed_prev = coefficients
+    now_out, prev_out, now_state, prev_state = flags
+    n_samples = state.shape[0]
+    for lo in range(0, n_samples, _STATE_BLOCK):
+        hi = min(lo + _STATE_BLOCK, n_samples)
+        x, total = state[lo:hi].copy(), totals[lo:hi].copy()
+        # Views from the block's start: the loop over them vectorises.
+        block_phi, block_now, block_previous = phi[lo:hi], gamma_now[lo:hi], gamma_prev[lo:hi]
+        block_c, block_feed_now, block_feed_previous = c[lo:hi], feed_now[lo:hi], feed_prev[lo:hi]
+        kept = 0
+        for e in range(y.shape[0]):
+            while kept < steps.shape[0] and steps[kept] == e:
+                states[kept, lo:hi] = x
+                kept += 1
+            now = padded_input[max(e - delay, -1) + 1]
+            previous = padded_input[max(e - delay - 1, -1) + 1]
+            y_e = y[e]
+            missing = np.isnan(y_e)
+            for i in range(hi - lo):
+                output = block_c[i] * x[i]
+                if now_out:
+                    output = output + block_feed_now[i] * now
+                if prev_out:
+                    output = output + block_feed_previous[i] * previous
+                total[i] = total[i] + (0.0 if missing else abs(output - y_e)) * scale
+                # Also past the record's last step, whose state is never kept.
+                following = block_phi[i] * x[i]
+                if now_state:
+                    following = following + block_now[i] * now
+                if prev_state:
+                    following = following + block_previous[i] * previous
+                x[i] = following if abs(following) >= FLUSH_BELOW else 0.0
+        totals[lo:hi] = total
+
+
+if kernels.AVAILABLE:
+    import numba
+
+    try:  # compiled once, then loaded from numba's on-disk cache, as the engine's kernels are
+        _lag_states = numba.njit(nogil=True, cache=True)(_lag_states)
+    except RuntimeError:  # no cache directory is writable: compiled in every worker process instead
+        _lag_states = numba.njit(nogil=True)(_lag_states)
+
+
+class _ResumedErrors:
+    """Absolute errors, time-major, of every sample chunk's paused simulation, simulated as they are asked for.
+
+    An error source of :func:`~dynia.engine.windows.window_inputs`: requests
+    move forward in time, and the first starts at the states' step.
+    """
+
+    def __init__(self, model, states, firsts, u, y):
         self.y = y
-        self._first = first
-        self._errors = errors
+        self._model = model
+        self._u = u
+        self._states = list(states)
+        self._firsts = firsts
+        self._first = states[0].step  # the step of the first error row kept
+        self._errors = np.empty((0, sum(state.n_samples for state in states)))
 
     def rows(self, start, stop):
         """Errors for times [start, stop), time-major: shape (stop - start, n_samples)."""
-        return self._errors[start - self._first : stop - self._first]
+        self._errors = self._errors[start - self._first :]
+        self._first = start
+        reached = self._states[0].step
+        if stop > reached:
+            sims = []
+            for i, (first, state) in enumerate(zip(self._firsts, self._states)):
+                with _sample_chunk_context(first, state.n_samples):
+                    span, self._states[i] = self._model.simulate_span(state, self._u, stop, time_major=True)
+                sims.append(span)
+            fresh = _time_major_errors(self.y, reached, np.concatenate(sims, axis=1))
+            self._errors = np.concatenate([self._errors, fresh]) if self._errors.shape[0] else fresh
+        return self._errors[: stop - start]
 
     def columns(self, start, stop):
         """Errors for times [start, stop), shape (n_samples, stop - start)."""
@@ -719,7 +975,7 @@ class _ErrorSpan:
 
 
 class _WholeRecordBlocks:
-    """Stage 1 for a model that cannot pause: one task per sample chunk over the whole record.
+    """For a model that cannot pause: one task per sample chunk over the whole record, cut into time chunks' blocks.
 
     Every time chunk's blocks are split off at once, so that each is
     released after its analysis.
@@ -732,17 +988,16 @@ class _WholeRecordBlocks:
             )
             for first, rows in row_chunks
         ]
-        self._time_chunks = time_chunks
         n_chunks = math.ceil(n_steps / time_chunks)
-        self._by_time = {
-            k: [client.submit(operator.getitem, inputs, k, pure=False) for inputs in whole_record]
-            for k in range(n_chunks)
-        }
+        self._by_time = [
+            [client.submit(operator.getitem, inputs, k, pure=False) for inputs in whole_record] for k in range(n_chunks)
+        ]
         self._totals = [client.submit(operator.getitem, inputs, n_chunks, pure=False) for inputs in whole_record]
 
-    def __call__(self, start, stop):
-        """The outputs' futures of the time chunk [start, stop), handed out once."""
-        return self._by_time.pop(start // self._time_chunks)
+    def __call__(self, k):
+        """The futures of the k-th time chunk's blocks, handed out once."""
+        blocks, self._by_time[k] = self._by_time[k], None
+        return blocks
 
     def totals(self):
         """Futures of every sample chunk's record totals of absolute error."""
@@ -750,11 +1005,7 @@ class _WholeRecordBlocks:
 
 
 def _whole_record_window_inputs(model, params, u, y, settings, windows, time_chunks, first):
-    """Stage 1, not resumable: simulate one sample chunk over the record; its window inputs per time chunk.
-
-    Each time chunk's block comes with nothing to hand on, as a chained task's output does; the samples'
-    record totals of absolute error follow the last.
-    """
+    """Simulate one sample chunk over the record: its block of every time chunk, then its samples' record totals."""
     n_steps = y.size
     totals = np.zeros(params.shape[0])
     with _sample_chunk_context(first, params.shape[0]):
@@ -763,25 +1014,20 @@ def _whole_record_window_inputs(model, params, u, y, settings, windows, time_chu
             model.simulate_chunks(params, u, dt=settings.dt, x0=settings.x0, chunk_steps=time_chunks),
             params.shape[0],
         )
-        inputs = [
-            (windows.block(errors, start, min(start + time_chunks, n_steps), n_steps, totals), None)
-            for start in range(0, n_steps, time_chunks)
-        ]
-    return [*inputs, totals]
+        blocks = []
+        for start in range(0, n_steps, time_chunks):
+            m = min(start + time_chunks, n_steps) - start
+            window_errors, measured = windows.inputs(errors, start, start + m, n_steps)
+            add_record_errors(totals, windows.own_errors(window_errors, m))
+            blocks.append(windows.block(window_errors, measured, m))
+    return [*blocks, totals]
 
 
-def _analyse_stage_one(flavour, windows, outputs, m):
-    """Stage 2 on the outputs of stage 1, (block, what it hands on) per sample chunk: their blocks analysed."""
-    return _analyse_time_chunk(flavour, windows, [block for block, _ in outputs], m)
+def _analyse_blocks(flavour, windows, blocks, m):
+    """The analysis of one time chunk's m windows from the blocks of all sample chunks, in sample order.
 
-
-def _analyse_time_chunk(flavour, windows, blocks, m):
-    """Stage 2: the analysis of one time chunk's m windows, from the blocks of all sample chunks.
-
-    Returns the chunk's :class:`~dynia.engine.flavours.WindowResults` and the flavour after it, whose
-    state the next chunk of a stateful flavour starts from.
+    Returns the chunk's :class:`~dynia.engine.flavours.WindowResults` and the flavour after it.
     """
-    # A worker hands the same object to every task that needs it; analysing
-    # must not change the state other tasks start from.
-    flavour = copy.deepcopy(flavour)
-    return windows.analyse(flavour, blocks, m), flavour
+    flavour = copy.deepcopy(flavour)  # as in _analyse_resumed
+    joined = np.concatenate([block for block, _ in blocks], axis=1)
+    return windows.analyse(flavour, joined, blocks[0][1], m), flavour

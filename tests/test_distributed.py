@@ -214,7 +214,7 @@ def test_without_dask_the_error_says_what_to_install(record, monkeypatch):
         run(u, y, FirstOrder(), BOUNDS)
 
 
-# Memory bounded in time: stage 1 resumes each sample chunk's simulation time chunk by time chunk.
+# Memory bounded in time: each time chunk's task resumes every sample chunk's simulation where its windows begin.
 
 TANK_BOUNDS = {"A": (0.5, 5.0), "c": (0.1, 2.0)}
 
@@ -238,7 +238,7 @@ def tank_record():
     return u, y
 
 
-# (first step, steps) of every call of lag_chunk: what each task of stage 1 simulated.
+# (first step, steps) of every call of lag_chunk: what each call of the model simulated.
 LAG_CALLS = []
 
 
@@ -291,7 +291,7 @@ def test_state_space_model_across_time_chunks_equals_dynia_run(client, flavour):
     assert_same(result, dynia.run(u, y, tank(), TANK_BOUNDS, **options))
 
 
-def test_streaming_function_model_simulates_each_step_once_in_time_chunks(client, record):
+def test_streaming_function_model_is_simulated_in_time_chunks_from_the_states_of_one_pass(client, record):
     u, y = record
     model = FunctionModel(lag_chunk, ["K", "T"], state=lag_start)
     options = dict(n_samples=200, n=5, rng=4)
@@ -299,18 +299,20 @@ def test_streaming_function_model_simulates_each_step_once_in_time_chunks(client
     result = run(u, y, model, LAG_BOUNDS, client=client, sample_chunks=100, time_chunks=20, **options)
     # Stage 0 checks each sample chunk over the whole record in one piece, the noise floor simulates the
     # record-best set and its neighbours twice on the client (engine.noise.record_fit) and the record's least
-    # squares (dynia.fit.record_least_squares) one set at a time; stage 1 resumes in pieces.
-    stage_one = sorted(call for call in LAG_CALLS if call[1] < STEPS)
+    # squares (dynia.fit.record_least_squares) one set at a time; the rest is simulated in pieces.
+    pieces = sorted(call for call in LAG_CALLS if call[1] < STEPS)
     whole = [call for call in LAG_CALLS if call[1] == STEPS]
-    assert len(whole) == len(LAG_CALLS) - len(stage_one) and len(whole) > 4
-    assert max(steps for _, steps in stage_one) <= 20 + 5  # a time chunk and the halo ahead
-    expected = [(0, 25)] + [(start + 5, 20) for start in range(20, STEPS - 20, 20)] + [(STEPS - 15, 15)]
-    assert stage_one == sorted(expected * 2)  # each step once per sample chunk
+    assert len(whole) == len(LAG_CALLS) - len(pieces) and len(whole) > 4
+    # One pass per sample chunk simulates the record once, paused where a time chunk's windows begin (n = 5
+    # steps before it); each time chunk's task resumes there and simulates its windows: the chunk and n either side.
+    state_pass = [(0, 15)] + [(start - 5, 20) for start in range(20, STEPS - 20, 20)] + [(STEPS - 25, 25)]
+    time_chunks = [(0, 25)] + [(start - 5, 30) for start in range(20, STEPS - 20, 20)] + [(STEPS - 25, 25)]
+    assert pieces == sorted((state_pass + time_chunks) * 2)  # twice: two sample chunks
     assert_same(result, dynia.run(u, y, model, LAG_BOUNDS, **options))
 
 
 def test_a_model_that_cannot_resume_is_simulated_over_the_whole_record(client, record):
-    """A FunctionModel without state= answers for the whole record: stage 1 takes the old path."""
+    """A FunctionModel without state= answers for the whole record: it takes the whole-record path."""
     u, y = record
     model = FunctionModel(whole_record_lag, ["K", "T"])
     assert not model.resumable
