@@ -838,7 +838,7 @@ class _ResumableErrors(CompiledErrors):
         """
         system, n_samples = self._system, self._n_samples
         totals = np.zeros(n_samples)
-        if system.c.shape[0] == 1 and self._delays.shape[0] == 1 and self._state_terms[0, 0] and self._output_terms[0]:
+        if kernels.is_lag(system.c, self._delays, self._state_terms, self._output_terms):
             states = np.empty((len(steps), 1, n_samples))
             _lag_states(
                 (system.phi[0, 0], system.gamma_now[0], system.gamma_prev[0], system.c[0])

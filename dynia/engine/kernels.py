@@ -81,6 +81,7 @@ __all__ = [
     "analyse_windows",
     "analyse_windows_batched",
     "parameter_ranks",
+    "is_lag",
     "CompiledErrors",
 ]
 
@@ -101,6 +102,14 @@ def _inner(function):
     Each wrapper is compiled with the function; leaving them out takes about a seventh off a first run's compile.
     """
     return _jit(function, no_cpython_wrapper=True, no_cfunc_wrapper=True)
+
+
+def is_lag(c, delays, state_terms, output_terms):
+    """Whether a discretised linear model is a lag: one state that carries over, seen in the output, one dead time.
+
+    Such models take the kernels' lag loops (``_simulate_lag``, ``_lag_window_sums``), the others the general ones.
+    """
+    return c.shape[0] == 1 and delays.shape[0] == 1 and bool(state_terms[0, 0]) and bool(output_terms[0])
 
 
 @_inner
@@ -164,7 +173,7 @@ def simulate_errors(
     # When every sample's pole underflows to 0 (a time constant far below dt) the general loop, which skips
     # unused terms as the numpy path does, gives the same numbers as the lag loop, which assumes the state
     # carries over.
-    if c.shape[0] == 1 and delays.shape[0] == 1 and state_terms[0, 0] and output_terms[0]:
+    if is_lag(c, delays, state_terms, output_terms):
         return _simulate_lag(
             phi[0, 0],
             gamma_now[0],
@@ -317,7 +326,7 @@ def simulate_window_sums(
     :func:`dynia.engine.noise.add_record_errors` does. Returns the first
     (step, sample) whose output is not finite, or (-1, -1).
     """
-    if c.shape[0] == 1 and delays.shape[0] == 1 and state_terms[0, 0] and output_terms[0]:
+    if is_lag(c, delays, state_terms, output_terms):
         return _lag_window_sums(
             (phi[0, 0], gamma_now[0], gamma_prev[0], c[0], feed_now, feed_prev),
             delays[0],
