@@ -103,7 +103,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _checks
-from .engine import kernels
 from .engine.flavours import WindowResults, compiled_engine, flavour_analysis, monte_carlo_errors
 from .engine.kernels import CompiledErrors
 from .engine.noise import (
@@ -122,6 +121,7 @@ from .engine.windows import (
     blank_overflowed,
     default_chunk_steps,
     error_scale,
+    record_cuts,
     report_overflowed,
     window_halos,
     window_inputs,
@@ -130,7 +130,6 @@ from .engine.windows import (
 from .errors import DataError, DyniaError, ModelError, SettingsError
 from .fit import record_least_squares
 from .io.frames import unpack
-from .models.base import FLUSH_BELOW
 from .pipeline import KernelSimulated, compiled_simulation, warn_dropped
 from .progress import progress_bar, shows_progress
 from .quality import screening
@@ -160,10 +159,6 @@ _BLOCK_VALUES = 4_000_000
 # busy while the next chunk's blocks are cut, few enough that the blocks waiting on the cluster stay a few time
 # chunks' worth.
 _CHUNKS_AHEAD_PER_THREAD = 2
-
-# Samples the state pass of a lag model runs through every step at a time: their eight arrays (2 kB each) stay in
-# the L1 cache.
-_STATE_BLOCK = 256
 
 
 def run(
@@ -732,23 +727,17 @@ def _state_pass(model, params, first, u, y, settings, windows, resumed_at, chunk
     """
     with _sample_chunk_context(first, params.shape[0]):
         if windows.fused:
-            source = _ResumableErrors(model, params, u, y, dt=settings.dt, x0=settings.x0, workers=1)
+            source = CompiledErrors(model, params, u, y, dt=settings.dt, x0=settings.x0, workers=1)
             return source.states_at(resumed_at, windows.scale, chunk_steps)
         state = model.start_simulation(params, u, dt=settings.dt, x0=settings.x0)
         totals = np.zeros(params.shape[0])
         kept = {}
-        for at, stop in _cuts(resumed_at, y.size, chunk_steps):
+        for at, stop in record_cuts(resumed_at, y.size, chunk_steps):
             kept[at] = state
             sims, state = model.simulate_span(state, u, stop, time_major=True)
             errors = _time_major_errors(y, at, sims)
             add_record_errors(totals, errors * windows.scale if windows.scale != 1.0 else errors)
         return [kept[at] for at in resumed_at], totals
-
-
-def _cuts(resumed_at, n_steps, chunk_steps):
-    """The record in pieces of at most ``chunk_steps``, cut at every step of ``resumed_at`` too: (from, to) pairs."""
-    cuts = sorted({*resumed_at, *range(0, n_steps, chunk_steps), n_steps})
-    return zip(cuts[:-1], cuts[1:])
 
 
 def _time_major_errors(y, at, sims):
@@ -779,7 +768,7 @@ def _analyse_resumed(flavour, windows, model, row_chunks, states, k, span, chunk
     pieces = _pieces(start, stop, chunk_steps)
     if windows.fused:
         params = np.concatenate([rows for _, rows in row_chunks])
-        source = _ResumableErrors(model, params, u, y, dt=settings.dt, x0=settings.x0, workers=1)
+        source = CompiledErrors(model, params, u, y, dt=settings.dt, x0=settings.x0, workers=1)
         state = np.concatenate([output[0][k] for output in states], axis=1)
         halos = (windows.before, windows.after)
         source.resume(state, start, halos, windows.scale)
@@ -819,123 +808,6 @@ def _joined(parts):
             for pieces, axis in zip(zip(*parts), _TIME_AXES)
         )
     )
-
-
-class _ResumableErrors(CompiledErrors):
-    """:func:`dynia.run`'s fused source, which also tells its samples' state at chosen steps and resumes from one.
-
-    :class:`~dynia.engine.kernels.CompiledErrors` has no public way to do
-    either; the attributes read and set here are the ones its own methods
-    keep: the discretised system and its term tables, the samples' state,
-    the ring of the last window's errors and the step of the next window.
-    """
-
-    def states_at(self, steps, scale, chunk_steps):
-        """Every sample's state at each of ``steps`` (ascending) and the record totals (n_samples,): one pass.
-
-        The states are (n_states, n_samples) arrays; the totals add every
-        step's absolute error times ``scale``, as :meth:`window_sums` adds them.
-        """
-        system, n_samples = self._system, self._n_samples
-        totals = np.zeros(n_samples)
-        if kernels.is_lag(system.c, self._delays, self._state_terms, self._output_terms):
-            states = np.empty((len(steps), 1, n_samples))
-            _lag_states(
-                (system.phi[0, 0], system.gamma_now[0], system.gamma_prev[0], system.c[0])
-                + (system.feed_now, system.feed_prev),
-                (bool(self._output_terms[1]), bool(self._output_terms[2]))
-                + (bool(self._state_terms[0, 1]), bool(self._state_terms[0, 2])),
-                int(self._delays[0]),
-                self._padded_input,
-                self.y,
-                scale,
-                np.asarray(steps, dtype=np.int64),
-                self._state[0],
-                totals,
-                states[:, 0],
-            )
-            return list(states), totals
-        # More states or dead times: the error rows of the engine's kernel, a chunk of time at a time.
-        kept = {}
-        for at, stop in _cuts(steps, self.y.shape[0], chunk_steps):
-            kept[at] = self._state.copy()
-            errors = self.rows(at, stop)
-            add_record_errors(totals, errors * scale if scale != 1.0 else errors)
-        return [kept[at] for at in steps], totals
-
-    def resume(self, state, start, halos, scale):
-        """Stand where serving the window sums up to step ``start`` would have left the source.
-
-        ``state`` holds every sample's state at step ``start - before``
-        (``halos`` = (before, after)), where the window at ``start`` begins;
-        from there the steps up to its end are simulated into the ring of
-        the last window's errors (the sums of the windows before ``start`` are
-        formed and dropped). Near the record's start it starts from step 0.
-        """
-        before, after = halos
-        warm_from = start - before - after
-        if warm_from > 0:
-            self._state = np.array(state, dtype=float)
-            self._ring = np.zeros((before + after + 1, self._n_samples))
-            self._next = warm_from
-        if start:
-            self.window_sums(max(warm_from, 0), start, halos, np.zeros(self._n_samples), scale)
-
-
-def _lag_states(coefficients, flags, delay, padded_input, y, scale, steps, state, totals, states):
-    """One-state recursions with one dead time (the lags) through the record, without window sums: states and totals.
-
-    Every sample runs from ``state`` (its state at step 0) to the end;
-    ``states[j]`` receives its state at step ``steps[j]`` (ascending), and
-    ``totals`` adds each step's absolute error (0 where ``y`` is missing)
-    times ``scale``, in time order. The products and sums are those of the
-    recursion of :mod:`dynia.engine.kernels`, term by term and in the same
-    order, so the states and totals are bit for bit those of
-    :func:`dynia.run`. A block of samples at a time runs through every step,
-    in the L1 cache and vectorised: the least work of an analysis.
-    """
-    phi, gamma_now, gamma_prev, c, feed_now, feed_prev = coefficients
-    now_out, prev_out, now_state, prev_state = flags
-    n_samples = state.shape[0]
-    for lo in range(0, n_samples, _STATE_BLOCK):
-        hi = min(lo + _STATE_BLOCK, n_samples)
-        x, total = state[lo:hi].copy(), totals[lo:hi].copy()
-        # Views from the block's start: the loop over them vectorises.
-        block_phi, block_now, block_previous = phi[lo:hi], gamma_now[lo:hi], gamma_prev[lo:hi]
-        block_c, block_feed_now, block_feed_previous = c[lo:hi], feed_now[lo:hi], feed_prev[lo:hi]
-        kept = 0
-        for e in range(y.shape[0]):
-            while kept < steps.shape[0] and steps[kept] == e:
-                states[kept, lo:hi] = x
-                kept += 1
-            now = padded_input[max(e - delay, -1) + 1]
-            previous = padded_input[max(e - delay - 1, -1) + 1]
-            y_e = y[e]
-            missing = np.isnan(y_e)
-            for i in range(hi - lo):
-                output = block_c[i] * x[i]
-                if now_out:
-                    output = output + block_feed_now[i] * now
-                if prev_out:
-                    output = output + block_feed_previous[i] * previous
-                total[i] = total[i] + (0.0 if missing else abs(output - y_e)) * scale
-                # Also past the record's last step, whose state is never kept.
-                following = block_phi[i] * x[i]
-                if now_state:
-                    following = following + block_now[i] * now
-                if prev_state:
-                    following = following + block_previous[i] * previous
-                x[i] = following if abs(following) >= FLUSH_BELOW else 0.0
-        totals[lo:hi] = total
-
-
-if kernels.AVAILABLE:
-    import numba
-
-    try:  # compiled once, then loaded from numba's on-disk cache, as the engine's kernels are
-        _lag_states = numba.njit(nogil=True, cache=True)(_lag_states)
-    except RuntimeError:  # no cache directory is writable: compiled in every worker process instead
-        _lag_states = numba.njit(nogil=True)(_lag_states)
 
 
 class _ResumedErrors:

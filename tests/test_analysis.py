@@ -180,6 +180,19 @@ def test_results_do_not_depend_on_chunking_or_threads(example1):
         np.testing.assert_array_equal(res.gradient, reference.gradient)
 
 
+def test_one_worker_analyses_in_the_calling_thread(example1, monkeypatch):
+    """workers=1 means one thread: no pool that would analyse one chunk while this thread prepares the next."""
+    import dynia.engine.windows
+
+    def no_pool(*args, **kwargs):
+        raise AssertionError("a thread pool was started for workers=1")
+
+    monkeypatch.setattr(dynia.engine.windows, "ThreadPoolExecutor", no_pool)
+    e = example1
+    res = moving_window(e["y"], e["sims"], e["params"], e["bounds"], n=10, workers=1, chunk_steps=64)
+    assert np.isfinite(res.ic).any()
+
+
 def test_gradient_is_the_likelihood_mass_per_bin(example1):
     e = example1
     res = moving_window(e["y"], e["sims"], e["params"], e["bounds"], n=10)

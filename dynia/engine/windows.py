@@ -106,7 +106,7 @@ import dataclasses
 import math
 import warnings
 from collections import deque
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor
 
 import numpy as np
 
@@ -616,10 +616,12 @@ def _windows_pass(errors, flavour_impl, compiled, output, settings, halos, chunk
     bar = progress_bar(progress, starts, desc="DYNIA windows", unit="chunk")
     starts = starts if bar is None else bar
     # Errors are pulled in time order (a simulation stream is sequential); the
-    # windows of each chunk are then analysed on a worker. MCAT's likelihood
-    # carries state from window to window, so it stays on one worker.
-    # An error or an interruption discards the output (a store's partial file).
-    with ThreadPoolExecutor(max_workers=workers) as pool, output:
+    # windows of each chunk are then analysed on a worker, while this thread
+    # pulls the next chunk. One worker means one thread: the chunk is analysed
+    # here. MCAT's likelihood carries state from window to window, so it stays
+    # on one worker. An error or an interruption discards the output (a
+    # store's partial file).
+    with _InlineExecutor() if workers == 1 else ThreadPoolExecutor(max_workers=workers) as pool, output:
         pending = deque()
         for start in starts:
             stop = min(start + chunk_steps, n_steps)
@@ -650,6 +652,33 @@ def _parameter_names(names, n_params):
     if len(set(names)) != len(names):
         raise SettingsError(f"names must be unique; got {names}")
     return names
+
+
+def record_cuts(steps, n_steps, chunk_steps):
+    """The record in pieces of at most ``chunk_steps``, cut at every one of ``steps`` too: (from, to) pairs.
+
+    Examples
+    --------
+    >>> list(record_cuts([5], 12, 4))
+    [(0, 4), (4, 5), (5, 8), (8, 12)]
+    """
+    cuts = sorted({*steps, *range(0, n_steps, chunk_steps), n_steps})
+    return zip(cuts[:-1], cuts[1:])
+
+
+class _InlineExecutor:
+    """An executor that runs each task as it is submitted, in the calling thread."""
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc_info):
+        return False
+
+    def submit(self, function, *args):
+        done = Future()
+        done.set_result(function(*args))  # an error stops the loop at once, as it would in the pool's reader
+        return done
 
 
 class StreamedErrors:
