@@ -47,14 +47,12 @@ sample's record: memory does not grow with the record.
 ``python -m benchmarks.bench --case distributed`` runs 4 000 samples x 200
 000 steps (a first-order model) with :func:`dynia.run` in one thread and on
 local clusters of one and of two single-threaded workers, every process
-computing in one thread: on a 2-core AMD EPYC shared with other jobs (load
-average 10 to 11), :func:`dynia.run` took 51 s (20 s of CPU), one worker 75
-s (29 s of CPU, the client's 4.3 s included), two workers 58 s (28 s: 4.1 +
-11.8 + 11.8); one worker needed 1.47 times the CPU of :func:`dynia.run`, two
-0.96 times one's. Wall clock on that machine says little: two workers and
-the other jobs shared its two cores. A worker's resident memory peaked at
-400 MB with one worker and at 352 MB with two. The results equalled
-:func:`dynia.run`'s bit for bit.
+computing in one thread. On a quiet 2-core AMD EPYC (load average 1.0 to
+1.3), :func:`dynia.run` took 13.1 s (13.5 s of CPU), one worker 15.1 s
+(17.7 s of CPU, the client's 2.6 s included: the screening, the noise floor
+and Dask's scheduler), two workers 9.2 s, 1.63 times faster than one. A
+worker's resident memory peaked at 370 MB with one worker and at 333 MB with
+two. The results equalled :func:`dynia.run`'s bit for bit.
 
 A model that cannot pause and resume (``model.resumable`` false: a
 :class:`~dynia.models.FunctionModel` without ``state=``, whose function
