@@ -7,7 +7,6 @@ or a seed; the same seed gives bit-identical samples).
 """
 
 import numpy as np
-from scipy.stats import qmc
 
 from . import _checks
 from .errors import SettingsError
@@ -39,6 +38,8 @@ def latin_hypercube(n_samples, bounds, rng=None):
     [0, 1, 2, 3]
     """
     n_samples, bounds, rng = _prepare(n_samples, bounds, rng)
+    from scipy.stats import qmc  # here: scipy.stats takes a second to import, which uniform sampling does not need
+
     unit = qmc.LatinHypercube(d=bounds.shape[0], rng=rng).random(n_samples)
     return qmc.scale(unit, bounds[:, 0], bounds[:, 1])
 
@@ -52,6 +53,8 @@ def sobol(n_samples, bounds, rng=None):
     (8, 2)
     """
     n_samples, bounds, rng = _prepare(n_samples, bounds, rng)
+    from scipy.stats import qmc
+
     engine = qmc.Sobol(d=bounds.shape[0], scramble=True, rng=rng)
     # Draw the next power of two and keep the first n_samples: a prefix of a
     # Sobol sequence is still low-discrepancy, and scipy warns on other sizes.

@@ -82,7 +82,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.stats
 
 from . import _checks
 from .errors import SettingsError
@@ -419,6 +418,8 @@ def _drift(result, p, blocks, drift_tolerance):
     if spread <= drift_tolerance * (1 + 1e-9) or not separated:
         return None
     times = np.array([[result.time[steps[0]], result.time[steps[-1]]] for steps in blocks])
+    import scipy.stats  # here: it takes a second to import, and only a drifting parameter needs it
+
     trend = float(scipy.stats.spearmanr(np.arange(len(blocks)), locations)[0])
 
     def at(block):

@@ -20,6 +20,19 @@ def test_import_loads_no_optional_heavy_library():
     assert loaded.strip() == ""
 
 
+def test_a_first_order_run_loads_no_statistics_library():
+    """scipy.stats takes about 0.7 CPU-s to import, a third of a warm quick start; a plain run needs none of it."""
+    code = (
+        "import sys, numpy as np, dynia\n"
+        "u = np.r_[np.zeros(10), np.ones(40)]\n"
+        "y = dynia.models.FirstOrder().simulate([[2.0, 3.0]], u)[0]\n"
+        "dynia.run(u, y, dynia.models.FirstOrder(), {'K': (0, 7), 'T': (0, 7)}, n_samples=100, n=5, rng=1)\n"
+        "print(','.join(m for m in ('scipy.stats', 'pandas', 'matplotlib') if m in sys.modules))"
+    )
+    loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert loaded.strip() == ""
+
+
 def test_a_transfer_function_model_still_simulates_after_the_lean_import():
     code = (
         "import control, dynia\n"

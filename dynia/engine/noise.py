@@ -178,7 +178,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import norm
+# ndtri is the normal quantile (scipy.stats.norm.ppf calls it); scipy.stats itself takes a second to import.
+from scipy.special import ndtri
 
 from ..errors import SettingsError
 
@@ -327,7 +328,7 @@ def critical_multiple(quantile, n_samples, n_windows, level=FAMILY_LEVEL):
     per_window = level / max(int(n_windows), 1)
     # 1 - (1 - a)^(1/N) without losing a to rounding when it is tiny.
     tail = -math.expm1(math.log1p(-per_window) / n_samples)
-    return float(norm.ppf(quantile) - norm.ppf(tail))
+    return float(ndtri(quantile) - ndtri(tail))
 
 
 def fitted_noise_sigma(best, points, n_params):
