@@ -178,6 +178,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+
 # ndtri is the normal quantile (scipy.stats.norm.ppf calls it); scipy.stats itself takes a second to import.
 from scipy.special import ndtri
 
