@@ -68,6 +68,7 @@ _SUBMODULES = frozenset(
         "analysis",
         "baseline",
         "cld",
+        "claims",
         "cli",
         "decimation",
         "distributed",
