@@ -193,6 +193,14 @@ def test_no_plots_gives_a_report_without_figures_that_says_so(tmp_path, capsys):
     _holds_the_printed_numbers(stdout, page)
 
 
+@pytest.mark.parametrize(
+    "text", ["--unit K='%/h'", "column dP [%/s]", "output (y)/2", "a rate in 1/s", "per /h and /2 and [/s]"]
+)
+def test_a_slash_of_a_unit_a_column_or_a_formula_is_kept(text):
+    """Issue 32: the pattern took any slash after a non-word character for a path, '%/h' was shown as '%h'."""
+    assert without_directories(text) == text
+
+
 def test_without_directories_keeps_relative_paths_and_shows_absolute_ones_by_name():
     home = os.path.expanduser("~")
     assert without_directories("data/plant.csv ./a.csv ../b.csv 3 degC/V 1/2") == (

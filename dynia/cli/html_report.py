@@ -5,8 +5,10 @@ lines under them), the warnings and data notes, every PNG figure of the
 directory inline as a base64 data URI, the settings, the run and the versions:
 no script, no stylesheet or image to fetch, nothing that needs the directory.
 A page that travels must not give away where the results were made, so every
-absolute path in it is shown by its last part (:func:`without_directories`);
-relative paths stay as the user gave them. Every text is escaped.
+absolute path in it is shown by its last part (:func:`without_directories`):
+the paths the summary names, and any other that starts in a directory of this
+machine or a home directory; relative paths and the slashes of units and
+formulas stay as the user gave them. Every text is escaped.
 """
 
 import base64
@@ -21,9 +23,11 @@ from ..serial import json_ready
 
 __all__ = ["write_report", "without_directories"]
 
-# An absolute path (or one from a home directory, ~ or ~user) inside a text: it starts a word or follows "=" or a
-# quote, and runs to whitespace or a delimiter. A slash after a letter or a dot (K/V, ./data, ../data) is no start.
-_ABSOLUTE = re.compile(r"(?<![\w.~/:-])(?:~[\w.-]*)?/[^\s'\"<>,;()\[\]{}]+")
+# What may be a path inside a text: a word (or what follows "=", a quote or an opening bracket) that starts at the
+# root or a home directory (~, ~user) and runs to whitespace or a delimiter. Only a candidate: user text is full of
+# slashes (units %/h, columns dP [%/s], formulas (y)/2), so it is a path only if it starts in a directory of this
+# machine (see _is_machine_path).
+_CANDIDATE = re.compile(r"(?<![^\s'\"=(\[{<])(?:~[\w.-]*)?/[^\s'\"<>,;()\[\]{}]+")
 
 _STYLE = """
 body { font-family: sans-serif; max-width: 70em; margin: 1em auto; padding: 0 1em; color: #222; }
@@ -51,11 +55,27 @@ def without_directories(text, paths=()):
     'no rows in plant data.csv from 2'
     >>> without_directories("--out=/tmp/run/ --model ~/m.py:tank data/plant.csv 5 degC/V")
     '--out=run --model m.py:tank data/plant.csv 5 degC/V'
+
+    A slash in a unit, a column name or a formula is no path:
+
+    >>> without_directories("K in %/h, column dP [%/s], output (y)/2, rate /s")
+    'K in %/h, column dP [%/s], output (y)/2, rate /s'
     """
     text = str(text)
     for path in sorted({str(path) for path in paths if _is_absolute(str(path))}, key=len, reverse=True):
         text = text.replace(path, _last_part(path))
-    return _ABSOLUTE.sub(lambda match: _last_part(match.group()), text)
+    return _CANDIDATE.sub(
+        lambda match: _last_part(match.group()) if _is_machine_path(match.group()) else match.group(), text
+    )
+
+
+def _is_machine_path(candidate):
+    """Whether ``candidate`` (``/...`` or ``~...``) names a place on this machine: a home directory's, or one whose
+    first directory exists (``/home/ana/x.csv``, ``/tmp/run``), not a slash of a unit or a formula (``/h``, ``/2``)."""
+    if candidate.startswith("~"):
+        return True
+    first = candidate.split("/", 2)[1]
+    return bool(first) and os.path.isdir("/" + first)
 
 
 def write_report(directory, summary, *, command, tables, lines=(), plots=True):
