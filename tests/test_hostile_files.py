@@ -95,6 +95,8 @@ def _refused(path, *needles, lazy=False):
         ("settings", '{"weights": {"__variable__": "weights"}}', "settings['weights']"),
         ("settings", '{"weights": {"__variable__": 3}}', "settings['weights']"),
         ("settings", '{"bounds": {"__tuple__": 5}}', "tags a tuple but holds no list"),
+        ("settings", '{"a": ' * 100_000 + "1" + "}" * 100_000, "attribute 'settings' nests its JSON deeper"),
+        ("verdicts", "[" * 100_000 + "]" * 100_000, "attribute 'verdicts' nests its JSON deeper"),
         ("verdicts", 3, "attribute 'verdicts' holds int64"),
         ("verdicts", "[1, 2]", "attribute 'verdicts' holds a JSON list"),
         ("verdicts", '{"K": 1, "T": 2}', "verdicts['K'] is 1"),

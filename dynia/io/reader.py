@@ -230,6 +230,11 @@ def _attribute(name, dataset, key, kinds, expected):
         raise DataError(f"{name}: attribute {key!r}: {error}; expected JSON as DyniaResult.save writes it") from None
     except ValueError as error:
         raise DataError(f"{name}: attribute {key!r} is not JSON ({error}); expected JSON text") from None
+    except RecursionError:
+        raise DataError(
+            f"{name}: attribute {key!r} nests its JSON deeper than Python can read; "
+            "expected JSON as DyniaResult.save writes it (a few levels)"
+        ) from None
     if not isinstance(value, kinds):
         raise DataError(f"{name}: attribute {key!r} holds a JSON {type(value).__name__}; expected {expected}")
     return value
