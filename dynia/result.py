@@ -20,7 +20,7 @@ from .engine.cld import binned_mass
 from .errors import SettingsError
 from .settings import IC_THRESHOLD, AnalysisSettings, RunRecord
 
-__all__ = ["DyniaResult", "date_axis"]
+__all__ = ["DyniaResult", "date_axis", "timestamps_problem"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -155,6 +155,11 @@ class DyniaResult:
             object.__setattr__(self, "run", RunRecord(**self.run))
         elif not isinstance(self.run, RunRecord):
             raise SettingsError(f"run must be a dynia.settings.RunRecord; got {type(self.run).__name__}", "run")
+        if self.timestamps is not None:
+            # Checked here, so that no result whose file dynia.load would refuse can be saved.
+            problem = timestamps_problem(self.time, self.timestamps)
+            if problem is not None:
+                raise SettingsError(f"timestamps {problem}", "timestamps")
 
     def index(self, name):
         """Position of parameter ``name`` on the parameter axis."""
@@ -776,6 +781,52 @@ class DyniaResult:
         from .io.writer import save
 
         save(self, path)
+
+
+# Seconds and dates may disagree by this share of the record's span (plus a microsecond): a logged record's times
+# count as uniform within 1e-6 of a step (dynia.io.csv), which adds up over the record.
+_DATES_TOLERANCE = 1e-5
+
+
+def timestamps_problem(time, timestamps):
+    """What keeps ``timestamps`` from dating the steps at ``time`` seconds, or None when they can.
+
+    The dates must be as many as the steps, known (no NaT), strictly rising
+    and as far from the first as ``time`` says, within 1e-5 of the record's
+    span and a microsecond.
+
+    Examples
+    --------
+    >>> start = np.datetime64("2024-01-01T00:00", "ns")
+    >>> timestamps_problem(np.array([0.0, 60.0, 120.0]), start + np.array([0, 60, 120]) * np.timedelta64(1, "s"))
+    >>> timestamps_problem(np.array([0.0, 60.0, 120.0]), start + np.array([0, 60, 60]) * np.timedelta64(1, "s"))
+    'do not rise at step 2 (2024-01-01T00:01:00.000000000 then 2024-01-01T00:01:00.000000000)'
+    >>> timestamps_problem(np.array([0.0, 60.0, 120.0]), start + np.array([0, 1, 2]) * np.timedelta64(1, "s"))
+    'put step 1 at 1 s from the first, where time says 60 s'
+    """
+    stamps = np.asarray(timestamps)
+    time = np.asarray(time, dtype=float)
+    if stamps.dtype != np.dtype("datetime64[ns]"):
+        return f"must be datetime64[ns]; got {stamps.dtype}"
+    if stamps.shape != time.shape:
+        return f"hold {stamps.shape[0] if stamps.ndim else 0} dates for {time.size} steps"
+    if np.isnat(stamps).any():
+        return f"hold a missing date (NaT) at step {int(np.flatnonzero(np.isnat(stamps))[0])}"
+    nanoseconds = stamps.view(np.int64)
+    falling = np.flatnonzero(np.diff(nanoseconds) <= 0)
+    if falling.size:
+        step = int(falling[0]) + 1
+        return f"do not rise at step {step} ({stamps[step - 1]} then {stamps[step]})"
+    if not stamps.size:
+        return None
+    dated = (nanoseconds - nanoseconds[0]) / 1e9
+    counted = time - time[0]
+    tolerance = _DATES_TOLERANCE * max(abs(dated[-1]), abs(counted[-1])) + 1e-6
+    off = np.flatnonzero(~(np.abs(dated - counted) <= tolerance))
+    if off.size:
+        step = int(off[0])
+        return f"put step {step} at {dated[step]:g} s from the first, where time says {counted[step]:g} s"
+    return None
 
 
 def date_axis(ax):

@@ -225,6 +225,54 @@ def test_a_forged_value_is_refused(saved, variable, index, value, needle, lazy):
     _refused(saved, needle, lazy=lazy)
 
 
+@pytest.fixture
+def saved_dated(result, tmp_path):
+    """A dated result's file (format 2: the dates in time, the seconds in elapsed), one step a second."""
+    start = np.datetime64("2024-03-31T00:59:58", "ns")
+    dated = dataclasses.replace(result, timestamps=start + np.round(result.time * 1e9).astype("timedelta64[ns]"))
+    path = tmp_path / "dated.nc"
+    dated.save(path)
+    return path
+
+
+def _dates_forged(path, change):
+    with h5py.File(path, "r+") as file:
+        file["time"][:] = change(file["time"][:])
+
+
+@pytest.mark.parametrize(
+    "change, needle",
+    [
+        (lambda dates: dates[::-1], "the dates in time do not rise at step 1"),
+        (lambda dates: np.r_[dates[:5], dates[4], dates[6:]], "the dates in time do not rise at step 5"),
+        (lambda dates: np.r_[dates[:5], np.iinfo(np.int64).min, dates[6:]], "missing date (NaT) at step 5"),
+        (
+            lambda dates: dates[0] + (dates - dates[0]) * 1000,
+            "put step 1 at 1000 s from the first, where time says 1 s",
+        ),
+    ],
+)
+@pytest.mark.parametrize("lazy", [False, True])
+def test_damaged_dates_of_a_dated_file_are_refused(saved_dated, change, needle, lazy):
+    """Issue 32: reversed, repeated or missing dates, or dates that disagree with elapsed, loaded without a word."""
+    dynia.load(saved_dated)
+    _dates_forged(saved_dated, change)
+    _refused(saved_dated, needle, lazy=lazy)
+
+
+def test_elapsed_that_disagrees_with_the_dates_is_refused(saved_dated):
+    with h5py.File(saved_dated, "r+") as file:
+        file["elapsed"][:] = file["elapsed"][:] * 1000
+    _refused(saved_dated, "put step 1 at 1 s from the first, where time says 1000 s")
+
+
+def test_a_result_whose_dates_disagree_with_its_seconds_cannot_be_made(result):
+    """Refused when made, so that no file that dynia.load refuses can be saved."""
+    start = np.datetime64("2024-03-31", "ns")
+    with pytest.raises(dynia.SettingsError, match="timestamps put step 1 at 15 s from the first, where time says 1 s"):
+        dataclasses.replace(result, timestamps=start + np.arange(result.time.size) * np.timedelta64(15, "s"))
+
+
 def test_a_forged_ic_with_forged_verdicts_is_refused(saved):
     """IC of 5 where the limits say otherwise, and the verdicts rewritten to match: refused by the ranges."""
     _forge(saved, "ic", (1, slice(None)), 0.9)

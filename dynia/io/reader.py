@@ -36,7 +36,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from ..errors import DataError, SettingsError
-from ..result import DyniaResult
+from ..result import DyniaResult, timestamps_problem
 from ..settings import AnalysisSettings, RunRecord
 from ..verdicts import VERDICTS, assess
 from .arrays import disk_arrays, read_block
@@ -175,14 +175,21 @@ def _time(name, dataset):
     file the seconds in ``time`` and, a version 1 file of a dated result, the dates in ``timestamp``.
     """
     dated = dataset.attrs["dynia_result"] >= 2 and dataset["time"].attrs.get("units") == TIMESTAMP_UNITS
-    if not dated:
-        stamps = _timestamps(name, dataset, "timestamp") if "timestamp" in dataset.variables else None
-        return _values(name, dataset, "time", ("time",)), stamps
-    if "elapsed" not in dataset.variables:
-        raise DataError(f"{name}: time holds dates but the file has no 'elapsed'; expected the seconds there")
-    if "timestamp" in dataset.variables:
-        raise DataError(f"{name}: time holds dates and the file has a 'timestamp' too; expected the dates once")
-    return _values(name, dataset, "elapsed", ("time",)), _timestamps(name, dataset, "time")
+    if dated:
+        if "elapsed" not in dataset.variables:
+            raise DataError(f"{name}: time holds dates but the file has no 'elapsed'; expected the seconds there")
+        if "timestamp" in dataset.variables:
+            raise DataError(f"{name}: time holds dates and the file has a 'timestamp' too; expected the dates once")
+        seconds, where = _values(name, dataset, "elapsed", ("time",)), "time"
+    else:
+        seconds, where = _values(name, dataset, "time", ("time",)), "timestamp"
+    stamps = _timestamps(name, dataset, where) if dated or where in dataset.variables else None
+    # Seconds that are not finite and rising are refused by the check of the fixed arrays.
+    if stamps is not None and seconds.dtype.kind == "f" and np.isfinite(seconds).all():
+        problem = timestamps_problem(seconds, stamps)
+        if problem is not None:
+            raise DataError(f"{name}: the dates in {where} {problem}; {_DAMAGED}")
+    return seconds, stamps
 
 
 def _timestamps(name, dataset, key):
