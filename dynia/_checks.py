@@ -45,16 +45,28 @@ def as_2d_float(value, name, *, columns=None):
     return array
 
 
-def whole_number(value, name, *, minimum):
-    """Return ``value`` as an int >= ``minimum``, or raise naming ``name``."""
+def whole_number(value, name, *, minimum, maximum=None, why=""):
+    """Return ``value`` as an int in [``minimum``, ``maximum``], or raise naming ``name`` (and ``why`` the maximum).
+
+    A count a user types can be any size: every count that sizes an
+    allocation or a loop has a ``maximum``, so that a slip (1e10 for 1e4)
+    is one clear line, not numpy's out-of-memory traceback or hours of work.
+    """
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        if isinstance(value, numbers.Real) and float(value).is_integer():
+        if isinstance(value, numbers.Real) and math.isfinite(value) and float(value).is_integer():
             value = int(value)
         else:
-            raise SettingsError(f"{name} must be a whole number; got {value!r}")
+            raise SettingsError(f"{name} must be a whole number; got {value!r}", name)
     if value < minimum:
-        raise SettingsError(f"{name} must be at least {minimum}; got {value}")
+        raise SettingsError(f"{name} must be at least {minimum}; got {value}", name)
+    if maximum is not None and value > maximum:
+        raise SettingsError(f"{name} must be at most {spaced(maximum)}{why}; got {spaced(value)}", name)
     return int(value)
+
+
+def spaced(number):
+    """A whole number with its thousands set apart by spaces, as the messages write them: 100 000 000."""
+    return f"{number:,}".replace(",", " ")
 
 
 def open_interval(value, name, low, high):

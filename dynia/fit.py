@@ -87,10 +87,35 @@ from .segments import check_segments, mask_to_segments
 from .serial import json_number, json_ready
 from .settings import check_dt
 
-__all__ = ["FitResult", "fit_segments", "record_least_squares", "validation_error", "OFFSETS", "X0_CHOICES"]
+__all__ = [
+    "FitResult",
+    "fit_segments",
+    "record_least_squares",
+    "validation_error",
+    "OFFSETS",
+    "X0_CHOICES",
+    "MAX_STARTS",
+    "check_starts",
+]
 
 OFFSETS = ("none", "segment")
 X0_CHOICES = ("steady", "zero")
+
+# Each start is a least-squares fit of every segment, a fraction of a second to seconds: more than this would run
+# for hours, and 10 000 random starts already cover a box of a few parameters densely.
+MAX_STARTS = 10_000
+
+
+def check_starts(n_starts):
+    """The number of least-squares starts, 1 to :data:`MAX_STARTS`, or a SettingsError naming ``n_starts``.
+
+    Examples
+    --------
+    >>> check_starts(5)
+    5
+    """
+    why = " (each start is a least-squares fit of every segment; more would run for hours)"
+    return _checks.whole_number(n_starts, "n_starts", minimum=1, maximum=MAX_STARTS, why=why)
 
 
 # A fitted parameter's typical scale is the width of its bounds, or
@@ -486,7 +511,7 @@ def fit_segments(
     if not segments:
         raise SettingsError("segments is empty; give at least one (start, stop) segment to fit")
     dt, x0, warmup, offset = _scheme(dt, x0, warmup, offset)
-    n_starts = _checks.whole_number(n_starts, "n_starts", minimum=1)
+    n_starts = check_starts(n_starts)
     fixed = _named_values(fixed, "fixed", model.names)
     initial = _named_values(initial, "initial", model.names)
     bounds = _named_bounds(bounds, model.names)

@@ -81,7 +81,7 @@ import numpy as np
 from . import _checks
 from .baseline import find_intervals
 from .errors import NothingSelected, SettingsError
-from .fit import fit_segments
+from .fit import check_starts, fit_segments
 from .io.frames import unpack
 from .pipeline import dated, run
 from .progress import shows_progress
@@ -295,6 +295,7 @@ def identify(
     names, box = parameter_box(bounds, model.names, type(model).__name__)
     bounds = {name: tuple(map(float, row)) for name, row in zip(names, box)}
     rng = _checks.generator(rng)
+    n_starts = check_starts(n_starts)  # before the analysis, which the fit waits for
     u, y, report = _quality_checked(u, y, dt, quality, exclude_flagged, quality_options)
     fit_part, validation = _split(y.size, held_out, method, analysis, len(names))
     y_fit = np.where(segments_to_mask(validation, y.size), np.nan, y)

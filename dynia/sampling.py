@@ -10,7 +10,7 @@ import numpy as np
 
 from . import _checks
 from .errors import SettingsError
-from .settings import SAMPLERS
+from .settings import SAMPLERS, sample_count
 
 __all__ = ["sample", "uniform", "latin_hypercube", "sobol", "SAMPLERS"]
 
@@ -74,7 +74,7 @@ def sample(method, n_samples, bounds, rng=None):
 
 
 def _prepare(n_samples, bounds, rng):
-    n_samples = _checks.whole_number(n_samples, "n_samples", minimum=1)
+    n_samples = sample_count(n_samples, "n_samples")
     bounds = _checks.as_2d_float(bounds, "bounds", columns=2)
     _checks.bounds_array(bounds, bounds.shape[0])
     return n_samples, bounds, _checks.generator(rng)

@@ -33,6 +33,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from . import _checks
 from .errors import SettingsError
 
 __all__ = [
@@ -57,6 +58,7 @@ __all__ = [
     "MIN_BATCH_BEHAVIOURAL",
     "check_dt",
     "check_x0",
+    "sample_count",
     "ic_batches",
     "merged_settings",
     "parameter_box",
@@ -99,18 +101,21 @@ _SAMPLES_WHY = " (DYNIA needs thousands; beyond this the samples alone fill the 
 
 
 def _whole(value, name, minimum, maximum=None, why=""):
+    # A setting takes an int only (1.0 is refused, as a slip of type); the range as every count's.
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         raise SettingsError(f"{name} must be a whole number; got {value!r} ({type(value).__name__})", name)
-    if value < minimum:
-        raise SettingsError(f"{name} must be at least {minimum}; got {value}", name)
-    if maximum is not None and value > maximum:
-        raise SettingsError(f"{name} must be at most {_spaced(maximum)}{why}; got {_spaced(value)}", name)
-    return int(value)
+    return _checks.whole_number(value, name, minimum=minimum, maximum=maximum, why=why)
 
 
-def _spaced(number):
-    """A whole number with its thousands set apart by spaces: 100 000 000."""
-    return f"{number:,}".replace(",", " ")
+def sample_count(value, name, minimum=1):
+    """A number of Monte Carlo samples, from ``minimum`` to :data:`MAX_SAMPLES`, or a SettingsError naming ``name``.
+
+    Examples
+    --------
+    >>> sample_count(2000, "n_samples")
+    2000
+    """
+    return _checks.whole_number(value, name, minimum=minimum, maximum=MAX_SAMPLES, why=_SAMPLES_WHY)
 
 
 def _real(value, name):

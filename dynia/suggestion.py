@@ -193,6 +193,7 @@ from .settings import (
     check_dt,
     check_x0,
     parameter_box,
+    sample_count,
 )
 from .verdicts import noise_sigma
 
@@ -678,7 +679,7 @@ def suggest(
     names, box = parameter_box(bounds, model.names, repr(model))
     bounds = {name: (float(low), float(high)) for name, (low, high) in zip(names, box)}
     target = _checks.open_interval(ic_se_target, "ic_se_target", 0.0, 1.0)
-    max_samples = _checks.whole_number(max_samples, "max_samples", minimum=_PILOT_MIN)
+    max_samples = sample_count(max_samples, "max_samples", minimum=_PILOT_MIN)
     limit, limit_source = _memory_limit(max_memory)
     rng = _checks.generator(rng)
     progress = shows_progress(progress)

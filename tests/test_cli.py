@@ -369,6 +369,9 @@ def test_identify_recovers_a_known_model_with_a_glitch_excluded(tmp_path, capsys
         (["--ic-threshold", "1.5"], "--ic-threshold"),
         (["--held-out", "1"], "--held-out"),
         (["--starts", "0"], "--starts"),
+        # Issue 32: numpy's out-of-memory traceback, and --starts 1000000 ran for minutes without a word.
+        (["--starts", "10000000000"], "--starts must be at most 10 000 (each start is a least-squares fit"),
+        (["--starts", "1000000"], "got 1 000 000"),
     ],
 )
 def test_identify_bad_options_are_one_line_errors(tmp_path, capsys, extra, message):

@@ -115,3 +115,29 @@ def test_a_lag_model_whose_pole_underflows_runs_on_both_engines():
     assert compiled.settings.engine == "numba"
     assert np.array_equal(compiled.ic, plain.ic, equal_nan=True)
     assert np.array_equal(compiled.ci, plain.ci, equal_nan=True)
+
+
+@pytest.mark.parametrize(
+    "call, needle",
+    [
+        (lambda: dynia.sampling.sample("uniform", 10**10, [[0.0, 1.0]], 1), "n_samples must be at most 100 000 000"),
+        (lambda: dynia.sampling.sample("sobol", 2.5, [[0.0, 1.0]], 1), "n_samples must be a whole number"),
+        (
+            lambda: dynia.fit.fit_segments(
+                [0.0] * 20, [0.0] * 20, dynia.models.FirstOrder(), [(0, 20)], n_starts=10**10
+            ),
+            "n_starts must be at most 10 000",
+        ),
+        (
+            lambda: dynia.suggest(
+                [0.0] * 50, [0.0] * 50, dynia.models.FirstOrder(), {"K": (0, 1), "T": (0, 1)}, max_samples=10**12
+            ),
+            "max_samples must be at most 100 000 000",
+        ),
+    ],
+)
+def test_every_count_has_a_bound_and_a_reason(call, needle):
+    """Issue 32: a count typed 1e10 for 1e4 is one line naming it, not an allocation that fails or runs for hours."""
+    with pytest.raises(SettingsError, match=needle) as refused:
+        call()
+    assert refused.value.setting == needle.split()[0]

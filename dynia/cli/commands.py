@@ -379,8 +379,6 @@ def _check_command_options(options):
     if options.get("seed") is not None and options["seed"] < 0:
         raise UsageError(f"--seed must be a whole number >= 0; got {options['seed']}")
     _check_follow_options(options)
-    if "starts" in options and options["starts"] < 1:
-        raise UsageError(f"--starts must be a whole number >= 1; got {options['starts']}")
     if options.get("min_length") is not None:
         if options["method"] != "dynia":
             raise UsageError(

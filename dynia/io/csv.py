@@ -1057,8 +1057,8 @@ def _resampled(path, times_u, u, times_y, y, dt):
     if steps >= _MAX_GRID_STEPS:
         inferred = "" if dt is not None else " (inferred: the median spacing of the timestamps)"
         raise DataError(
-            f"{path}: the grid would have {_spaced(math.floor(steps) + 1)} steps at dt = {step:g} s"
-            f"{inferred} over the {last - first:g} s the data span (limit {_spaced(_MAX_GRID_STEPS)}); "
+            f"{path}: the grid would have {_checks.spaced(math.floor(steps) + 1)} steps at dt = {step:g} s"
+            f"{inferred} over the {last - first:g} s the data span (limit {_checks.spaced(_MAX_GRID_STEPS)}); "
             "pass a larger --dt / dt="
         )
     missing = np.isnan(y)
@@ -1174,11 +1174,6 @@ def _shown(cell):
 def _listed(names):
     shown = ", ".join(repr(name) for name in names[:_LISTED_NAMES])
     return shown if len(names) <= _LISTED_NAMES else f"{shown}, ... ({len(names)} in all)"
-
-
-def _spaced(number):
-    """A whole number with its thousands set apart by spaces: 10 000 000."""
-    return f"{number:,}".replace(",", " ")
 
 
 def _duration(seconds):
