@@ -25,6 +25,8 @@ drifts between informative windows points to a model-structure problem
 """
 
 import dataclasses
+import math
+import numbers
 
 import numpy as np
 
@@ -35,7 +37,7 @@ from .segments import mask_to_segments
 from .settings import IC_THRESHOLD
 from .structure import clear_of_bounds
 
-__all__ = ["narrowed_bounds", "second_run"]
+__all__ = ["narrowed_bounds", "second_run", "check_margin"]
 
 
 def narrowed_bounds(result, bounds, *, ic_threshold=IC_THRESHOLD, margin=0.5, min_windows=3):
@@ -79,8 +81,7 @@ def narrowed_bounds(result, bounds, *, ic_threshold=IC_THRESHOLD, margin=0.5, mi
     ['K']
     """
     min_windows = _checks.whole_number(min_windows, "min_windows", minimum=1)
-    if not margin >= 0:
-        raise SettingsError(f"margin must be >= 0; got {margin!r}")
+    margin = check_margin(margin)
     if set(bounds) != set(result.names):
         raise SettingsError(f"bounds name {sorted(bounds)} but the result has {sorted(result.names)}")
     new_bounds, narrowed = {}, []
@@ -100,8 +101,24 @@ def narrowed_bounds(result, bounds, *, ic_threshold=IC_THRESHOLD, margin=0.5, mi
             sliver = 0.01 * (float(high) - float(low))
             new_low, new_high = max(new_low - sliver, float(low)), min(new_high + sliver, float(high))
         new_bounds[name] = (new_low, new_high)
-        narrowed.append(name)
+        if (new_low, new_high) != (float(low), float(high)):  # a band widened to the whole range narrows nothing
+            narrowed.append(name)
     return new_bounds, narrowed
+
+
+def check_margin(margin):
+    """The narrowing's margin as a float, finite and >= 0, or a SettingsError naming ``margin``.
+
+    Examples
+    --------
+    >>> check_margin(0.5)
+    0.5
+    """
+    if isinstance(margin, bool) or not isinstance(margin, numbers.Real) or not 0 <= margin < math.inf:
+        raise SettingsError(
+            f"margin must be a finite number >= 0 (an infinite one would narrow nothing); got {margin!r}", "margin"
+        )
+    return float(margin)
 
 
 def _in_long_runs(flags, min_length):

@@ -365,6 +365,23 @@ def test_identify_recovers_a_known_model_with_a_glitch_excluded(tmp_path, capsys
 @pytest.mark.parametrize(
     "extra, message",
     [
+        (["--narrow-margin", "inf", "--second-run"], "--narrow-margin must be a finite number >= 0"),
+        (["--narrow-threshold", "0.6"], "--narrow-threshold sets the narrowing of --second-run"),
+        (["--narrow-margin", "0.2"], "--narrow-margin sets the narrowing of --second-run"),
+        (["--reference", "K=1", "--no-plots"], "--reference draws a line on the figures, and --no-plots draws none"),
+    ],
+)
+def test_an_option_that_would_do_nothing_is_refused(tmp_path, capsys, extra, message):
+    """Issue 32: these were accepted and silently ignored (or, --narrow-margin inf, reported T as narrowed)."""
+    status = main(["analyse", str(HEATING), *HEATING_ARGS, *extra, "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert status == 2 and len(err) == 1 and message in err[0], err
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize(
+    "extra, message",
+    [
         (["--method", "random"], "--method"),
         (["--ic-threshold", "1.5"], "--ic-threshold"),
         (["--held-out", "1"], "--held-out"),

@@ -42,12 +42,19 @@ def test_nothing_identified_nothing_narrowed(example1_twice):
     "kwargs, message",
     [
         (dict(ic_threshold=1.5), r"ic_threshold must be a number in \[0, 1\]"),
-        (dict(margin=-1), "margin must be >= 0"),
+        (dict(margin=-1), "margin must be a finite number >= 0"),
+        (dict(margin=float("inf")), "an infinite one would narrow nothing"),
     ],
 )
 def test_bad_narrowing_options(example1_twice, kwargs, message):
     with pytest.raises(ValueError, match=message):
         narrowed_bounds(example1_twice[0], {"K": (0, 7), "T": (0, 7)}, **kwargs)
+
+
+def test_a_band_widened_to_the_whole_range_is_not_reported_as_narrowed(example1_twice):
+    """Issue 32: with a margin that widens the band past the bounds, the range stays whole and nothing is narrowed."""
+    new, narrowed = narrowed_bounds(example1_twice[0], {"K": (0, 7), "T": (0, 7)}, margin=1e6)
+    assert new == {"K": (0.0, 7.0), "T": (0.0, 7.0)} and narrowed == []
 
 
 def _hand_result(bands, bounds=(0.0, 7.0)):

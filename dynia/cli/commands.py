@@ -45,7 +45,7 @@ from ..models.base import user_code_failed
 from ..pipeline import DroppedSamplesWarning, TargetNotReachedWarning, run
 from ..progress import stderr_is_terminal
 from ..quality import SCREENED_KINDS, check_quality
-from ..refine import narrowed_bounds
+from ..refine import check_margin, narrowed_bounds
 from ..settings import MAX_PARAMETER, AnalysisSettings
 from ..suggestion import parse_duration, parse_size, suggest, window_half_width
 from ..verdicts import assess
@@ -374,8 +374,9 @@ def _check_command_options(options):
             if not inside:
                 interval = f"({low}, {high}]" if closed_high else f"({low}, {high})"
                 raise UsageError(f"--{key.replace('_', '-')} must lie in {interval}; got {value:g}")
-    if "narrow_margin" in options and not options["narrow_margin"] >= 0:
-        raise UsageError(f"--narrow-margin must be >= 0; got {options['narrow_margin']:g}")
+    _check_options_that_act_together(options)
+    if options.get("second_run"):
+        check_margin(options["narrow_margin"])  # now, not after the first run
     if options.get("seed") is not None and options["seed"] < 0:
         raise UsageError(f"--seed must be a whole number >= 0; got {options['seed']}")
     _check_follow_options(options)
@@ -391,6 +392,31 @@ def _check_command_options(options):
             f"--max-gap is a multiple of the grid step above 1 (a gap longer than that many steps is "
             f"left missing); got {options['max_gap']:g}"
         )
+
+
+# Options that do something only beside another: (option, the other, whether the other must be on, the refusal).
+_ACT_TOGETHER = (
+    (
+        "narrow_threshold",
+        "second_run",
+        True,
+        "--narrow-threshold sets the narrowing of --second-run; add that or leave it out",
+    ),
+    (
+        "narrow_margin",
+        "second_run",
+        True,
+        "--narrow-margin sets the narrowing of --second-run; add that or leave it out",
+    ),
+    ("reference", "no_plots", False, "--reference draws a line on the figures, and --no-plots draws none; drop one"),
+)
+
+
+def _check_options_that_act_together(options):
+    """Refuse an option given where it would do nothing, rather than ignore it without a word."""
+    for key, other, wanted, refusal in _ACT_TOGETHER:
+        if key in options["given"] and other in options and bool(options[other]) != wanted:
+            raise UsageError(refusal)
 
 
 def _check_follow_options(options):
