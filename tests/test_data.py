@@ -689,6 +689,13 @@ def test_a_folder_is_not_a_file(tmp_path):
         _load(tmp_path)
 
 
+def test_one_column_for_both_signals_is_refused(tmp_path):
+    """Issue 32: load_csv(input="y", output="y") was accepted, a record whose output is its own input."""
+    with pytest.raises(SettingsError, match=r"^input and output both name the column 'y'; expected") as caught:
+        load_csv(_write(tmp_path, _ROWS), time="time", input="y", output="y")
+    assert caught.value.setting == "output"
+
+
 @pytest.mark.parametrize("dt", [0, -1.0, math.nan, math.inf, "2", True])
 def test_dt_must_be_a_finite_number_above_zero(tmp_path, dt):
     with pytest.raises(SettingsError, match=r"^dt must be a finite number of seconds > 0; got "):

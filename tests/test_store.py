@@ -268,6 +268,11 @@ def test_verdicts_that_cannot_be_saved_are_named(thesis_result, tmp_path):
 def test_load_names_what_it_cannot_read(thesis_result, tmp_path):
     with pytest.raises(DataError, match=r"missing\.nc: no such file; expected a netCDF file"):
         dynia.load(tmp_path / "missing.nc")
+    # Issue 32: both were "no such file".
+    with pytest.raises(DataError, match=r": is a directory; expected a netCDF file"):
+        dynia.load(tmp_path)
+    with pytest.raises(DataError, match=r"/dev/zero: is not a regular file \(a device"):
+        dynia.load("/dev/zero")
     (tmp_path / "text.nc").write_text("time,u,y\n")
     with pytest.raises(DataError, match=r"text\.nc: cannot be read as netCDF-4"):
         dynia.load(tmp_path / "text.nc")

@@ -330,18 +330,7 @@ def load_csv(
     ...     print(error)
     no_such_file.csv: no such file; expected a CSV file with a header row
     """
-    for argument, name in (("time", time), ("input", input), ("output", output)):
-        if not isinstance(name, str) or not name.strip():
-            what = "tag" if long_format and argument != "time" else "column"
-            raise SettingsError(f"{argument} must be the name of the {argument} {what} (a str); got {name!r}", argument)
-    if not long_format:
-        for argument, name in (("input", input), ("output", output)):
-            if name.strip() == time.strip():
-                raise SettingsError(
-                    f"{argument} names the time column {time.strip()!r}; "
-                    f"expected the column of the {argument}'s values",
-                    argument,
-                )
+    _check_names(time, input, output, long_format, output_path)
     if time_format is not None and (not isinstance(time_format, str) or "%" not in time_format):
         raise SettingsError(
             f"time_format must be a strptime format such as '%d.%m.%Y %H:%M'; got {time_format!r}", "time_format"
@@ -367,6 +356,27 @@ def load_csv(
     else:
         return _from_rows(_read_table(path, time_format), time, input, output, dt, max_gap, average)
     return _from_logs(input_log, output_log, dt, max_gap)
+
+
+def _check_names(time, input, output, long_format, output_path):
+    """The column (or tag) names of load_csv: strings, the signals' apart from time and from each other."""
+    for argument, name in (("time", time), ("input", input), ("output", output)):
+        if not isinstance(name, str) or not name.strip():
+            what = "tag" if long_format and argument != "time" else "column"
+            raise SettingsError(f"{argument} must be the name of the {argument} {what} (a str); got {name!r}", argument)
+    if not long_format:
+        for argument, name in (("input", input), ("output", output)):
+            if name.strip() == time.strip():
+                raise SettingsError(
+                    f"{argument} names the time column {time.strip()!r}; "
+                    f"expected the column of the {argument}'s values",
+                    argument,
+                )
+    if output_path is None and input.strip() == output.strip():
+        what = "tag" if long_format else "column"
+        raise SettingsError(
+            f"input and output both name the {what} {input.strip()!r}; expected the {what} of each signal", "output"
+        )
 
 
 def resample_events(times_u, u, times_y, y, dt=None, start=None, stop=None):

@@ -108,7 +108,14 @@ def load(path, *, lazy=False):
 
     name = os.fspath(path)
     if not os.path.isfile(name):
-        raise DataError(f"{name}: no such file; expected a netCDF file written by DyniaResult.save")
+        kind = (
+            "no such file"
+            if not os.path.exists(name)
+            else "is a directory"
+            if os.path.isdir(name)
+            else "is not a regular file (a device, a pipe or a socket)"
+        )
+        raise DataError(f"{name}: {kind}; expected a netCDF file written by DyniaResult.save")
     try:
         dataset = xr.open_dataset(
             name, engine="h5netcdf", mask_and_scale=False, decode_times=False, decode_timedelta=False
