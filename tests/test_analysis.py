@@ -9,6 +9,7 @@ from conftest import example_firstorder_input, first_order_response
 from dynia import mcat, thesis
 from dynia.engine.selection import lowest_stable, stable_rank_mask
 from dynia.engine.windows import moving_window
+from dynia.errors import SettingsError
 
 
 def _small_example(seed, steps=120, samples=300, zero_start=20):
@@ -263,3 +264,14 @@ def test_mcat_flavour_rejects_negative_parameters_and_odd_percentages():
         moving_window(y, sims - 1, params - 1, [[-1, 8]], n=1, flavour="mcat")
     with pytest.raises(ValueError, match="whole number of blocks"):
         moving_window(y, sims, params, [[0, 9]], n=1, percentage=30, flavour="mcat")
+
+
+@pytest.mark.parametrize("change", [lambda t: t[::-1].copy(), lambda t: np.r_[t[:5], t[4], t[6:]]])
+def test_a_time_that_does_not_rise_is_refused(example1, change):
+    """Issue 32: moving_window accepted a falling time, and its plots and tables then ran backwards."""
+    e = example1
+    with pytest.raises(SettingsError, match="time must be finite and strictly rising") as refused:
+        moving_window(
+            e["y"], e["sims"], e["params"], e["bounds"], n=10, time=change(np.arange(e["y"].size, dtype=float))
+        )
+    assert refused.value.setting == "time"

@@ -545,7 +545,11 @@ def _time_of_steps(time, n_steps):
     """``time`` checked as one value per step, or 0, 1, ... when None."""
     time = np.arange(n_steps, dtype=float) if time is None else _checks.as_1d_float(time, "time")
     if time.size != n_steps:
-        raise SettingsError(f"time has {time.size} values but y has {n_steps}; they must match")
+        raise SettingsError(f"time has {time.size} values but y has {n_steps}; they must match", "time")
+    falling = np.flatnonzero(~(np.diff(time) > 0))
+    if not np.isfinite(time).all() or falling.size:
+        where = f"at step {int(falling[0]) + 1}" if falling.size else "somewhere"
+        raise SettingsError(f"time must be finite and strictly rising, one value per step; it is not {where}", "time")
     return time
 
 
