@@ -373,6 +373,12 @@ def window_half_width(seconds, dt, n_steps, name="window"):
             f"{name} {seconds:g} s is {steps:.3g} steps of {dt:g} s; a window needs at least 3 steps ({3 * dt:g} s)",
             name,
         )
+    if steps > max(n_steps, 10**12):  # not as a whole number: 1e308 s would print 309 digits
+        raise SettingsError(
+            f"{name} {seconds:g} s is {steps:.6g} steps of {dt:g} s, longer than the record's "
+            f"{n_steps} steps ({n_steps * dt:g} s)",
+            name,
+        )
     n = math.floor(steps / 2 + 0.5)
     if 2 * n + 1 > n_steps:
         raise SettingsError(

@@ -72,6 +72,9 @@ def test_the_half_window_of_a_duration():
         window_half_width(201.0, 1.0, 100)
     with pytest.raises(SettingsError, match="longer than the record's 100 steps"):
         window_half_width(100.0, 1.0, 100)  # n = 50: 101 steps
+    # Issue 32: 1e308 s printed a 309-digit number of steps.
+    with pytest.raises(SettingsError, match=r"^window 1e\+308 s is 1e\+308 steps of 1 s, longer than the record's 100"):
+        window_half_width(1e308, 1.0, 100)
 
 
 # ------------------------------------------------------- the time scale
