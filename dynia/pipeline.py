@@ -264,6 +264,7 @@ def _analyse_samples(u, y, model, names, box, samples, settings, progress, outpu
                 "finite (NaN or overflow); check the model and the parameter ranges"
             )
         analysed = samples[finite]
+        _check_enough_left(settings, analysed.shape[0], n_sampled, u)
         if sims is not None and not finite.all():
             sims = sims[finite]
         chunk_steps = default_chunk_steps(analysed.shape[0], 2 * settings.n)
@@ -462,6 +463,31 @@ def compiled_simulation(model):
     return isinstance(model, LinearModel) and model.n_inputs == 1
 
 
+def _overflow_cause(u):
+    """Why simulations overflowed: the input, when it holds values beyond 1e150, else an unstable model."""
+    largest = 0.0 if u is None else float(np.max(np.abs(u)))
+    if largest > MAX_PARAMETER:
+        return f"the input reaches {largest:.3g} in magnitude, where the simulation overflows"
+    return "an unstable model overflowing"
+
+
+def _check_enough_left(settings, kept, n_sampled, u):
+    """Refuse, saying why, when the sets left after dropping those that overflowed are too few to analyse.
+
+    The settings' own message would name the count left as if it had been asked for ("n_samples 6").
+    """
+    if kept == n_sampled:
+        return
+    try:
+        settings.replace(n_samples=kept)
+    except SettingsError:
+        raise ModelError(
+            f"{n_sampled - kept} of the {n_sampled} parameter sets were dropped because their simulation is not "
+            f"finite ({_overflow_cause(u)}); the {kept} left are too few to keep 2 behavioural sets a window at "
+            f"percentage {settings.percentage:g}"
+        ) from None
+
+
 def warn_dropped(n_dropped, n_sampled, u=None):
     """Warn (:class:`DroppedSamplesWarning`) when more than 1 % of the sampled sets were dropped.
 
@@ -469,14 +495,10 @@ def warn_dropped(n_dropped, n_sampled, u=None):
     blamed on them, not on an unstable model.
     """
     if n_dropped > DROPPED_WARNING_SHARE * n_sampled:
-        cause = "an unstable model overflowing"
-        if u is not None:
-            largest = float(np.max(np.abs(u)))
-            if largest > MAX_PARAMETER:
-                cause = f"the input reaches {largest:.3g} in magnitude, where the simulation overflows"
         warnings.warn(
             f"{n_dropped} of {n_sampled} parameter sets ({100 * n_dropped / n_sampled:.1f} %) were dropped "
-            f"because their simulation is not finite ({cause}); the analysis covers only the rest of the box",
+            f"because their simulation is not finite ({_overflow_cause(u)}); the analysis covers only the rest of the "
+            "box",
             DroppedSamplesWarning,
             stacklevel=3,
         )

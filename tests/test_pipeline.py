@@ -1,5 +1,7 @@
 """dynia.run end to end: the thesis's example 1, result objects, bad input."""
 
+import re
+
 import matplotlib
 import numpy as np
 import pytest
@@ -132,6 +134,18 @@ def test_parameter_sets_that_overflow_are_dropped_and_counted():
     assert res.samples.shape[0] == 300 - res.run.n_dropped
     assert np.isfinite(res.ic).all()
     assert (res.samples[:, 1] < 15).all()
+
+
+def test_too_few_sets_left_after_overflow_are_refused_saying_how_many_were_asked_and_why():
+    """Issue 32: one input value of 1.797e308 left 6 of 500 sets, refused as if 'n_samples 6' had been asked."""
+    u = np.r_[np.zeros(5), np.ones(60)]
+    y = FirstOrder().simulate([[2.0, 3.0]], u)[0]
+    u[30:] = 1.797e308  # every set with K > 1 overflows: about 70 of 500 are left, too few for 1 %
+    with pytest.raises(dynia.ModelError) as refused:
+        dynia.run(u, y, FirstOrder(), {"K": (0, 7), "T": (0.1, 7)}, n_samples=500, n=3, percentage=1, rng=1)
+    message = str(refused.value)
+    assert re.search(r"^\d+ of the 500 parameter sets were dropped because their simulation is not finite", message)
+    assert "the input reaches 1.8e+308 in magnitude" in message and "are too few to keep 2 behavioural" in message
 
 
 def test_summary_reports_the_band_and_estimate_at_the_highest_ic(example1_run):
