@@ -129,6 +129,26 @@ def test_several_inputs_reach_a_state_space_model():
 @pytest.mark.parametrize(
     "fn, message",
     [
+        (
+            lambda p, u, dt: (1000 + LAG.simulate(p, u, dt=dt) * 1e-3).astype(np.float16),
+            "as float16 values: the parameters' effect is below what float16 resolves; return float64",
+        ),
+        (
+            lambda p, u, dt: LAG.simulate(p, u * 1e-320, dt=dt),
+            "0 everywhere: the response is below what float64 resolves",
+        ),
+    ],
+)
+def test_an_output_below_the_resolution_is_not_blamed_on_ignored_params(fn, message):
+    """Issue 32: a float16 model and a response that underflows got 'it must use params'."""
+    with pytest.raises(ModelError, match=message) as caught:
+        dynia.run(U, Y, FunctionModel(fn, ["K", "T"]), BOUNDS, n_samples=100, rng=1)
+    assert "must use params" not in str(caught.value)
+
+
+@pytest.mark.parametrize(
+    "fn, message",
+    [
         (lambda p, u, dt: np.zeros((u.shape[0], p.shape[0])), r"fn returned shape \(300, 100\); expected .*transposed"),
         (lambda p, u, dt: np.zeros(p.shape[0]), r"fn returned shape \(100,\); expected \(n_samples, n_steps\)"),
         (lambda p, u, dt: np.full((p.shape[0], u.shape[0]), np.nan), "every one of the 100 parameter sets is not"),

@@ -385,6 +385,14 @@ def test_online_blanks_windows_whose_model_output_overflows_as_the_batch_run_doe
     assert_array_equal(result.gradient, batch.gradient)
 
 
+def test_a_built_in_model_below_the_resolution_is_not_said_to_ignore_its_parameters():
+    """Issue 32: dt = 1e-300 made every FirstOrder set's output the same, refused as 'it must use params'."""
+    online = OnlineDynia(FirstOrder(), MAGNITUDE_BOUNDS, n_samples=300, n=5, rng=1, dt=1e-300)
+    with pytest.raises(dynia.errors.ModelError, match="the response is below what float64 resolves") as caught:
+        online.replay(MAGNITUDE_U, MAGNITUDE_Y)
+    assert "must use params" not in str(caught.value)
+
+
 def test_replay_refuses_a_model_that_ignores_its_parameters():
     """Before: the linear model's windows all tied (IC from ties); the state-space model's refusal named 5 sets."""
     ignoring = StateSpaceModel(

@@ -478,14 +478,35 @@ def check_names(names) -> tuple[str, ...]:
     return names
 
 
-def refuse_ignored_params(model, params, functions):
-    """The ModelError for a model whose output was the same for every parameter set, unless the sets are too."""
-    if np.unique(params, axis=0).shape[0] > 1:
+def refuse_ignored_params(model, params, functions, output=None, precision=None):
+    """The ModelError for a model whose output was the same for every parameter set, unless the sets are too.
+
+    ``output`` is that one output (its last chunk will do) and ``precision``
+    the float type user code returned it in, where it was coarser than
+    float64. The message tells a model that ignores ``params`` from one whose
+    response is below what the numbers can resolve: dynia's own models, an
+    output that is 0 everywhere (a record or a dt so small that the response
+    underflows), or an output of a coarse float type.
+    """
+    if np.unique(params, axis=0).shape[0] <= 1:
+        return
+    n_sets = params.shape[0]
+    same = f"{model!r}: {functions} returned the same output for all {n_sets} parameter sets over the whole record"
+    zero = output is not None and not np.any(output)
+    if precision is not None and not zero:
         raise ModelError(
-            f"{model!r}: {functions} returned the same output for all {params.shape[0]} parameter sets over the "
-            "whole record; it must use params (one row per set, columns in the order of names), or the input "
-            "never excites the model"
+            f"{same}, as {precision} values: the parameters' effect is below what {precision} resolves; return float64"
         )
+    if zero or functions == "the simulation":
+        raise ModelError(
+            f"{same}{', 0 everywhere' if zero else ''}: the response is below what float64 resolves (an input, "
+            "a record or a dt so small, or so large beside the model's time scales, that the parameters change "
+            "nothing); rescale the data or the time step, or check that the input excites the model"
+        )
+    raise ModelError(
+        f"{same}; it must use params (one row per set, columns in the order of names), or the input never excites "
+        "the model"
+    )
 
 
 class SameOutput:
@@ -498,10 +519,14 @@ class SameOutput:
     def __init__(self, model, params, functions):
         self._model, self._params, self._functions = model, params, functions
         self.same = params.shape[0] > 1
+        self._zero = True  # and 0 everywhere so far
 
     def check(self, sims, *, last):
         """Take the next chunk (n_samples, m); at the ``last`` one, refuse a record the same for every set."""
         if self.same:
             self.same = bool(np.array_equal(sims, np.broadcast_to(sims[:1], sims.shape)))
+            self._zero = self._zero and self.same and not np.any(sims)
             if self.same and last:
-                refuse_ignored_params(self._model, self._params, self._functions)
+                refuse_ignored_params(
+                    self._model, self._params, self._functions, output=np.zeros(1) if self._zero else sims[0]
+                )

@@ -581,6 +581,8 @@ def _checked_output(model, sims, params, u, *, whole_record):
     chunk before the first input change may well be the same for all.
     """
     expected = (params.shape[0], u.shape[0])
+    returned = getattr(sims, "dtype", None)
+    coarse = str(returned) if returned is not None and returned.kind == "f" and returned.itemsize < 8 else None
     try:
         sims = np.asarray(sims, dtype=float)
     except (TypeError, ValueError):
@@ -597,7 +599,7 @@ def _checked_output(model, sims, params, u, *, whole_record):
         and np.array_equal(sims[1], sims[0])
         and np.array_equal(sims, np.broadcast_to(sims[:1], expected))
     ):
-        refuse_ignored_params(model, params, "fn")
+        refuse_ignored_params(model, params, "fn", output=sims[0], precision=coarse)
     return sims
 
 
