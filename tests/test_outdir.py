@@ -546,3 +546,26 @@ def test_results_get_the_permissions_the_umask_allows(place, umask, directory_mo
         "second_run/limits.csv": file_mode,
     }
     assert stat.S_IMODE(os.stat("elsewhere.txt").st_mode) == 0o640
+
+
+DIES_IN_THE_RUN = """
+import os
+from dynia.io.outdir import OutputDirectory
+with OutputDirectory("results", command="analyse") as staging:
+    (staging / "ic.csv").write_text("half")
+    os._exit(9)  # as SIGKILL or the out-of-memory killer end it: no clean-up runs
+"""
+
+
+def test_the_next_run_removes_the_staging_directory_of_a_killed_run(place):
+    """Issue 32: a run killed outright left .results.partial-* beside --out for ever."""
+    assert run_child(DIES_IN_THE_RUN, cwd=place).returncode == 9
+    [dead] = list(place.glob(".results.partial-*"))
+    # Not dynia's: a directory of that name without dynia's marker that holds something stays.
+    (place / ".results.partial-mine").mkdir()
+    (place / ".results.partial-mine" / "notes.txt").write_text("keep")
+    with OutputDirectory("results", command="analyse") as staging:
+        assert not dead.exists()
+        (staging / "ic.csv").write_text("new")
+    assert sorted(path.name for path in place.glob(".results.partial-*")) == [".results.partial-mine"]
+    assert (place / "results" / "ic.csv").read_text() == "new"

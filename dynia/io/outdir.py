@@ -16,7 +16,9 @@ when the caller finishes without an exception. The rules:
    directory or one of its parents, or that is the filesystem root, the home directory or a parent of it. Paths
    are compared after resolving ``..`` and symlinks.
 5. Before any work starts, ``out``'s parent is created if needed and the staging directory ``.NAME.partial-XXXX``
-   is made in it, so an unwritable location fails at once.
+   is made in it, so an unwritable location fails at once. The staging directories that runs killed outright
+   (SIGKILL, the out-of-memory killer, ``os._exit``) left there are removed first: holding the lock, no live run
+   has one.
 6. One run at a time per ``out``: a second run fails at once while the lock file ``.NAME.dynia-lock`` beside
    ``out`` is held.
 7. If ``out`` appears while dynia works (or, with ``--overwrite``, stops being dynia's), it is left alone and the
@@ -49,6 +51,7 @@ import signal
 import stat
 import tempfile
 import threading
+from glob import escape as glob_escape
 from pathlib import Path
 
 from ..errors import Interrupted, OutputError
@@ -141,6 +144,21 @@ def _foreign(path):
 def _made_by_dynia(path):
     """Whether ``path`` is a real directory holding dynia's marker and nothing dynia did not write."""
     return _foreign(path) == []
+
+
+def _remove_dead_staging(parent, name):
+    """Remove the staging directories of earlier runs for ``out`` that died without cleaning up (SIGKILL, os._exit).
+
+    Called holding ``out``'s lock, which a live run holds until it has cleaned up: any ``.NAME.partial-*`` there
+    now is a dead run's. Only a real directory that holds dynia's marker (written first into every staging
+    directory) or nothing at all is removed; anything else of that name is left alone.
+    """
+    for entry in parent.glob(f".{glob_escape(name)}.partial-*"):
+        try:
+            if _marker(entry) is not None or (entry.is_dir() and not entry.is_symlink() and not any(entry.iterdir())):
+                shutil.rmtree(entry)
+        except OSError:  # another user's, or read-only: left for whoever can remove it
+            continue
 
 
 def _named(entries):
@@ -243,6 +261,7 @@ class OutputDirectory:
         try:
             parent.mkdir(parents=True, exist_ok=True)
             self._lock = self._acquire(parent / f".{name}.dynia-lock")
+            _remove_dead_staging(parent, name)
             self._existed = self._check()  # again, now that no other run can change out
             self.staging = Path(tempfile.mkdtemp(prefix=f".{name}.partial-", dir=parent))
             self._staged = True
