@@ -103,10 +103,17 @@ def default_workers():
     return os.cpu_count() or 1
 
 
-def record(u, y, n_inputs=1):
+# A record whose values are all smaller than this cannot be simulated faithfully: the simulators set states below
+# dynia.models.base.FLUSH_BELOW (2^-960) to zero, and 2^60 above it leaves room for a model's gains and slow poles.
+SMALLEST_RESOLVED = 2.0**-900
+
+
+def record(u, y, n_inputs=1, *, whole=True):
     """Input and output of one record: ``u`` (n_steps,) or (n_steps, n_inputs), ``y`` (n_steps,).
 
-    NaN in ``y`` marks a missing sample; ``u`` must be finite.
+    NaN in ``y`` marks a missing sample; ``u`` must be finite. A ``whole``
+    record (not a block of one fed in pieces) must hold a value of at least
+    :data:`SMALLEST_RESOLVED` in each signal that is not all zero.
     """
     if n_inputs == 1:
         u = as_1d_float(u, "u")
@@ -118,6 +125,14 @@ def record(u, y, n_inputs=1):
     y = as_1d_float(y, "y", allow_nan=True)
     if u.shape[0] != y.size:
         raise DataError(f"u has {u.shape[0]} samples but y has {y.size}; they must be logged on the same steps")
+    for name, values in (("u", u), ("y", y)) if whole else ():
+        largest = float(np.nanmax(np.abs(values), initial=0.0))
+        if 0 < largest < SMALLEST_RESOLVED:
+            raise DataError(
+                f"{name}'s largest magnitude is {largest:.3g}, below {SMALLEST_RESOLVED:.2g}: the simulation sets "
+                "states below 1e-289 to 0 every step, so no model's response can be told from another's; "
+                "express the record in a smaller unit (multiply it by a power of ten)"
+            )
     return u, y
 
 

@@ -128,7 +128,7 @@ from .engine.windows import (
 from .errors import DataError, DyniaError, ModelError, SettingsError
 from .fit import record_least_squares
 from .io.frames import unpack
-from .pipeline import KernelSimulated, compiled_simulation, warn_dropped
+from .pipeline import KernelSimulated, compiled_simulation, warn_dropped, warn_unreached_output
 from .progress import progress_bar, shows_progress
 from .quality import screening
 from .result import DyniaResult
@@ -328,6 +328,7 @@ def run(
         )
         screened = screened.result()
     result = _result(u, y, model, names, box, samples, settings, flavour_impl, windows, analysed, totals, screened)
+    warn_unreached_output(result, y)
     # The least squares simulates a few sets at a time, some ten times: through the kernel where dynia.run does.
     result = record_least_squares(result, u, y, KernelSimulated(model) if windows.fused else model)
     return result if timestamps is None else dataclasses.replace(result, timestamps=timestamps)

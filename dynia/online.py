@@ -392,7 +392,7 @@ class OnlineDynia:
             window's scaled units (:attr:`newest_errors`), added to in place
             step by step (:func:`dynia.engine.noise.add_record_errors`).
         """
-        u, y = _checks.record(u, y, n_inputs=self._model.n_inputs)
+        u, y = _checks.record(u, y, n_inputs=self._model.n_inputs, whole=False)
         inputs = u.reshape(y.size, -1)
         width = self._errors.shape[0]
         for start in range(0, y.size, _ADVANCE_BLOCK):

@@ -31,6 +31,8 @@ __all__ = [
     "DROPPED_WARNING_SHARE",
     "DroppedSamplesWarning",
     "TargetNotReachedWarning",
+    "UnreachedOutputWarning",
+    "warn_unreached_output",
     "TARGET_MARGIN",
     "TARGET_MIN_GROWTH",
     "KernelSimulated",
@@ -51,6 +53,10 @@ TARGET_MIN_GROWTH = 1.5
 
 class DroppedSamplesWarning(UserWarning):
     """More than 1 % of the parameter sets were dropped because their simulation was not finite."""
+
+
+class UnreachedOutputWarning(UserWarning):
+    """No parameter set in the box fits the output better than an output of zero would (see :func:`run`)."""
 
 
 class TargetNotReachedWarning(UserWarning):
@@ -231,6 +237,7 @@ def run(
         else:
             result = _analyse_to_target(u, y, model, names, box, samples, settings, generator, progress, output)
         result = dataclasses.replace(result, run=dataclasses.replace(result.run, screened=screened))
+        warn_unreached_output(result, y)
         # The least squares simulates a few sets at a time: through the kernel where the analysis ran on it.
         kernel = result.settings.engine == "numba" and compiled_simulation(model)
         result = record_least_squares(result, u, y, KernelSimulated(model) if kernel else model)
@@ -461,6 +468,47 @@ def _compiled_state_space(model):
 def compiled_simulation(model):
     """Whether the compiled kernels can simulate ``model`` (the single-input linear models)."""
     return isinstance(model, LinearModel) and model.n_inputs == 1
+
+
+# The typical window's best MAE over the output's mean magnitude from which no set fits better than zero would.
+_UNREACHED = 0.999
+
+
+def warn_unreached_output(result, y):
+    """Warn (:class:`UnreachedOutputWarning`) when in the typical window even the best set misses the output whole.
+
+    Then the best set's mean absolute error is as large as the output's own
+    mean magnitude: no set in the box does better than an output of zero.
+    The usual cause is a model that cannot reach the output's scale or
+    level: data in other units than the model (1e100 times, 20 times is not
+    caught), an offset that moved the data far away, bounds that exclude the
+    gain. The verdicts would then be ties or noise, with no word why.
+    """
+    if result.best_mae is None or result.settings is None:
+        return
+    before, after = result.window_halos
+    magnitude = np.abs(y)
+    largest = float(np.nanmax(magnitude, initial=0.0))
+    if not 0 < largest < np.inf:
+        return
+    # Window sums of |y| / largest by running sums: no overflow whatever the magnitude.
+    sums = np.concatenate(([0.0], np.cumsum(np.where(np.isnan(y), 0.0, magnitude / largest))))
+    counts = np.concatenate(([0], np.cumsum(~np.isnan(y))))
+    steps = np.arange(y.size)
+    lo, hi = np.clip(steps - before, 0, y.size), np.clip(steps + after + 1, 0, y.size)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = (result.best_mae / largest) / ((sums[hi] - sums[lo]) / (counts[hi] - counts[lo]))
+    ratio = ratio[np.isfinite(ratio)]
+    if ratio.size and float(np.median(ratio)) >= _UNREACHED:
+        warnings.warn(
+            "no parameter set in the box fits the output better than an output of 0 would: in the typical window "
+            f"the best set misses it by {100 * float(np.median(ratio)):.0f} % of its mean magnitude "
+            f"(largest |y| {largest:.3g}); the model cannot reach the output's scale or level within these bounds "
+            "(check the units and offsets of the data, and the bounds), or the record holds no response it can "
+            "follow",
+            UnreachedOutputWarning,
+            stacklevel=3,
+        )
 
 
 def _overflow_cause(u):

@@ -1,6 +1,7 @@
 """dynia.run end to end: the thesis's example 1, result objects, bad input."""
 
 import re
+import warnings
 
 import matplotlib
 import numpy as np
@@ -157,3 +158,30 @@ def test_summary_reports_the_band_and_estimate_at_the_highest_ic(example1_run):
     assert summary["K"]["band"] == list(example1_run.ci[k, best])
     assert summary["K"]["band"][0] <= summary["K"]["estimate"] <= summary["K"]["band"][1]
     assert abs(summary["K"]["estimate"] - 2.0) < 0.3
+
+
+@pytest.mark.parametrize(
+    "scale, model_scale, warned",
+    [(1.0, 1.0, False), (1e100, 1.0, True), (1.0, 1e-200, True)],
+)
+def test_a_model_that_cannot_reach_the_outputs_scale_is_named(scale, model_scale, warned):
+    """Issue 32: data 1e100 above the model, or a model 1e-200 below the data, ended in ties without a word."""
+    u = np.r_[np.zeros(20), np.ones(80), np.zeros(100)]
+    y = (FirstOrder().simulate([[2.0, 3.0]], u)[0] + np.random.default_rng(0).normal(0, 0.05, u.size)) * scale
+    model = dynia.models.FunctionModel(lambda p, u, dt: FirstOrder().simulate(p, u, dt=dt) * model_scale, ["K", "T"])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        dynia.run(u, y, model, {"K": (0, 7), "T": (0.1, 7)}, n_samples=500, n=5, rng=1)
+    named = [item for item in caught if item.category is dynia.pipeline.UnreachedOutputWarning]
+    assert bool(named) is warned
+    if warned:
+        assert "no parameter set in the box fits the output better than an output of 0" in str(named[0].message)
+
+
+@pytest.mark.parametrize("scale", [1e-280, 1e-300, 3e-308])
+def test_a_record_below_what_the_simulation_resolves_is_refused(scale):
+    """Issue 32: at 1e-290 every set tied (K 0.279, T 0.112, weak) without a word; at 1e-280 it still held."""
+    u = np.r_[np.zeros(20), np.ones(80)]
+    y = FirstOrder().simulate([[2.0, 3.0]], u)[0]
+    with pytest.raises(dynia.DataError, match=r"^u's largest magnitude is .* below 1.2e-271: the simulation sets"):
+        dynia.run(u * scale, y * scale, FirstOrder(), {"K": (0, 7), "T": (0.1, 7)}, n_samples=300, rng=1)

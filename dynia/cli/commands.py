@@ -42,7 +42,7 @@ from ..identification import identify
 from ..io.csv import load_csv
 from ..io.outdir import OutputDirectory
 from ..models.base import user_code_failed
-from ..pipeline import DroppedSamplesWarning, TargetNotReachedWarning, run
+from ..pipeline import DroppedSamplesWarning, TargetNotReachedWarning, UnreachedOutputWarning, run
 from ..progress import stderr_is_terminal
 from ..quality import SCREENED_KINDS, check_quality
 from ..refine import check_margin, narrowed_bounds
@@ -797,7 +797,7 @@ def _screening_summary(result, findings):
 
 def _dynia_warnings(caught):
     """The messages of dynia's own warnings among those caught; the rest stay silent."""
-    ours = (DroppedSamplesWarning, TargetNotReachedWarning, OverflowedWindowsWarning)
+    ours = (DroppedSamplesWarning, TargetNotReachedWarning, OverflowedWindowsWarning, UnreachedOutputWarning)
     messages = [str(item.message) for item in caught if issubclass(item.category, ours)]
     caught.clear()
     return messages
