@@ -285,6 +285,7 @@ def run(
         "use dynia.run; the cluster's workers are its threads",
     )
     names, box = parameter_box(bounds, model.names, type(model).__name__)
+    model.check_ranges(dict(zip(names, box)))
     settings.check_record(y.size)
     compiled = compiled_engine(settings.engine, settings.flavour)
     windows = _Windows(

@@ -221,6 +221,7 @@ def run(
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
     settings.check_record(y.size)  # before any simulation
     names, box = parameter_box(bounds, model.names, repr(model))
+    model.check_ranges(dict(zip(names, box)))  # before any set is drawn, naming the parameter, not a sample
     if settings.sampler in ADAPTIVE_SAMPLERS:  # adaptive_run screens the record itself
         result = adaptive_run(
             u, y, model, dict(zip(names, map(tuple, box))), scheme=settings.sampler, settings=settings, rng=rng

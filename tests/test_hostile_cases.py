@@ -336,8 +336,8 @@ def test_the_time_column_is_no_signal(tmp_path, capsys, never_analysed, argument
 @pytest.mark.parametrize(
     "param, needle",
     [
-        ("T=-5:-1", "--param T=-5:-1: FirstOrder does not accept T"),
-        ("T=-1:5", "--param T=-1:5: FirstOrder does not accept T = -1"),
+        ("T=-5:-1", "--param T=-5:-1: T ranges over (-5, -1), which reaches T = -3, where FirstOrder refuses it"),
+        ("T=-1:5", "--param T=-1:5: T ranges over (-1, 5), which reaches T = -1, where FirstOrder refuses it"),
         ("K=0:inf", "--param K=0:inf: expected finite bounds"),
         ("K=nan:1", "--param K=nan:1: expected finite bounds"),
     ],

@@ -185,3 +185,14 @@ def test_a_record_below_what_the_simulation_resolves_is_refused(scale):
     y = FirstOrder().simulate([[2.0, 3.0]], u)[0]
     with pytest.raises(dynia.DataError, match=r"^u's largest magnitude is .* below 1.2e-271: the simulation sets"):
         dynia.run(u * scale, y * scale, FirstOrder(), {"K": (0, 7), "T": (0.1, 7)}, n_samples=300, rng=1)
+
+
+def test_a_range_the_model_refuses_is_named_by_its_parameter_before_any_set_is_drawn():
+    """Issue 32: the API said 'sample 4 has T = -0.78' where the command line names the range."""
+    u = np.r_[np.zeros(20), np.ones(80)]
+    y = FirstOrder().simulate([[2.0, 3.0]], u)[0]
+    with pytest.raises(
+        dynia.SettingsError, match=r"^T ranges over \(-1, 7\), which reaches T = -1, where FirstOrder"
+    ) as refused:
+        dynia.run(u, y, FirstOrder(), {"K": (0, 7), "T": (-1, 7)}, n_samples=300, rng=1)
+    assert refused.value.setting == "T" and "sample" not in str(refused.value)

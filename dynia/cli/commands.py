@@ -37,7 +37,7 @@ from .. import __version__, models
 from ..engine import kernels
 from ..engine.flavours import compiled_engine
 from ..engine.windows import OverflowedWindowsWarning
-from ..errors import DyniaError, ModelError, NothingSelected, OutputError, SettingsError
+from ..errors import DyniaError, NothingSelected, OutputError, SettingsError
 from ..identification import identify
 from ..io.csv import load_csv
 from ..io.outdir import OutputDirectory
@@ -597,44 +597,12 @@ def _bounds(specs, model):
 
 
 def _admissible(model, ranges):
-    """Refuse a range reaching values a built-in model refuses (a negative time constant), naming its --param.
-
-    Each end of each range is tried with the other parameters in the middle of theirs, on three steps of input;
-    user models are left to the run, which reports their own errors (probing them would run their code twice).
-    """
-    if type(model).__module__.split(".")[:2] != ["dynia", "models"] or isinstance(
-        model, (models.FunctionModel, models.StateSpaceModel)
-    ):
-        return
-    middle = [sum(ranges[name]) / 2 for name in model.names]
-    probe = np.zeros(3 if model.n_inputs == 1 else (3, model.n_inputs))
-
-    def refusal(point):
-        try:
-            model.simulate(np.array([point]), probe)
-        except ModelError as error:
-            return error
-        return None
-
-    trials = [(None, None, middle)] + [
-        (name, end, middle[:column] + [end] + middle[column + 1 :])
-        for column, name in enumerate(model.names)
-        for end in ranges[name]
-    ]
-    for name, value, point in trials:
-        error = refusal(point)
-        if error is None:
-            continue
-        if point is middle:  # refused in the middle of every range: blame the parameter the model names
-            named = [other for other in model.names if str(error).startswith(f"{other} ")]
-            if not named:
-                return  # not a matter of one range: the run says what is wrong
-            name, value = named[0], middle[model.names.index(named[0])]
-        low, high = ranges[name]
-        raise UsageError(
-            f"--param {name}={low:g}:{high:g}: {type(model).__name__} does not accept {name} = {value:g} "
-            f"({str(error).split(';')[0]}); give a range of values the model accepts"
-        )
+    """The model's own check of the ranges (:meth:`~dynia.models.Model.check_ranges`), naming the --param."""
+    try:
+        model.check_ranges(ranges)
+    except SettingsError as error:
+        low, high = ranges[error.setting]
+        raise UsageError(f"--param {error.setting}={low:g}:{high:g}: {error}") from None
 
 
 def _offset(value, option):

@@ -396,6 +396,17 @@ class Model:
                 finite &= np.isfinite(chunk).all(axis=1)
         return finite
 
+    def check_ranges(self, ranges) -> None:
+        """Refuse sampling ranges that reach values the model refuses, before any set is drawn.
+
+        ``ranges`` maps every parameter name to its (low, high). Raises a
+        :class:`~dynia.errors.SettingsError` whose ``setting`` is the
+        parameter's name. The models of this package know their constraints
+        and check (:class:`~dynia.models.linear.LinearModel`); a model of user
+        code is left to the run, which reports its own errors (probing it
+        would run the user's code twice).
+        """
+
     def check_params(self, params) -> np.ndarray:
         """Return ``params`` as a finite float (n_samples, n_params) array."""
         expected = f"(n_samples, {self.n_params}) with columns {self.names}"

@@ -56,7 +56,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import scipy.linalg
 
-from ..errors import DataError, ModelError
+from ..errors import DataError, ModelError, SettingsError
 from ..settings import check_dt, check_x0
 from .base import Model, SimulationState, flush_tiny, user_code_failed
 
@@ -137,6 +137,49 @@ class LinearModel(Model):
     chunking and the time loop live here, shared by all. The compiled engine
     (:mod:`dynia.engine.kernels`) simulates these models in compiled code.
     """
+
+    def check_ranges(self, ranges) -> None:
+        """Refuse a range that reaches a value the model refuses (a negative time constant), naming the parameter.
+
+        Each end of each range is tried with the other parameters in the middle of theirs, on three steps of input.
+
+        Examples
+        --------
+        >>> FirstOrder().check_ranges({"K": (0, 7), "T": (-1, 7)})  # doctest: +ELLIPSIS
+        Traceback (most recent call last):
+        ...
+        dynia.errors.SettingsError: T ranges over (-1, 7), which reaches T = -1, where FirstOrder refuses it ...
+        """
+        middle = [sum(map(float, ranges[name])) / 2 for name in self.names]
+        trials = [(None, None, middle)] + [
+            (name, float(end), middle[:column] + [float(end)] + middle[column + 1 :])
+            for column, name in enumerate(self.names)
+            for end in ranges[name]
+        ]
+        for name, value, point in trials:
+            reason = self._refusal(point)
+            if reason is None:
+                continue
+            if name is None:  # refused in the middle of every range: blame the parameter the model names
+                named = [other for other in self.names if reason.startswith(f"{other} ")]
+                if not named:
+                    return  # not a matter of one range: the run says what is wrong
+                name, value = named[0], middle[self.names.index(named[0])]
+            low, high = map(float, ranges[name])
+            raise SettingsError(
+                f"{name} ranges over ({low:g}, {high:g}), which reaches {name} = {value:g}, where "
+                f"{type(self).__name__} refuses it ({reason}); give a range of values the model accepts",
+                name,
+            )
+
+    def _refusal(self, point):
+        """Why the model refuses the parameter set ``point`` (its error's first clause), or None."""
+        probe = np.zeros(3 if self.n_inputs == 1 else (3, self.n_inputs))
+        try:
+            self.simulate(np.array([point]), probe)
+        except ModelError as error:
+            return str(error).split(";")[0]
+        return None
 
     def simulate_chunks(
         self, params, u, dt: float = 1.0, x0: str = "zero", chunk_steps: int | None = None
