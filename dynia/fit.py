@@ -83,6 +83,7 @@ from .engine.noise import steady_size_factor
 from .errors import DataError, ModelError, SettingsError
 from .io.frames import unpack
 from .models import Model
+from .models.base import check_model
 from .segments import check_segments, mask_to_segments
 from .serial import json_number, json_ready
 from .settings import check_dt
@@ -503,8 +504,7 @@ def fit_segments(
     >>> fit.identifiable
     {'K': True, 'T': True, 'theta': True}
     """
-    if not isinstance(model, Model):
-        raise TypeError(f"model must be a dynia.models.Model, e.g. FirstOrder(); got {type(model).__name__}")
+    check_model(model)
     u, y, dt, _ = unpack(u, y, dt)
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
     segments = check_segments(segments, u.shape[0])
@@ -948,8 +948,7 @@ def validation_error(u, y, model, parameters, segments, *, dt=None, x0="steady",
     >>> round(validation_error(u, y, FirstOrder(), {"K": 2.0, "T": 3.0}, [(30, 50)]), 12)
     0.1
     """
-    if not isinstance(model, Model):
-        raise TypeError(f"model must be a dynia.models.Model, e.g. FirstOrder(); got {type(model).__name__}")
+    check_model(model)
     u, y, dt, _ = unpack(u, y, dt)
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
     mask = np.asarray(segments) if isinstance(segments, np.ndarray) else None

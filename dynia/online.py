@@ -56,8 +56,8 @@ from .engine.windows import OverflowedWindowsWarning, blank_overflowed, error_sc
 from .errors import DataError, ModelError, SettingsError
 from .fit import record_least_squares
 from .io.frames import unpack
-from .models import FunctionModel, Model, StateSpaceModel
-from .models.base import SameOutput, refuse_ignored_params
+from .models import FunctionModel, StateSpaceModel
+from .models.base import SameOutput, check_model, refuse_ignored_params
 from .quality import screen
 from .result import DyniaResult
 from .sampling import sample
@@ -190,10 +190,7 @@ class OnlineDynia:
         min_points=None,
         quality=None,
     ):
-        if not isinstance(model, Model):
-            raise TypeError(
-                f"model must be a dynia.models.Model, e.g. dynia.models.FirstOrder(); got {type(model).__name__}"
-            )
+        check_model(model)
         settings = merged_settings(settings, locals(), default=AnalysisSettings(window="trailing"))
         settings.require(
             "OnlineDynia",

@@ -17,6 +17,7 @@ from .fit import record_least_squares
 from .io.arrays import result_arrays
 from .io.frames import unpack
 from .models import LinearModel, Model, StateSpaceModel
+from .models.base import check_model
 from .models.custom import StateErrors
 from .progress import shows_progress
 from .quality import screening
@@ -213,11 +214,7 @@ def run(
     u, y, dt, timestamps = unpack(u, y, dt if dt is not None else getattr(settings, "dt", None))
     settings = merged_settings(settings, locals())
     progress = shows_progress(progress)
-    if not isinstance(model, Model):
-        raise ModelError(
-            f"model must be a dynia.models.Model (e.g. FirstOrder(), FunctionModel(fn, names) or "
-            f"StateSpaceModel(...)); got {type(model).__name__}"
-        )
+    check_model(model)
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
     settings.check_record(y.size)  # before any simulation
     names, box = parameter_box(bounds, model.names, repr(model))

@@ -278,7 +278,7 @@ def test_update_rejects_bad_values_without_advancing(u_t, y_t, error, match):
 @pytest.mark.parametrize(
     "kwargs, error, match",
     [
-        (dict(model="FirstOrder"), TypeError, "model must be a dynia.models.Model"),
+        (dict(model="FirstOrder"), dynia.ModelError, "model must be a dynia.models.Model"),
         (dict(bounds={"K": (0, 5)}), ValueError, "missing: \\['T'\\]"),
         (dict(bounds=[(0, 5), (0, 8)]), ValueError, "bounds must map"),
         (dict(sampler="iis"), ValueError, "OnlineDynia does not support sampler='iis'"),

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from dynia import verdicts
-from dynia.errors import NothingSelected
+from dynia.errors import ModelError, NothingSelected
 from dynia.fit import fit_segments, validation_error
 from dynia.models import FOPDT, FirstOrder
 from dynia.result import DyniaResult
@@ -504,7 +504,7 @@ def test_bad_fit_arguments(kwargs, message):
 
 def test_bad_fit_types():
     u = steps_input()
-    with pytest.raises(TypeError, match="model must be a dynia.models.Model"):
+    with pytest.raises(ModelError, match="model must be a dynia.models.Model"):
         fit_segments(u, u, "first-order", [(0, 10)], bounds=FIRST_ORDER_BOUNDS)
     with pytest.raises(ValueError, match="u has 200 samples but y has 10"):
         fit_segments(u, u[:10], FirstOrder(), [(0, 10)], bounds=FIRST_ORDER_BOUNDS)

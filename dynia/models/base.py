@@ -55,6 +55,7 @@ __all__ = [
     "SameOutput",
     "VALUES_PER_CHUNK",
     "FLUSH_BELOW",
+    "check_model",
     "check_names",
     "flush_tiny",
     "refuse_ignored_params",
@@ -477,6 +478,23 @@ def user_code_failed(what, error):
             f"{what} raised SystemExit({error.code!r}): model code must return or raise, not exit the process"
         )
     return ModelError(f"{what} raised {type(error).__name__}: {error}")
+
+
+def check_model(model) -> None:
+    """Refuse anything but a :class:`Model` as a front-end's ``model``, with one :class:`~dynia.errors.ModelError`.
+
+    Examples
+    --------
+    >>> check_model("FirstOrder")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    dynia.errors.ModelError: model must be a dynia.models.Model (e.g. FirstOrder(), ...); got str
+    """
+    if not isinstance(model, Model):
+        raise ModelError(
+            "model must be a dynia.models.Model (e.g. FirstOrder(), FunctionModel(fn, names) or "
+            f"StateSpaceModel(...)); got {type(model).__name__}"
+        )
 
 
 def check_names(names) -> tuple[str, ...]:
