@@ -9,7 +9,6 @@ Monte Carlo errors ``ic_se`` (n_params, n_steps) and ``ci_se`` (n_params,
 n_steps, 2).
 """
 
-import numbers
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
@@ -18,7 +17,7 @@ import numpy as np
 from .decimation import decimated_columns, envelope
 from .engine.cld import binned_mass
 from .errors import SettingsError
-from .settings import IC_THRESHOLD, AnalysisSettings, RunRecord
+from .settings import IC_THRESHOLD, AnalysisSettings, RunRecord, check_ic_threshold
 
 __all__ = ["DyniaResult", "date_axis", "timestamps_problem"]
 
@@ -276,8 +275,7 @@ class DyniaResult:
         >>> res.informative_windows().tolist()  # step 1 below the floor, step 3 without IC
         [[True, False, True, False]]
         """
-        if isinstance(ic_threshold, bool) or not isinstance(ic_threshold, numbers.Real) or not 0 <= ic_threshold <= 1:
-            raise SettingsError(f"ic_threshold must be a number in [0, 1] (IC lies there); got {ic_threshold!r}")
+        ic_threshold = check_ic_threshold(ic_threshold)
         names = self.names if parameters is None else ((parameters,) if isinstance(parameters, str) else parameters)
         rows = np.asarray(self.ic)[[self.index(name) for name in names]]
         with np.errstate(invalid="ignore"):  # NaN compares False

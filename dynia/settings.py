@@ -59,6 +59,7 @@ __all__ = [
     "check_dt",
     "check_x0",
     "sample_count",
+    "check_ic_threshold",
     "ic_batches",
     "merged_settings",
     "parameter_box",
@@ -105,6 +106,19 @@ def _whole(value, name, minimum, maximum=None, why=""):
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         raise SettingsError(f"{name} must be a whole number; got {value!r} ({type(value).__name__})", name)
     return _checks.whole_number(value, name, minimum=minimum, maximum=maximum, why=why)
+
+
+def check_ic_threshold(value):
+    """The IC from which a window counts as informative, a number in [0, 1], or a SettingsError naming ``ic_threshold``.
+
+    Examples
+    --------
+    >>> check_ic_threshold(0.5)
+    0.5
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not 0 <= value <= 1:
+        raise SettingsError(f"ic_threshold must be a number in [0, 1] (IC lies there); got {value!r}", "ic_threshold")
+    return float(value)
 
 
 def sample_count(value, name, minimum=1):

@@ -383,7 +383,7 @@ def test_an_option_that_would_do_nothing_is_refused(tmp_path, capsys, extra, mes
     "extra, message",
     [
         (["--method", "random"], "--method"),
-        (["--ic-threshold", "1.5"], "--ic-threshold"),
+        (["--ic-threshold", "1.5"], "--ic-threshold must be a number in [0, 1] (IC lies there); got 1.5"),
         (["--held-out", "1"], "--held-out"),
         (["--starts", "0"], "--starts"),
         # Issue 32: numpy's out-of-memory traceback, and --starts 1000000 ran for minutes without a word.

@@ -46,7 +46,7 @@ from ..pipeline import DroppedSamplesWarning, TargetNotReachedWarning, Unreached
 from ..progress import stderr_is_terminal
 from ..quality import SCREENED_KINDS, check_quality
 from ..refine import check_margin, narrowed_bounds
-from ..settings import MAX_PARAMETER, AnalysisSettings
+from ..settings import MAX_PARAMETER, AnalysisSettings, check_ic_threshold
 from ..suggestion import parse_duration, parse_size, suggest, window_half_width
 from ..verdicts import assess
 from . import report
@@ -363,17 +363,11 @@ def _analysis_settings(options):
 
 def _check_command_options(options):
     """The options that only the command line has."""
-    for key, low, high, closed_high in (
-        ("narrow_threshold", 0, 1, False),
-        ("ic_threshold", 0, 1, True),
-        ("held_out", 0, 1, False),
-    ):
+    for key in ("narrow_threshold", "ic_threshold"):
         if key in options:
-            value = options[key]
-            inside = low < value <= high if closed_high else low < value < high
-            if not inside:
-                interval = f"({low}, {high}]" if closed_high else f"({low}, {high})"
-                raise UsageError(f"--{key.replace('_', '-')} must lie in {interval}; got {value:g}")
+            check_ic_threshold(options[key])  # the library's own check, now rather than after the analysis
+    if "held_out" in options and not 0 < options["held_out"] < 1:
+        raise UsageError(f"--held-out must lie in (0, 1); got {options['held_out']:g}")
     _check_options_that_act_together(options)
     if options.get("second_run"):
         check_margin(options["narrow_margin"])  # now, not after the first run
