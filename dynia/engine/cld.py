@@ -9,7 +9,7 @@ normalised to sum to 1 along the last axis.
 Examples
 --------
 >>> import numpy as np
->>> from dynia import cld
+>>> from dynia.engine import cld
 >>> cost = np.array([0.2, 0.6, 0.4])
 >>> w = cld.likelihood(cost)
 >>> w.round(3)
