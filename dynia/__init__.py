@@ -90,6 +90,7 @@ _SUBMODULES = frozenset(
         "settings",
         "structure",
         "suggestion",
+        "summary",
         "synthetic",
         "thesis",
         "verdicts",

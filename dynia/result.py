@@ -18,6 +18,7 @@ from .decimation import decimated_columns, envelope
 from .engine.cld import binned_mass
 from .errors import SettingsError
 from .settings import IC_THRESHOLD, AnalysisSettings, RunRecord, check_ic_threshold
+from .summary import Summary
 
 __all__ = ["DyniaResult", "date_axis", "timestamps_problem"]
 
@@ -421,12 +422,13 @@ class DyniaResult:
 
         Returns
         -------
-        dict
-            ``{name: {"max_ic", "time_of_max_ic", "band": [lower, upper], "estimate", "highest_ic",
+        dynia.summary.Summary
+            A dict ``{name: {"max_ic", "time_of_max_ic", "band": [lower, upper], "estimate", "highest_ic",
             "time_of_highest_ic", "high_ic_windows", "high_ic_span": [first, last], "record_fit", "record_fit_se",
             "verdict", "reasons"}}``
             with plain Python values but the dates; with the Monte Carlo errors also
-            ``"max_ic_se"``, the standard error of the max IC.
+            ``"max_ic_se"``, the standard error of the max IC. It shows itself as the table ``dynia analyse``
+            prints (``print(summary)``, HTML in a notebook) and ``summary.to_frame()`` gives it as a pandas frame.
 
         Examples
         --------
@@ -444,7 +446,7 @@ class DyniaResult:
         from .verdicts import assess, high_ic_windows, no_evidence_reasons, reported_step
 
         verdicts = self.verdicts if self.verdicts is not None else assess(self)
-        summary = {}
+        summary = Summary()
         for p, name in enumerate(self.names):
             if np.isnan(self.ic[p]).all():
                 summary[name] = dict(

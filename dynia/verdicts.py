@@ -464,11 +464,14 @@ def high_ic_windows(result, p, ic_threshold=IC_THRESHOLD):
 def _clock(result, clock):
     """``when(step)``: the time of a step as the reasons write it."""
 
+    # A daily record (every date a midnight) names days, not midnights.
+    daily = result.timestamps is not None and not (result.timestamps.view(np.int64) % (86_400 * 10**9)).any()
+
     def when(step):
         if clock is not None:
             value = clock(step)
         elif result.timestamps is not None:
-            value = str(np.datetime_as_string(result.timestamps[step], unit="s"))
+            value = str(np.datetime_as_string(result.timestamps[step], unit="D" if daily else "s"))
         else:
             value = result.time[step]
         return value if isinstance(value, str) else f"{float(value):.6g}"

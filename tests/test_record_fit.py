@@ -13,9 +13,9 @@ import pytest
 import scipy.signal
 
 import dynia
-from dynia.cli.report import verdict_table
 from dynia.fit import fit_segments, record_least_squares
 from dynia.result import DyniaResult
+from dynia.summary import verdict_table
 from dynia.verdicts import assess, record_fit_conflict, record_fit_noise_error
 
 STEPS = 1000

@@ -48,6 +48,7 @@ from ..quality import SCREENED_KINDS, check_quality
 from ..refine import check_margin, narrowed_bounds
 from ..settings import MAX_PARAMETER, AnalysisSettings, check_ic_threshold
 from ..suggestion import parse_duration, parse_size, suggest, window_half_width
+from ..summary import verdict_table
 from ..verdicts import assess
 from . import report
 from .figures import Labels
@@ -865,7 +866,7 @@ def _analyse(options, command_line, caught):
                 saved=options["on_disk"],
                 labels=_labels(options),
             )
-            table = report.verdict_table(parameters)
+            table = verdict_table(parameters)
             table += "".join("\n" + line for line in report.screening_lines(summary))
             if summary["noise_floor"] is not None:
                 table += "\n" + report.noise_floor_line(summary["noise_floor"])

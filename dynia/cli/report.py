@@ -20,14 +20,13 @@ import numpy as np
 from .. import segments
 from ..io.writer import add_attributes
 from ..serial import json_ready
+from ..summary import aligned, verdict_parts
 from .figures import write_figures, write_fit_figure
 from .html_report import write_report
 
 __all__ = [
     "write_analysis",
     "write_identification",
-    "verdict_table",
-    "verdict_parts",
     "identification_table",
     "identification_parts",
     "noise_floor_summary",
@@ -212,77 +211,6 @@ def screening_lines(summary):
 
 
 # How the table's notes say why a window is no evidence (the codes of dynia.verdicts.no_evidence_reasons).
-_NO_EVIDENCE = {
-    "low_ic": "IC below the threshold",
-    "record_edge": "truncated by the record's edge",
-    "below_noise_floor": "below the noise floor",
-    "noise_ranked": "its behavioural set tied within noise",
-    "screened": "screened out for saturated, frozen or quantised readings",
-}
-
-
-def verdict_table(parameters):
-    """The lines ``dynia analyse`` prints per parameter: max IC, where, band, estimate, record fit, evidence, verdict.
-
-    The evidence is the number of windows with IC >= 0.5 above the noise
-    floor and the times of the first and the last of them ("from", "to").
-    ``parameters`` is ``summary["parameters"]`` of :func:`write_analysis`.
-    """
-    header, rows, notes = verdict_parts(parameters)
-    return "\n".join(_aligned(header, rows) + notes)
-
-
-def verdict_parts(parameters):
-    """The cells of :func:`verdict_table`: its header, its rows and the lines under it, as printed."""
-    header = ("parameter", "max IC", "at", "band", "estimate", "record fit", "IC>=0.5", "from", "to", "verdict")
-    rows = []
-    for name, entry in parameters.items():
-        first, last = entry["high_ic_span"]
-        record = _record_fit_cell(entry)
-        windows = (
-            str(entry["high_ic_windows"]),
-            "-" if first is None else str(first),
-            "-" if last is None else str(last),
-        )
-        if entry["max_ic"] is None:
-            rows.append((name, "-", "-", "-", "-", record, *windows, entry["verdict"]))
-            continue
-        low, high = entry["band"]
-        se = entry.get("max_ic_se")
-        rows.append(
-            (
-                name,
-                f"{entry['max_ic']:.3f}" + ("" if se is None else f" +- {se:.3f}"),
-                str(entry["time_of_max_ic"]),
-                f"[{low:.4g}, {high:.4g}]",
-                f"{entry['estimate']:.4g}",
-                record,
-                *windows,
-                entry["verdict"],
-            )
-        )
-    notes = []
-    for name, entry in parameters.items():
-        if entry.get("highest_ic") is not None and entry["time_of_highest_ic"] != entry["time_of_max_ic"]:
-            why = [_NO_EVIDENCE.get(code, code) for code in entry.get("highest_ic_no_evidence", ())]
-            notes.append(
-                f"  {name}: the record's highest IC, {entry['highest_ic']:.3f} at {entry['time_of_highest_ic']}, is "
-                f"in a window that is no evidence ({' and '.join(why) or 'not evidence'}); shown: the highest IC among "
-                "the windows that are"
-            )
-        for reason in entry["reasons"]:
-            notes.append(f"  {name} {entry['verdict']}: {reason['text']}")
-    return header, rows, notes
-
-
-def _record_fit_cell(entry):
-    """The table's "record fit": the whole record's least-squares value +- its standard error, "-" without one."""
-    value, error = entry.get("record_fit"), entry.get("record_fit_se")
-    if value is None or not np.isfinite(value):
-        return "-"
-    return f"{value:.4g} +- " + ("inf" if error is None or not np.isfinite(error) else f"{error:.2g}")
-
-
 def identification_table(summary, *, fitted_steps, held_out_steps):
     """What ``dynia identify`` prints: the selection, the estimates with their standard errors, the validation error.
 
@@ -295,7 +223,7 @@ def identification_table(summary, *, fitted_steps, held_out_steps):
     lies on a bound of its range.
     """
     lead, header, rows, notes = identification_parts(summary, fitted_steps=fitted_steps, held_out_steps=held_out_steps)
-    return "\n".join(lead + _aligned(header, rows) + notes)
+    return "\n".join(lead + aligned(header, rows) + notes)
 
 
 def identification_parts(summary, *, fitted_steps, held_out_steps):
@@ -333,12 +261,6 @@ def identification_parts(summary, *, fitted_steps, held_out_steps):
         f"{held_out}); fit RMSE {_number(summary['fit_rmse'])} on the selected data",
     ]
     return lead, header, rows, notes
-
-
-def _aligned(header, rows):
-    """The header and rows as lines of left-aligned columns two spaces apart."""
-    widths = [max(len(row[column]) for row in [*rows, header]) for column in range(len(header))]
-    return ["  ".join(cell.ljust(width) for cell, width in zip(row, widths)).rstrip() for row in [header, *rows]]
 
 
 def _number(value):
