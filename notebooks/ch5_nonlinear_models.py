@@ -64,15 +64,18 @@ percentage: float = 10  # behavioural share of the samples, in percent (thesis: 
 ic_threshold: float = 0.5  # IC from which a window counts in the truth checks below
 
 # %%
+import math
 import os
 
 import matplotlib.pyplot as plt
 import numpy as np
 
 import dynia
+from dynia.claims import either, say
 from dynia.models.conceptual import hymod, hymod_fluxes, hymod_record, tank, tank_record
 from dynia.segments import mask_to_segments
 from dynia.structure import clear_of_bounds
+from dynia.verdicts import evidence_needed
 
 os.makedirs(figure_dir, exist_ok=True)
 record_seed, hymod_seed, tank_record_seed, tank_seed = np.random.SeedSequence(seed).spawn(4)
@@ -128,11 +131,20 @@ fig.savefig(f"{figure_dir}/nonlinear_hymod_data.png", dpi=120, bbox_inches="tigh
 print({label: int(mask.sum()) for label, mask in PERIODS.items()}, "days of each kind;",
       int((PERIODS["wetting-up"] & PERIODS["peaks"]).sum()), "wetting-up days are peaks too")
 
+# %%
+dry_spells = mask_to_segments(rain == 0)
+spell_start, spell_stop = max(dry_spells, key=lambda spell: spell[1] - spell[0])
+say(f"""
+    **`nonlinear_hymod_data.png`** shows the record. Rain falls in storms; evaporation peaks in summer. The
+    longest dry spell lasts {spell_stop - spell_start} days (days {spell_start} to {spell_stop - 1}), and by its
+    end the soil store is down to {soil_fill[spell_stop - 1]:.0%} of its capacity (its lowest in the record is
+    {soil_fill.min():.0%}). The discharge responds to each storm with a sharp quick-flow peak on top of a slowly
+    varying slow flow: quick flow carries at least half the discharge on {int(PERIODS["peaks"].sum())} of the
+    {hymod_days} days.
+""")
+
 # %% [markdown]
-# **`nonlinear_hymod_data.png`** shows the record. Rain falls in storms,
-# mostly in winter; evaporation peaks in summer, when a 40-day dry spell
-# empties much of the soil store. The discharge responds to each storm with
-# a sharp quick-flow peak on top of a slowly varying slow flow. The shading
+# The shading
 # marks the three kinds of period the classic findings speak of, read off the
 # true model's own stores (we know them here; on real data one would not):
 # **peaks** (red), days when the quick reservoirs carry at least half the
@@ -220,13 +232,94 @@ def narrowing_line(first, second):
     set tied within noise, which dynia.refine leaves out. Then the parameters the second run narrowed."""
     threshold = second.run.narrowing_threshold
     noise = ~first.informative | (first.behavioural_spread <= first.behavioural_floor)
-    counts = []
+    counts, found = [], {}
     for p, name in enumerate(first.names):
         candidates = (first.ic[p] >= threshold) & clear_of_bounds(first, p)
+        found[name] = (int(candidates.sum()), int((candidates & noise).sum()))
         counts.append(f"{name} {int(candidates.sum())}" + (f" ({int((candidates & noise).sum())})"
                                                            if candidates.any() else ""))
     print(f"first-run windows with IC >= {threshold:g} and the band clear of the bounds (of these below the noise "
           f"floor or tied): {', '.join(counts)}; narrowed: {second.run.narrowed}")
+    return found
+
+
+def windows(result, name, true_values):
+    """The truth check of ``truth_check`` as numbers: the windows with IC >= ic_threshold (``all``), those above
+    the noise floor (``informative``) and those of these not tied (``untied``), and the share of each whose band
+    holds the truth (``held_...``, nan for none); ``steps`` lists the windows with IC >= ic_threshold."""
+    p = result.index(name)
+    tied = result.behavioural_spread <= result.behavioural_floor
+    high = result.ic_at_least(ic_threshold, name)
+    held = (result.ci[p, :, 0] <= true_values[name]) & (true_values[name] <= result.ci[p, :, 1])
+    found = {"steps": np.flatnonzero(high)}
+    for key, mask in {"all": high, "informative": high & result.informative,
+                      "untied": high & result.informative & ~tied}.items():
+        found[key] = int(mask.sum())
+        found[f"held_{key}"] = float(held[mask].mean()) if mask.any() else math.nan
+    return found
+
+
+def period_mean(result, name, periods, label):
+    """Mean IC of a parameter in one kind of period (``"all"``: the whole record)."""
+    row = result.ic[result.index(name)]
+    return float(np.nanmean(row if label == "all" else row[periods[label]]))
+
+
+def share_words(value):
+    """A share of windows as the prose writes it."""
+    if math.isnan(value) or value == 0:
+        return "none"
+    if value == 1:
+        return "all"
+    return f"{value:.0%}" if 0.005 <= value < 0.995 else f"{value:.1%}"
+
+
+def band_words(band):
+    return f"[{band[0]:.3g}, {band[1]:.3g}]"
+
+
+def verdict_words(result, name):
+    """The verdict and its reasons, as the summary table prints them."""
+    line = result.summary()[name]
+    reasons = ", ".join(f"`{reason['code']}`" for reason in line["reasons"])
+    return f"`{line['verdict']}`" + (f" ({reasons})" if reasons else "")
+
+
+def reported_words(result, name, when="day"):
+    """The window the summary reports: IC, time and band."""
+    line = result.summary()[name]
+    return f"IC {line['max_ic']:.2f} on {when} {line['time_of_max_ic']:.0f}, band {band_words(line['band'])}"
+
+
+def highest_words(result, name, when="day"):
+    """Where the record's highest IC lies, and if the verdict leaves it out, why and what it reports instead."""
+    line = result.summary()[name]
+    if "highest_ic_no_evidence" not in line:
+        return f"its highest IC is the window the summary reports, {reported_words(result, name, when)}"
+    why = ", ".join(f"`{code}`" for code in line["highest_ic_no_evidence"])
+    return (f"its highest IC, {line['highest_ic']:.2f} on {when} {line['time_of_highest_ic']:.0f}, is no evidence "
+            f"({why}), so the summary reports {reported_words(result, name, when)}")
+
+
+def holds_words(result, name, true_values):
+    low, high = result.summary()[name]["band"]
+    return either(bool(low <= true_values[name] <= high), "holds the truth", "misses the truth")
+
+
+def window_counts(result, name, true_values, days=False):
+    """How many windows reach ic_threshold, how many of them are evidence, and how many hold the truth; with
+    ``days``, the days of up to five such windows."""
+    found = windows(result, name, true_values)
+    if not found["all"]:
+        return f"its IC reaches {ic_threshold:g} in no window (highest {result.summary()[name]['highest_ic']:.2f})"
+    untied = (f"{found['untied']} of these {'is' if found['untied'] == 1 else 'are'} not tied within noise "
+              f"({share_words(found['held_untied'])} of {'it' if found['untied'] == 1 else 'them'} holding the "
+              "truth)" if found["untied"] else "none of these is free of a tie within noise")
+    where = (f" (day{'s' if found['all'] > 1 else ''} {listing([str(step) for step in found['steps']])})"
+             if days and found["all"] <= 5 else "")
+    return (f"{found['all']} window{'s' if found['all'] > 1 else ''}{where} reach IC {ic_threshold:g} and "
+            f"{share_words(found['held_all'])} of them hold "
+            f"the true {true_values[name]:g}; {found['informative']} lie above the noise floor and {untied}")
 
 
 print("first run, ranges", HYMOD_BOUNDS)
@@ -244,7 +337,7 @@ for p, name in enumerate(first.names):
 
 # %%
 # NBVAL_CHECK_OUTPUT
-narrowing_line(first, second)
+candidates = narrowing_line(first, second)
 for label, result in (("first run", first), ("second run", second)):
     print(f"{label}:")
     period_table(result, PERIODS)
@@ -286,140 +379,229 @@ fig.savefig(f"{figure_dir}/nonlinear_hymod_identifiability.png", dpi=120, bbox_i
 
 # %% [markdown]
 # **`nonlinear_hymod_ic.png` and `nonlinear_hymod_identifiability.png`**,
-# read with the tables above (numbers from the default run):
-#
-# - **Quick flow, `kq`: found, where expected.** In the first run its IC
-#   rises with every storm sequence and drops to its lowest in every
-#   recession (mean IC 0.44 on peaks against 0.12 in recessions; on
-#   wetting-up days, which are mostly storms on a dry soil, 0.36). All its
-#   221 windows with IC >= 0.5 hold the true value 0.5; its highest IC (0.80,
-#   day 927, band [0.40, 0.58]) lies in the storms of the third winter and
-#   is `identified`.
-# - **Slow flow, `ks`: found, where expected.** The mirror image: its IC
-#   climbs through each recession and peaks near its end, when the quick
-#   reservoirs are empty and the discharge is slow flow alone (mean IC 0.35
-#   in recessions, 0.18 on peaks). The CLD gradient shows the most likely
-#   values coming down towards the true 0.04 as a recession goes on: early
-#   in it the quick reservoirs still drain, and a faster slow reservoir can
-#   stand in for them. Its windows with IC >= 0.5 all hold the truth, but
-#   its highest IC lies late in a recession (day 708, the soil store 0.09
-#   full), in a window whose behavioural set ties within noise (of its 27
-#   windows with IC >= 0.5 only 2 are not tied; why, below the next table),
-#   so the summary reports the highest of the untied ones, IC 0.54 on day
-#   288 (band [0.0067, 0.098]). Two windows are fewer than a quarter of
-#   the 11-day window (3), so the verdict is `suspect`
-#   (`isolated_evidence`), though the band holds the truth.
-# - **Storage, `b` and `cmax`: weakly.** Their IC is highest in wetting-up
-#   periods, as expected, and lowest in recessions, when no rain tests the
-#   soil store; but it is only a little higher there than on peaks (mean IC
-#   0.29 against 0.26 for `b`, 0.21 against 0.19 for `cmax`). `b` reaches
-#   its highest IC on day 776: storms early in the third wet season on a
-#   soil store still only about a quarter full after the dry summer (it
-#   gains only a few mm in that window, so our wetting-up class, which asks
-#   for 10 mm, counts the day as a peak only). That window's behavioural
-#   set ties within noise, as do all but 2 of `b`'s 18 windows with IC >=
-#   0.5; the summary reports the higher of those 2, IC 0.51 on day 821
-#   (band [0.30, 1.29]), `suspect` (`isolated_evidence`, as for `ks`: 2
-#   windows of evidence, 3 needed). All 18 hold the truth.
-#   `cmax` never reaches 0.5 and its verdict is `weak`; its
-#   highest IC comes when the soil is nearly full instead, where `cmax`
-#   decides how much of the rain overflows. A likely reason: the discharge shows how much
-#   rain the soil holds back, which both parameters set together (the
-#   capacity is `cmax/(b+1)`), and bands of one parameter at a time cannot
-#   show such a trade-off.
-# - **The split, `alpha`: not found in the first run, and flagged.**
-#   Its IC reaches 0.5 in only two windows, days 544 (its highest) and 545,
-#   and neither band holds the true 0.6. The behavioural set of the window
-#   at day 544 ties within noise, so which sets it keeps, and so the band,
-#   is a ranking of noise (the noise floor's noise is stationary, white or
-#   autocorrelated, of the level that the windows' best fits show and the
-#   autocorrelation of the residuals of the record's best fit; a stretch the
-#   model cannot fit counts as noise too). The window at day 545 does not
-#   tie, so the summary reports it: IC 0.51, band [0.020, 0.51], a band
-#   that misses the truth (the check at the end of the notebook lists it).
-#   It is the only window that can be evidence, so the verdict is `suspect`
-#   (`isolated_evidence`), and its band excludes the whole record's
-#   least-squares `alpha` (`disagrees_with_record_fit`). With `kq` free over [0.1, 1], other
-#   quick-flow residence times with a different split fit the peaks as
-#   well. The verdict rules cannot know the truth; here the tie gives one
-#   window's wrong band away, and its neighbour's is flagged because no
-#   other window backs it.
-# - **The second run** narrows `kq` to the band its windows of high IC
-#   agreed on ([0.38, 0.59]). `dynia.refine` counts the windows with IC >=
-#   0.75 whose band keeps clear of the bounds, but none below the noise floor
-#   or with a behavioural set tied within noise: their bands rank noise.
-#   Here that leaves the narrowing as it was: none of `kq`'s 27 such windows
-#   is below the floor or tied, and no other parameter has any (the line
-#   above the period tables). With `kq` confined,
-#   `alpha` is found on the peaks (mean IC 0.29 against 0.20 in the first run; 79 windows with IC >= 0.5, 92 % of them holding
-#   the truth, 97 % of the 73 whose behavioural set is not tied; highest IC
-#   0.65 with band [0.38, 0.73], `identified`), and `ks` is found far more
-#   often in recessions (mean IC 0.60; 231 windows with IC >= 0.5, all
-#   holding the truth; the summary reports IC 0.71 on day 318, band
-#   [0.0063, 0.065], `identified`). `b` is `suspect` again
-#   (`isolated_evidence`: of its 57 windows with IC >= 0.5 only 2 are not
-#   tied), at IC 0.51 (day 643, band [0.38, 1.35], holding the truth).
-#   The IC of `kq` itself falls: the IC is measured
-#   against the range, which is now narrow.
-# - **The noise floor** (printed under each summary): 96 % of the first
-#   run's windows are informative. The others are the first weeks of the
-#   record, on the dry catchment of late summer, with a true discharge of
-#   about 0.03 mm/day against 1.5 elsewhere: there no parameter set fits
-#   clearly worse than another, and the identifiability plots veil them
-#   grey. Every window with IC >= 0.5 lies above the floor, so here the mask
-#   changes none of the truth checks; the tie of the behavioural set, the
-#   other noise test, is common (of `ks`'s 27 windows with IC >= 0.5 in the
-#   first run only 2 are not tied).
+# read with the tables above. The paragraphs below are rendered from this
+# run's results.
+
+# %%
+def listing(items):
+    """'a', 'a and b', 'a, b and c'."""
+    items = list(items)
+    return "" if not items else items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
+
+
+def cap(text):
+    """The text with its first letter capitalised (str.capitalize would lower the rest)."""
+    return text[:1].upper() + text[1:]
+
+
+def kinds_at(step, periods=PERIODS):
+    """The kinds of period a step belongs to, as words."""
+    kinds = [label for label, mask in periods.items() if mask[step]]
+    return listing(kinds) if kinds else "none of the kinds of period"
+
+
+def highest_step(result, name):
+    return int(np.nanargmax(result.ic[result.index(name)]))
+
+
+def mean_ic(result, name, label):
+    return period_mean(result, name, PERIODS, label)
+
+
+def verdict(result, name):
+    return result.summary()[name]["verdict"]
+
+
+bullets = []
+kq_found = bool(mean_ic(first, "kq", "peaks") > 2 * mean_ic(first, "kq", "recessions")
+                and verdict(first, "kq") == "identified")
+overlap = int((PERIODS["wetting-up"] & PERIODS["peaks"]).sum())
+bullets.append(f"""
+- **Quick flow, `kq`: {either(kq_found, "found, where expected", "not clearly found where expected")}.** In the
+  first run its mean IC is {mean_ic(first, "kq", "peaks"):.2f} on peaks against
+  {mean_ic(first, "kq", "recessions"):.2f} in recessions, and {mean_ic(first, "kq", "wetting-up"):.2f} on
+  wetting-up days ({overlap} of the {int(PERIODS["wetting-up"].sum())} wetting-up days are peaks too, storms on a
+  dry soil). {cap(window_counts(first, "kq", truth))}. {cap(highest_words(first, "kq"))}
+  (the record's highest lies on {kinds_at(highest_step(first, "kq"))}); its verdict is
+  {verdict_words(first, "kq")}.""")
+
+ks_found = bool(mean_ic(first, "ks", "recessions") > mean_ic(first, "ks", "peaks"))
+ks_at = highest_step(first, "ks")
+bullets.append(f"""
+- **Slow flow, `ks`: {either(ks_found, "found, where expected", "not found where expected")}.** The mirror image:
+  its mean IC is {mean_ic(first, "ks", "recessions"):.2f} in recessions and {mean_ic(first, "ks", "peaks"):.2f} on
+  peaks. Its IC climbs through a recession as the quick reservoirs empty and the discharge becomes slow flow
+  alone; early in a recession the quick reservoirs still drain, and a faster slow reservoir can stand in for them,
+  which the CLD gradient shows as likely values above the true {truth["ks"]:g}.
+  {cap(window_counts(first, "ks", truth))}. {cap(highest_words(first, "ks"))}; the record's highest
+  IC lies on {kinds_at(ks_at)}, the soil store {soil_fill[ks_at]:.2f} full. The verdict is
+  {verdict_words(first, "ks")}, and the reported band {holds_words(first, "ks", truth)}.""")
+
+b_at, cmax_at = highest_step(first, "b"), highest_step(first, "cmax")
+storage_order = all(mean_ic(first, name, "wetting-up") > mean_ic(first, name, "recessions") for name in ("b", "cmax"))
+bullets.append(f"""
+- **Storage, `b` and `cmax`: {either(verdict(first, "b") != "identified" and verdict(first, "cmax") != "identified",
+                                     "weakly", "found")}.** Their mean IC in wetting-up periods is
+  {mean_ic(first, "b", "wetting-up"):.2f} for `b` and {mean_ic(first, "cmax", "wetting-up"):.2f} for `cmax`,
+  against {mean_ic(first, "b", "peaks"):.2f} and {mean_ic(first, "cmax", "peaks"):.2f} on peaks and
+  {mean_ic(first, "b", "recessions"):.2f} and {mean_ic(first, "cmax", "recessions"):.2f} in recessions,
+  {either(storage_order, "when no rain tests the soil store", "although no rain tests the soil store then")}.
+  `b` reaches the record's highest IC on day {b_at}, with the soil store {soil_fill[b_at]:.2f} full and
+  {soil_rise[b_at]:+.1f} mm over the window (the wetting-up class asks for a soil under half full that gains
+  10 mm, so the day counts as {kinds_at(b_at)}). {cap(window_counts(first, "b", truth))};
+  {highest_words(first, "b")}, and the verdict is {verdict_words(first, "b")}. `cmax`'s highest IC is
+  {first.summary()["cmax"]["highest_ic"]:.2f}, on day {cmax_at} with the soil store {soil_fill[cmax_at]:.2f}
+  full, where `cmax` decides how much of the rain overflows; its verdict is {verdict_words(first, "cmax")}. A
+  likely reason why storage is seen only weakly: the discharge shows how much rain the soil holds back, which
+  both parameters set together (the capacity is `cmax/(b+1)`), and bands of one parameter at a time cannot show
+  such a trade-off.""")
+
+alpha = windows(first, "alpha", truth)
+alpha_codes = [reason["code"] for reason in first.summary()["alpha"]["reasons"]]
+bullets.append(f"""
+- **The split, `alpha`: {either(verdict(first, "alpha") == "identified", "found in the first run",
+                                 "not found in the first run")}.** {cap(window_counts(first, "alpha", truth, days=True))}.
+  {cap(highest_words(first, "alpha"))}; that band {holds_words(first, "alpha", truth)}, and
+  the verdict is {verdict_words(first, "alpha")}.
+  {either("disagrees_with_record_fit" in alpha_codes, "The band excludes the whole record's least-squares "
+          "`alpha` (`disagrees_with_record_fit`).", "")} A window whose behavioural set ties within noise ranks
+  noise: which sets it keeps, and so the band, is decided by the noise realisation (the noise floor's noise is
+  stationary, white or autocorrelated, of the level that the windows' best fits show and the autocorrelation of
+  the residuals of the record's best fit; a stretch the model cannot fit counts as noise too). With `kq` free over
+  {list(HYMOD_BOUNDS["kq"])}, other quick-flow residence times with a different split fit the peaks as well.""")
+
+threshold = second.run.narrowing_threshold
+with_windows = [f"{count} of `{name}` ({noisy} of them below the floor or tied)"
+                for name, (count, noisy) in candidates.items() if count]
+without = [f"`{name}`" for name, (count, _) in candidates.items() if not count]
+confined = listing([f"`{name}`" for name in narrowed])
+bullets.append(f"""
+- **The second run** narrows {confined or "no parameter"} to the band the first run's windows of high IC agreed
+  on ({", ".join(f"`{name}` to {band_words(second.bounds[second.index(name)])}" for name in narrowed)}).
+  `dynia.refine` counts the windows with IC >= {threshold:g} whose band keeps clear of the bounds, but none below
+  the noise floor or with a behavioural set tied within noise: their bands rank noise. The first run has
+  {listing(with_windows) or "none"} such windows{f", and {listing(without)} none" if without else ""} (the line
+  above the period tables). With {confined or "nothing"} confined, `alpha`'s mean IC on peaks is
+  {mean_ic(second, "alpha", "peaks"):.2f} against {mean_ic(first, "alpha", "peaks"):.2f} in the first run;
+  {window_counts(second, "alpha", truth)}; the summary reports {reported_words(second, "alpha")},
+  {verdict_words(second, "alpha")}. `ks`'s mean IC in recessions is {mean_ic(second, "ks", "recessions"):.2f}
+  (first run {mean_ic(first, "ks", "recessions"):.2f}); {window_counts(second, "ks", truth)}; the summary reports
+  {reported_words(second, "ks")}, {verdict_words(second, "ks")}. For `b`,
+  {window_counts(second, "b", truth)}; {highest_words(second, "b")}, a band that
+  {holds_words(second, "b", truth)}, and the verdict is {verdict_words(second, "b")}. The highest IC of `kq`
+  itself {either(second.summary()["kq"]["highest_ic"] < first.summary()["kq"]["highest_ic"], "falls", "rises")}
+  from {first.summary()["kq"]["highest_ic"]:.2f} to {second.summary()["kq"]["highest_ic"]:.2f}: the IC is
+  measured against the range{either("kq" in narrowed, ", which is now narrow", "")}.""")
+
+stretches = mask_to_segments(~first.informative)
+high_anywhere = {name: windows(first, name, truth) for name in first.names}
+all_above = all(found["all"] == found["informative"] for found in high_anywhere.values())
+most_tied = max(first.names, key=lambda name: high_anywhere[name]["informative"] - high_anywhere[name]["untied"])
+tied_total = sum(found["informative"] - found["untied"] for found in high_anywhere.values())
+above_total = sum(found["informative"] for found in high_anywhere.values())
+floor_words = (f"The others lie in {len(stretches)} stretch{'es' if len(stretches) > 1 else ''}, "
+               f"{'the first ' if len(stretches) > 1 else ''}from day {stretches[0][0]} to {stretches[0][1] - 1}, with a true discharge of "
+               f"{catchment.clean[~first.informative].mean():.2g} mm/day against "
+               f"{catchment.clean[first.informative].mean():.2g} elsewhere: there no parameter set fits clearly "
+               "worse than another, and the identifiability plots veil them grey." if stretches else "")
+bullets.append(f"""
+- **The noise floor** (printed under each summary): {first.informative.mean():.0%} of the first run's windows are
+  informative. {floor_words} {either(all_above, f"Every window with IC >= {ic_threshold:g} lies above the floor, so "
+  "here the mask changes none of the truth checks", f"Some windows with IC >= {ic_threshold:g} lie below the "
+  "floor, and the truth checks count them apart")}; the tie of the behavioural set, the other noise test, takes out
+  {tied_total} of the {above_total} windows with IC >= {ic_threshold:g} above the floor, over all parameters (of `{most_tied}`'s {high_anywhere[most_tied]["informative"]} windows with IC >= {ic_threshold:g} above
+  the floor in the first run, {high_anywhere[most_tied]["untied"]} are not tied).""")
+say("\n".join(bullets))
+
 
 # %%
 for label, result in (("first run", first), ("second run", second)):
     print(f"{label}:")
     floor_verdicts(result, catchment.clean, truth, lambda flow: hymod_noise * flow.mean(), " mm/day")
 
+# %%
+RUNS_HYMOD = {"first run": first, "second run": second}
+
+
+def window_noise(result, step):
+    """The window at ``step``: its days, its mean true discharge and the standard deviation of its errors."""
+    window = slice(*result.window_range(step))
+    flow = catchment.clean[window].mean()
+    return window, flow, hymod_noise * flow
+
+
+flagged = [(label, name, [reason["code"] for reason in line["reasons"]
+                          if reason["code"] in ("below_noise_floor", "noise_ranked")])
+           for label, result in RUNS_HYMOD.items() for name, line in result.summary().items()]
+flagged = [(label, name, codes) for label, name, codes in flagged if codes]
+flag_lines = []
+for label, name, codes in flagged:
+    result = RUNS_HYMOD[label]
+    reported = int(np.flatnonzero(result.time == result.summary()[name]["time_of_max_ic"])[0])
+    window, flow, error_sd = window_noise(result, reported)
+    flag_lines.append(
+        f"the {label}'s `{name}` ({', '.join(f'`{code}`' for code in codes)}): in its window (days {window.start}-"
+        f"{window.stop - 1}) the true discharge averages {flow:.2g} mm/day and its errors, of standard deviation "
+        f"{error_sd:.2g}, are {error_sd / result.run.noise_sigma:.2f} times sigma; its band "
+        f"{holds_words(result, name, truth)}"
+        + either(bool(error_sd < result.run.noise_sigma) and holds_words(result, name, truth) == "holds the truth",
+                 ", a false alarm of the one-sigma-for-the-record kind that `dynia.engine.noise` names", ""))
+say(f"""
+    {either(bool(flagged), f"{len(flagged)} verdict{'s' if len(flagged) > 1 else ''} of the two runs carr"
+            f"{'y' if len(flagged) > 1 else 'ies'} a noise reason.", "No verdict of the two runs carries a noise reason.")}
+    The rule compares the spread of the behavioural set's MAEs in a window with what noise of one standard
+    deviation for the whole record would produce; the floor estimates it from the best fits (sigma, printed above,
+    {first.run.noise_sigma:.2g} mm/day in the first run and {second.run.noise_sigma:.2g} in the second). The
+    discharge errors here are relative, as gauging errors are, so in low flows they are far smaller than sigma and
+    sets that do fit differently look tied. {cap("; ".join(flag_lines)) + "." if flag_lines else ""}
+""")
+
+# %%
+needed = evidence_needed(first)
+left_out = []
+for label, result in RUNS_HYMOD.items():
+    sigma = result.run.noise_sigma
+    for name, line in result.summary().items():
+        if "highest_ic_no_evidence" not in line or line["highest_ic"] < ic_threshold:
+            continue
+        at = highest_step(result, name)
+        window, flow, error_sd = window_noise(result, at)
+        p = result.index(name)
+        there = bool(result.ci[p, at, 0] <= truth[name] <= result.ci[p, at, 1])
+        left_out.append(
+            f"- `{name}`, {label}: the record's highest IC, {line['highest_ic']:.2f} on day {at} "
+            f"({kinds_at(at)}), is no evidence ({', '.join(f'`{code}`' for code in line['highest_ic_no_evidence'])})."
+            f" There the true discharge averages {flow:.2g} mm/day and the errors are "
+            f"{error_sd / sigma:.2f} times sigma: "
+            + either(bool(error_sd < sigma), "smaller than sigma, so the tie may be false",
+                     "larger than sigma, so the floor is too low if anything and the tie is real")
+            + f"; its band there {either(there, 'holds the truth', 'misses it')}. The summary reports "
+            f"{reported_words(result, name)}, whose band {holds_words(result, name, truth)}, with "
+            f"{line['high_ic_windows']} window{'s' if line['high_ic_windows'] != 1 else ''} of evidence: "
+            f"{verdict_words(result, name)}.")
+say(f"""
+The same test shapes the other verdicts, since a verdict judges the highest IC among the windows above the floor
+whose behavioural set does not tie, and counts only such windows as evidence (`isolated_evidence` when fewer than
+{needed}, a quarter of the {2 * hymod_n + 1}-day window, are left).
+{either(bool(left_out), "Where the record's highest IC of a parameter (at least " + f"{ic_threshold:g}" + ") is left out:",
+        "No parameter's highest IC of at least " + f"{ic_threshold:g}" + " is left out here.")}
+
+{chr(10).join(left_out)}
+
+With errors that grow with the output, read a `noise_ranked` or `below_noise_floor` verdict, and a highest IC the
+summary leaves out, against the size of the output in that window.
+""")
+
 # %% [markdown]
-# Only one verdict still carries a noise reason: the second run's `cmax`,
-# `noise_ranked` besides `low_ic` (the first run has none). The rule
-# compares the spread of the behavioural set's MAEs in a window with what
-# noise of one standard deviation for the whole record would produce; the
-# floor estimates it from the best fits (sigma, printed above, near 0.09
-# mm/day). The discharge errors here are relative, as gauging errors are:
-# in `cmax`'s window (days 376-386) the true discharge averages 0.05 mm/day
-# and its errors are about a sixteenth of sigma, so sets that do fit
-# differently look tied. Its band holds the truth: a false alarm of the
-# one-sigma-for-the-record kind that `dynia.engine.noise` names.
-#
-# The same test shapes the other verdicts, since a verdict judges the
-# highest IC among the windows above the floor whose behavioural set does
-# not tie, and counts only such windows as evidence (`isolated_evidence`
-# when fewer than 3, a quarter of the 11-day window, are left):
-#
-# - in the low flows of a late recession (`ks`, day 708 in the first run)
-#   or of a soil that is only starting to wet up (`b`, day 776) the errors
-#   are several times smaller than sigma too, and the window of the
-#   record's highest IC ties. The summary reports a lower, untied window
-#   instead, whose band holds the truth as well; but the ties leave only 2
-#   windows of evidence, so both are `suspect` (`isolated_evidence`), a
-#   false alarm that follows from the false ties;
-# - `alpha`'s window at day 544 is a storm peak, where the errors are
-#   larger than sigma: there the floor is too low if anything, so the tie
-#   is real, and the band misses the truth. The next window, day 545,
-#   misses it too but does not tie; as the only window of evidence it is
-#   reported as `suspect` (`isolated_evidence`; its band excludes the
-#   record's least-squares fit too, `disagrees_with_record_fit`).
-#
-# With errors that grow with the output, read a `noise_ranked` or
-# `below_noise_floor` verdict, and a highest IC the summary leaves out,
-# against the size of the output in that window.
-#
 # ## The tank
 #
 # The same procedure on the tank: `tank_steps` samples of an inflow that
-# steps every 60 to 150 samples between 0.1 and 0.6, the level with errors of
-# standard deviation `tank_noise`, true `A` = 2 and `c` = 0.3 (steady levels
-# from 0.1 to 4, time constants `2 A sqrt(h*)/c` from 7 to 27 samples).
-# Expected: `c` fixes the steady level, so it is identified wherever the
-# level has settled; `A` does not change a steady level at all, only how fast
-# the level gets there, so it can be identified in transients only.
+# steps every 60 to 150 samples, the level with errors of standard deviation
+# `tank_noise` (the inflows, true values, steady levels and time constants
+# `2 A sqrt(h*)/c` are printed below the tank's summaries). Expected: `c`
+# fixes the steady level, so it is identified wherever the level has
+# settled; `A` does not change a steady level at all, only how fast the
+# level gets there, so it can be identified in transients only.
 
 # %%
 tank_rng = np.random.default_rng(tank_seed)
@@ -450,10 +632,19 @@ high_ic = tank_second.ic_at_least(ic_threshold, "c")
 holds = (tank_second.ci[c_row, :, 0] <= tank_truth["c"]) & (tank_truth["c"] <= tank_second.ci[c_row, :, 1])
 print(f"second run, c: mean true level in windows with IC >= {ic_threshold:g} whose band holds the truth "
       f"{vessel.clean[high_ic & holds].mean():.2f}, misses it {vessel.clean[high_ic & ~holds].mean():.2f}")
+inflows = vessel.u[changes]
+steady_levels = (inflows / tank_truth["c"]) ** 2
+time_constants = 2 * tank_truth["A"] * np.sqrt(steady_levels) / tank_truth["c"]
+say(f"""
+    The tank's record: true `A` = {tank_truth["A"]:g} and `c` = {tank_truth["c"]:g}; {len(changes)} steps of the
+    inflow, to levels between {inflows.min():.2f} and {inflows.max():.2f}, so steady levels from
+    {steady_levels.min():.2g} to {steady_levels.max():.2g} and time constants from {time_constants.min():.0f} to
+    {time_constants.max():.0f} samples.
+""")
 
 # %%
 # NBVAL_CHECK_OUTPUT
-narrowing_line(tank_first, tank_second)
+tank_candidates = narrowing_line(tank_first, tank_second)
 for label, result in (("first run", tank_first), ("second run", tank_second)):
     print(f"{label}:")
     period_table(result, TANK_PERIODS)
@@ -489,56 +680,69 @@ for row, name in ((1, "A"), (3, "c")):
 axes[-1].set_xlabel("sample")
 fig.savefig(f"{figure_dir}/nonlinear_tank.png", dpi=120, bbox_inches="tight")
 
+# %%
+def tank_mean(result, name, label):
+    return period_mean(result, name, TANK_PERIODS, label)
+
+
+A_first, A_second = tank_first.summary()["A"], tank_second.summary()["A"]
+A_at = highest_step(tank_first, "A")
+A_window = tank_first.window_range(A_at)
+A_codes = [reason["code"] for reason in A_first["reasons"]]
+below = mask_to_segments(~tank_first.informative)
+c_count, c_noisy = tank_candidates["c"]
+c_second = windows(tank_second, "c", tank_truth)
+second_below = mask_to_segments(~tank_second.informative)
+tank_bullets = [f"""
+- **First run: `c` everywhere, `A` {either(tank_mean(tank_first, "A", "all") < 0.3, "almost nowhere", "too")}.**
+  The mean IC of `c` is {tank_mean(tank_first, "c", "steady"):.2f} at steady levels,
+  {tank_mean(tank_first, "c", "transients"):.2f} in transients and {tank_mean(tank_first, "c", "all"):.2f} over the
+  record; {window_counts(tank_first, "c", tank_truth)}. `A`'s mean IC is {tank_mean(tank_first, "A", "all"):.2f}
+  over the record and {tank_mean(tank_first, "A", "first filling"):.2f} while the tank first fills. A parameter
+  set with a slightly wrong `c` sits at a wrong level all the time, an offset that dwarfs what `A` changes, so the
+  best {percentage:g} % of the sets are chosen by `c` and `A` is left to chance. Only while the tank fills from
+  empty is the outflow near zero and the rise rate `q/A` alone.""", f"""
+- **`A`'s highest IC{either(A_first["verdict"] != "identified", " is flagged", "")}.** It lies at sample {A_at},
+  in the window of samples {A_window[0]}-{A_window[1] - 1} (the inflow first steps at sample {changes[0]}), with
+  band {band_words(tank_first.ci[tank_first.index("A"), A_at])}, which
+  {either(bool(tank_first.ci[tank_first.index("A"), A_at, 0] <= tank_truth["A"] <= tank_first.ci[tank_first.index("A"), A_at, 1]), "holds", "misses")}
+  the truth. The verdict is {verdict_words(tank_first, "A")}
+  {either(bool(tank_first.full_windows[A_at]), "(the window is whole, so the record's start is no reason of its "
+          "own)", "(the window is cut by the record's start)")}. The tank is nearly empty in that window (printed
+  above), so no parameter set fits it clearly worse than another. The first run's windows below the floor lie in
+  {len(below)} stretch{"es" if len(below) != 1 else ""}{f", from sample {below[0][0]} to {below[-1][1] - 1}" if below else ""}
+  ({tank_first.informative.mean():.0%} of the windows are informative).""", f"""
+- **Second run, {listing([f"`{name}`" for name in tank_narrowed]) or "nothing"} narrowed: `A`
+  {either(A_second["verdict"] == "identified", "appears in the transients", "is still not identified")}.** The
+  first run has {c_count} windows of `c` with IC >= {tank_second.run.narrowing_threshold:g} and the band clear of
+  the bounds; the {c_noisy} of them below the noise floor or with a tied behavioural set do not count (the line
+  above the period tables). The bands of the others agree, and their common part, widened by half its width on
+  each side, is `c`'s new range {band_words(tank_second.bounds[tank_second.index("c")])}. With `c` confined, the
+  mean IC of `A` is {tank_mean(tank_second, "A", "first filling"):.2f} at the first filling,
+  {tank_mean(tank_second, "A", "transients"):.2f} in the 20 samples after a later step and
+  {tank_mean(tank_second, "A", "steady"):.2f} once the level has settled; {window_counts(tank_second, "A", tank_truth)};
+  the summary reports {reported_words(tank_second, "A", "sample")}, {verdict_words(tank_second, "A")}. `c` becomes
+  the mirror image: mean IC {tank_mean(tank_second, "c", "steady"):.2f} at steady levels,
+  {tank_mean(tank_second, "c", "transients"):.2f} in transients, where the level depends on both. This is the
+  expected picture, and the thesis's second run (its examples 1 and 3) is what reveals it.""", f"""
+- **A band can be narrower than the data justify.** In the second run {share_words(c_second["held_all"])} of
+  `c`'s {c_second["all"]} windows with IC >= {ic_threshold:g} hold the truth. The band is the spread of the best
+  {percentage:g} % of the samples, so it shrinks with the range: on the narrowed range it can become narrower than
+  the noise allows, most of all at low levels, where the noise is large against the level (the true level
+  averages {vessel.clean[high_ic & ~holds].mean():.2f} in the windows whose band misses the truth,
+  {vessel.clean[high_ic & holds].mean():.2f} where it holds it). The noise floor catches this twice. With `c`
+  narrowed, {1 - tank_second.informative.mean():.0%} of the windows fall below the floor, in
+  {len(second_below)} stretches (veiled grey in the figure), where the true level averages
+  {vessel.clean[~tank_second.informative].mean():.2f} against {vessel.clean[tank_second.informative].mean():.2f}
+  elsewhere: of `c`'s windows with IC >= {ic_threshold:g} above the floor {share_words(c_second["held_informative"])}
+  hold the truth. And of those whose behavioural set is not tied within noise,
+  {share_words(c_second["held_untied"])} do: since the tank's errors are the same size everywhere
+  ({tank_noise:g}, and the floor's sigma is {tank_second.run.noise_sigma:.3g}), these ties are real, unlike
+  HYMOD's in low flows. The verdict judges the highest IC among the untied windows above the floor,
+  {reported_words(tank_second, "c", "sample")}, and is {verdict_words(tank_second, "c")}."""]
+say("\n".join(tank_bullets))
+
 # %% [markdown]
-# **`nonlinear_tank.png`** (numbers from the default run):
-#
-# - **First run: `c` everywhere, `A` almost nowhere.** The IC of `c` is
-#   high wherever the level is, and highest at steady levels (0.90, 0.84 in
-#   transients); its 793 windows with IC >= 0.5 all hold the true 0.3.
-#   `A` stays at its lowest IC except while the tank first fills. A parameter set with a
-#   slightly wrong `c` sits at a wrong level all the time, an offset that
-#   dwarfs what `A` changes, so the best 10 % of the sets are chosen by `c`
-#   and `A` is left to chance. Only while the tank fills from empty is the
-#   outflow near zero and the rise rate `q/A` alone.
-# - **`A`'s highest IC is an artefact, and flagged.** It lies at sample 6, in
-#   a window of the closed valve and a single sample of filling, with a band
-#   against the upper bound that misses the truth. Its verdict is `suspect`
-#   for two reasons: band at the bound, and below the noise floor (the
-#   window, samples 1-11, is whole, so the record's start is no reason of
-#   its own): the tank is still nearly empty in that window
-#   (printed above), so no parameter set fits it clearly worse than another.
-#   Such windows at the start, before the tank fills, are the first run's
-#   only ones below the floor (99 % of the windows are informative).
-# - **Second run, `c` narrowed: `A` appears in the transients.** The first
-#   run has 752 windows of `c` with IC >= 0.75 and the band clear of the
-#   bounds; the 11 of them below the noise floor or with a tied behavioural
-#   set do not count (the line above the period tables). The bands of the
-#   others agree, and their common part, widened by half its width on each
-#   side, is `c`'s new range [0.278, 0.331]. With `c` confined, the IC of `A` is high at
-#   the first filling (0.72) and after every step of the inflow (0.38 in the
-#   20 samples after a step, and high for longer after a large one), and at
-#   its lowest once the level has settled (0.13); 98 % of its windows with
-#   IC >= 0.5 hold the true 2, all of those above the noise floor, and its
-#   verdict is `identified` (IC 0.80 at sample 288, band [1.77, 2.67]). `c`
-#   becomes the mirror image: identified at steady levels (0.77), lost in
-#   transients (0.43), where the level depends on both. This is the expected picture, and the thesis's second run (its
-#   examples 1 and 3) is what reveals it.
-# - **A band can be narrower than the data justify.** In the second run only
-#   85 % of `c`'s windows with IC >= 0.5 hold the truth. The band is the
-#   spread of the best 10 % of the samples, so it shrinks with the range: on
-#   the narrowed range it becomes narrower than the noise allows, most of all
-#   at low levels, where the noise is large against the level (the true
-#   level averages 0.26 in the windows whose band misses the truth, 1.59
-#   where it holds it). The noise floor catches this twice. With `c`
-#   narrowed, 15 % of the windows fall below the floor, at low levels
-#   (veiled grey in the figure): of `c`'s windows with IC >= 0.5 above the
-#   floor 90 % hold the truth. And of those whose behavioural set is not
-#   tied within noise, all do: since the tank's errors are the same size
-#   everywhere (0.02, and the floor's sigma is 0.0201), these ties are real,
-#   unlike HYMOD's in low flows. The verdict judges the highest IC among the
-#   untied windows above the floor, 0.87 at sample 620 with band [0.298,
-#   0.305], and is `identified`.
-#
 # Every band the summaries report, checked against the truth (a verdict
 # cannot do that on real data):
 
@@ -558,40 +762,62 @@ print("every identified band holds the truth:",
 # %% [markdown]
 # ## What we find
 #
-# What DYNIA found, checked against the truth (default run):
-#
-# | parameter | expected where | found? |
-# | --- | --- | --- |
-# | HYMOD `kq` | rising limbs and peaks | yes: on storm sequences, never in recessions; every band with IC >= 0.5 holds the truth |
-# | HYMOD `ks` | recessions | yes: late in every recession, more often after `kq` is narrowed; bands hold the truth; `suspect` (`isolated_evidence`) in the first run, whose highest IC, in the low flows late in a recession, ties within noise (a false tie of relative errors) and is left out, leaving 2 windows of evidence; `identified` in the second |
-# | HYMOD `b` | wetting-up | weakly: highest IC on storms over a dry soil early in a wet season; mean IC in wetting-up only slightly above that on peaks; IC 0.51 in both runs, `suspect` (`isolated_evidence`: 2 untied windows), though its bands hold the truth |
-# | HYMOD `cmax` | wetting-up | no: highest in wetting-up, but IC never reaches 0.5 (`weak`) |
-# | HYMOD `alpha` | peaks | only in the second run; in the first its two windows with IC >= 0.5 miss the truth; its verdict is `suspect` (`isolated_evidence`: only one of them does not tie within noise; `disagrees_with_record_fit`: that band excludes the whole record's least-squares fit) |
-# | tank `c` | steady levels | yes, in both runs; in the second its bands miss the truth in 15 % of the windows with IC >= 0.5, all of them below the floor or tied within noise, and the reported band holds it |
-# | tank `A` | transients | only in the second run, with `c` narrowed (`identified`); in the first run only the first filling (`suspect`) |
-#
+# What DYNIA found, checked against the truth; the table is rendered from
+# this run's results.
+
+# %%
+def row(label, expected, result_1, result_2, name, true_values, mean_of, where):
+    """One line of the findings table: mean IC where expected in each run, the windows that reach ic_threshold
+    and hold the truth, and the verdicts."""
+    cells = []
+    for run_label, result in (("first", result_1), ("second", result_2)):
+        found = windows(result, name, true_values)
+        cells.append(f"{run_label}: mean IC {mean_of(result, name, where):.2f} ({mean_of(result, name, 'all'):.2f} "
+                     f"overall), {found['all']} windows >= {ic_threshold:g}"
+                     + (f", {share_words(found['held_all'])} holding the truth" if found["all"] else "")
+                     + f", {verdict_words(result, name)}")
+    return f"| {label} | {expected} | {'; '.join(cells)} |"
+
+
+rows = [row("HYMOD `kq`", "rising limbs and peaks", first, second, "kq", truth, mean_ic, "peaks"),
+        row("HYMOD `ks`", "recessions", first, second, "ks", truth, mean_ic, "recessions"),
+        row("HYMOD `b`", "wetting-up", first, second, "b", truth, mean_ic, "wetting-up"),
+        row("HYMOD `cmax`", "wetting-up", first, second, "cmax", truth, mean_ic, "wetting-up"),
+        row("HYMOD `alpha`", "peaks", first, second, "alpha", truth, mean_ic, "peaks"),
+        row("tank `c`", "steady levels", tank_first, tank_second, "c", tank_truth, tank_mean, "steady"),
+        row("tank `A`", "transients", tank_first, tank_second, "A", tank_truth, tank_mean, "transients")]
+say("| parameter | expected where | found? (mean IC there, windows, verdict) |\n| --- | --- | --- |\n"
+    + "\n".join(rows))
+
+# %% [markdown]
 # Lessons for reading DYNIA on nonlinear models:
 #
 # - A dominant parameter hides the others: the behavioural sets are chosen
 #   by it, and the rest look unidentifiable. The thesis's second run, which
-#   narrows what is identified, is not a refinement but a necessity here
-#   (`alpha`, the tank's `A`).
+#   narrows what is identified, is not a refinement but a necessity where
+#   that happens (the table above shows which parameters gain in the second
+#   run).
 # - The IC measures how narrow a band is, not whether it is right. Checked
-#   against the truth, a band can miss it because of an interaction (`alpha`,
-#   first run) or because a narrowed range makes it narrower than the noise
-#   allows (the tank's `c`, second run).
-# - The verdicts catch these here: an edge artefact below the noise
-#   floor (the tank's `A`, first run); the tank's `c` in the second run,
-#   whose bands that miss the truth all lie below the floor or in windows
-#   whose behavioural set ties within noise, which the verdict does not
-#   judge; and `alpha` in the first run, whose one untied wrong window is
-#   called `suspect` (`isolated_evidence`) because no other window backs
-#   it. Every band called `identified` holds the truth (the check above).
-#   The price is false alarms: the noise floor assumes errors of one size
-#   for the whole record, and with errors that grow with the output it
-#   finds ties in low flows among sets that do fit differently. Here, in
-#   the first run, it leaves the highest IC of `b` and `ks` out of their
-#   verdicts, and so few untied windows that both are `suspect`
-#   (`isolated_evidence`; `b` again in the second run, with 2 untied
-#   windows of 57) although their bands hold the truth; and it adds
-#   `noise_ranked` to the second run's `cmax`.
+#   against the truth, a band can miss it because of an interaction or
+#   because a narrowed range makes it narrower than the noise allows.
+
+# %%
+RUN_LABELS = {"HYMOD's first run": (first, truth), "HYMOD's second run": (second, truth),
+              "the tank's first run": (tank_first, tank_truth), "the tank's second run": (tank_second, tank_truth)}
+missed = [f"`{name}` in {label} (verdict {verdict_words(result, name)})"
+          for label, (result, true_values) in RUN_LABELS.items()
+          for name, line in result.summary().items() if not line["band"][0] <= true_values[name] <= line["band"][1]]
+identified_hold = all(line["band"][0] <= true_values[name] <= line["band"][1]
+                      for result, true_values in RUN_LABELS.values() for name, line in result.summary().items()
+                      if line["verdict"] == "identified")
+false_alarms = [f"`{name}` in {label}" for label, (result, true_values) in RUN_LABELS.items()
+                for name, line in result.summary().items() if label.startswith("HYMOD")
+                and line["verdict"] == "suspect" and line["band"][0] <= true_values[name] <= line["band"][1]]
+say(f"""
+    - The verdicts {either(identified_hold, "catch these here", "miss some of these here")}: the reported bands
+      that miss the truth are {listing(missed) or "none"}, and every band called `identified`
+      {either(identified_hold, "holds", "does not hold")} the truth (the check above). The price is false alarms:
+      the noise floor assumes errors of one size for the whole record, and with errors that grow with the output
+      it finds ties in low flows among sets that do fit differently. The `suspect` verdicts on HYMOD whose band
+      holds the truth are {listing(false_alarms) or "none"}.
+""")

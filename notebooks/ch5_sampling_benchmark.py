@@ -50,9 +50,9 @@
 #
 # | figure | what it shows |
 # | --- | --- |
-# | `fig5_01.png` | example 1 (first order): RMSE of the IC against model evaluations, one line per sampler, log-log; the uniform-100 000 level dashed |
+# | `fig5_01.png` | example 1 (first order): RMSE of the IC against model evaluations, one line per sampler, log-log; the level of uniform sampling at `goal_uniform` evaluations dashed |
 # | `fig5_02.png` | example 2 (second order with dead time): the same |
-# | `fig5_03.png` | IC curves of the reference, uniform 10 000 and the better adaptive scheme at 10 000, one parameter per example |
+# | `fig5_03.png` | IC curves of the reference, uniform sampling and the better adaptive scheme at `goal_adaptive` evaluations, one parameter per example |
 # | `fig5_04.png` | coverage: the share of time steps whose band contains the true value, against evaluations, with the reference's own coverage |
 #
 # Figures are written to `figure_dir` (relative to the working directory;
@@ -130,6 +130,7 @@ import numpy as np
 import pandas as pd
 
 import dynia
+from dynia.claims import claim, either, say
 
 os.makedirs(figure_dir, exist_ok=True)
 ADAPTIVE = ("iis", "de")
@@ -165,11 +166,12 @@ def coverage(result, truth):
 # %% [markdown]
 # ## The converged references
 #
-# The reference of each example is one uniform run with `n_reference`
-# samples. Its behavioural sets hold `n_reference x percentage / 100`
-# samples per window (1000 at the defaults), where a run of
-# 10 000 evaluations keeps 10. `dynia.run` streams the simulations through
-# the moving window, so the memory does not grow with the number of samples.
+# The reference of each example is one uniform run with `n_reference` samples.
+# Its behavioural sets hold `n_reference x percentage / 100` samples per
+# window (the cell prints the number), where a run of `goal_adaptive`
+# evaluations keeps `goal_adaptive x percentage / 100`. `dynia.run` streams
+# the simulations through the moving window, so the memory does not grow with
+# the number of samples.
 
 # %%
 references = {}
@@ -190,10 +192,10 @@ for number, example in EXAMPLES.items():
 #
 # A run that `dynia.run` refuses (a `ValueError`) gets no value in the tables
 # and figures; the cell prints why. Uniform, Latin hypercube and Sobol runs
-# need at least two behavioural sets per window,
-# `floor(budget x percentage / 100) >= 2`, so at 0.1 % they cannot run on
-# 1000 evaluations. The adaptive schemes select the behavioural set by
-# importance weight and need no such minimum.
+# need at least two behavioural sets per window, `floor(budget x percentage /
+# 100) >= 2`, so at 0.1 % they cannot run on the smallest budgets (the cell
+# prints which). The adaptive schemes select the behavioural set by importance
+# weight and need no such minimum.
 
 # %%
 def run_id(number, sampler, budget, repeat):
@@ -202,6 +204,7 @@ def run_id(number, sampler, budget, repeat):
 
 rows = []
 kept = {}  # first runs at goal_adaptive (Figure 5.3) and uniform at goal_uniform (the level)
+extra_seconds = {}  # wall time of the uniform run at goal_uniform where it is not among the budgets
 for number, example in EXAMPLES.items():
     for sampler in samplers:
         for budget in budgets:
@@ -219,8 +222,8 @@ for number, example in EXAMPLES.items():
                 if repeat == 0 and (budget == goal_adaptive or (sampler, budget) == ("uniform", goal_uniform)):
                     kept[number, sampler, budget] = result
     if (number, "uniform", goal_uniform) not in kept:
-        kept[number, "uniform", goal_uniform], _ = analyse(example, "uniform", goal_uniform,
-                                                           run_id(number, "uniform", goal_uniform, 0))
+        kept[number, "uniform", goal_uniform], extra_seconds[number] = analyse(
+            example, "uniform", goal_uniform, run_id(number, "uniform", goal_uniform, 0))
 runs = pd.DataFrame(rows)
 mean = runs.groupby(["example", "sampler", "budget"], sort=False)[["rmse", "coverage", "seconds"]].mean()
 
@@ -236,16 +239,47 @@ for number in EXAMPLES:
     print(f"example {number}: wall time per run, seconds")
     print(table("seconds", number, 2), "\n")
 
-# %% [markdown]
-# **The tables.** The first table of each example holds the numbers behind
-# Figures 5.1 and 5.2. The wall times show what an evaluation costs here: the
-# models are linear and simulate in microseconds, so an adaptive run of 10 000
-# evaluations, which holds every simulation in memory and re-ranks it between
-# stages, takes many times as long as a uniform run of 10 000, and about as
-# long as a uniform run of 100 000 (`"iis"` longer, `"de"` a little shorter
-# in this run). A saving in
-# evaluations becomes a saving in time only for models whose simulation
-# dominates, not for these two.
+# %%
+def words(budget):
+    """A number of evaluations as the prose writes it: 100 000."""
+    return f"{budget:,}".replace(",", " ")
+
+
+def mean_error(number, sampler, budget):
+    """Mean RMSE of a sampler at a budget (nan where it did not run)."""
+    return float(mean.loc[(number, sampler, budget), "rmse"])
+
+
+def seconds_of(number, sampler, budget):
+    """Mean wall time of a sampler at a budget; the extra uniform run's where the budget was not benchmarked."""
+    if (number, sampler, budget) in mean.index:
+        return float(mean.loc[(number, sampler, budget), "seconds"])
+    return extra_seconds[number]
+
+
+def timing(number):
+    adaptive = [sampler for sampler in ADAPTIVE if not math.isnan(seconds_of(number, sampler, goal_adaptive))]
+    return (f"example {number}: " + ", ".join(f"`{sampler}` {seconds_of(number, sampler, goal_adaptive):.2f} s"
+                                               for sampler in adaptive)
+            + f" against uniform's {seconds_of(number, 'uniform', goal_adaptive):.2f} s at {words(goal_adaptive)} "
+            f"and {seconds_of(number, 'uniform', goal_uniform):.2f} s at {words(goal_uniform)}")
+
+
+slowdown = [seconds_of(number, sampler, goal_adaptive) / seconds_of(number, "uniform", goal_adaptive)
+            for number in EXAMPLES for sampler in ADAPTIVE
+            if not math.isnan(seconds_of(number, sampler, goal_adaptive))]
+say(f"""
+    **The tables.** The first table of each example holds the numbers behind
+    Figures 5.1 and 5.2. The wall times, measured on the machine that rendered
+    this report, show what an evaluation costs here: the models are linear and
+    simulate in microseconds, and an adaptive run, which holds every simulation
+    in memory and re-ranks it between stages, took {min(slowdown):.0f} to
+    {max(slowdown):.0f} times as long as a uniform run of the same
+    {words(goal_adaptive)} evaluations ({"; ".join(timing(number) for number in EXAMPLES)}).
+    {either(min(slowdown) > 1, "A saving in evaluations becomes a saving in time only for models whose "
+            "simulation dominates, not for these two.",
+            "On this machine some adaptive runs were no slower than uniform ones of the same size.")}
+""")
 
 # %% [markdown]
 # ## Figures 5.1 and 5.2: error against evaluations
@@ -293,10 +327,12 @@ def first_reaching(number, sampler, level):
 
 
 goal = {}
+reference_errors = {}
+largest = max(budgets)
 for number in EXAMPLES:
     uniform_at_goal = float(mean.loc[(number, "uniform", goal_adaptive), "rmse"])
-    largest = max(budgets)
     reference_error = float(mean.loc[(number, "uniform", largest), "rmse"]) * math.sqrt(largest / n_reference)
+    reference_errors[number] = reference_error
     print(f"example {number}: uniform error at {goal_uniform} evaluations {levels[number]:.3f}, "
           f"at {goal_adaptive} {uniform_at_goal:.3f}; the reference's own error, scaled from uniform at "
           f"{largest} as 1/sqrt(samples): about {reference_error:.3f}")
@@ -311,66 +347,175 @@ for number in EXAMPLES:
 # %% [markdown]
 # **What the figures show.** Each line is one sampler's error against its
 # number of model evaluations, on log-log axes; the dashed line is the error of
-# uniform sampling at 100 000 evaluations and the dotted line marks 10 000
-# evaluations. The goal asks for a point of the `"de"` line at or below the
-# dashed line, left of the dotted one.
-#
-# * **Uniform Monte Carlo** converges as slowly as section 4.2 of the thesis
-#   leads one to expect. At 0.1 % its error falls from about 0.4-0.5 at 3000
-#   evaluations (three behavioural sets per window) to about 0.03 at 100 000.
-#   At 1000 it cannot run at all.
-# * **Latin hypercube and Sobol** cost the same per evaluation. Latin
-#   hypercube is about as good as uniform, or a little better. Sobol is better
-#   than uniform at almost every budget, and at 100 000 it is among the best
-#   of all samplers on both examples: stratifying the box is free.
-# * **`"iis"`** is the best sampler on example 1 at every budget. With 1000
-#   evaluations it is as good as uniform with 10 000, and with 30 000 it is
-#   below the uniform-100 000 level. On example 2 its lead is large only at
-#   3000 evaluations (0.30 against 0.48 to 0.51 for the others); from
-#   10 000 on it is small: a little ahead of Sobol at 10 000 and 30 000
-#   evaluations, and no better than uniform at 100 000, where Sobol is best.
-# * **`"de"`** is better than uniform on example 1 up to 10 000 evaluations,
-#   but behind `"iis"` everywhere. On example 2 it is behind uniform at every
-#   budget, at 1000 evaluations it does not run at all (its searches alone
-#   need more evaluations than the budget), and its error is up to about
-#   twice uniform's.
-#
-# **The goal is not met**, neither by `"de"` nor by `"iis"`, on either
-# example; the cell above prints the numbers. With the defaults, uniform
-# sampling reaches an error of about 0.03 with 100 000 evaluations on both
-# examples. On example 1, `"de"` with 10 000 evaluations is about three times
-# that error and first reaches it at 100 000; `"iis"` is about 1.6 times the
-# error, less than half of uniform's at 10 000, and reaches the level at
-# 30 000 evaluations: a saving of a factor of about three, not ten. On
-# example 2, `"de"` at 10 000 is about eight times the level and worse than
-# uniform at 10 000; `"iis"` is about four times the level, and only at
-# 100 000 evaluations does it come to about the level, like uniform itself.
-#
-# Points above `repeat_limit` evaluations are single runs and carry their own
-# sampling noise (uniform at 30 000 and at 100 000 are almost equal on
-# example 1). The verdict does not hinge on it: the adaptive errors at 10 000
-# are between about 1.6 and 8 times the level.
-#
-# The reference has errors of its own. Scaled from uniform at the largest
-# budget as 1/sqrt(samples), they are about 0.01 with the defaults, so the
-# smallest errors in the figures (about 0.01 at 100 000) are near what the
-# reference can resolve, while the gaps that decide the goal are far larger.
+# uniform sampling at `goal_uniform` evaluations and the dotted line marks
+# `goal_adaptive` evaluations. The goal asks for a point of the `"de"` line at
+# or below the dashed line, left of the dotted one. The paragraphs below are
+# rendered from the tables above.
+
+# %%
+def ran(number, sampler):
+    """The budgets at which a sampler ran, with its mean errors."""
+    errors = mean.loc[(number, sampler), "rmse"].dropna()
+    return {int(budget): float(value) for budget, value in errors.items()}
+
+
+def refused(number, sampler):
+    return [budget for budget in budgets if budget not in ran(number, sampler)]
+
+
+def listing(items):
+    """'a', 'a and b', 'a, b and c'."""
+    items = list(items)
+    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
+
+
+def budgets_words(selected):
+    return listing([words(budget) for budget in selected]) if selected else "no budget"
+
+
+def best_at(number, budget):
+    """The sampler with the smallest mean error at a budget, and that error."""
+    errors = {sampler: mean_error(number, sampler, budget) for sampler in samplers
+              if not math.isnan(mean_error(number, sampler, budget))}
+    winner = min(errors, key=errors.get)
+    return winner, errors[winner]
+
+
+def where_not_best(number, sampler):
+    """The budgets at which ``sampler`` ran but another was better, as words."""
+    misses = [budget for budget in ran(number, sampler) if best_at(number, budget)[0] != sampler]
+    return [f"{words(budget)}, where `{best_at(number, budget)[0]}` is best "
+            f"({pair(best_at(number, budget)[1], mean_error(number, sampler, budget))})" for budget in misses]
+
+
+def pair(smaller, larger):
+    """Two errors, with a fourth decimal where three would show them equal."""
+    digits = 3 if round(smaller, 3) != round(larger, 3) else 4
+    return f"{smaller:.{digits}f} against {larger:.{digits}f}"
+
+
+def rank_at(number, sampler, budget):
+    errors = [mean_error(number, other, budget) for other in samplers if not math.isnan(mean_error(number, other, budget))]
+    return 1 + sum(value < mean_error(number, sampler, budget) for value in errors), len(errors)
+
+
+ORDINAL = {1: "best", 2: "second", 3: "third", 4: "fourth", 5: "fifth"}
+uniform_budgets = {number: ran(number, "uniform") for number in EXAMPLES}
+uniform_lines = []
+for number, errors in uniform_budgets.items():
+    low = min(errors)
+    uniform_lines.append(f"from {errors[low]:.3f} at {words(low)} evaluations "
+                         f"({math.floor(low * percentage / 100)} behavioural sets per window) to "
+                         f"{errors[largest]:.3f} at {words(largest)} on example {number}")
+too_small = sorted({budget for number in EXAMPLES for budget in refused(number, "uniform")})
+paragraphs = [f"""* **Uniform Monte Carlo** converges as slowly as section 4.2 of the thesis
+  leads one to expect. At {percentage:g} % its error falls {listing(uniform_lines)}.
+  {f"At {budgets_words(too_small)} it cannot run at all." if too_small else ""}"""]
+
+stratified = [sampler for sampler in ("lhs", "sobol") if sampler in samplers]
+if stratified:
+    lines = []
+    for sampler in stratified:
+        better = {number: [budget for budget in uniform_budgets[number] if budget in ran(number, sampler)
+                           and mean_error(number, sampler, budget) < mean_error(number, "uniform", budget)]
+                  for number in EXAMPLES}
+        ranks = [f"{ORDINAL[rank_at(number, sampler, largest)[0]]} of {rank_at(number, sampler, largest)[1]} "
+                 f"on example {number}" for number in EXAMPLES]
+        lines.append(f"`{sampler}` is better than uniform at "
+                     + listing([f"{len(better[number])} of {len(uniform_budgets[number])} budgets on example "
+                                f"{number}" for number in EXAMPLES])
+                     + f", and at {words(largest)} it ranks {listing(ranks)}")
+    paragraphs.append(f"""* **Latin hypercube and Sobol** cost the same per evaluation as uniform
+  sampling. {"; ".join(lines)}.""")
+
+def adaptive_line(number, sampler):
+    """One example's sentence on an adaptive scheme: where it is best, against uniform, and the level."""
+    errors = ran(number, sampler)
+    misses = where_not_best(number, sampler)
+    compared = [budget for budget in errors if budget in uniform_budgets[number]]
+    worse = [budget for budget in compared if errors[budget] >= uniform_budgets[number][budget]]
+    reached = first_reaching(number, sampler, levels[number])
+    if not misses:
+        best = "the best sampler at every budget it runs"
+    elif len(misses) < len(errors):
+        best = f"the best sampler at every budget but {listing(misses)}"
+    else:
+        best = "the best sampler at no budget"
+    against = (f"worse than uniform at {budgets_words(worse)}" if worse
+               else "better than uniform at every budget where both run")
+    pairs = listing([f"{words(budget)}: {errors[budget]:.3f} against {uniform_budgets[number][budget]:.3f}"
+                     for budget in compared])
+    line = f"On example {number} it is {best}, and {against} ({pairs})"
+    if refused(number, sampler):
+        line += (f"; at {budgets_words(refused(number, sampler))} it does not run at all"
+                 + (" (its searches alone need more evaluations than the budget)" if sampler == "de" else ""))
+    level = f"the uniform-{words(goal_uniform)} level ({levels[number]:.3f})"
+    return line + (f"; it first reaches {level} at {words(reached)} evaluations." if reached is not None
+                   else f"; it reaches {level} at no budget measured.")
+
+
+for sampler in ADAPTIVE:
+    if sampler in samplers:
+        paragraphs.append(f"* **`\"{sampler}\"`**. " + " ".join(adaptive_line(number, sampler)
+                                                                for number in EXAMPLES))
+say("\n".join(paragraphs))
+
+# %%
+def goal_words(number, sampler):
+    value = mean_error(number, sampler, goal_adaptive)
+    reached = first_reaching(number, sampler, levels[number])
+    return (f"`\"{sampler}\"` with {words(goal_adaptive)} evaluations has an error of {value:.3f}, "
+            f"{value / levels[number]:.1f} times the level and {value / mean_error(number, 'uniform', goal_adaptive):.2f} "
+            f"times uniform's at {words(goal_adaptive)}, and "
+            + (f"first reaches the level at {words(reached)} evaluations"
+               + (f" (a saving of a factor of {goal_uniform / reached:.1f} against uniform's {words(goal_uniform)}, "
+                  f"where the goal asks for {goal_uniform / goal_adaptive:.0f})" if reached < goal_uniform else "")
+               if reached is not None else "reaches it at no budget measured"))
+
+
+met = [f"`{sampler}` on example {number}" for (number, sampler), value in goal.items() if value]
+ratios = [mean_error(number, sampler, goal_adaptive) / levels[number] for number in EXAMPLES for sampler in ADAPTIVE
+          if sampler in samplers and not math.isnan(mean_error(number, sampler, goal_adaptive))]
+say(f"""
+    **The goal is {either(not met, "not met", "met by " + listing(met) if met else "")}**{either(
+        not met, ", neither by `de` nor by `iis`, on either example", "")}; the cell above prints the numbers.
+    {" ".join(f"On example {number}, uniform sampling reaches an error of {levels[number]:.3f} with "
+              f"{words(goal_uniform)} evaluations; " + "; ".join(goal_words(number, sampler) for sampler in ADAPTIVE
+                                                                if sampler in samplers) + "."
+              for number in EXAMPLES)}
+
+    Points above `repeat_limit` ({words(repeat_limit)}) evaluations are single runs and carry their own
+    sampling noise. {either(min(ratios) > 1.2, f"The verdict does not hinge on it: the adaptive errors at "
+                            f"{words(goal_adaptive)} are between {min(ratios):.1f} and {max(ratios):.1f} times the "
+                            "level.", f"The verdict may hinge on it: the adaptive errors at {words(goal_adaptive)} "
+                            f"are between {min(ratios):.1f} and {max(ratios):.1f} times the level.")}
+
+    The reference has errors of its own. Scaled from uniform at {words(largest)} evaluations as
+    1/sqrt(samples), they are about {listing([f"{reference_errors[number]:.3f} on example {number}"
+                                              for number in EXAMPLES])}; the smallest mean error in the figures is
+    {runs["rmse"].min():.3f}, so the smallest errors are
+    {either(bool(runs["rmse"].min() < 3 * max(reference_errors.values())), "near what the reference can resolve",
+            "well above what the reference can resolve")}, while the goal is decided by the ratios above.
+""")
+
 
 # %% [markdown]
 # ## Where the adaptive schemes lose
 #
-# In example 1 the input drops to zero at step 399 and the output settles at
-# zero a few time constants later. Windows in that tail hold only noise:
-# any parameter set whose simulated output has decayed fits, that is a small
-# time constant with any gain, or a small gain with any time constant. This
-# region is L-shaped and reaches the prior's edges, so the bounding box that
-# `"iis"` places around a block's behavioural samples covers almost the whole
-# prior and concentrates nothing (the `dynia.adaptive` docstring says so too).
-# The cell below splits the error of the first run of each sampler at the step
-# where the input drops to zero.
+# In example 1 the input drops to zero at step 399 (thesis script's input,
+# checked in the cell below) and the output settles at zero a few time
+# constants later. Windows in that tail hold only noise: any parameter set
+# whose simulated output has decayed fits, that is a small time constant with
+# any gain, or a small gain with any time constant. This region is L-shaped
+# and reaches the prior's edges, so the bounding box that `"iis"` places
+# around a block's behavioural samples covers almost the whole prior and
+# concentrates nothing (the `dynia.adaptive` docstring says so too). The cell
+# below splits the error of the first run of each sampler at the step where
+# the input drops to zero.
 
 # %%
 tail_errors = {}
+claim(TAIL_START == 399, "the input of example 1 drops to zero at step 399")
 if 1 in EXAMPLES:
     reference = references[1]
     split = {"before": slice(0, TAIL_START), "after": slice(TAIL_START, None)}
@@ -423,33 +568,53 @@ for number, example in EXAMPLES.items():
                                                  zip(example.model.names, extent))
               + f": {box_shares[number, label]:.1%} of the prior")
 
-# %% [markdown]
-# **The data confirm the explanation.** Before step 399, `"iis"` with 10 000
-# evaluations is far better than uniform sampling with 100 000 (an error of
-# about 0.01 against about 0.035 with the defaults). After it, in the tail, it
-# is several times worse (about 0.10 against about 0.02), mostly in the gain.
-# In the steady state the behavioural samples of a whole block fit in a box of
-# a fraction of a percent of the prior (the gain is pinned down, the time
-# constant is free): there, concentrating evaluations pays. In the settled
-# tail their bounding box covers most of the prior, so the boxes draw almost
-# uniformly, the evaluations spent after the uniform stage add little, and the
-# IC there rests on few effective samples.
-#
-# Example 2 is mostly like that tail. The output is at rest more than 90 % of
-# the time, and in the zero state between the responses the box covers most
-# of the prior, as it does in example 1's tail. Even at a response, the box is
-# narrow only in the dead time: every gain and lag fits some window of the
-# block. That is why `"iis"` gains little on example 2.
-#
-# `"de"` loses on both examples, and it is far behind `"iis"` before step 399
-# too, where `"iis"` does best: the tail is not its main problem. The
-# `dynia.adaptive` docstring names the reason: its boxes are set around the
-# best few points of a short differential evolution per block, too few to
-# outline a region, so they miss parts of the behavioural sets. The coverage
-# below shows the same.
+# %%
+def extent_words(number, label):
+    return f"{box_shares[number, label]:.1%} of the prior"
+
+
+paragraphs = []
+if 1 in EXAMPLES:
+    iis_run, uniform_run = tail_errors[f"iis {goal_adaptive}"], tail_errors[f"uniform {goal_uniform}"]
+    iis_names = kept[1, "iis", goal_adaptive].names
+    after_by_name = {name: rmse(kept[1, "iis", goal_adaptive].ic[p, TAIL_START:], references[1].ic[p, TAIL_START:])
+                     for p, name in enumerate(iis_names)}
+    worst = max(after_by_name, key=after_by_name.get)
+    confirmed = (iis_run["before"] < uniform_run["before"] and iis_run["after"] > uniform_run["after"]
+                 and box_shares[1, "steady input of 35"] < 0.01 and box_shares[1, "settled tail"] > 0.5)
+    paragraphs.append(f"""
+**The data {either(confirmed, "confirm", "do not fully confirm")} the explanation.** Before step {TAIL_START},
+`"iis"` with {words(goal_adaptive)} evaluations has an error of {iis_run["before"]:.3f} against
+{uniform_run["before"]:.3f} for uniform sampling with {words(goal_uniform)}; after it, in the tail,
+{iis_run["after"]:.3f} against {uniform_run["after"]:.3f}, {iis_run["after"] / uniform_run["after"]:.1f} times
+uniform's, mostly in {worst} (an error of {after_by_name[worst]:.3f} there). In the steady state the behavioural
+samples of a whole block fit in a box of {extent_words(1, "steady input of 35")}: there, concentrating
+evaluations {either(box_shares[1, "steady input of 35"] < 0.01, "pays", "pays little")}. In the settled tail their
+bounding box covers {extent_words(1, "settled tail")}, so the boxes draw
+{either(box_shares[1, "settled tail"] > 0.5, "almost uniformly", "from part of the prior")}, the evaluations
+spent after the uniform stage add little, and the IC there rests on few effective samples.""")
+if 2 in EXAMPLES:
+    at_rest = float(np.mean(np.abs(EXAMPLES[2].y_true) < 0.01 * np.abs(EXAMPLES[2].y_true).max()))
+    response_shares = [box_shares[2, label] for label in ("first response", "second response")]
+    paragraphs.append(f"""
+Example 2 is mostly like that tail. The true output is at rest (under 1 % of its peak) {at_rest:.0%} of the time,
+and in the zero state between the responses the box covers {extent_words(2, "zero state between")}. At the two
+responses the box covers {listing([f"{share:.1%}" for share in response_shares])} of the prior, narrow only in the
+dead time (the cell above prints the share of each parameter): every gain and lag fits some window of the block.
+That is why `"iis"` gains little on example 2.""")
+if 1 in EXAMPLES and "de" in samplers:
+    de_run = tail_errors[f"de {goal_adaptive}"]
+    paragraphs.append(f"""
+`"de"` has an error of {de_run["before"]:.3f} before step {TAIL_START}, against {iis_run["before"]:.3f} for
+`"iis"`, and {de_run["after"]:.3f} after it: {either(de_run["before"] > 2 * iis_run["before"],
+"the tail is not its main problem", "its loss is mostly in the tail")}. The `dynia.adaptive` docstring names the
+reason: its boxes are set around the best few points of a short differential evolution per block, too few to
+outline a region, so they miss parts of the behavioural sets. The coverage below shows the same.""")
+say("\n".join(paragraphs))
+
 
 # %% [markdown]
-# ## Figure 5.3: the IC curves at 10 000 evaluations
+# ## Figure 5.3: the IC curves at `goal_adaptive` evaluations
 
 # %%
 SHOWN = {1: "T", 2: "theta"}
@@ -477,20 +642,45 @@ fig.tight_layout()
 fig.savefig(f"{figure_dir}/fig5_03.png", dpi=120, bbox_inches="tight")
 plt.show()
 
-# %% [markdown]
-# **What Figure 5.3 shows.** The black line is the reference's IC, the orange
-# line uniform sampling and the blue one the better adaptive scheme at 10 000
-# evaluations (with the defaults `"iis"` on both examples). Uniform sampling
-# with 10 000 evaluations keeps only 10 behavioural sets per window, and a
-# 90 % band of ten points is too narrow: where the reference's IC is near its
-# floor of 0.1 (the time constant of example 1 while the input is steady, the
-# dead time of example 2 before any simulated output can respond), the
-# uniform curve sits well above it. `"iis"` follows the reference there,
-# because its behavioural sets hold many more samples. For the time constant
-# shown here, `"iis"` also stays close to the reference in example 1's
-# settled tail (right of the dotted line); its loss in the tail is in the
-# gain (the cell under "Where the adaptive schemes lose" prints it by
-# parameter).
+# %%
+def curve_words(number):
+    """Figure 5.3 for one example: which scheme is drawn, and how close each curve is near the reference's floor."""
+    name = SHOWN[number]
+    best = min(ADAPTIVE, key=lambda sampler: mean.loc[(number, sampler, goal_adaptive), "rmse"])
+    reference = references[number]
+    p = reference.index(name)
+    floor = float(np.nanpercentile(reference.ic[p], 5))  # the floor, not the odd lower window at the edges
+    low = reference.ic[p] < floor + 0.1  # where the reference's IC is near its floor
+    gaps = {sampler: float(np.nanmean(kept[number, sampler, goal_adaptive].ic[p, low] - reference.ic[p, low]))
+            for sampler in ("uniform", best)}
+    return best, floor, gaps, low.mean()
+
+
+figure_lines = []
+for number in EXAMPLES:
+    best, floor, gaps, share = curve_words(number)
+    figure_lines.append(
+        f"on example {number} (`{SHOWN[number]}`, adaptive curve `\"{best}\"`) the reference's IC is within 0.1 of "
+        f"its floor of {floor:.2f} (its 5th percentile) at {share:.0%} of the steps, and there uniform sampling lies {gaps['uniform']:+.2f} "
+        f"from it on average, `\"{best}\"` {gaps[best]:+.2f}")
+tail_sentence = ""
+if 1 in EXAMPLES:
+    T = references[1].index("T")
+    tail_T = rmse(kept[1, "iis", goal_adaptive].ic[T, TAIL_START:], references[1].ic[T, TAIL_START:])
+    tail_sentence = (f"For the time constant shown, `\"iis\"`'s error in example 1's settled tail (right of the "
+                     f"dotted line) is {tail_T:.3f}; its loss in the tail is mostly in `{worst}` (the cell under "
+                     "\"Where the adaptive schemes lose\" prints it by parameter).")
+say(f"""
+    **What Figure 5.3 shows.** The black line is the reference's IC, the orange line uniform sampling and the
+    coloured one the better adaptive scheme at {words(goal_adaptive)} evaluations. Uniform sampling with
+    {words(goal_adaptive)} evaluations keeps only {math.floor(goal_adaptive * percentage / 100)} behavioural sets per
+    window, and a 90 % band of so few points is too narrow. Where the reference's IC is near its floor (the
+    time constant of example 1 while the input is steady, the dead time of example 2 before any simulated output can
+    respond), the uniform curve {either(all(curve_words(number)[2]["uniform"] > 0.05 for number in EXAMPLES),
+    "sits well above it", "does not always sit above it")}: {"; ".join(figure_lines)}.
+    {tail_sentence}
+""")
+
 
 # %% [markdown]
 # ## Figure 5.4: coverage of the true values
@@ -519,20 +709,50 @@ fig.tight_layout()
 fig.savefig(f"{figure_dir}/fig5_04.png", dpi=120, bbox_inches="tight")
 plt.show()
 
-# %% [markdown]
-# **What Figure 5.4 shows.** For every run, the share of time steps at which
-# the 90 % band contains the true value, averaged over the parameters. The
-# reference itself reaches only about 0.8 on example 1 and about 0.65 on
-# example 2, not 0.9. The band is the spread of the behavioural set, not a
-# calibrated interval, and in windows that hold only noise the narrow bands
-# of 0.1 % wander away from the truth (the chapter 3 notebooks discuss these
-# windows). Small uniform runs miss the truth far more often: three
-# behavioural sets make a narrow band in the wrong place. From 10 000
-# evaluations on, every sampler but `"de"` on example 2 comes close to the
-# reference's coverage, and `"iis"` gets there with fewer evaluations than
-# uniform sampling on example 1. `"de"` on example 2 stays well below the
-# reference at 10 000 evaluations: its bands miss the truth more often than
-# the reference's, which fits boxes that miss parts of the behavioural sets.
+# %%
+def close_from(number, sampler, margin=0.15):
+    """Smallest budget from which a sampler's coverage stays within ``margin`` of the reference's (None if none)."""
+    shares = mean.loc[(number, sampler), "coverage"]
+    close = (shares >= reference_coverage[number] - margin).to_numpy()
+    for position, budget in enumerate(shares.index):
+        if close[position:].all():
+            return int(budget)
+    return None
+
+
+coverage_lines = []
+misses_most = []
+small_uniform = []
+for number in EXAMPLES:
+    first_uniform = min(ran(number, "uniform"))
+    small_uniform.append(f"uniform at {words(first_uniform)} covers "
+                         f"{mean.loc[(number, 'uniform', first_uniform), 'coverage']:.2f} on example {number}")
+    far = [sampler for sampler in samplers
+           if not mean.loc[(number, sampler, goal_adaptive), "coverage"] >= reference_coverage[number] - 0.15]
+    closing = {sampler: close_from(number, sampler) for sampler in ("uniform", "iis") if sampler in samplers}
+    line = (f"On example {number} the reference covers {reference_coverage[number]:.2f}; at "
+            f"{words(goal_adaptive)} evaluations "
+            + ("every sampler is within 0.15 of it" if not far else
+               f"every sampler but {listing([f'`{sampler}`' for sampler in far])} is within 0.15 of it ("
+               + ", ".join(f"{sampler} {mean.loc[(number, sampler, goal_adaptive), 'coverage']:.2f}"
+                           for sampler in far) + ")")
+            + "; " + listing([f"`{sampler}` stays that close from "
+                              + (words(budget) if budget is not None else "no budget")
+                              + " evaluations on" for sampler, budget in closing.items()]) + ".")
+    coverage_lines.append(line)
+    misses_most += [f"the bands of `{sampler}` on example {number}" for sampler in far if sampler in ADAPTIVE]
+say(f"""
+    **What Figure 5.4 shows.** For every run, the share of time steps at which the 90 % band contains the true
+    value, averaged over the parameters. The reference itself reaches only
+    {listing([f"{reference_coverage[number]:.2f} on example {number}" for number in EXAMPLES])}, not 0.9. The band
+    is the spread of the behavioural set, not a calibrated interval, and in windows that hold only noise the narrow
+    bands of {percentage:g} % wander away from the truth (the chapter 3 notebooks discuss these windows). Small
+    uniform runs miss the truth more often ({listing(small_uniform)}): a few behavioural sets make a narrow band
+    in the wrong place. {" ".join(coverage_lines)}
+    {either(bool(misses_most), f"{listing(misses_most)} miss the truth more often than the reference's bands, "
+            "which fits boxes that miss parts of the behavioural sets.", "")}
+""")
+
 
 # %% [markdown]
 # ## Checked numbers
