@@ -92,6 +92,7 @@ import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
 import dynia
+from dynia.claims import claim, either, say
 
 os.makedirs(figure_dir, exist_ok=True)
 # Independent streams, so the rainfall and the noise do not change with n_samples.
@@ -135,6 +136,7 @@ fig.savefig(f"{figure_dir}/ch2_method_data.png", dpi=120, bbox_inches="tight")
 first_rain = int(np.argmax(rain > 0))
 print(f"storms: {np.count_nonzero(np.diff(np.r_[0, rain > 0].astype(int)) == 1)}; wet share of the record: {np.mean(rain > 0):.2f}; "
       f"first rain on day {time[first_rain]:g}")
+claim(bool(flow.min() < 0), 'some "observed" flows are slightly negative')
 
 # %% [markdown]
 # The record above is not a thesis figure. Before the first storm every model
@@ -172,6 +174,11 @@ print("best/worst behavioural likelihood, SSE scaled by the worst sample:",
 print("SSE scaled by the worst behavioural set: that set gets likelihood", float(weights.min()))
 print("same weights as the thesis's 1 - SSE (shifted, normalised) on the raw SSE:",
       bool(np.allclose(dynia.engine.cld.likelihood(sse[behavioural]), weights)))
+claim(bool(likelihood_mcat.max() / likelihood_mcat.min() < 1.2),
+      "the best and the worst behavioural set differ in likelihood only by the ratio printed above")
+claim(bool(np.allclose(dynia.engine.cld.likelihood(sse[behavioural]), weights)),
+      "these are also exactly the weights that the thesis's pseudo code gives")
+claim(bool(sse[behavioural].min() > 1), "Those SSEs exceed 1")
 
 # %% [markdown]
 # **Likelihood (Section 2.2.2).** The likelihood is the thesis's (MCAT's)
@@ -217,6 +224,10 @@ changing = np.abs(np.gradient(true_flow)) > np.abs(np.gradient(true_flow)).max()
 print(f"share of observed flows inside the limits: {inside_observed:.2f}")
 print(f"share of noise-free flows inside the limits: {inside_true:.2f}")
 print(f"mean width where the flow rises or recedes: {width[changing].mean():.2f}; elsewhere: {width[~changing].mean():.2f}")
+claim(bool(width[changing].mean() > width[~changing].mean()),
+      "this band is widest where the flow rises or recedes")
+claim(bool(inside_true > 0.9 and inside_observed < 0.5),
+      "The band holds almost all of the noise-free flow, but only a minority of the noisy observations")
 
 # %% [markdown]
 # Figure 2.1 shows the GLUE output band. At every step, the outputs of the
@@ -286,13 +297,17 @@ fig.savefig(f"{figure_dir}/fig2_04.png", dpi=120, bbox_inches="tight")
 best = int(np.argmin(sse))
 print("rt range of the behavioural set:", np.round([rt_values[behavioural].min(), rt_values[behavioural].max()], 2))
 print("best sample: gain", round(float(samples[best, 0]), 3), "rt", round(float(samples[best, 1]), 3))
+claim(bool(np.ptp(rt_values[behavioural]) < 0.25 * np.diff(box[1])[0]
+           and rt_values[behavioural].min() < rt_true < rt_values[behavioural].max()),
+      "The rt values of these sets fill only a small part of the sampled range, around the true value")
+claim(bool(abs(samples[best, 1] - rt_true) < 0.1 * rt_true), "the lower edge dips near rt = 1 day, where the best sample lies")
 
 # %% [markdown]
 # Figure 2.4 keeps only the behavioural sets, the best 10 % by SSE as
 # Wagener et al. (2003) suggest, on a linear axis. This is the thesis's Figure
 # 2.4: "SSE values of the behavioural set of Fig. 2.3". The rt values of these
 # sets fill only a small part of the sampled range (printed above), around the
-# true value. The cloud still has a lower edge that dips near rt = 1 day, where
+# true value. The cloud still has a lower edge that dips near the true rt, where
 # the best sample lies. Above that edge are sets whose gain is further from the
 # best gain for their rt.
 #
@@ -329,6 +344,9 @@ for number, name, kind in (("2.5", "rt", "high"), ("2.6", "gain", "low")):
     fig.savefig(f"{figure_dir}/fig2_0{number[-1]}.png", dpi=120, bbox_inches="tight")
     print(f"{name}: {conf_level:g} % limits {np.round(whole_limits[name], 2)}, "
           f"IC over the whole record {whole_ic[name]:.2f}")
+claim(bool(whole_limits["rt"][0] <= rt_true <= whole_limits["rt"][1] and whole_ic["rt"] > 0.8),
+      "rt's band is narrow and holds the true value")
+claim(bool(whole_ic["gain"] < 0.5), "The gain (Figure 2.6) has ... a wide band")
 
 # %% [markdown]
 # Figures 2.5 and 2.6 follow the thesis in form. Each shows the cumulative
@@ -352,10 +370,17 @@ wide_samples = dynia.sampling.uniform(n_samples, wide_box, rng=np.random.default
 wide_sse = ((model.simulate(wide_samples, rain, dt=dt) - flow) ** 2).sum(axis=1)
 wide_behavioural = np.argsort(wide_sse, kind="stable")[:count]
 wide_weights = dynia.engine.cld.likelihood(wide_sse[wide_behavioural] / wide_sse[wide_behavioural].max())
+wide_limits, wide_ic = {}, {}
 for p, name in enumerate(names):
     low, high = dynia.engine.cld.weighted_limits(wide_samples[wide_behavioural, p], wide_weights, conf_level)
+    wide_limits[name], wide_ic[name] = (low, high), 1 - (high - low) / np.diff(wide_box[p])[0]
     print(f"gain sampled from {wide_gain_range}: {name} limits {np.round([low, high], 2)}, "
-          f"IC {1 - (high - low) / np.diff(wide_box[p])[0]:.2f}")
+          f"IC {wide_ic[name]:.2f}")
+claim(bool(wide_ic["gain"] > 0.5 > whole_ic["gain"]),
+      "The gain comes out well identified (sampled from 0 to 2)")
+claim(bool(np.diff(wide_limits["gain"])[0] > np.diff(whole_limits["gain"])[0]),
+      "its band is wider in gain units than with the narrow range")
+claim(bool(wide_ic["rt"] < whole_ic["rt"]), "rt loses part of its information content")
 
 # %% [markdown]
 # Now sample the gain from 0 to 2 instead of 0.45 to 0.55 and change nothing
@@ -396,10 +421,20 @@ print(f"steepest range: rt {edges[steepest]:.2f} to {edges[steepest + 1]:.2f} da
 # across it (`dynia.engine.cld.binned_mass`). The bars therefore share the CLD's
 # axis: each bar's height is the step the CLD takes over its base. The thesis
 # reads the range with the largest gradient as the one where the parameter is
-# best identified. Here that range (printed above) lies close to the true
-# value. With a few hundred behavioural sets in eight ranges, neighbouring bars
-# differ partly by sampling noise.
-#
+# best identified.
+
+# %%
+bin_width = edges[1] - edges[0]
+ranges_away = 0 if edges[steepest] <= rt_true <= edges[steepest + 1] else int(
+    np.ceil(min(abs(rt_true - edges[steepest]), abs(rt_true - edges[steepest + 1])) / bin_width))
+say(f"""
+    Here that range (printed above) {either(ranges_away == 0, "holds the true value",
+    either(ranges_away == 1, "lies next to the range holding the true value",
+           f"lies {ranges_away} ranges away from the true value"))}. With {count} behavioural sets in {cld_bins}
+    ranges, neighbouring bars differ partly by sampling noise.
+""")
+
+# %% [markdown]
 # One choice differs from Figures 2.5 and 2.6: the eight ranges divide the
 # behavioural values of rt, not the whole sampled range. Over 0 to 5 days,
 # nearly all the mass would fall into one or two ranges, which says only that
@@ -448,22 +483,43 @@ for label, steps in (("before the first storm", before_rain),
 # `"mcat"`, the port of MCAT's `id_time.m`, because the thesis's chapter-2
 # figures were made with MCAT. Its cost is the mean absolute error over the
 # window.
-#
-# The printed means sort the windows by what the noise-free flow does in
-# them. They show what the thesis says Figure 2.8 is for: the information
-# content changes along the record.
-#
-# * Before the first storm every model gives exactly zero flow. There is no
-#   information, and the IC of both parameters sits near 0.1: an
-#   unconditioned 10 % subset of a uniform sample spans about 90 % of the
-#   range.
-# * Where the flow rises or recedes, the IC of rt is high and the gain's is
-#   low.
-# * In the steady middle of a long storm the IC of rt dips and the gain's
-#   rises, to about the same level. Only the flow-to-rainfall ratio is seen
-#   there, and that is what the gain sets.
-#
-# The IC of rt stays high through the dry spells. A recession that has died
+
+# %%
+def mean_ic(ic, steps):
+    return float(np.mean(ic[steps]))
+
+
+changing_flow = ~no_flow & ~steady_flow
+dry_spells = no_flow & ~before_rain
+say(f"""
+    The printed means sort the windows by what the noise-free flow does in
+    them. They show what the thesis says Figure 2.8 is for: the information
+    content changes along the record.
+
+    * Before the first storm every model gives exactly zero flow. There is no
+      information, and the IC of both parameters sits
+      {either(max(abs(mean_ic(ic, before_rain) - 0.1) for ic in (rt_ic, gain_ic)) < 0.05, "near", "not near")} 0.1
+      (rt {mean_ic(rt_ic, before_rain):.2f}, gain {mean_ic(gain_ic, before_rain):.2f}): an unconditioned
+      10 % subset of a uniform sample spans about 90 % of the range.
+    * Where the flow rises or recedes, the IC of rt is
+      {either(mean_ic(rt_ic, changing_flow) > 0.5, "high", "low")} ({mean_ic(rt_ic, changing_flow):.2f}) and the
+      gain's is {either(mean_ic(gain_ic, changing_flow) > 0.5, "high too", "low")}
+      ({mean_ic(gain_ic, changing_flow):.2f}).
+    * In the steady middle of a long storm the IC of rt
+      {either(mean_ic(rt_ic, steady_flow) < mean_ic(rt_ic, changing_flow), "dips", "does not dip")}
+      (to {mean_ic(rt_ic, steady_flow):.2f}) and the gain's
+      {either(mean_ic(gain_ic, steady_flow) > mean_ic(gain_ic, changing_flow), "rises", "does not rise")}
+      (to {mean_ic(gain_ic, steady_flow):.2f}){either(
+          abs(mean_ic(rt_ic, steady_flow) - mean_ic(gain_ic, steady_flow)) < 0.1, ", to about the same level", "")}.
+      Only the flow-to-rainfall ratio is seen there, and that is what the gain sets.
+
+    The IC of rt {either(mean_ic(rt_ic, dry_spells) > 0.5, "stays high", "does not stay high")} through the dry
+    spells (mean {mean_ic(rt_ic, dry_spells):.2f} where the window holds no flow above the noise after the first
+    storm).
+""")
+
+# %% [markdown]
+# A recession that has died
 # away does rule out slow storages, but Figure 2.9 shows that much of this is
 # an artefact. The thesis's figure comes from a hydrological record with
 # continuous rainfall and baseflow, so its shape cannot be matched in detail.
@@ -494,14 +550,17 @@ for label, steps in (("a flow signal", identified & ~no_flow), ("no flow above t
           f"share the noise checks flag: {ranks_noise[steps].mean():.2f}")
 print(f"of the flagged steps with IC(rt) > 0.5, share whose band misses the true rt: "
       f"{misses[identified & ranks_noise].mean():.2f}; of the unflagged: {misses[identified & ~ranks_noise].mean():.2f}")
+claim(bool(misses[identified & ~no_flow].mean() < 0.5),
+      "Wherever the window holds the rise or the recession of a storm, the band ... contains [the true value] "
+      "at most such steps")
 
 # %% [markdown]
 # Figure 2.9 is the identifiability plot of Section 2.2.3.2. It shows the
 # moving window's 90 % band of rt at every step (blue and red lines). The grey
 # shading inside is the CLD gradient (MCAT's 20 containers), darker where it
 # is steeper. Wherever the window holds the rise or the recession of a storm,
-# the band is narrow, the darkest grey lies near the true value of 1 day, and
-# the band contains it. This is how the thesis reads its Figure 2.9: the
+# the band is narrow, the darkest grey lies near the true rt, and
+# the band contains it at most such steps (the first printed share). This is how the thesis reads its Figure 2.9: the
 # estimate lies where the band is narrow and the gradient is darkest. In the
 # steady middle of a long storm the band widens, as Figure 2.8 showed.
 #
@@ -510,13 +569,19 @@ print(f"of the flagged steps with IC(rt) > 0.5, share whose band misses the true
 # the true value, frequently onto an edge of the sampled range, while the IC
 # stays high. The 10 % selection is then decided by whether the noise in the
 # window happens to lie mostly above zero (favouring slow, long-tailed
-# storages) or below it (favouring fast ones). The printed shares compare the
-# steps where rt looks identified (IC > 0.5): those whose band misses the true
-# value are far more common when the window holds no flow above the noise. A
-# narrow band in a window with no flow to speak of is a warning sign, not
-# information. The thesis's figure comes from real data, where the truth is
-# unknown, so this check was not possible there.
-#
+# storages) or below it (favouring fast ones).
+
+# %%
+with_flow, without_flow = misses[identified & ~no_flow].mean(), misses[identified & no_flow].mean()
+say(f"""
+    The printed shares compare the steps where rt looks identified (IC > 0.5): the band misses the true value
+    at {without_flow:.0%} of those whose window holds no flow above the noise, against {with_flow:.0%} of those
+    with a flow signal, {either(without_flow > 3 * with_flow, "far more often", "not much more often")}. A narrow
+    band in a window with no flow to speak of is a warning sign, not information. The thesis's figure comes from
+    real data, where the truth is unknown, so this check was not possible there.
+""")
+
+# %% [markdown]
 # This package checks it without the truth (`dynia.engine.noise`). The floor
 # assumes stationary noise, white or autocorrelated, with the level that the
 # windows' best fits show and the autocorrelation that the residuals of the
@@ -529,12 +594,23 @@ print(f"of the flagged steps with IC(rt) > 0.5, share whose band misses the true
 # whose behavioural set ties within noise, so that the band ranks noise. The
 # last printed lines say how many of the steps that look identified either
 # check flags, and how often the band misses the true rt with and without a
-# flag. With the defaults every such step without flow above the noise is
-# flagged, and no unflagged step's band misses the truth; the price is that
-# about two thirds of the steps with a flow signal are flagged as well: the
-# checks are cautious, and a flagged window is one to read with care, not
-# one known to be wrong.
-#
+# flag.
+
+# %%
+flagged_without_flow = ranks_noise[identified & no_flow].mean()
+unflagged_misses = misses[identified & ~ranks_noise].mean()
+flagged_with_flow = ranks_noise[identified & ~no_flow].mean()
+say(f"""
+    In this run {either(flagged_without_flow == 1, "every", f"{flagged_without_flow:.0%} of the")} such
+    step{either(flagged_without_flow == 1, "", "s")} without flow above the noise
+    {either(flagged_without_flow == 1, "is", "are")} flagged, and
+    {either(unflagged_misses == 0, "no unflagged step's band misses the truth",
+            f"the band misses the truth at {unflagged_misses:.0%} of the unflagged steps")}; the price is that
+    {flagged_with_flow:.0%} of the steps with a flow signal are flagged as well: the checks are cautious, and a
+    flagged window is one to read with care, not one known to be wrong.
+""")
+
+# %% [markdown]
 # ## What the thesis's text says vs what its code does
 #
 # Two definitions of the method differ between the thesis's text and its
@@ -620,16 +696,21 @@ print("code's definitions computed here equal dynia.moving_window(flavour='thesi
       bool(np.array_equal(code_ic, engine.ic)))
 shared = np.mean([np.intersect1d(mae, sse).size for mae, sse in zip(*chosen.values())]) / example_count
 print(f"behavioural sets: on average {shared:.2f} of a window's set is the same under both costs")
+cost_change = {}
 for p, name in enumerate(example.model.names):
     cost_only = np.abs(variants["text: SSE", "sampling range"][p] - code_ic[p])
+    cost_change[name] = (cost_only.mean(), int(np.argmax(cost_only)))
     print(f"{name}: the SSE instead of the squared MAE changes the IC by {cost_only.mean():.3f} on average, "
           f"{cost_only.max():.2f} at most (step {np.argmax(cost_only)})")
+extremes = {}
 for p, name in enumerate(example.model.names):
     print(f"{name}: IC over the record, code's definitions {code_ic[p].min():.2f} to {code_ic[p].max():.2f}; "
           f"text's definitions {text_ic[p].min():.2f} to {text_ic[p].max():.2f}; "
           f"correlation of the two curves {np.corrcoef(code_ic[p], text_ic[p])[0, 1]:.2f}")
     for label, step in (("highest", int(np.argmax(code_ic[p]))), ("lowest", int(np.argmin(code_ic[p])))):
         values = example_samples[chosen["code: squared MAE"][step], p]
+        extremes[name, label] = (np.ptp(values) / sampling_width[p],
+                                 variants["code: squared MAE", "behavioural range"][p, step])
         print(f"  at the step of its {label} IC by the code ({step}): behavioural values span {np.ptp(values):.2f} "
               f"of the sampling range {sampling_width[p]:g}; IC by the sampling range {code_ic[p, step]:.2f}, "
               f"by the behavioural range {variants['code: squared MAE', 'behavioural range'][p, step]:.2f}")
@@ -663,10 +744,14 @@ for offset in range(1, 10):
     *_, noise_draw, sample_draw = np.random.default_rng(seed + offset).spawn(5)  # example 1's two streams
     *_, more = example1_variants(noise_draw, sample_draw)
     draws.append((more["code: squared MAE", "sampling range"], more["text: SSE", "behavioural range"]))
+over_draws = {}
 for p, name in enumerate(example.model.names):
     code_peaks, text_peaks = ([ic[p].max() for ic in curves] for curves in zip(*draws))
     code_above, text_above = ([int(np.sum(ic[p] > 0.5)) for ic in curves] for curves in zip(*draws))
     correlations = [np.corrcoef(code[p], text[p])[0, 1] for code, text in draws]
+    text_peak_steps = [int(np.argmax(text[p])) for _, text in draws]
+    over_draws[name] = dict(code_peaks=code_peaks, text_peaks=text_peaks, code_above=code_above,
+                            text_above=text_above, correlations=correlations, text_peak_steps=text_peak_steps)
     print(f"{name}, {len(draws)} draws: highest IC, code's {min(code_peaks):.2f} to {max(code_peaks):.2f}, text's "
           f"{min(text_peaks):.2f} to {max(text_peaks):.2f}; steps with IC > 0.5 (of {steps.size}), code's "
           f"{min(code_above)} to {max(code_above)}, text's {min(text_above)} to {max(text_above)}; correlation of "
@@ -678,47 +763,63 @@ for p, name in enumerate(example.model.names):
 # chapter-3 figures show and what this package computes), under the text's
 # (red), and with only one of the two changed (dashed: the SSE with the
 # code's normalisation; dotted: the squared MAE with the text's).
-#
-# * **The cost matters little, except where many sets fit about equally.**
-#   The printed overlap shows that the two costs mostly choose the same
-#   behavioural sets, and the dashed curve follows the black one; the mean
-#   change of the IC is small. The largest changes (printed with their steps)
-#   lie in the settled tail after the input drops to 0 at step 399, where
-#   every set whose output has decayed fits the noise about equally well:
-#   there the L1 and the L2 norm decide between near-ties differently, and
-#   the IC of that tail depends on the norm as much as on the data. With
-#   Gaussian noise and a model that fits, the two rankings otherwise agree;
-#   they part where an error is concentrated in a few points of a window
-#   (a glitch, a step the model places late), which the SSE punishes more.
-# * **The normalisation changes what the IC means.** Divided by the
-#   behavioural set's own range, the 90 % band measures the *shape* of the
-#   behavioural values, how much of their spread lies in their outer tenth,
-#   and no longer their width. The printed steps show it: where the code's IC
-#   is highest, the behavioural values span a small part of the sampling
-#   range, where it is lowest nearly all of it, yet by their own range both
-#   read about the same low IC. The text's curve (red) therefore stays low
-#   nearly everywhere. Its peaks are single steps and move with the draw: over
-#   the ten draws of the last cell its highest IC is 0.24 to 0.36 for the gain
-#   and 0.41 to 0.91 for the time constant (whose peaks lie in the tail after
-#   the final step), against 0.90 to 0.93 by the code; the first draw's 0.30
-#   and 0.47 (printed above) are two of these. What every draw shows is the
-#   count of steps: the code's IC exceeds 0.5 at about 410 of the 500 steps
-#   for the gain and 82 to 92 for the time constant, the text's at 2 at most.
-#   The two curves also go different ways. For the gain the text's even rises
-#   at the input's steps, where the code's dips, and the two are uncorrelated
-#   (-0.21 to 0.32 over the draws); for the time constant they correlate
-#   moderately (0.30 to 0.63, median 0.54). Over 100 draws (the same
-#   computation with the defaults and the seeds 2009 to 2108, not run here)
-#   the gain's text peak reaches 0.64, the time constant's text IC exceeds 0.5
-#   at 7 steps at most, and the correlations range from -0.34 to 0.67 for the
-#   gain and from 0.06 to 0.75 for the time constant. An IC that does not see
-#   the band's width cannot tell informative windows from uninformative ones,
-#   so the code's choice is the one that makes the method work, and this
-#   package keeps it (MCAT, too, divides by a range that is the same for every
-#   window, the samples' range). The text's "acceptable values" may have meant
-#   the feasible range, which is what the code does; the docstring's table and
-#   this figure take the words literally.
-#
+
+# %%
+def value_range(values, digits=2):
+    """min to max of a list of numbers, in words."""
+    low, high = min(values), max(values)
+    return f"{low:.{digits}f}" if round(low, digits) == round(high, digits) else f"{low:.{digits}f} to {high:.{digits}f}"
+
+
+def pair_words(first, second):
+    return f"{first:.0%} and {second:.0%}"
+
+
+final_step = int(np.flatnonzero(example.u > 0)[-1]) + 1  # the input drops to 0 here
+gain_draws, lag_draws = over_draws["K"], over_draws["T"]
+lag_tail_peaks = sum(step >= final_step for step in lag_draws["text_peak_steps"])
+shape_not_width = all(extremes[name, "highest"][0] < 0.2 and extremes[name, "lowest"][0] > 0.9
+                      and max(extremes[name, "highest"][1], extremes[name, "lowest"][1]) < 0.3 for name in ("K", "T"))
+say(f"""
+    * **The cost matters little, except where many sets fit about equally.**
+      The two costs {either(shared > 0.8, "mostly choose", "often do not choose")} the same behavioural sets
+      (on average {shared:.0%} of a window's set), and the dashed curve follows the black one; the mean change of
+      the IC is {cost_change["K"][0]:.3f} for K and {cost_change["T"][0]:.3f} for T. The largest changes, at steps
+      {cost_change["K"][1]} and {cost_change["T"][1]},
+      {either(min(cost_change["K"][1], cost_change["T"][1]) >= final_step, "lie", "do not all lie")} in the settled
+      tail after the input drops to 0 at step {final_step}, where every set whose output has decayed fits the noise
+      about equally well: there the L1 and the L2 norm decide between near-ties differently, and the IC of that
+      tail depends on the norm as much as on the data. With Gaussian noise and a model that fits, the two rankings
+      otherwise agree; they part where an error is concentrated in a few points of a window (a glitch, a step the
+      model places late), which the SSE punishes more.
+    * **The normalisation changes what the IC means.** Divided by the behavioural set's own range, the
+      {conf_level:g} % band measures the *shape* of the behavioural values, how much of their spread lies in their
+      outer tails, and no longer their width. The printed steps {either(shape_not_width, "show it", "show it only "
+      "in part")}: where the code's IC is highest, the behavioural values span
+      {pair_words(extremes["K", "highest"][0], extremes["T", "highest"][0])} of the sampling range (K and T),
+      where it is lowest {pair_words(extremes["K", "lowest"][0], extremes["T", "lowest"][0])}, yet by their own
+      range both read a low IC ({max(value for (_, _), (_, value) in extremes.items()):.2f} at most). The text's
+      curve (red) therefore stays low nearly
+      everywhere. Its peaks are single steps and move with the draw: over the {len(draws)} draws of the last cell
+      its highest IC is {value_range(gain_draws["text_peaks"])} for the gain and
+      {value_range(lag_draws["text_peaks"])} for the time constant (whose peak lies in the tail after the final
+      step in {lag_tail_peaks} of the {len(draws)} draws), against
+      {value_range(gain_draws["code_peaks"] + lag_draws["code_peaks"])} by the code; the first draw's
+      {text_ic[0].max():.2f} and {text_ic[1].max():.2f} (printed above) are two of these. What every draw shows
+      is the count of steps: the code's IC exceeds 0.5 at {value_range(gain_draws["code_above"], 0)} of the
+      {steps.size} steps for the gain and {value_range(lag_draws["code_above"], 0)} for the time constant, the
+      text's at {max(gain_draws["text_above"] + lag_draws["text_above"])} at most. The two curves also go
+      different ways: for the gain their correlation over the draws is
+      {value_range(gain_draws["correlations"])} (median {np.median(gain_draws["correlations"]):.2f}), for the
+      time constant {value_range(lag_draws["correlations"])} (median {np.median(lag_draws["correlations"]):.2f}).
+      An IC that does not see the band's width cannot tell informative windows from uninformative ones, so the
+      code's choice is the one that makes the method work, and this package keeps it (MCAT, too, divides by a
+      range that is the same for every window, the samples' range). The text's "acceptable values" may have meant
+      the feasible range, which is what the code does; the docstring's table and this figure take the words
+      literally.
+""")
+
+# %% [markdown]
 # ## The noise floor under coloured noise
 #
 # The floor's noise model is estimated from the record: the windows' best fits
@@ -768,29 +869,48 @@ def coloured_run(phi, record_seed, response):
 # A stream of its own (the sixth child of the seed), so that the sections above keep theirs.
 record_seeds = np.random.SeedSequence(seed).spawn(6)[5].spawn(coloured_records)
 coloured_phis = (0.0, 0.5, 0.9, 0.98)
-false_share, power = {}, {}
-print(f"{'phi':>5}  {'records with a false window':>27}  {'power':>5}  {'lag-1 estimated':>15}  {'size factor':>11}")
+def white_floor_false(run):
+    """Whether the run has a false informative window under the white-noise floor: the same floor with f = 1."""
+    return bool((run.discrimination > run.noise_floor / np.sqrt(run.run.noise_size_factor)).any())
+
+
+false_share, power, white_false, size_factors = {}, {}, {}, {}
+print(f"{'phi':>5}  {'records with a false window':>27}  {'white floor':>11}  {'power':>5}  {'lag-1 estimated':>15}"
+      f"  {'size factor':>11}")
 for phi in coloured_phis:
     noise_runs = [coloured_run(phi, record_seed, False) for record_seed in record_seeds]
     response_runs = [coloured_run(phi, record_seed, True) for record_seed in record_seeds]
     false_share[phi] = np.mean([run.informative.any() for run in noise_runs])
+    white_false[phi] = sum(white_floor_false(run) for run in noise_runs)
     power[phi] = np.mean([run.informative.mean() for run in response_runs])
     estimated = np.median([result.run.noise_autocorrelation for result in noise_runs])
-    factor = np.median([result.run.noise_size_factor for result in noise_runs])
-    print(f"{phi:5.2f}  {false_share[phi]:27.2f}  {power[phi]:5.2f}  {estimated:15.2f}  {factor:11.1f}")
+    size_factors[phi] = [result.run.noise_size_factor for result in noise_runs]
+    print(f"{phi:5.2f}  {false_share[phi]:27.2f}  {white_false[phi]:11d}  {power[phi]:5.2f}  {estimated:15.2f}"
+          f"  {np.median(size_factors[phi]):11.1f}")
+
+# %%
+white_phis = [phi for phi in coloured_phis if white_false[phi]]
+white_counts = " and ".join(f"{white_false[phi]} at phi {phi:g}" for phi in white_phis) or "none at any phi"
+most_false = max(false_share.values())
+white_lags = sum(factor == 1 for factor in size_factors[0.0])
+say(f"""
+    With the white-noise floor (f = 1 and the windows' noise level only; the table's "white floor" column),
+    {white_counts} of these {coloured_records} pure-noise records had informative windows: a slow stretch of
+    noise is a level that the sets with the matching gain fit, and {2 * 10 + 1} points of it are worth about
+    {21 / np.median(size_factors[0.9]):.1f} independent ones at phi 0.9. Calibrated for the autocorrelation, the
+    false windows {either(most_false <= 0.05, "stay within", "exceed")} the family-wise 5 % the floor is built
+    for ({either(most_false == 0, "none of the records", f"at most {most_false:.0%} of the records")} at any
+    phi), while {either(min(power.values()) > 0.5, "most",
+    "not all")} windows of a real response stay informative ({min(power.values()):.0%} to
+    {max(power.values()):.0%}, the table's power column). The noise level is the windows' own estimate, which
+    reads low under strongly coloured noise (a window's fit takes up the slow part of the noise); the size factor
+    {either(false_share[0.98] <= 0.05, "more than makes up for it", "does not make up for it")} on pure noise,
+    and on a response the power at phi 0.98 is {either(power[0.98] >= power[0.9], "no lower than", "lower than")}
+    at 0.9. At phi 0 the estimate keeps no lag in {white_lags} of the {coloured_records} records, whose floor is
+    the white one.
+""")
 
 # %% [markdown]
-# With the white-noise floor (f = 1 and the windows' noise level only), 13 and
-# 19 of these 20 pure-noise records had informative windows at phi 0.9 and
-# 0.98 (with the default parameters): a slow stretch of noise is a level that
-# the sets with the matching gain fit, and 21 points of it are worth about
-# two independent ones at phi 0.9. Calibrated for the autocorrelation, the false windows stay at the
-# family-wise 5 % the floor is built for, while most windows of a real response stay informative
-# (the table's power column). The noise level is the windows' own estimate, which reads low under
-# strongly coloured noise (a window's fit takes up the slow part of the noise); the size factor
-# more than makes up for it on pure noise, and on a response the power at phi 0.98 is no lower than
-# at 0.9. At phi 0 the estimate keeps no lag in most records and the floor is the white one.
-#
 # ## Checked numbers
 #
 # The cell below prints the key results rounded. CI compares them on every

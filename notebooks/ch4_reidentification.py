@@ -92,11 +92,13 @@ noise_seeds: int = 3  # noise realisations of each known-truth record
 # %%
 import dataclasses
 import os
+import textwrap
 
 import matplotlib.pyplot as plt
 import numpy as np
 
 import dynia
+from dynia.claims import claim, either, say
 from dynia.errors import NothingSelected
 from dynia.identification import identify
 from dynia.io.csv import resample_events
@@ -315,6 +317,34 @@ def plot_estimates(found, randoms, u_clean, y_clean, *, title, path, truth=None)
     fig.savefig(path, dpi=120, bbox_inches="tight")
 
 
+def share_of(fit, total):
+    """The share of ``total`` steps a fit's segments hold, in words."""
+    return f"{steps_in(fit) / total:.0%}"
+
+
+def levels_in(u, start, stop):
+    """The input levels of ``u[start:stop]`` in the order they occur, in words."""
+    values = u[start:stop]
+    changes = np.r_[0, np.flatnonzero(np.diff(values)) + 1]
+    return ", then ".join(f"{value:g}" for value in values[changes])
+
+
+def informative_share(result, validation):
+    """Share of the fitting part's windows above the noise floor, and the length of the uninformative start."""
+    fitting = ~segments_to_mask(validation, result.time.size)
+    informative = result.informative & fitting
+    return float(informative[fitting].mean()), int(np.argmax(informative))
+
+
+def ends_only(result, validation, half_window):
+    """Whether the windows of the fitting part below the noise floor are only its first and last half_window."""
+    fitting = ~segments_to_mask(validation, result.time.size)
+    below = np.flatnonzero(fitting & ~result.informative)
+    (start, stop), = [(a, b) for a, b in dynia.segments.mask_to_segments(fitting)][:1]
+    allowed = set(range(start, start + half_window)) | set(range(stop - half_window, stop))
+    return bool(set(below.tolist()) <= allowed)
+
+
 # %% [markdown]
 # ## 1. The DaISy heating system
 #
@@ -367,38 +397,66 @@ for label, draws in heating_random.items():
 # each selection fits on. `reid_heating_estimates.png` shows the estimates
 # with their standard errors and the validation error; the grey dots are the
 # random draws, the black bars their medians.
-#
-# What the heating record shows, with the defaults (the table above):
-#
-# - **The one-run DYNIA selection** is the end of the first 9 V plateau,
-#   where the gain's IC is highest, and the transients, where T's is: about
-#   two thirds of the fitting part. Its model has the *largest* validation
-#   error of all selections, larger than the whole record's and than the
-#   median of the random draws of the same length.
-# - **The second-run selection** (the transients after each step) and the
-#   **baseline** (everything from the first down-step on) have the smallest
-#   validation errors, and lower gains.
-# - The standard errors are about 1 % of the estimates (0.4 to 1.4 %), yet
-#   the gains of the selections differ by many standard errors (from about 18.9 to
-#   20.1 degC/V). The plate is not a linear first-order system (its static
-#   gain changes with the operating point, and DaISy notes "discrepancies"):
-#   each selection fits the operating points it contains, and the held-out
-#   block (3 V, then 7 V and 6 V) rewards the selections that weight the low
-#   levels. On such a record the validation error ranks selections by how
-#   much their operating points resemble the held-out block's, not by how
-#   much information they hold, and the standard errors, which assume the
-#   model is right, understate the real uncertainty. We see nothing here that
-#   shows DYNIA's selection to be better or worse than another *as a
-#   selection of information*; the record cannot tell.
-# - **DYNIA's noise floor** (`informative`, the line above the table;
-#   it assumes stationary noise, white or autocorrelated, of the level that
-#   the windows' best fits show and the autocorrelation that the residuals of
-#   the record's best fit show, so a stretch the model cannot fit raises the
-#   floor too)
-#   changes nothing here: every window of the fitting part is informative in
-#   the first run, and in the second only the first and last n steps are
-#   not, whose windows are cut short and which have no IC in that run (it
-#   asks for full windows). The same holds on the stand-in below.
+
+# %%
+HEATING = {}  # verdicts the summary in section 5 repeats
+
+
+def heating_words():
+    """The heating record's findings, rendered from the fits above."""
+    errors = {label: score(fit, *heating_clean) for label, fit in heating.items() if fit is not None}
+    gains = {label: fit.parameters["K"] for label, fit in heating.items() if fit is not None}
+    relative_se = [fit.std_errors[name] / abs(fit.parameters[name]) for fit in heating.values() if fit is not None
+                   for name in ("K", "T")]
+    gain_se = min(fit.std_errors["K"] for fit in heating.values() if fit is not None)
+    one_run = heating["DYNIA"]
+    fitting_steps = heating_u.size - sum(stop - start for start, stop in heating_validation)
+    random_median = np.median([score(draw, *heating_clean) for draw in heating_random["DYNIA"]])
+    worst = max(errors, key=errors.get)
+    best_two = sorted(errors, key=errors.get)[:2]
+    (held_start, held_stop), = heating_validation
+    first_share, _ = informative_share(one_run.dynia_result, heating_validation)
+    heating_second_random = np.median([score(draw, *heating_clean) for draw in heating_random["DYNIA 2nd run"]])
+    HEATING.update(second_below_whole=bool(errors["DYNIA 2nd run"] < errors["whole"]),
+                   second_below_random=bool(errors["DYNIA 2nd run"] < heating_second_random))
+    second_ends = ends_only(heating_second, heating_validation, n)
+    return f"""
+        What the heating record shows, with the defaults (the table above):
+
+        * **The one-run DYNIA selection** is the end of the first 9 V plateau, where the gain's IC is highest, and
+          the transients, where T's is: {share_of(one_run, fitting_steps)} of the fitting part. Its model has
+          {either(worst == "DYNIA", "the *largest* validation error of all selections",
+                  f"not the largest validation error ({worst}'s is)")},
+          {either(errors["DYNIA"] > errors["whole"], "larger", "not larger")} than the whole record's and
+          {either(errors["DYNIA"] > random_median, "larger", "not larger")} than the median of the random draws of
+          the same length.
+        * The smallest validation errors are the {best_two[0]} selection's ({errors[best_two[0]]:.3g}) and the
+          {best_two[1]} selection's ({errors[best_two[1]]:.3g}), against {errors["whole"]:.3g} for the whole
+          record; their gains, {gains[best_two[0]]:.2f} and {gains[best_two[1]]:.2f} degC/V, are
+          {either(max(gains[best_two[0]], gains[best_two[1]]) < min(gains["DYNIA"], gains["whole"]), "lower than",
+                  "not all lower than")} the one-run selection's and the whole record's. (The second-run selection
+          is the transients after each step, the baseline everything from the first down-step on.)
+        * The standard errors are {min(relative_se):.1%} to {max(relative_se):.1%} of the estimates, yet the
+          gains of the selections range from {min(gains.values()):.2f} to {max(gains.values()):.2f} degC/V,
+          {(max(gains.values()) - min(gains.values())) / gain_se:.0f} times the smallest standard error of the
+          gain. The plate is not a linear first-order system (its static gain changes with the operating point,
+          and DaISy notes "discrepancies"): each selection fits the operating points it contains, and the
+          held-out block (input {levels_in(data.u, held_start, held_stop)} V) rewards the selections that weight
+          the low levels. On such a record the validation error ranks selections by how much their operating
+          points resemble the held-out block's, not by how much information they hold, and the standard errors,
+          which assume the model is right, understate the real uncertainty. We see nothing here that shows DYNIA's
+          selection to be better or worse than another *as a selection of information*; the record cannot tell.
+        * **DYNIA's noise floor** (`informative`, the line above the table; it assumes stationary noise, white or
+          autocorrelated, of the level that the windows' best fits show and the autocorrelation that the residuals
+          of the record's best fit show, so a stretch the model cannot fit raises the floor too):
+          {first_share:.1%} of the fitting part's windows are informative in the first run, and in the second
+          {either(second_ends, f"only the first and last n = {n} steps are not, whose windows are cut short and "
+                  "which have no IC in that run (it asks for full windows)",
+                  "more than the cut-short windows at the ends are not")}.
+    """
+
+
+say(heating_words())
 
 # %% [markdown]
 # ## 2. The cooling-water stand-in
@@ -470,43 +528,93 @@ for label, fit in list(cooling.items()) + [(f"{label}, flagged excluded", fit)
     print(f"{label}: share of the fitting part {steps_in(fit) / cooling_fitting_steps:.2f}, holds the zero reading "
           f"{holds(fit, cooling_glitch)}, relative error K {errors['K']:.2f}, T {errors['T']:.2f}")
 
-# %% [markdown]
-# In `reid_cooling_data.png` the gain's IC sits near 0.9 in every window
-# (the behavioural 10 % of [0, 6] cannot be narrower than about a tenth of
-# the range) and T's stays near its floor, in the first run and in the
-# second: the input steps are 1-2 units on a 1-minute grid, against an
-# output disturbance of 0.3. The one exception is the erroneous reading.
-#
-# What the stand-in shows, with the defaults (the lines above):
-#
-# - **The one-run DYNIA selection is the whole fitting part**, because the
-#   gain is identified in every window. DYNIA then offers no reduction of
-#   the data, and random segments "of the same length" are the same data.
-# - **The second-run selection is only the few steps around the erroneous
-#   reading**, exactly as in the thesis's Figure 3.24: with the gain
-#   narrowed, the highest IC of T1 is at the glitch, where a lag near zero
-#   reproduces the output's zero one minute after the input's. Fitted there,
-#   T1 comes out near 0 (true 2 min), and the model has the largest
-#   validation error of all, larger than most random draws of five steps.
-#   **Here DYNIA loses, and it loses by pointing at bad data.**
-# - Every selection contains the erroneous reading, the baseline's too, and
-#   every one estimates T1 far below 2 min: one sample 72 units off outweighs
-#   the few minutes of response at each small step. The gain is right within
-#   1 % for all. The validation error hardly notices the wrong T1, because on
-#   the held-out block it is dominated by the output disturbance (about 0.3).
-# - With `exclude_flagged=True` the zero readings are gone and T1 moves most
-#   of the way back to 2 for the whole record (the remaining bias is the
-#   grid effect the chapter-3 notebook explains under Figure 3.26: steps
-#   happen between grid points, and a slightly faster lag makes up for the
-#   late start). The second run then selects nothing: without the glitch no
-#   window of T1 reaches the threshold. The baseline selects about three
-#   quarters of the fitting part with the zero readings and without them:
-#   the input's slow wander counts as excitation, besides the six steps. (Its
-#   noise floor is 1 % of each signal's range between the 1 % and 99 %
-#   quantiles, which one erroneous reading does not stretch.)
-# - DYNIA's noise floor (not the baseline's) again leaves out only the
-#   cut-short windows at the ends of the second run (printed above the
-#   table).
+# %%
+def value_span(low, high):
+    """``low`` to ``high`` in words, one number when they round alike."""
+    return f"{low:.2f}" if f"{low:.2f}" == f"{high:.2f}" else f"{low:.2f} to {high:.2f}"
+
+
+def cooling_words():
+    """The stand-in's findings, rendered from the fits above."""
+    first = cooling["DYNIA"].dynia_result
+    fitting = ~segments_to_mask(cooling_validation, cooling_u.size)
+    gain_ic = first.ic[first.index("K")][fitting]
+    lag_ic = first.ic[first.index("T")][fitting]
+    near_glitch = np.abs(np.arange(cooling_u.size) - cooling_glitch)[fitting] <= 2 * cooling_n
+    errors = {label: score(fit, *cooling_clean) for label, fit in cooling.items() if fit is not None}
+    relative = {label: {name: abs(fit.parameters[name] / truth - 1) for name, truth in cooling_truth_values.items()}
+                for label, fit in cooling.items() if fit is not None}
+    second = cooling["DYNIA 2nd run"]
+    true_lag = cooling_truth.time_constant
+    lines = [f"""
+        In `reid_cooling_data.png` the gain's IC in the first run lies at
+        {value_span(np.nanpercentile(gain_ic, 5), np.nanpercentile(gain_ic, 95))} in nine windows of ten (the
+        behavioural {percentage:g} % of [0, 6]
+        cannot be narrower than about a tenth of the range), and T's stays at {np.nanmedian(lag_ic):.2f} in the
+        median, {np.nanmax(lag_ic[~near_glitch]):.2f} at most away from the erroneous reading and
+        {np.nanmax(lag_ic[near_glitch]):.2f} at it: the input steps are 1-2 units on a 1-minute grid, against an
+        output disturbance of 0.3.
+
+        What the stand-in shows, with the defaults (the lines above):
+    """, f"""
+        * **The one-run DYNIA selection is {either(steps_in(cooling["DYNIA"]) == cooling_fitting_steps,
+          "the whole fitting part", f"{share_of(cooling['DYNIA'], cooling_fitting_steps)} of the fitting part")}**,
+          because the gain is identified in every window. DYNIA then offers no reduction of the data, and random
+          segments "of the same length" are the same data.
+    """]
+    if second is not None:
+        random_errors = np.array([score(draw, *cooling_clean) for draw in cooling_random["DYNIA 2nd run"]])
+        lines.append(f"""
+        * **The second-run selection is {steps_in(second)} steps,
+          {either(holds(second, cooling_glitch), "around the erroneous reading", "not around the erroneous reading")}**,
+          as in the thesis's Figure 3.24: with the gain narrowed, the highest IC of T1 is at the glitch, where a
+          lag near zero reproduces the output's zero one minute after the input's. Fitted there, T1 comes out at
+          {second.parameters["T"]:.2f} min (true {true_lag:g} min), and the model has
+          {either(max(errors, key=errors.get) == "DYNIA 2nd run", "the largest validation error of all",
+                  "not the largest validation error")} ({errors["DYNIA 2nd run"]:.3f}), larger than
+          {np.mean(random_errors < errors["DYNIA 2nd run"]):.0%} of the random draws of {steps_in(second)} steps.
+          {either(errors["DYNIA 2nd run"] > errors["whole"], "**Here DYNIA loses, and it loses by pointing at bad "
+                  "data.**", "")}
+        """)
+    else:
+        lines.append("""
+        * **The second run selects nothing** on the stand-in in this run.
+        """)
+    chosen = [label for label, fit in cooling.items() if fit is not None]
+    all_hold = all(holds(cooling[label], cooling_glitch) for label in chosen)
+    whole_excluded = cooling_excluded["whole"]
+    baseline_shares = [steps_in(fits["baseline"]) / cooling_fitting_steps for fits in (cooling, cooling_excluded)
+                       if fits["baseline"] is not None]
+    lines.append(f"""
+        * {either(all_hold, "Every selection contains the erroneous reading, the baseline's too",
+                  "Not every selection contains the erroneous reading")}, and T1 comes out
+          {min(fit.parameters["T"] for fit in map(cooling.get, chosen)):.2f} to
+          {max(fit.parameters["T"] for fit in map(cooling.get, chosen)):.2f} min (true {true_lag:g}): one sample
+          72 units off outweighs the few minutes of response at each small step. The gain is right within
+          {max(entry["K"] for entry in relative.values()):.1%} for all. The validation error hardly notices the
+          wrong T1 ({min(errors.values()):.3f} to {max(errors.values()):.3f}), because on the held-out block it is
+          dominated by the output disturbance (about 0.3).
+        * With `exclude_flagged=True` the zero readings are gone and T1 moves to
+          {whole_excluded.parameters["T"]:.2f} min for the whole record (the remaining bias is the grid effect the
+          chapter-3 notebook explains under Figure 3.26: steps happen between grid points, and a slightly faster
+          lag makes up for the late start). The second run then
+          {either(cooling_excluded["DYNIA 2nd run"] is None, "selects nothing: without the glitch no window of T1 "
+                  "reaches the threshold", "still selects data")}. The baseline selects
+          {" and ".join(f"{share:.0%}" for share in baseline_shares)} of the fitting part with the zero readings
+          and without them: the input's slow wander counts as excitation, besides the six steps. (Its noise floor
+          is 1 % of each signal's range between the 1 % and 99 % quantiles, which one erroneous reading does not
+          stretch.)
+        * DYNIA's noise floor (not the baseline's) {either(
+              ends_only(cooling["DYNIA"].dynia_result, cooling_validation, cooling_n)
+              and ends_only(cooling_second, cooling_validation, cooling_n),
+              "again leaves out only the cut-short windows at the ends of the second run",
+              "leaves out more than the cut-short windows at the ends")} (printed above the table).
+    """)
+    head, *bullets = (textwrap.dedent(line).strip("\n") for line in lines)
+    return head + "\n\n" + "\n".join(bullets)
+
+
+say(cooling_words())
 
 # %% [markdown]
 # ## 3. Synthetic records with known truth
@@ -584,33 +692,94 @@ for label in KNOWN_TRUTH:
                     marks=[(first["glitch"], "erroneous zero reading", "tab:red")])
     print()
 
-# %% [markdown]
-# The two figures `reid_synthetic_first_order.png` and
-# `reid_synthetic_second_order.png` show the first noise seed. The gain's IC
-# is high in every steady stretch at non-zero input, so the one-run DYNIA
-# selection runs from the first step to the held-out block; the IC of the
-# dynamic parameters reaches the threshold only right after the steps: in the
-# first run only once, theta's after the first step of the second-order
-# record, and otherwise only in the second run (dashed), where the gain's
-# range is narrowed. The second-run selection is therefore the responses to
-# the steps, much like the baseline's intervals, though in this seed it
-# leaves out the step at 42 % of the record, where that IC crosses the
-# threshold only briefly (`segments_from_ic` keeps runs of at least one
-# window). The erroneous zero reading (red) is inside the
-# one-run selection and not inside the second-run one.
-#
-# DYNIA's noise floor (printed for every seed above the tables): in the first
-# runs about 88 to 89 % of the fitting part's windows are informative. The
-# others are its first 234 to 246 steps (235 to 250 in the second runs),
-# whose windows see the input at 0 and at most a few steps after the first
-# step, at step 240, where every parameter set predicts about 0, so none fits
-# worse than another. In the second
-# runs, with the gain narrowed, 79 to 80 %: the start again, and most of the
-# last steady stretch before the held-out block, at the lowest input level
-# 0.5, where the narrowed gains predict levels within the noise of each
-# other. DYNIA's selections never include such windows, whatever their IC:
-# in `reid_synthetic_second_order.png` the IC of T1 in the second run spikes
-# in that last steady stretch, and none of it is selected.
+# %%
+changes = np.round(np.array(INPUT_CHANGES) * record_steps).astype(int)
+fit_end = synthetic_validation[0][0]
+fitted_changes = [int(change) for change in changes if change < fit_end]
+
+
+def steps_covered(fit):
+    """The input steps (as % of the record) whose first 100 samples a fit's segments reach into."""
+    if fit is None:
+        return []
+    return [round(100 * change / record_steps) for change in fitted_changes
+            if any(start < change + 100 and stop > change for start, stop in fit.segments)]
+
+
+def percent_list(values):
+    return ", ".join(f"{value} %" for value in values) if values else "none"
+
+
+RECORD_NAMES = {"first order": "first-order", "second order with dead time": "second-order"}
+
+
+def figure_words(label):
+    """What the first noise seed's figure shows, rendered from its selections."""
+    run = known[label][0]
+    second_fit, baseline_fit = run["found"]["DYNIA 2nd run"], run["found"]["baseline"]
+    first = run["found"]["DYNIA"].dynia_result
+    dynamic = [name for name in first.names if name != "K"]
+    first_reach = [name for name in dynamic
+                   if np.any((first.ic[first.index(name)] >= ic_threshold) & first.informative)]
+    if second_fit is None:
+        second_text = "selects nothing"
+    else:
+        second_text = (f"is {len(second_fit.segments)} segment{'s' if len(second_fit.segments) > 1 else ''} of "
+                       f"{steps_in(second_fit)} steps in all, in the responses to the steps at "
+                       f"{percent_list(steps_covered(second_fit))} of the record")
+    return (f"In the {RECORD_NAMES[label]} record the IC of the dynamic parameters reaches the threshold in an informative window "
+            f"of the first run for {', '.join(first_reach) if first_reach else 'none of them'}. The second-run "
+            f"selection {second_text}; the baseline's intervals ({steps_in(baseline_fit)} steps) cover the steps "
+            f"at {percent_list(steps_covered(baseline_fit))}. The erroneous zero reading (red) is "
+            f"{either(holds(run['found']['DYNIA'], run['glitch']), 'inside', 'outside')} the one-run selection and "
+            f"{either(holds(second_fit, run['glitch']), 'inside', 'outside')} the second-run one.")
+
+
+say(f"""
+    The two figures `reid_synthetic_first_order.png` and `reid_synthetic_second_order.png` show the first noise
+    seed; the steps in the fitting part are at {percent_list([round(100 * c / record_steps) for c in fitted_changes])}
+    of the record. The gain's IC is high in every steady stretch at non-zero input, so the one-run DYNIA selection
+    runs from the first step to the held-out block; the second-run selection reads the IC of the dynamic
+    parameters in the second run (dashed), where the gain's range is narrowed.
+    {figure_words("first order")} {figure_words("second order with dead time")} (`segments_from_ic` keeps runs of
+    at least one window, so an IC that crosses the threshold only briefly gives a short segment or none.)
+""")
+
+# %%
+floor_first = [informative_share(run["found"]["DYNIA"].dynia_result, synthetic_validation)
+               for runs in known.values() for run in runs]
+floor_second = [informative_share(run["second"], synthetic_validation) for runs in known.values() for run in runs]
+last_level = float(known["first order"][0]["u"][fit_end - 1])
+last_stretch = np.zeros(record_steps, dtype=bool)
+last_stretch[fitted_changes[-1] + 100:fit_end] = True
+last_uninformative = [float(np.mean(~run["second"].informative[last_stretch])) for runs in known.values()
+                      for run in runs]
+selected_uninformative = [bool(np.any(segments_to_mask(run["found"]["DYNIA 2nd run"].segments, record_steps)
+                                      & ~run["second"].informative))
+                          for runs in known.values() for run in runs if run["found"]["DYNIA 2nd run"] is not None]
+claim(not any(selected_uninformative), "DYNIA's selections never include such windows, whatever their IC")
+second_order_run = known["second order with dead time"][0]["second"]
+t1_spike = float(np.nanmax(second_order_run.ic[second_order_run.index("T1")][last_stretch]))
+
+
+def share_range(values):
+    low, high = min(values), max(values)
+    return f"{low:.0%}" if round(low, 2) == round(high, 2) else f"{low:.0%} to {high:.0%}"
+
+
+say(f"""
+    DYNIA's noise floor (printed for every seed above the tables): in the first runs
+    {share_range([share for share, _ in floor_first])} of the fitting part's windows are informative. The others
+    are its first {min(start for _, start in floor_first)} to {max(start for _, start in floor_first)} steps
+    ({min(start for _, start in floor_second)} to {max(start for _, start in floor_second)} in the second runs),
+    whose windows see the input at 0 and at most a few steps after the first step, at step {fitted_changes[0]},
+    where every parameter set predicts about 0, so none fits worse than another. In the second runs, with the gain
+    narrowed, {share_range([share for share, _ in floor_second])}: the start again, and
+    {share_range(last_uninformative)} of the last steady stretch before the held-out block, at the input level
+    {last_level:g}, where the narrowed gains predict levels within the noise of each other. DYNIA's selections never
+    include such windows, whatever their IC: in `reid_synthetic_second_order.png` the IC of T1 in the second run
+    reaches {t1_spike:.2f} in that last steady stretch, and none of it is selected.
+""")
 
 
 # %% [markdown]
@@ -718,60 +887,161 @@ for label, summary in summaries.items():
 # %% [markdown]
 # `reid_synthetic_errors.png` shows every seed's relative error per
 # parameter and selection (log scale); the grey rows are the random draws.
-#
-# What the known truth shows, with the defaults (the tables above):
-#
-# - **Every selection gets the gain right**, to within about 1 % in every
-#   seed.
-# - **The one-run DYNIA selection is nearly the whole fitting part** (about
-#   seven eighths of it), so its estimates, standard errors and validation
-#   errors are those of the whole record, and random segments of the same
-#   length do as well. This is the same effect as on the stand-in: a
-#   selection by "any parameter's IC at the threshold" is dominated by the gain,
-#   which every steady stretch informs.
-# - **The second-run selection does locate the dynamic parameters' data.**
-#   With about a tenth of the fitting part it estimates T of the
-#   first-order process as well as the whole record, and for both processes
-#   its median errors of the time constants and the dead time are below
-#   those of random segments of the same lengths, for the second-order
-#   process by a wide margin (random short segments mostly land in steady
-#   stretches, where T1, T2 and theta are not determined; their standard
-#   errors blow up).
-# - **But it does not beat the baseline or the whole record.** The baseline's
-#   intervals (417 and 460 steps in the median against the second run's
-#   231 and 192, each response in full) give
-#   smaller standard errors for every parameter and errors of the same size,
-#   and the whole record does about as well as any selection, the
-#   differences lying within the standard errors: with the right model
-#   structure, data that carry no information about a parameter do not bias
-#   it, they only add points. For
-#   the weakly determined T2 of the second-order process (relative standard
-#   errors of 18 to 28 % for every selection) the second-run selection has the
-#   largest median error of the four, within its standard error: fewer
-#   points, a larger error.
-# - **The automated second run depends on its narrowing rule.** It needs the
-#   first run to narrow the gain (`dynia.refine.narrowed_bounds`: the bands
-#   of the informative windows, IC >= 0.5, must overlap). Windows whose output is
-#   only noise can have a high IC with a band that excludes the true gain;
-#   counted, one such window stops the narrowing and the second run selects
-#   nothing. The rule therefore leaves out bands pressed against a bound of
-#   the range, windows not in a run of at least three, and windows below the
-#   noise floor or whose behavioural set ties within noise, since their bands
-#   rank noise; with it the gain was narrowed in every seed here (the ranges
-#   are printed above). Counting the windows below the floor or tied would
-#   narrow the gain a little further in two of the three seeds of each
-#   process (printed beside them). The thesis narrowed by hand and could
-#   simply ignore such windows.
-# - **The glitch.** The one-run selection contains the erroneous zero
-#   reading in every seed, the second-run selection in none: a wrong output
-#   sample under a correct input favours no parameter set, so it raises no
-#   IC (unlike the stand-in, where input and output both read 0). In a
-#   least-squares fit on 2000 points the one wrong sample moves the
-#   estimates little, but it inflates the residual variance: excluding it
-#   (`quality=True, exclude_flagged=True`) cuts the standard errors of every
-#   parameter to about two thirds.
-# - The validation error is at the noise level (0.1) for every selection
-#   fitted on the responses; only random short segments reach far above it.
+
+# %%
+SELECTIONS = ("DYNIA", "DYNIA 2nd run", "baseline", "whole")
+FOUND = {}  # verdicts the summary in section 5 repeats
+fitting_steps = fit_end  # the held-out block is the end of the record
+
+
+def median_of(label, key, what="errors"):
+    """Median over the seeds (or draws) of one row of the summary: one value per parameter."""
+    entry = summaries[label][key]
+    return np.median(entry[what], axis=0) if entry["steps"].size else None
+
+
+def gain_range_width(bounds_k):
+    low, high = bounds_k
+    return high - low
+
+
+def known_truth_words():
+    """The known-truth findings, rendered from the summaries above."""
+    labels = list(KNOWN_TRUTH)
+    chosen = [(label, key) for label in labels for key in summaries[label]
+              if not key.startswith("random") and summaries[label][key]["steps"].size]
+    gain_worst = {}
+    for label, key in chosen:
+        gain_worst[key] = max(gain_worst.get(key, 0.0), float(summaries[label][key]["errors"][:, 0].max()))
+    gain_bad = {key: error for key, error in gain_worst.items() if error >= 0.02}
+    gain_words = either(not gain_bad, "**Every selection gets the gain right**, to within 2 % in every seed",
+                        "**Every selection gets the gain right to within 2 % in every seed except "
+                        + ", ".join(gain_bad) + "**, whose worst seeds miss it by "
+                        + ", ".join(f"{error:.1%}" for error in gain_bad.values()))
+    one_run_share = [np.median(summaries[label]["DYNIA"]["steps"]) / fitting_steps for label in labels]
+    like_random = all(np.all(np.abs(median_of(label, "random, as DYNIA") - median_of(label, "DYNIA"))
+                             <= median_of(label, "DYNIA", "std_errors")) for label in labels)
+    second = {label: median_of(label, "DYNIA 2nd run") for label in labels}
+    if any(value is None for value in second.values()):
+        return "**The second DYNIA run selects nothing in some record here**; see the tables above."
+    second_se = {label: median_of(label, "DYNIA 2nd run", "std_errors") for label in labels}
+    random_second = {label: median_of(label, "random, as DYNIA 2nd run") for label in labels}
+    second_steps = [int(np.median(summaries[label]["DYNIA 2nd run"]["steps"])) for label in labels]
+    baseline_steps = [int(np.median(summaries[label]["baseline"]["steps"])) for label in labels]
+    first_lag = list(KNOWN_TRUTH["first order"][1]).index("T")
+    whole_first = median_of("first order", "whole")[first_lag]
+    below_random = all(np.all(second[label][1:] < random_second[label][1:]) for label in labels)
+    wide_margin = bool(np.all(random_second[labels[-1]][1:] > 3 * second[labels[-1]][1:]))
+    smaller_se = all(np.all(median_of(label, "baseline", "std_errors") < second_se[label]) for label in labels)
+
+    def largest_gap(pairs):
+        """The largest |median error difference| in units of the larger median standard error, and where."""
+        found = []
+        for label, key, other in pairs:
+            gap = np.abs(median_of(label, key) - median_of(label, other)) / np.maximum(
+                median_of(label, key, "std_errors"), median_of(label, other, "std_errors"))
+            worst = int(np.argmax(gap))
+            found.append((float(gap[worst]), f"{key}'s {list(KNOWN_TRUTH[label][1])[worst]} on the {label} record"))
+        return max(found)
+
+    def gap_words(gap):
+        ratio, where = gap
+        return either(ratio <= 1, "within the standard errors", f"within {ratio:.1f} standard errors (the largest "
+                      f"gap: {where})")
+
+    baseline_gap = largest_gap([(label, "DYNIA 2nd run", "baseline") for label in labels])
+    whole_gap = largest_gap([(label, key, "whole") for label in labels for key in ("DYNIA", "DYNIA 2nd run",
+                                                                                   "baseline")])
+    baseline_like, whole_like = baseline_gap[0] <= 1, whole_gap[0] <= 1
+    beats = any(np.any(median_of(label, other) - second[label]
+                       > np.maximum(second_se[label], median_of(label, other, "std_errors")))
+                for label in labels for other in ("baseline", "whole"))
+    t2 = list(KNOWN_TRUTH[labels[-1]][1]).index("T2")
+    t2_se = [median_of(labels[-1], key, "std_errors")[t2] for key in SELECTIONS]
+    t2_errors = {key: median_of(labels[-1], key)[t2] for key in SELECTIONS}
+    t2_largest = max(t2_errors, key=t2_errors.get) == "DYNIA 2nd run"
+    t2_within = bool(t2_errors["DYNIA 2nd run"] <= second_se[labels[-1]][t2])
+    narrowed_every = all(gain_range_width(run["second"].bounds[run["second"].index("K")])
+                         < gain_range_width(KNOWN_TRUTH[label][2]["K"]) for label in labels for run in known[label])
+
+    def narrower_counting_noise(label):
+        count = 0
+        for run in known[label]:
+            without_tests = dataclasses.replace(run["first_run"], informative=None, behavioural_spread=None,
+                                                behavioural_floor=None)
+            counted = gain_range_width(narrowed_bounds(without_tests, KNOWN_TRUTH[label][2])[0]["K"])
+            count += counted < gain_range_width(run["second"].bounds[run["second"].index("K")]) - 1e-9
+        return count
+
+    further = [narrower_counting_noise(label) for label in labels]
+    glitch_one = [sum(holds(run["found"]["DYNIA"], run["glitch"]) for run in known[label]) for label in labels]
+    glitch_two = [sum(holds(run["found"]["DYNIA 2nd run"], run["glitch"]) for run in known[label]) for label in labels]
+    se_ratios = np.concatenate([np.median(summaries[label]["DYNIA, glitch excluded"]["std_errors"]
+                                          / summaries[label]["DYNIA"]["std_errors"], axis=0) for label in labels])
+    rmse_chosen = [float(np.median(summaries[label][key]["rmse"])) for label in labels for key in SELECTIONS]
+    rmse_random = max(float(np.median(summaries[label]["random, as DYNIA 2nd run"]["rmse"])) for label in labels)
+
+    def pair(values, fmt):
+        return " and ".join(format(value, fmt) for value in values)
+
+    FOUND.update(whole_gap=gap_words(whole_gap), baseline_gap=gap_words(baseline_gap), second_share=pair([steps / fitting_steps for steps in second_steps], ".1%"),
+                 below_random=below_random, wide_margin=wide_margin, whole_like=whole_like, smaller_se=smaller_se,
+                 baseline_like=baseline_like, first_lag_better=bool(second["first order"][first_lag] <= whole_first),
+                 one_run_share=pair(one_run_share, ".0%"), like_random=like_random)
+    return f"""
+        What the known truth shows, with the defaults (the tables above; "the two processes" in this order:
+        {" and ".join(labels)}):
+
+        - {gain_words} (the random draws aside; "glitch excluded" rows count as selections).
+        - **The one-run DYNIA selection is nearly the whole fitting part** ({pair(one_run_share, ".0%")} of it in
+          the median), so its estimates, standard errors and validation errors are those of the whole record, and
+          random segments of the same length {either(like_random, "do as well", "do not do as well")}. This is the
+          same effect as on the stand-in: a selection by "any parameter's IC at the threshold" is dominated by the
+          gain, which every steady stretch informs.
+        - **The second-run selection {either(below_random, "does", "does not always")} locate the dynamic
+          parameters' data.** With {pair([steps / fitting_steps for steps in second_steps], ".1%")} of the fitting
+          part ({pair(second_steps, "d")} steps in the median) it estimates T of the first-order process
+          {either(second["first order"][first_lag] <= whole_first, "as well as or better than", "less well than")}
+          the whole record (median error {second["first order"][first_lag]:.1%} against {whole_first:.1%}), and
+          for both processes its median errors of the time constants and the dead time are
+          {either(below_random, "below", "not all below")} those of random segments of the same lengths{either(
+              wide_margin, ", for the second-order process by a wide margin (random short segments mostly land in "
+              "steady stretches, where T1, T2 and theta are not determined; their standard errors blow up)", "")}.
+        - **{either(not beats, "But it does not beat the baseline or the whole record beyond the standard "
+                    "errors.", "It beats the baseline or the whole record somewhere beyond the standard errors.")}**
+          The baseline's intervals ({pair(baseline_steps, "d")} steps in the median against the second run's
+          {pair(second_steps, "d")}, each response in full) give
+          {either(smaller_se, "smaller standard errors for every parameter", "not always smaller standard errors")}
+          and median errors {gap_words(baseline_gap)} of the second run's, and the whole record's median errors
+          are {gap_words(whole_gap)} of every selection's: with the right model structure, data that carry no information about a parameter do not bias it, they
+          only add points. For the weakly determined T2 of the second-order process (median relative standard
+          errors of {min(t2_se):.0%} to {max(t2_se):.0%} for the four selections) the second-run selection has
+          {either(t2_largest, "the largest median error of the four", "not the largest median error of the four")}
+          ({t2_errors["DYNIA 2nd run"]:.0%}), {either(t2_within, "within", "beyond")} its standard error.
+        - **The automated second run depends on its narrowing rule.** It needs the first run to narrow the gain
+          (`dynia.refine.narrowed_bounds`: the bands of the informative windows must overlap). Windows whose
+          output is only noise can have a high IC with a band that excludes the true gain; counted, one such
+          window stops the narrowing and the second run selects nothing. The rule therefore leaves out bands
+          pressed against a bound of the range, windows not in a run of at least three, and windows below the
+          noise floor or whose behavioural set ties within noise, since their bands rank noise; with it the gain
+          was narrowed in {either(narrowed_every, "every seed here", "only some seeds here")} (the ranges are
+          printed above). Counting the windows below the floor or tied would narrow the gain a little further in
+          {pair(further, "d")} of the {noise_seeds} seeds of the two processes (printed beside them). The thesis
+          narrowed by hand and could simply ignore such windows.
+        - **The glitch.** The one-run selection contains the erroneous zero reading in {pair(glitch_one, "d")}
+          of the {noise_seeds} seeds, the second-run selection in {pair(glitch_two, "d")}: a wrong output sample
+          under a correct input favours no parameter set, so it raises no IC (unlike the stand-in, where input and
+          output both read 0). In a least-squares fit on about {int(np.median(one_run_share) * fitting_steps)}
+          points the one wrong sample moves the estimates little, but it inflates the residual variance: excluding
+          it (`quality=True, exclude_flagged=True`) multiplies the one-run selection's standard errors by
+          {se_ratios.min():.2f} to {se_ratios.max():.2f}.
+        - The median validation error of the four selections is {min(rmse_chosen):.3f} to {max(rmse_chosen):.3f},
+          {either(max(rmse_chosen) < 1.1 * noise, "at the noise level", "above the noise level")} ({noise:g});
+          random short segments as long as the second run's reach {rmse_random:.3f} in the median.
+    """
+
+
+say(known_truth_words())
 
 # %% [markdown]
 # ## 4. Model-structure warnings (thesis 4.4)
@@ -853,73 +1123,106 @@ axes[1].set_title(f"Cooling-water stand-in, whole record, K in {cooling_gain_ran
 axes[1].legend(loc="lower left", fontsize="small")
 fig.savefig(f"{figure_dir}/reid_structure.png", dpi=120, bbox_inches="tight")
 
-# %% [markdown]
-# `reid_structure.png`, top: the first-order model's time constant on the
-# second-order record. Its band spans most of [0, 100] except right after
-# the steps, where only its lower limit rises; the least-squares T lands
-# near T1 + T2 + theta. Grey veils the windows that are not informative
-# (below the noise floor, or with best sets tied within noise): the start,
-# at input 0, the held-out block, which this run does not see, and wherever
-# T's band only ranks noise.
-# Bottom: the gain on the whole cooling-water record
-# with the narrow range, and the true gain (dashed), which falls from 2.0 to
-# 1.8 during the change of operating mode (orange).
-#
-# - **The wrong structure draws no warning.** The first-order model fits the
-#   second-order responses clearly worse (the validation error above is well
-#   above the noise level, against the right structure's at it), but no
-#   window is informative about T: where its IC is highest (printed above)
-#   the window is below the noise floor or its best sets tie within noise,
-#   so the drift test has nothing to compare; and a
-#   misfit that is the same at every step would not move a parameter anyway.
-#   The validation error shows the structure error; the warning does not.
-# - **A parameter that really varies does draw one, if the range is narrow
-#   enough.** With the first run's range [0, 6] the behavioural bands are
-#   about 0.6 wide, much wider than the change from 2.0 to 1.8, and there is
-#   no warning. With the narrower range the bands are under a tenth wide and
-#   the warning names the move of the gain from about 2.0 to 1.8. That is
-#   the thesis's "unless the parameter describes something time-varying"
-#   case: the warning cannot tell a wrong structure from a real change; it
-#   is a prompt to look at the plant.
+# %%
+def structure_words():
+    """The structure warnings' findings, rendered from the runs above."""
+    truth = KNOWN_TRUTH["second order with dead time"][1]
+    lag_sum = truth["T1"] + truth["T2"] + truth["theta"]
+    wrong_t = wrong_structure.parameters["T"]
+    wrong_error, right_error = score(wrong_structure, *second_order["clean"]), score(right_structure,
+                                                                                     *second_order["clean"])
+    wide, narrow_run = drift_runs[(0.0, 6.0)], drift_runs[tuple(cooling_gain_range)]
+
+    def band_width(result):
+        k = result.index("K")
+        return float(np.nanmedian(np.diff(result.ci[k], axis=-1)))
+
+    def warned(result):
+        return bool(structure_warnings(result, ignore=flagged))
+
+    return f"""
+        `reid_structure.png`, top: the first-order model's time constant on the second-order record, with its
+        band and CLD gradient; the least-squares T is {wrong_t:.1f},
+        {either(abs(wrong_t - lag_sum) < 0.1 * lag_sum, "near", "not near")} T1 + T2 + theta = {lag_sum:g}. Grey
+        veils the windows that are not informative (below the noise floor, or with best sets tied within noise):
+        the start, at input 0, the held-out block, which this run does not see, and wherever T's band only ranks
+        noise. Bottom: the gain on the whole cooling-water record with the narrow range, and the true gain
+        (dashed), which falls from {cooling_truth.gain:g} to {cooling_truth.gain_after:g} during the change of
+        operating mode (orange).
+
+        - **The wrong structure {either(bool(wrong_structure.warnings), "draws a warning",
+          "draws no warning")}.** The first-order model fits the second-order responses
+          {either(wrong_error > 1.2 * right_error, "clearly worse", "about as well")} (validation error
+          {wrong_error:.3f} against the right structure's {right_error:.3f}, noise {noise:g}), and
+          {int(wrong_t_informative.sum())} windows are informative about T: where its IC is highest
+          ({np.nanmax(wrong_structure.dynia_result.ic[1]):.2f}) the window is below the noise floor or its best
+          sets tie within noise, so the drift test has {either(int(wrong_t_informative.sum()) < 2,
+          "nothing to compare", "windows to compare")}; and a misfit that is the same at every step would not
+          move a parameter anyway. The validation error shows the structure error; the warning
+          {either(bool(wrong_structure.warnings), "does too", "does not")}.
+        - **A parameter that really varies {either(warned(narrow_run) and not warned(wide), "does draw one, if "
+          "the range is narrow enough", "is not told apart by the range here")}.** With the first run's range
+          [0, 6] the behavioural bands are {band_width(wide):.2f} wide in the median, against the change from
+          {cooling_truth.gain:g} to {cooling_truth.gain_after:g}, and there is
+          {either(warned(wide), "a warning", "no warning")}. With the range {cooling_gain_range} the bands are
+          {band_width(narrow_run):.2f} wide and there is {either(warned(narrow_run), "a warning, which names the "
+          "move of the gain printed above", "no warning")}. That is the thesis's "unless the parameter describes
+          something time-varying" case: the warning cannot tell a wrong structure from a real change; it is a
+          prompt to look at the plant.
+    """
+
+
+say(structure_words())
 
 # %% [markdown]
 # ## 5. What we find
-#
-# Where fitting on DYNIA's segments helps:
-#
-# - The thesis's two-run procedure finds the data that determine the dynamic
-#   parameters: on the known-truth records its segments, about a tenth of the
-#   data, estimate the time constants and the dead time far better than
-#   random segments of the same lengths, and T of the first-order process as
-#   precisely as the whole record.
-# - The heating record's transients, selected by the second run, give a
-#   lower validation error than the whole record and than random segments of
-#   the same length; but on that record any selection's validation error
-#   mostly reflects its operating points (see section 1).
-#
-# Where it does not, or loses:
-#
-# - Selecting the steps where the IC of *any* parameter reaches the threshold, the one-run
-#   default of `dynia.identification`, gives nearly the whole record whenever the
-#   gain is identified in every steady stretch (the stand-in, the known-truth
-#   records). It then is the whole record, no better and no worse.
-# - Fewer points give larger standard errors. On data the model structure
-#   describes, no DYNIA selection was more accurate than the whole record by
-#   more than the standard errors, and the baseline's intervals (Bittencourt
-#   et al., 2015) gave smaller standard errors than DYNIA's second run on
-#   every known-truth record, with errors of the same size.
-# - Noise-only windows can have a high IC. The automated narrowing has to
-#   leave them out, or one of them stops the second run from selecting
-#   anything.
-# - An erroneous reading can be the most "informative" data in the record:
-#   on the cooling-water stand-in the second run selected only the glitch,
-#   and the model fitted there has a time constant near zero and the worst
-#   validation error. Check the data first (`quality=True,
-#   exclude_flagged=True`), as the thesis concludes.
-# - The model-structure warning flags a real change of a parameter (with a
-#   narrow enough range), not a first-order model fitted to a second-order
-#   process; the validation error flags that.
-#
+
+# %%
+cooling_second_fit = cooling["DYNIA 2nd run"]
+cooling_errors = {label: score(fit, *cooling_clean) for label, fit in cooling.items() if fit is not None}
+glitch_only = (cooling_second_fit is not None and holds(cooling_second_fit, cooling_glitch)
+               and steps_in(cooling_second_fit) <= 4 * cooling_n + 1)
+structure_as_said = (bool(structure_warnings(drift_runs[tuple(cooling_gain_range)], ignore=flagged))
+                     and not wrong_structure.warnings)
+say(f"""
+    Where fitting on DYNIA's segments helps:
+
+    - The thesis's two-run procedure {either(FOUND["below_random"], "finds", "does not always find")} the data
+      that determine the dynamic parameters: on the known-truth records its segments, {FOUND["second_share"]} of
+      the fitting part, estimate the time constants and the dead time {either(FOUND["below_random"], "better",
+      "not always better")} than random segments of the same lengths{either(FOUND["wide_margin"],
+      " (far better on the second-order process)", "")}, and T of the first-order process
+      {either(FOUND["first_lag_better"], "as accurately as", "less accurately than")} the whole record (with larger
+      standard errors).
+    - The heating record's transients, selected by the second run, give a
+      {either(HEATING["second_below_whole"], "lower", "higher")} validation error than the whole record and a
+      {either(HEATING["second_below_random"], "lower", "higher")} one than the median of random segments of the
+      same length; but on that record any selection's validation error mostly reflects its operating points (see
+      section 1).
+
+    Where it does not, or loses:
+
+    - Selecting the steps where the IC of *any* parameter reaches the threshold, the one-run default of
+      `dynia.identification`, gives nearly the whole record whenever the gain is identified in every steady
+      stretch (the stand-in, the known-truth records: {FOUND["one_run_share"]} of the fitting part). It then is
+      the whole record, no better and no worse.
+    - Fewer points give larger standard errors. On data the model structure describes, every selection's median
+      errors were {FOUND["whole_gap"]} of the whole record's, and the baseline's intervals (Bittencourt et al.,
+      2015) gave {either(FOUND["smaller_se"], "smaller", "not always smaller")} standard errors than DYNIA's second
+      run on every known-truth record, with median errors {FOUND["baseline_gap"]} of its.
+    - Noise-only windows can have a high IC. The automated narrowing has to leave them out, or one of them stops
+      the second run from selecting anything.
+    - An erroneous reading can be the most "informative" data in the record: on the cooling-water stand-in the
+      second run selected {either(glitch_only, "only the few steps around the glitch", "more than the glitch")}
+      {either(cooling_second_fit is not None and max(cooling_errors, key=cooling_errors.get) == "DYNIA 2nd run",
+              "and the model fitted there has the worst validation error", "")}. Check the data first
+      (`quality=True, exclude_flagged=True`), as the thesis concludes.
+    - The model-structure warning {either(structure_as_said, "flags a real change of a parameter (with a narrow "
+      "enough range), not a first-order model fitted to a second-order process; the validation error flags that",
+      "did not separate a real change from a wrong structure in this run (section 4)")}.
+""")
+
+# %% [markdown]
 # These findings come from three records, a few noise seeds and the
 # package's default tuning (`ic_threshold` 0.5, the baseline's defaults, the
 # refine module's narrowing rule); a different threshold or a hand-made

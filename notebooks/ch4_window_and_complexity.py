@@ -76,6 +76,7 @@ from distributed import Client, LocalCluster
 import dynia
 import dynia.distributed
 from dynia import thesis
+from dynia.claims import either, say
 
 os.makedirs(figure_dir, exist_ok=True)
 UNINFORMED = 0.1  # IC of a parameter the window says nothing about: 90 % band of a uniform set
@@ -317,61 +318,132 @@ for ax in axes:
     ax.legend(fontsize="x-small")
 fig.savefig(f"{figure_dir}/fig4_03.png", dpi=110)
 
-# %% [markdown]
-# **What the window size does** (numbers from the default parameters; the
-# tables above are recomputed on every run).
-#
-# * **Large windows blur.** A window of 2n+1 steps centred on t attributes a
-#   short informative stretch to every t within n steps of it. Once n exceeds
-#   the stretch's own length the informative segment widens like the window
-#   (fig4_03, middle): theta's segment at example 2's first response grows
-#   from 23 steps (n = 2) to 121 (n = 40), K's from 10 to 78, and theta's
-#   segment starts 17 (n = 20) and 45 (n = 40) steps before the output moves
-#   at all. The few informative steps are also diluted by 2n uninformative
-#   ones: the time constant's peaks at example 1's two input dips (IC 0.25 at
-#   n = 2 for both) are down to 0.11, next to the uninformed level 0.1, by
-#   n = 20 for the 3-step dip and by n = 40 for the 21-step one. After the
-#   final step to zero the gain's IC stays above 0.5 for 5 steps at n = 2 but
-#   for 42 at n = 40 (about n + 2 to n + 3 steps): the window keeps seeing the
-#   steady stretch before the step long after the output has settled at zero.
-#   This is what the thesis calls mixing periods of noise and information.
-#   (Theta's segment at the second response widens less, 28 to 90 steps: the
-#   flat stretches around it carry a high theta IC of their own, so
-#   half-height is a poor edge there.)
-# * **Small windows are noisier where the information is.** Near the output
-#   transients the spread of the IC across noise realisations falls as the
-#   window grows (fig4_03, right): for example 2 from 0.090 (n = 2) to
-#   0.016 (n = 20) for theta and from 0.039 to 0.003 for T1 (T2 alike). Past
-#   n = 20 the spread near theta's transients rises again (0.061 at n = 40):
-#   the window reaches into the flat stretches. On those flat stretches the
-#   spread is larger and hardly depends on n (theta about 0.14 to 0.10, T1
-#   and T2 about 0.11 to 0.09): there several families of samples fit a flat
-#   output equally well (short lags whose response is over, or long dead
-#   times whose response is still to come) and the noise decides which 10 %
-#   are kept, which no window size repairs. This is also why T1's and T2's IC
-#   flicker high on the flat stretches after each response in fig4_02 while
-#   they stay low at the responses themselves: at a response both orders of
-#   the pair (2, 2/3) and (2/3, 2) fit, so each parameter's behavioural values
-#   sit near both values and the band is wide. The gain's spread near the
-#   transients stays about 0.01 at every n, and its peak IC at example 2's
-#   responses is low (about 0.3 at every n), presumably because on a response
-#   this short the gain trades off against the two lags. On
-#   example 1 (noise 0.5 on an output of 70) the spreads are small at every
-#   n. The IC is also capped by the behavioural share: with 10 % kept, a
-#   perfectly determined parameter reads about 1 - 0.9 x 0.1 = 0.91 (the gain
-#   on example 1's steady stretches reads 0.90 at every n), so noise that
-#   does not move the 10 % boundary does not show.
-# * **Choosing n.** The thesis suggests starting from the range of the
-#   dominating response time (the lags' ranges reach 8 steps here). That
-#   agrees with what we measure on example 2, where n = 10 gives theta's
-#   highest peak at the first response and, against n = 2, nearly halves
-#   theta's noise spread near the responses and quarters T1's and T2's,
-#   while the segments stay close to the responses' own length (about 30
-#   steps); but on example 1 n = 10 already nearly flattens the 3-step dip,
-#   which n <= 5 shows clearly. The window has to be
-#   matched to the shortest informative stretch one wants to find, and below
-#   that to the noise. The first and last n steps use truncated windows
-#   (thesis 4.1); the segments measured above lie away from both ends.
+# %%
+smallest, largest = window_sizes[0], window_sizes[-1]
+theta1, theta2, gain1 = table["ex2 theta, response 1"], table["ex2 theta, response 2"], table["ex2 K, response 1"]
+dip_long, dip_short = table["ex1 T, dip 1 (steps 139-159)"], table["ex1 T, dip 2 (steps 329-331)"]
+
+
+def width(row, n):
+    """Width of the informative segment at half window n, in words."""
+    return "no segment" if row[n][3] is None else str(row[n][3])
+
+
+def flattened(row):
+    """The first half window at which a peak rises less than 0.02 above the uninformed level, in words."""
+    n_flat = next((n for n in window_sizes if row[n][3] is None), None)
+    if n_flat is None:
+        return f"still above it at n = {largest}"
+    return f"down to {row[n_flat][0]:.2f}, next to the uninformed level {UNINFORMED:g}, by n = {n_flat}"
+
+
+def change(row, n_from, n_to):
+    """How a segment's width changes between two half windows, in words."""
+    if row[n_from][3] is None or row[n_to][3] is None:
+        return f"goes from {width(row, n_from)} (n = {n_from}) to {width(row, n_to)} (n = {n_to})"
+    verb = either(row[n_to][3] > row[n_from][3], "grows", "does not grow")
+    return f"{verb} from {row[n_from][3]} steps (n = {n_from}) to {row[n_to][3]} (n = {n_to})"
+
+
+leads = [f"{theta_lead[n]} (n = {n})" for n in window_sizes if theta_lead[n] is not None and theta_lead[n] > 0]
+lags_past_n = [k_lag[n] - n for n in window_sizes]
+say(f"""
+    **What the window size does** (the numbers are this run's, from the tables above).
+
+    * **Large windows blur.** A window of 2n+1 steps centred on t attributes a short informative stretch to every
+      t within n steps of it. Once n exceeds the stretch's own length the informative segment widens like the
+      window (fig4_03, middle): theta's segment at example 2's first response {change(theta1, smallest, largest)},
+      K's {change(gain1, smallest, largest)}, and theta's segment starts
+      {", ".join(leads) if leads else "no"} steps before the output moves at all. The few informative steps are
+      also diluted by 2n uninformative ones: the time constant's peaks at example 1's two input dips (IC
+      {dip_long[smallest][0]:.2f} and {dip_short[smallest][0]:.2f} at n = {smallest}) are
+      {flattened(dip_short)} for the 3-step dip and {flattened(dip_long)} for the 21-step one. After the
+      final step to zero the gain's IC stays above 0.5 for {k_lag[smallest]} steps at n = {smallest} but for
+      {k_lag[largest]} at n = {largest} (n + {min(lags_past_n)} to n + {max(lags_past_n)} steps): the window keeps
+      seeing the steady stretch before the step long after the output has settled at zero. This is what the
+      thesis calls mixing periods of noise and information. (Theta's segment at the second response
+      {change(theta2, smallest, largest)}: the flat stretches around it carry a high theta IC of their own, so
+      half-height is a poor edge there.)
+""")
+
+
+# %%
+def spread(example, part, name, n):
+    """Mean standard deviation of the IC across the noise realisations."""
+    names = (model1 if example == 1 else model2).names
+    return float(noise_sd[example, part][n][names.index(name)])
+
+
+def spread_words(values):
+    """The range of ``values`` in words, one number when they round alike."""
+    low, high = f"{min(values):.2f}", f"{max(values):.2f}"
+    return low if low == high else f"{low} to {high}"
+
+
+def spread_range(example, part, name):
+    values = [spread(example, part, name, n) for n in window_sizes]
+    return f"{values[0]:.3f} to {values[-1]:.3f}" if len(values) > 1 else f"{values[0]:.3f}"
+
+
+calmest = min(window_sizes, key=lambda n: spread(2, "transient", "theta", n))
+lag_calmest = min(window_sizes, key=lambda n: spread(2, "transient", "T1", n))
+rises_again = calmest < largest and spread(2, "transient", "theta", largest) > spread(2, "transient", "theta", calmest)
+flat_above = all(spread(2, "flat", name, n) > spread(2, "transient", name, n)
+                 for name in ("T1", "T2", "theta") for n in window_sizes)
+gain_spreads = [spread(2, "transient", "K", n) for n in window_sizes]
+gain_peaks = [gain1[n][0] for n in window_sizes]
+example1_spread = max(float(noise_sd[1, part][n].max()) for part in ("transient", "flat") for n in window_sizes)
+steady_gain = [float(results1[n].ic[0, 180:320].mean()) for n in window_sizes]
+cap = 1 - 0.9 * percentage / 100  # the 90 % band of a behavioural set that spans percentage % of the range
+say(f"""
+    * **Small windows are noisier where the information is.** Near the output transients the spread of the IC
+      across noise realisations {either(calmest > smallest, "falls", "does not fall")} as the window grows
+      (fig4_03, right): for example 2 from {spread(2, "transient", "theta", smallest):.3f} (n = {smallest}) to
+      {spread(2, "transient", "theta", calmest):.3f} (n = {calmest}) for theta and from
+      {spread(2, "transient", "T1", smallest):.3f} to {spread(2, "transient", "T1", lag_calmest):.3f}
+      (n = {lag_calmest}) for T1 (T2: {spread(2, "transient", "T2", smallest):.3f} to
+      {min(spread(2, "transient", "T2", n) for n in window_sizes):.3f}).{either(rises_again,
+      f" Past n = {calmest} the spread near theta's transients rises again "
+      f"({spread(2, 'transient', 'theta', largest):.3f} at n = {largest}): the window reaches into the flat "
+      "stretches.", "")} On those flat stretches the spread is {either(flat_above, "larger at every n",
+      "not larger at every n")} and changes less with n (theta {spread_range(2, "flat", "theta")}, T1
+      {spread_range(2, "flat", "T1")} and T2 {spread_range(2, "flat", "T2")} from n = {smallest} to n =
+      {largest}): there several families of samples fit a flat output equally well (short lags whose response is
+      over, or long dead times whose response is still to come) and the noise decides which
+      {percentage:g} % are kept, which no window size repairs. This is also why T1's and T2's IC flicker high on
+      the flat stretches after each response in fig4_02 while they stay low at the responses themselves: at a
+      response both orders of the pair (2, 2/3) and (2/3, 2) fit, so each parameter's behavioural values sit near
+      both values and the band is wide. The gain's spread near the transients stays between
+      {min(gain_spreads):.3f} and {max(gain_spreads):.3f} at every n, and its peak IC at example 2's first
+      response is low ({spread_words(gain_peaks)}), presumably because on a response this
+      short the gain trades off against the two lags. On example 1 (noise {example1.noise:g} on an output of
+      {np.max(clean1):.0f}) the spreads are {either(example1_spread < 0.03, "small", "not small")} at every n (at
+      most {example1_spread:.3f}). The IC is also capped by the behavioural share: with {percentage:g} % kept, a
+      perfectly determined parameter reads about 1 - 0.9 x {percentage / 100:g} = {cap:.2f} (the gain on example
+      1's steady stretches reads {spread_words(steady_gain)} over the window sizes), so
+      noise that does not move the {percentage:g} % boundary does not show.
+""")
+
+# %%
+lag_range = float(bounds2[[model2.names.index("T1"), model2.names.index("T2")], 1].max())
+middle = 10 if 10 in window_sizes[1:] else window_sizes[len(window_sizes) // 2]
+small_enough = [n for n in window_sizes if dip_short[n][3] is not None and dip_short[n][0] > dip_short[middle][0]]
+theta_best = max(window_sizes, key=lambda n: theta1[n][0])
+theta_ratio = spread(2, "transient", "theta", middle) / spread(2, "transient", "theta", smallest)
+lag_ratio = spread(2, "transient", "T1", middle) / spread(2, "transient", "T1", smallest)
+say(f"""
+    * **Choosing n.** The thesis suggests starting from the range of the dominating response time (the lags'
+      ranges reach {lag_range:g} steps here). Against what we measure on example 2: n = {middle}
+      {either(theta_best == middle, "gives theta's highest peak at the first response",
+              f"does not give theta's highest peak at the first response (n = {theta_best} does)")}
+      ({theta1[middle][0]:.2f}), and against n = {smallest} it multiplies theta's noise spread near the responses
+      by {theta_ratio:.2f} and T1's by {lag_ratio:.2f}, while theta's segment at the first response is
+      {width(theta1, middle)} steps wide; on example 1, n = {middle} brings the 3-step dip's peak down to
+      {dip_short[middle][0]:.2f}{either(bool(small_enough), f", which n = {' and '.join(map(str, small_enough))} "
+      "show higher", "")}. The window has to be matched to the shortest informative stretch one wants to find,
+      and below that to the noise. The first and last n steps use truncated windows (thesis 4.1); the segments
+      measured above lie away from both ends.
+""")
 
 # %% [markdown]
 # ## 4.2 Computational complexity
@@ -400,7 +472,8 @@ def example1_problem(n_samples, n_steps, generator):
     return u, y, params
 
 
-print(f"cores: {os.cpu_count()}; load average over the last minute before timing: {os.getloadavg()[0]:.1f}")
+timing_load = os.getloadavg()[0]
+print(f"cores: {os.cpu_count()}; load average over the last minute before timing: {timing_load:.1f}")
 timing_rng = np.random.default_rng(seed + 2)
 timings = {"samples": {"engine": [], "simulate": []}, "steps": {"engine": [], "simulate": []},
            "params": {"engine": [], "simulate": []}, "port": []}
@@ -523,53 +596,51 @@ for ax in axes[1:]:
     ax.legend(fontsize="x-small")
 fig.savefig(f"{figure_dir}/fig4_04.png", dpi=110)
 
-# %% [markdown]
-# **What we measure** (default parameters, one thread). The timings depend
-# on the machine and on what else runs on it (the cell prints the load
-# average before timing; on a shared 2-core machine single points can be off
-# by a factor of two or more), so the prose says what to read in them and
-# the printed numbers give their values. Nothing here is checked by the test
-# suite: the slopes' verdicts against eq. 4.4 are printed, and tip on a loaded
-# machine.
-#
-# * **Samples.** The engine's run time grows about linearly in S: the fitted
-#   slope (printed above) is closer to 1 than to the 2 of eq. 4.4 (the
-#   printed verdict below: under 1.5), also over the larger half of the
-#   sizes alone. The time
-#   per sample and step is printed for every S, with its median over the
-#   smaller and the larger half of the sizes: a few tens of nanoseconds at
-#   most, and higher at large S, where a time chunk's arrays outgrow the
-#   cache and the window sums, plain additions and linear by construction,
-#   become memory-bound (this also depends on the machine). The step eq. 4.4
-#   is about, picking each window's behavioural set, grows about linearly
-#   when timed alone (`numpy.argpartition` in `dynia.engine.selection.lowest_stable`,
-#   fitted slope printed above, well below 2); the
-#   stable sort the thesis uses instead grows like S log S, and costs many
-#   times more at every S (both printed above). The thesis's own algorithm,
-#   timed through the one-to-one port, is no more quadratic than that: it
-#   sorts the costs and walks the sorted behavioural set once. The
-#   behavioural set does grow with S, but it is built once per window, not
-#   once per sample, so the two factors of S in eq. 4.4 do not multiply.
-# * **Steps.** Engine and simulation grow about linearly in the number of
-#   steps (fitted slopes printed above, well below 2; a loaded machine pushes
-#   the larger records' points up): every step is one vectorised update of all samples, and
-#   every window costs the same.
-# * **Parameters.** The window sums and the selection are shared by all
-#   parameters, and only the limits and the gradient, on the small
-#   behavioural set, are per parameter, so the engine's time should grow far
-#   less than in proportion to the parameters analysed (a fitted slope well
-#   below 1). The printed slope says how far the measurement agrees; these
-#   runs take tens of milliseconds, and on a loaded machine (see the printed
-#   load average) their points scatter enough to hide the difference. The
-#   simulation does not depend on how many parameters are free at all (the
-#   model always has its four); differences between its points are timing
-#   noise.
-#
-# A whole run therefore costs about S x steps x (2n+1) additions for the
-# window sums plus a linear selection per window, linear in everything the
-# engine is handed. Where the thesis's exponential cost (eq. 4.2-4.3) could
-# come from is the number of samples the user must hand it, which the next
-# section measures.
+# %%
+def slope_words(name, below, good, bad):
+    """The fitted slope of ``name`` and a verdict against ``below``, in words."""
+    return f"{slopes[name]:.2f} ({either(slopes[name] < below, good, bad)})"
+
+
+sort_ratio = np.array(timings["select"]["sort"]) / np.array(timings["select"]["partition"])
+say(f"""
+    **What we measure** (this run, one thread, on {os.cpu_count()} cores with a load average of
+    {timing_load:.1f} before timing). The timings depend on the machine and on what else runs on it (on a shared
+    2-core machine single points can be off by a factor of two or more), so every number and verdict below is
+    rendered from this run's measurement; nothing here is checked by the test suite.
+
+    * **Samples.** The engine's fitted slope against S is {slope_words("engine vs S", 1.5,
+      "closer to 1 than to the 2 of eq. 4.4", "closer to the 2 of eq. 4.4 than to 1")}, and over the larger half
+      of the sizes alone {slope_words("engine vs S, larger half", 1.5, "closer to 1", "closer to 2")}. The time
+      per sample and step is {per_sample_step.min():.1f} to {per_sample_step.max():.1f} ns, with a median of
+      {np.median(per_sample_step[:half]):.1f} ns over the smaller half of the sizes and
+      {np.median(per_sample_step[half:]):.1f} ns over the larger half; where it is higher at large S, a time
+      chunk's arrays outgrow the cache and the window sums, plain additions and linear by construction, become
+      memory-bound (this depends on the machine). The step eq. 4.4 is about, picking each window's behavioural
+      set, timed alone (`numpy.argpartition` in `dynia.engine.selection.lowest_stable`), has a fitted slope of
+      {slope_words("selection by partition vs S", 1.5, "well below 2", "near 2")}; the stable sort the thesis uses
+      instead, slope {slopes["selection by stable sort vs S"]:.2f}, grows like S log S and costs
+      {sort_ratio.min():.1f} to {sort_ratio.max():.1f} times as much over the sizes. The thesis's own algorithm,
+      timed through the one-to-one port, has a slope of {slope_words("thesis port vs S", 1.5,
+      "no more quadratic than that", "closer to quadratic")}: it sorts the costs and walks the sorted behavioural
+      set once. The behavioural set does grow with S, but it is built once per window, not once per sample, so
+      the two factors of S in eq. 4.4 do not multiply.
+    * **Steps.** The fitted slopes against the number of steps are {slope_words("engine vs steps", 1.5,
+      "well below 2", "near 2")} for the engine and {slope_words("simulate vs steps", 1.5, "well below 2",
+      "near 2")} for the simulation (a loaded machine pushes the larger records' points up): every step is one
+      vectorised update of all samples, and every window costs the same.
+    * **Parameters.** The window sums and the selection are shared by all parameters, and only the limits and
+      the gradient, on the small behavioural set, are per parameter, so the engine's time should grow far less
+      than in proportion to the parameters analysed. The fitted slope is {slope_words("engine vs parameters", 0.5,
+      "well below 1, as expected", "not far below 1: these runs take tens of milliseconds, and on a loaded "
+      "machine their points scatter enough to hide the difference")}. The simulation does not depend on how many
+      parameters are free at all (the model always has its four); its slope of
+      {slopes["simulate vs parameters"]:.2f} is timing noise.
+
+    A whole run therefore costs about S x steps x (2n+1) additions for the window sums plus a linear selection
+    per window, linear in everything the engine is handed. Where the thesis's exponential cost (eq. 4.2-4.3)
+    could come from is the number of samples the user must hand it, which the next section measures.
+""")
 
 # %% [markdown]
 # ## The sampling-density argument (eq. 4.1-4.3)
@@ -666,21 +737,37 @@ axes[1].set_ylim(density_sizes[0] / 2, 3 * float(anchor) ** parameter_counts[-1]
 axes[1].legend(fontsize="x-small", loc="upper left")
 fig.savefig(f"{figure_dir}/fig4_05.png", dpi=110)
 
+# %%
+def samples_needed(key):
+    """The S needed for every number of free parameters, in words."""
+    return ", ".join(f"{density[c][key]} for {c} free" if density[c][key] is not None
+                     else f"more than {density_sizes[-1]} for {c} free" for c in parameter_counts)
+
+
+reached = all(density[c]["needed"] is not None for c in parameter_counts)
+needed = [density[c]["needed"] for c in parameter_counts]
+no_growth = reached and all(s_needed <= 2 * needed[0] for s_needed in needed)
+error_slopes = {c: loglog_slope(density_sizes, density[c]["rmse"]) for c in parameter_counts}
+like_root = all(-0.8 < slope < -0.3 for slope in error_slopes.values())
+growth_words = (either(no_growth, "does not grow like `s^n`", "may grow with n; it is not measured here")
+                + either(reached and needed[-1] < needed[0], "; if anything it falls", ""))
+say(f"""
+    **What comes out** (this run). On this example the number of samples needed to pin down the IC curves
+    {growth_words}. The RMSE criterion
+    (< {density_tolerance}) gives {samples_needed("needed")}; the mean absolute error criterion
+    (< {density_tolerance / 2}) gives {samples_needed("needed_mae")}. The error falls
+    {either(like_root, "roughly like", "not like")} `S^(-1/2)` for every n (fig4_05, left; fitted log-log slopes
+    {", ".join(f"{slope:.2f}" for slope in error_slopes.values())}).{either(
+        reached and needed[0] == max(needed) and needed[0] > min(needed),
+        " The one-parameter case needs the most samples by the RMSE only because its IC curve has a few sharp "
+        "jumps (steps at which theta's behavioural set splits into two clusters, dead times that put the response "
+        "before the window and ones that put it after, and the IC collapses); where a draw and the reference jump "
+        "at different steps, these few steps dominate the RMSE.", "")} The reference's own Monte Carlo error,
+    extrapolated along `S^(-1/2)`, is about {floor:.3f}, {either(floor < density_tolerance / 3,
+    "well below the tolerance", "not far below the tolerance")}.
+""")
+
 # %% [markdown]
-# **What comes out** (default parameters). On this example the number of
-# samples needed to pin down the IC curves does not grow like `s^n`; if
-# anything it falls. The RMSE criterion gives 8 000 samples for theta alone,
-# 4 000 for two and for three free parameters and 2 000 for four; the mean
-# absolute error criterion gives 4 000 for every n. The error falls roughly
-# like `S^(-1/2)` for every n (fig4_05, left). The one-parameter case
-# needs the most samples by the RMSE only because its IC curve has a few
-# sharp jumps (steps at which theta's behavioural set splits into two
-# clusters, dead times that put the response before the window and ones
-# that put it after, and the IC collapses); where a draw and the
-# reference jump at different steps, these few steps dominate the RMSE. The
-# reference's own Monte Carlo error, extrapolated along `S^(-1/2)`, is about
-# 0.004, well below the tolerance.
-#
 # The reason is the way the IC is built. The behavioural set is a fixed
 # share (10 %) of the samples, k = S/10, and the IC is read off the 5 % and
 # 95 % quantiles of each parameter's behavioural values. The Monte Carlo error
@@ -688,19 +775,22 @@ fig.savefig(f"{figure_dir}/fig4_05.png", dpi=110)
 # dimension of the space the points were drawn from. The thesis's density
 # argument is about covering the joint parameter space at a fixed resolution,
 # which is not what a fixed-share IC measures.
-#
-# What adding parameters costs instead is the IC itself: the same 10 % of
-# the box must now also spread over directions the window does not identify,
-# so theta's IC falls as parameters are freed (mean reference IC 0.44 for
-# theta alone, 0.34-0.35 with three or four free). More samples do not bring it back at a
-# fixed percentage. A smaller percentage or narrower ranges do; with a
-# behavioural set that shrinks to a fixed neighbourhood of the best fit, the
-# samples needed would scale with the box volume over that neighbourhood,
-# which is the thesis's `s^n`, but we have not measured that regime here.
-# In short: at a fixed behavioural share, DYNIA's cost is linear in S and
-# the S needed for a converged IC curve does not grow exponentially with the
-# number of parameters on this example; what the converged curve can resolve
-# drops as parameters are added.
+
+# %%
+theta_ic = {c: float(density[c]["reference"][0].mean()) for c in parameter_counts}
+say(f"""
+    What adding parameters costs instead is the IC itself: the same {percentage:g} % of the box must now also
+    spread over directions the window does not identify, so theta's IC
+    {either(theta_ic[parameter_counts[-1]] < theta_ic[1], "falls", "does not fall")} as parameters are freed
+    (mean reference IC {", ".join(f"{ic:.2f} with {c} free" for c, ic in theta_ic.items())}). More samples do not
+    bring it back at a fixed percentage. A smaller percentage or narrower ranges do; with a behavioural set that
+    shrinks to a fixed neighbourhood of the best fit, the samples needed would scale with the box volume over that
+    neighbourhood, which is the thesis's `s^n`, but we have not measured that regime here. In short: at a fixed
+    behavioural share, DYNIA's cost is linear in S and the S needed for a converged IC curve
+    {either(no_growth, "does not grow exponentially", "was not shown here not to grow exponentially")} with the
+    number of parameters on this example; what the converged curve can resolve
+    {either(theta_ic[parameter_counts[-1]] < theta_ic[1], "drops", "does not drop")} as parameters are added.
+""")
 
 # %% [markdown]
 # ## Parallel speed-up (thesis section 5.1)
@@ -750,7 +840,8 @@ def time_runs(analyse, cpu_clock):
     return seconds, cores, result
 
 
-print(f"cores: {os.cpu_count()}; load average over the last minute before timing: {os.getloadavg()[0]:.1f}")
+parallel_load = [os.getloadavg()[0]]
+print(f"cores: {os.cpu_count()}; load average over the last minute before timing: {parallel_load[0]:.1f}")
 parallel_seconds, cores_used, parallel_results, cluster_start = {}, {}, {}, {}
 for workers in (1, 2):
     def analyse_in_threads(n_samples, workers=workers):
@@ -779,7 +870,8 @@ for workers in (1, 2):
         analyse_on_cluster(parallel_samples[0])
         (parallel_seconds["Dask", workers], cores_used["Dask", workers],
          parallel_results["Dask", workers]) = time_runs(analyse_on_cluster, cluster_cpu_time)
-print(f"load average over the last minute after timing: {os.getloadavg()[0]:.1f}")
+parallel_load.append(os.getloadavg()[0])
+print(f"load average over the last minute after timing: {parallel_load[1]:.1f}")
 print("Dask cluster start-up (s):", {workers: round(seconds, 1) for workers, seconds in cluster_start.items()})
 speed_up = {kind: np.array(parallel_seconds[kind, 1]) / np.array(parallel_seconds[kind, 2]) for kind in ("threads", "Dask")}
 print("wall time in s (cores in use) and speed-up from 1 to 2 workers")
@@ -821,8 +913,13 @@ ax_speed.set(xscale="log", xlabel="number of samples S", ylabel="speed-up", ylim
              title=f"Speed-up from 1 to 2 workers ({os.cpu_count()} cores, shared)")
 ax_speed.legend(fontsize="small", loc="upper right")
 ax_cores.axhline(os.cpu_count(), color="k", linestyle=":", label=f"all {os.cpu_count()} cores")
+two_workers_cores = max(max(cores_used[kind, 2]) for kind in ("threads", "Dask"))
+ran_at_once = bool(two_workers_cores >= 1.5)
 ax_cores.set(xscale="log", xlabel="number of samples S", ylabel="CPU time / wall time",
-             ylim=(0, os.cpu_count() + 1.2), title="Cores the analysis actually had")
+             ylim=(0, os.cpu_count() + 1.2),
+             title="Cores the analysis actually had\n" + either(
+                 ran_at_once, f"2 workers ran at once (up to {two_workers_cores:.2f} cores)",
+                 f"2 workers never ran at once here (at most {two_workers_cores:.2f} cores)"))
 ax_cores.legend(fontsize="small", loc="upper right", ncols=2)
 for ax in (ax_time, ax_speed, ax_cores):
     ax.set_xticks(parallel_samples, [str(s) for s in parallel_samples])
@@ -838,18 +935,27 @@ fig.savefig(f"{figure_dir}/parallel_speedup.png", dpi=110)
 # over its wall time. The checked cell shows that all four configurations
 # give the same IC, limits, gradient and samples, bit for bit: parallelism
 # changes only the time.
-#
-# Read the speed-up together with the right panel and the printed load
-# average. A speed-up near 2 needs two cores free for the two workers; where
-# the load average printed before and after the timing is near or above the
-# number of cores, other processes share them, the right panel shows the
-# analysis getting little more than one core at most whatever the number of workers,
-# and a second worker cannot help (it can even cost time, as the printed
-# speed-ups below 1 show where they occur). The rendered report was made on
-# such a shared machine, so its numbers say more about the machine's load
-# than about the method; rerun the notebook on an idle machine to measure the
-# speed-up itself. What limits it even on an idle 2-core machine:
-#
+
+# %%
+best_speed_up = max(float(ratios.max()) for ratios in speed_up.values())
+worst_speed_up = min(float(ratios.min()) for ratios in speed_up.values())
+loaded = max(parallel_load) >= os.cpu_count() - 0.5
+say(f"""
+    Read the speed-up together with the right panel and the printed load average. A speed-up near 2 needs two
+    cores free for the two workers. In this render the load average was {parallel_load[0]:.1f} before the timing
+    and {parallel_load[1]:.1f} after it, on {os.cpu_count()} cores, and with two workers the analysis had at
+    most {two_workers_cores:.2f} cores (CPU time over wall time, right panel):
+    {either(ran_at_once, "the two workers did run at once", "**the two workers never ran at once on the machine "
+            "that rendered this report**, so the figure cannot show a parallel speed-up, only the overheads")}.
+    The speed-up from one worker to two ranges from {worst_speed_up:.2f} to {best_speed_up:.2f} over the sizes
+    and both kinds{either(worst_speed_up < 1, "; below 1 a second worker cost time", "")}.
+    {either(loaded, "Other processes shared the cores (the load average is near or above their number), so "
+            "these numbers say more about the machine's load than about the method; rerun the notebook on an "
+            "idle machine to measure the speed-up itself.", "The machine was not fully loaded during the timing.")}
+    What limits the speed-up even on an idle 2-core machine:
+""")
+
+# %% [markdown]
 # * **Two cores are at most a factor of 2**, and the operating system, the
 #   notebook's kernel and (for Dask) the scheduler take their share too.
 # * **Serial parts** run on one core whatever the workers: drawing the
@@ -869,9 +975,12 @@ fig.savefig(f"{figure_dir}/parallel_speedup.png", dpi=110)
 #   machines with a scheduler (`dynia.distributed` says how to start one).
 # * **Small problems** are dominated by fixed costs per analysis (starting the
 #   threads, scheduling the tasks), so any speed-up shows only at the larger S.
-#
-# So the thesis is right that the windows and the simulations split into
-# independent pieces with no change to the result (checked above), but a
-# linear speed-up is an upper bound that a shared 2-core machine does not
-# reach; the measurement here documents the overheads, not the method's
-# limit.
+
+# %%
+say(f"""
+    So the thesis is right that the windows and the simulations split into independent pieces with no change to
+    the result (checked above), but a linear speed-up is an upper bound, which this run
+    {either(best_speed_up >= 1.8, "came close to", f"did not reach (at best {best_speed_up:.2f})")};
+    {either(ran_at_once, "the measurement here shows what two workers running at once gain",
+            "the measurement here documents the overheads, not the method's limit")}.
+""")
