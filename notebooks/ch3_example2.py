@@ -36,10 +36,10 @@
 # * **Record and input.** 600 steps, zero except two unit pulses of 10 steps
 #   starting at steps 100 and 350. Each output response (one dead time later,
 #   at steps 200 and 450) lasts about 20 steps, the pulse plus the decay of the
-#   lags, so the record is in its zero state more than 90 % of the time, as in
-#   the thesis's description of Figure 3.9. Ten steps are five times T1: long
-#   enough for the output to come close to its steady state 2 (the peak is
-#   1.98), still a "short" step. The record ends some 130 steps after the
+#   lags, so the record is in its zero state most of the time, as in the
+#   thesis's description of Figure 3.9 (the share is printed under the
+#   figure). Ten steps are five times T1: long enough for the output to come
+#   close to its steady state 2, still a "short" step. The record ends some 130 steps after the
 #   second response.
 # * **Noise.** Gaussian, standard deviation 0.2, a tenth of the response's
 #   peak: clearly visible on a response only about 20 steps long.
@@ -49,17 +49,19 @@
 #   [80, 120] left commented out in the thesis's example-1 script. All are "quite large" in the thesis's sense: a
 #   21-step window can only see the response of a sample whose dead time is
 #   within about 10 steps of the truth, a fifth of the theta range.
-# * **Monte Carlo samples.** 20 000 uniform draws. Only about 2 % of them have
-#   a dead time within one step of the truth, which leaves a few hundred samples
-#   near the truth. A run takes under a second. The results hardly change with
-#   more samples, because the behavioural set is a fixed share of them.
+# * **Monte Carlo samples.** 20 000 uniform draws (`n_samples`). A dead time
+#   within one step of the truth covers 2 of the 100 steps of its range, so
+#   about one sample in fifty can be expected there (the share drawn is
+#   printed under the first run, with the time the run took). More samples
+#   fill the box more densely, but the behavioural set stays a fixed share
+#   of them.
 # * **DYNIA settings.** Those of the thesis: half window n = 10 (21 steps),
 #   behavioural set = best 10 %, 40 gradient bins, 90 % confidence limits, and
 #   the thesis's cost and likelihood (`flavour="thesis"`). Simulations start
 #   from zero (`x0="zero"`), the state the data start in.
 #
-# Numbers quoted in the text are those of a run with the default parameters;
-# the code cells print them.
+# The sentences that quote a result are rendered from this run's numbers
+# (the code cells print them), so they hold for any parameters.
 #
 # **Two code paths.** `code_path = "corrected"` (the default) draws the
 # engine's likelihood mass per bin. `code_path = "thesis"` draws every
@@ -68,9 +70,9 @@
 # (`dynia.thesis.thesis_code_result`, `plot_parameter_estimation`). The thesis
 # prints no script for this example, so the simulations stay exact: its
 # example-1 script's Euler loop is for a first-order model only. The
-# information content and limits are the same on both paths. The prose under
-# each figure describes the default rendering; the section "The thesis's code
-# path" at the end draws both side by side in either rendering.
+# information content and limits, and so every number in the text, are the
+# same on both paths; the section "The thesis's code path" at the end draws
+# both side by side in either rendering.
 
 # %% tags=["parameters"]
 n_samples: int = 20000  # Monte Carlo parameter sets per run (the thesis does not say)
@@ -86,11 +88,14 @@ figure_dir: str = "figures"  # where the PNGs go
 
 # %%
 import os
+import time
 
 import matplotlib.pyplot as plt
 import numpy as np
+import scipy.special
 
 import dynia
+from dynia.claims import claim, either, say
 
 dynia.thesis.check_code_path(code_path)
 os.makedirs(figure_dir, exist_ok=True)
@@ -118,14 +123,17 @@ ax.set_title("Figure 3.9: input/output data, second-order system with time delay
 ax.legend(loc="upper right")
 save(fig, 9)
 plt.show()
+moving = int(np.sum(y_true > 0.01 * y_true.max()))
 print(f"peak of the noise-free output: {y_true.max():.2f}; "
-      f"steps where it exceeds 1 % of its peak: {int(np.sum(y_true > 0.01 * y_true.max()))} of {n_steps}")
+      f"steps where it exceeds 1 % of its peak: {moving} of {n_steps}")
+say(f"""
+    As in the thesis's Figure 3.9, the record is in its zero state most of the time (the noise-free output is
+    within 1 % of zero in {1 - moving / n_steps:.0%} of the steps; its peak is {y_true.max():.2f}), the two
+    short input steps reach the output only one dead time ({TRUE["theta"]:g} steps) later, and the noise
+    (standard deviation {noise:g}) is large compared with the short responses.
+""")
 
 # %% [markdown]
-# As in the thesis's Figure 3.9, the record is in its zero state most of the
-# time, the two short input steps reach the output only one dead time (100
-# steps) later, and the noise is large compared with the short responses.
-#
 # **Where the output moves.** The information sits in the windows in which the
 # output responds. A quiet window can only rule out parameter values that would
 # have produced a response inside it, which matters for the dead time (Figure
@@ -135,9 +143,10 @@ print(f"peak of the noise-free output: {y_true.max():.2f}; "
 # estimated robustly from the output (1.4826 x the median absolute deviation,
 # fine because the output is zero most of the time), and a window "sees a
 # response" when the mean of its 2n+1 measured outputs is more than five
-# standard errors (5 sigma / sqrt(2n+1)) from zero. Pure noise crosses that line
-# in about one window in two million. These windows, shaded yellow in the plots
-# below, are used to read the first run and to choose the ranges of the second.
+# standard errors (5 sigma / sqrt(2n+1)) from zero (how rarely pure noise
+# crosses that line is printed below). These windows, shaded yellow in the
+# plots below, are used to read the first run and to choose the ranges of the
+# second.
 
 # %%
 sigma_hat = 1.4826 * np.median(np.abs(y - np.median(y)))
@@ -147,7 +156,8 @@ responding = np.abs(window_mean) > 5 * sigma_hat / np.sqrt(2 * n + 1)
 resp_steps = np.flatnonzero(responding)
 breaks = np.flatnonzero(np.diff(resp_steps) > 1)
 stretches = [(int(part[0]), int(part[-1])) for part in np.split(resp_steps, breaks + 1)]
-print(f"noise estimate {sigma_hat:.3f} (true {noise}); windows that see a response: {stretches}")
+print(f"noise estimate {sigma_hat:.3f} (true {noise}); windows that see a response: {stretches}; "
+      f"pure Gaussian noise crosses the line in one window in {1 / (2 * scipy.special.ndtr(-5)):,.0f}")
 for start, (first, last) in zip(step_starts, stretches):
     print(f"  input step at {start}: its response is seen by windows {first}-{last}, "
           f"centred {first - start} to {last - start} steps after the step")
@@ -165,8 +175,10 @@ def mark_input(ax):
 # ## First run: all four parameters over the large ranges
 
 # %%
+started = time.perf_counter()
 res1 = dynia.run(u, y, model, BOUNDS_1, n_samples=n_samples, n=n, percentage=percentage,
                  bins=bins, conf_level=conf_level, x0="zero", rng=rng)
+run_seconds = time.perf_counter() - started  # machine-dependent: rendered below, never checked
 
 
 def near_truth(name, half_width):
@@ -234,6 +246,11 @@ for name in res1.names:
     print(f"{name:>5}: max IC where the output responds {ic:.2f} at step {k}, band [{low:.2f}, {high:.2f}]"
           f" | max IC anywhere {res1.ic[p, k_all]:.2f} at step {k_all},"
           f" band [{res1.ci[p, k_all, 0]:.2f}, {res1.ci[p, k_all, 1]:.2f}]")
+say(f"""
+    This run of {n_samples} samples took {run_seconds:.1f} s on this machine (a wall-clock time, not checked).
+    {near_truth("theta", 1).mean():.1%} of its samples ({near_truth("theta", 1).sum()}) have a dead time within
+    one step of the truth.
+""")
 
 # %% [markdown]
 # ## Figures 3.10 and 3.11: the time delay
@@ -251,23 +268,35 @@ print(f"first response: theta's IC peaks at {theta_ic:.2f} at step {theta_step},
 print(f"that window holds steps {theta_step - n}-{theta_step + n}; the output starts to move at "
       f"step {step_starts[0] + int(TRUE['theta']) + 1}")
 
+# %%
+p_theta = res1.index("theta")
+earliest = step_starts[0] + int(BOUNDS_1["theta"][0])  # no sample answers the first step before this step
+quiet_ic = res1.ic[p_theta, : earliest - n]
+ic_all = {name: summary(res1, name)[0] for name in res1.names}
+second_theta = summary(res1, "theta", np.arange(stretches[1][0], stretches[1][1] + 1))
+after_first = np.arange(stretches[0][1] + 1, stretches[0][1] + 11)
+below_after = int(np.sum(res1.ci[p_theta, after_first, 1] < TRUE["theta"]))
+quiet_range = (f"{np.nanmin(quiet_ic):.2f}" if f"{np.nanmin(quiet_ic):.2f}" == f"{np.nanmax(quiet_ic):.2f}"
+               else f"{np.nanmin(quiet_ic):.2f} to {np.nanmax(quiet_ic):.2f}")
+claim(max(ic_all, key=ic_all.get) == "theta", "the dead time is the best identified parameter")
+say(f"""
+    **Agreement with the thesis.** As in Figures 3.10 and 3.11, the dead time is the best identified parameter
+    (its IC where the output responds reaches {ic_all["theta"]:.2f}, the others' at most
+    {max(v for k, v in ic_all.items() if k != "theta"):.2f}), and it is identified when the input change reaches
+    the output, not when the input changes. Up to step {earliest - n - 1} the information content stays
+    at {quiet_range} (a {conf_level:g} % band of a uniform sample): no sample can answer the input step at {step_starts[0]} before step {earliest}, so every simulated
+    output in those windows is exactly zero and nothing can be told apart. Then the lower limit climbs with
+    time: a sample with dead time theta would already have answered the first step at step
+    {step_starts[0]} + theta, so every window that is still quiet rules out a little more of the lower range.
+    When the response arrives, the band collapses to {theta_band[1] - theta_band[0]:.1f} steps
+    ([{theta_band[0]:.1f}, {theta_band[1]:.1f}], IC {theta_ic:.2f}), and at the second response to
+    {second_theta[2][1] - second_theta[2][0]:.1f} steps (IC {second_theta[0]:.2f}). The IC peaks {delay_seen}
+    steps after the input step, {either(bool(delay_seen < TRUE["theta"]), "a little less than one dead time",
+    "not before one dead time")}: the window at step t already holds steps up to t + n, so it catches the rising
+    edge of the response a few steps before the edge itself.
+""")
+
 # %% [markdown]
-# **Agreement with the thesis.** As in Figures 3.10 and 3.11, the dead time is
-# the best identified parameter, and it is identified when the input change
-# reaches the output, not when the input changes. The information content stays
-# at about 0.1 (a 90 % band of a uniform sample) up to about step 140: no
-# sample can answer the input step at 100 before step 150, so every simulated
-# output in those windows is exactly zero and nothing can be told apart. Then
-# the lower limit climbs with time: a sample with dead time
-# theta would already have answered the first step at step 100 + theta, so
-# every window that is still quiet rules out a little more of the lower range.
-# When the response arrives, the band collapses to about 12 steps (IC near
-# 0.88) around the truth, with the CLD gradient (grey) concentrated inside it,
-# and the same happens at the second response. The IC peaks a little less
-# than 100 steps after the input step: the window at step t already holds steps
-# up to t + n, so it catches the rising edge of the response a few steps before
-# the edge itself.
-#
 # **The thesis's remark on timing.** DYNIA plots information at the time it
 # shows up in the output. With a dead time, the input that produced it came one
 # dead time (here 100 steps) earlier. A data segment chosen from these plots
@@ -275,17 +304,19 @@ print(f"that window holds steps {theta_step - n}-{theta_step + n}; the output st
 # before the high-IC stretch, or it will not contain the input step that caused
 # it.
 #
-# **Where we differ, or add to the thesis.** The band is not centred on 100 but
-# a little below it (its centre is about 98 here). Dead time and lags trade off:
-# a slightly shorter dead time with slightly slower lags puts the response's
-# centre of mass (theta + T1 + T2, about 102.7) in the same place, and a noisy,
-# 20-step response cannot separate the two well. Right after each response the
-# band drops below the truth. This is real information, the mirror image of the
-# climb before the response: samples whose response would fall into the
-# now-quiet window are ruled out. Further into the zero state the band wanders
-# over the upper part of the range and is sometimes narrow. Those windows hold
-# only noise, and the narrow bands there are not information (see under
-# Figure 3.12). The thesis does not discuss this.
+
+# %%
+say(f"""
+    **Where we differ, or add to the thesis.** The band is centred on {theta_band.mean():.1f}, not on
+    {TRUE["theta"]:g}. Dead time and lags trade off: a slightly shorter dead time with slightly slower lags puts
+    the response's centre of mass (theta + T1 + T2, {TRUE["theta"] + TRUE["T1"] + TRUE["T2"]:.1f} for the truth)
+    in the same place, and a noisy, 20-step response cannot separate the two well. Right after the first
+    response the band drops below the truth (its upper limit is below {TRUE["theta"]:g} in {below_after} of the
+    10 windows after it). This is real information, the mirror image of the climb before the response: samples
+    whose response would fall into the now-quiet window are ruled out. Further into the zero state the band
+    wanders over the upper part of the range and is sometimes narrow. Those windows hold only noise, and the
+    narrow bands there are not information (see under Figure 3.12). The thesis does not discuss this.
+""")
 
 # %% [markdown]
 # ## Figure 3.12: the first time constant
@@ -293,27 +324,22 @@ print(f"that window holds steps {theta_step - n}-{theta_step + n}; the output st
 # %%
 ic_figure(res1, "T1", 12, "information content of the first time constant")
 
-# %% [markdown]
-# **Agreement with the thesis.** Where the output responds (yellow), T1's
-# information content stays close to its floor (about 0.1, band almost the
-# whole range). As in the thesis, T1 is poorly identified in the first run,
-# "and the plot of the information content does not give reliable results for
-# data segment selection".
-#
-# **What makes the plot unreliable.** The largest values of T1's IC in this run
-# (up to about 0.7) are not at the responses but in the zero state between and
-# after them, and they flicker from one step to the next. Those windows hold
-# only noise. Every sample whose simulated output is (almost) zero there fits
-# about equally well, and the ranking that chooses the best 10 % is decided by
-# simulated outputs far below the noise. The cell below reproduces the
-# behavioural set at the step where T1's IC is largest. It shows that the
-# samples kept and the samples rejected differ by outputs thousands of times
-# smaller than the noise, so much so that the last bits of the sums decide:
-# the compiled engine's running sums, within rounding of the left-to-right
-# sums of the thesis (and of the numpy engine), may keep other members here. A narrow band there reflects the noise in that window
-# and carries no information about T1. This is why the first run is read, and
-# the second run's ranges are chosen, from the windows that see a response
-# only.
+# %%
+t1_ic, _, t1_band = summary(res1, "T1")
+t1_zero = float(np.nanmax(res1.ic[res1.index("T1"), ~responding]))
+claim(t1_zero > t1_ic, "the largest values of T1's IC are in the zero state, not at the responses")
+say(f"""
+    **Agreement with the thesis.** Where the output responds (yellow), T1's information content stays close to
+    its floor (at most {t1_ic:.2f}, band [{t1_band[0]:.2f}, {t1_band[1]:.2f}] of [0, 8]). As in the thesis, T1 is
+    poorly identified in the first run, "and the plot of the information content does not give reliable results
+    for data segment selection".
+
+    **What makes the plot unreliable.** The largest values of T1's IC in this run (up to {t1_zero:.2f}) are not
+    at the responses but in the zero state between and after them, and they flicker from one step to the next.
+    Those windows hold only noise. Every sample whose simulated output is (almost) zero there fits about equally
+    well, and the ranking that chooses the best {percentage:g} % is decided by simulated outputs far below the
+    noise. The cell below reproduces the behavioural set at the step where T1's IC in the zero state is largest.
+""")
 
 # %%
 p_t1 = res1.index("T1")
@@ -344,6 +370,17 @@ print(f"  largest simulated |output| in that window, median over samples: kept {
       f"rejected {np.median(typical[rejected]):.0e}; noise standard deviation {noise}")
 print(f"  the kept samples' costs span {cost[kept].max() - cost[kept].min():.0e}; "
       f"the cost of an output of exactly zero is {np.mean(np.abs(y[lo_w:hi_w])) ** 2:.4f}")
+same_as_compiled = bool(np.array_equal(reproduced, res1.ci[p_t1, k_spike]))
+say(f"""
+    The samples kept and the samples rejected there differ by outputs
+    {noise / np.median(typical[rejected]):,.0f} times smaller than the noise (the median largest output of the
+    rejected samples against the noise's standard deviation), so much so that the last bits of the sums decide:
+    the compiled engine's running sums, within rounding of the left-to-right sums of the thesis (and of the numpy
+    engine), {either(same_as_compiled, "keep the same members here this time, but need not",
+    "keep other members here, and its band differs")}. A narrow band there reflects the noise in that window and
+    carries no information about T1. This is why the first run is read, and the second run's ranges are chosen,
+    from the windows that see a response only.
+""")
 
 # %% [markdown]
 # ## Figure 3.13: the gain
@@ -351,18 +388,19 @@ print(f"  the kept samples' costs span {cost[kept].max() - cost[kept].min():.0e}
 # %%
 ic_figure(res1, "K", 13, "information content of the gain")
 
-# %% [markdown]
-# **Agreement with the thesis.** The gain's information content rises only
-# where the input reaches the output, to about 0.3 at each response, and stays
-# low elsewhere (the small zero-state wobbles are the ranking effect described
-# under Figure 3.12). This matches the thesis's "tendencies to increased
-# information content when the input actuates the output", which "would have
-# been likely to be considered inconclusive". The wide dead-time range is the
-# reason. Only about one sample in five has a dead time that puts any of its
-# response inside a 21-step window at the right place, and only about one in
-# fifty has a dead time within a step of the truth. The behavioural set (the
-# best 10 %) is therefore filled up with samples that barely match, whatever
-# their gain.
+# %%
+k_at = [summary(res1, "K", np.arange(a, b + 1))[0] for a, b in stretches]
+say(f"""
+    **Agreement with the thesis.** The gain's information content rises only where the input reaches the output,
+    to {" and ".join(f"{v:.2f}" for v in k_at)} at the {len(k_at)} responses, and stays low elsewhere (the small
+    zero-state wobbles are the ranking effect described under Figure 3.12). This matches the thesis's "tendencies
+    to increased information content when the input actuates the output", which "would have been likely to be
+    considered inconclusive". The wide dead-time range is the reason. Only
+    {near_truth("theta", n).mean():.1%} of the samples have a dead time that puts any of their response inside a
+    {2 * n + 1}-step window at the right place (within {n} steps of the truth), and only
+    {near_truth("theta", 1).mean():.1%} one within a step of it. The behavioural set (the best {percentage:g} %)
+    is therefore filled up with samples that barely match, whatever their gain.
+""")
 
 # %% [markdown]
 # ## Figures 3.14 and 3.15: the second time constant
@@ -386,17 +424,24 @@ for name in ("T1", "T2"):
           f"over the windows that see a response: {lower_share(res1, name, resp_steps, third[name]):.2f} "
           f"(a flat gradient gives 0.33)")
 
+# %%
+t2_ic, _, t2_band = summary(res1, "T2")
+shares = {name: lower_share(res1, name, resp_steps, third[name]) for name in ("T1", "T2")}
+t2_better = bool(t2_ic >= ic_threshold and t2_ic > t1_ic + 0.1)
+t2_low = bool(shares["T2"] > 0.5)
+say(f"""
+    **Where we differ from the thesis.** The thesis finds that T2 has "substantially better properties" than T1.
+    In its Figure 3.15 the CLD gradient is "considerably larger for the lower part of the uncertainty interval",
+    as it should be for the true value 2/3. {either(not t2_better and not t2_low, "Neither holds here.",
+    "Here: T2 " + either(t2_better, "is", "is not") + " better identified, and its gradient "
+    + either(t2_low, "is", "is not") + " concentrated low.")} Where the output responds T2's information content
+    reaches {t2_ic:.2f} (T1's {t1_ic:.2f}), with the same zero-state flicker as Figure 3.12; at the responses
+    the band of Figure 3.15 is [{t2_band[0]:.2f}, {t2_band[1]:.2f}] of [0, 8]. The lowest third of the range
+    holds {shares["T2"]:.2f} of T2's gradient over the responding windows and {shares["T1"]:.2f} of T1's, against
+    0.33 for a flat gradient (previous cell).
+""")
+
 # %% [markdown]
-# **Where we differ from the thesis.** The thesis finds that T2 has
-# "substantially better properties" than T1. In its Figure 3.15 the CLD
-# gradient is "considerably larger for the lower part of the uncertainty
-# interval", as it should be for the true value 2/3. Neither holds here.
-# Figure 3.14 looks like Figure 3.12: T2's information content is at its floor
-# where the output responds, with the same zero-state flicker. At the responses
-# the band of Figure 3.15 covers almost all of [0, 8], and the gradient is flat.
-# The lowest third of the range holds no more than its share of the gradient
-# (previous cell), and the same is true for T1.
-#
 # Two things explain this. Both follow from the structure of the example,
 # not from the details we had to choose.
 #
@@ -408,37 +453,43 @@ for name in ("T1", "T2"):
 #   the data.
 # * **The behavioural set is diluted.** A sample fits a response well only if
 #   its dead time is within about a step of the truth, its gain close, and the
-#   sum of its lags close to 2.7. That is of the order of one sample in ten
-#   thousand of this four-dimensional box, while the behavioural set is a
-#   tenth of all samples. A lag is then only constrained once the other
-#   parameters' ranges are narrow (see "What limits T1" below). More samples do
-#   not help, because the behavioural set is a fixed share of them. The noise
-#   level hardly matters either (also below).
-#
-# So this first run does not pick out T2 as well identified. The thesis's
-# first run did.
+#   sum of its lags close to 2.7: a small corner of this four-dimensional box
+#   (the share drawn is below), while the behavioural set is a fixed share of
+#   all samples. A lag is then only constrained once the other parameters'
+#   ranges are narrow (see "What limits T1" below). More samples fill the
+#   corner more densely, but the behavioural set grows with them.
+
+# %%
+say(f"""
+    In this run {close_fit.mean():.2%} of the samples ({close_fit.sum()}) have a dead time within a step of the
+    truth, K within 0.3 and T1 + T2 within 0.35 of it, while the behavioural set holds {percentage:g} %. So this
+    first run {either(bool(t2_ic >= ic_threshold), "picks out T2 as well identified, as the thesis's did",
+    "does not pick out T2 as well identified. The thesis's first run did")}.
+""")
 
 # %% [markdown]
 # ## Narrowed ranges for the second run
-#
-# The thesis narrows the ranges of the parameters that the first run
-# identified well (it names theta and T2) and runs DYNIA again. The rule here,
-# computed from the first run:
-#
-# 1. A parameter is **well identified** if its largest information content over
-#    the windows that see a response reaches `ic_threshold` = 0.75.
-# 2. Its new range is its confidence band at the step of that maximum, widened
-#    on each side by `margin` = 0.5 times the band's width (so twice as wide as
-#    the band), and clipped to the old range.
-# 3. Every other parameter keeps its old range. That also keeps its information
-#    content comparable between the two runs, since IC is normalised by the
-#    range.
-#
-# The threshold sits in a wide gap: theta reaches about 0.88, while the other
-# three stay at or below about 0.3, so any threshold between about 0.4 and 0.85
-# makes the same choice. Reading the maximum over all windows instead would pick
-# T1's and T2's zero-state spikes (up to 0.7, at bands that are noise) and put
-# the decision at the mercy of the threshold.
+
+# %%
+above = sorted(v for v in ic_all.values() if v >= ic_threshold)
+below = sorted(v for v in ic_all.values() if v < ic_threshold)
+zero_spikes = max(float(np.nanmax(res1.ic[res1.index(name), ~responding])) for name in ("T1", "T2"))
+say(f"""
+    The thesis narrows the ranges of the parameters that the first run identified well (it names theta and T2)
+    and runs DYNIA again. The rule here, computed from the first run:
+
+    1. A parameter is **well identified** if its largest information content over the windows that see a
+       response reaches `ic_threshold` = {ic_threshold:g}.
+    2. Its new range is its confidence band at the step of that maximum, widened on each side by `margin` =
+       {margin:g} times the band's width, and clipped to the old range.
+    3. Every other parameter keeps its old range. That also keeps its information content comparable between
+       the two runs, since IC is normalised by the range.
+
+    In this run {", ".join(f"{k} {v:.2f}" for k, v in ic_all.items())}: any threshold between
+    {max(below, default=0.0):.2f} and {min(above, default=1.0):.2f} makes the same choice. Reading the maximum
+    over all windows instead would pick T1's and T2's zero-state spikes (up to {zero_spikes:.2f}, at bands that
+    are noise) and put the decision at the mercy of the threshold.
+""")
 
 # %%
 BOUNDS_2 = dict(BOUNDS_1)
@@ -454,11 +505,13 @@ for name in res1.names:
           f"[{BOUNDS_2[name][0]:.2f}, {BOUNDS_2[name][1]:.2f}]"
           + ("  (narrowed)" if name in well_identified else ""))
 
-# %% [markdown]
-# Only the dead time is narrowed, to about a quarter of its first range. T2 is
-# not, for the reasons given under Figure 3.15. This is where the second run
-# departs from the thesis's recipe, and it is the rule applied to our first
-# run, not a choice.
+# %%
+say(f"""
+    Narrowed: {", ".join(f"{name}, to {(BOUNDS_2[name][1] - BOUNDS_2[name][0]) / (BOUNDS_1[name][1] - BOUNDS_1[name][0]):.0%} of its first range" for name in well_identified) or "nothing"}.
+    {either("T2" in well_identified, "T2 is narrowed too, as in the thesis's recipe.", "T2 is not, for the "
+    "reasons given under Figure 3.15. This is where the second run departs from the thesis's recipe, and it is "
+    "the rule applied to our first run, not a choice.")}
+""")
 
 # %% [markdown]
 # ## Second run: Figures 3.16-3.19
@@ -481,44 +534,56 @@ print(f"K, second run: the CLD gradient over the responding windows is largest a
 ic_figure(res2, "T1", 16, "information content of the first time constant, second run")
 identifiability_figure(res2, "T1", 17, "identifiability of the first time constant, second run")
 
-# %% [markdown]
-# **Agreement with the thesis.** With the dead time pinned down, many more
-# samples produce their response at the right time, and fewer poorly fitting
-# samples fill the behavioural set. T1's information content where the output
-# responds doubles, from about 0.12 to about 0.25. It is highest at the end of
-# each response, where the upper limit in Figure 3.17 comes down to about 6:
-# there the data show how fast the output decays, and lags slower than about 6
-# are ruled out. This is the thesis's observation that narrowing the well
-# identified parameters improves the others.
-#
-# **Where we differ.** T1 is still poorly identified. The band still covers
-# both 2/3 and 2, and the gradient inside it is nearly flat. The thesis's
-# Figures 3.16 and 3.17 suggest a clear improvement. Ours is modest, because
-# T2 was not narrowed and the two lags can still swap roles. The experiment
-# under "What limits T1" shows what narrowing T2 would have done. The
-# zero-state spikes of Figure 3.12 are still there, and they are still not
-# information.
+# %%
+t1_ic2, t1_step2, t1_band2 = summary(res2, "T1")
+t1_end = [stretch for stretch in stretches if stretch[0] <= t1_step2 <= stretch[1]]
+covers_both = bool(t1_band2[0] <= TRUE["T2"] and TRUE["T1"] <= t1_band2[1])
+claim(t1_ic2 > t1_ic, "T1's information content where the output responds rises in the second run")
+say(f"""
+    **Agreement with the thesis.** With the dead time pinned down, many more samples produce their response at
+    the right time, and fewer poorly fitting samples fill the behavioural set. T1's information content where
+    the output responds rises from {t1_ic:.2f} to {t1_ic2:.2f} ({t1_ic2 / t1_ic:.1f} times). It is highest at
+    step {t1_step2}{f", {t1_step2 - t1_end[0][0]} steps into the response seen by windows {t1_end[0][0]}-{t1_end[0][1]}" if t1_end else ""},
+    where the upper limit in Figure 3.17 comes down to {t1_band2[1]:.1f}: there the data show how fast the output
+    decays, and slower lags are ruled out. This is the thesis's observation that narrowing the well identified
+    parameters improves the others.
+
+    **Where we differ.** T1 is {either(bool(t1_ic2 < ic_threshold), "still poorly identified", "now well identified")}:
+    the band there, [{t1_band2[0]:.2f}, {t1_band2[1]:.2f}], {either(covers_both, "still covers both 2/3 and 2",
+    "no longer covers both 2/3 and 2")}. The thesis's Figures 3.16 and 3.17 suggest a clear improvement.
+    {either("T2" in well_identified, "", "Ours is modest, because T2 was not narrowed and the two lags can still "
+    "swap roles.")} The experiment under "What limits T1" shows what narrowing T2 would have done. The zero-state
+    spikes of Figure 3.12 are still there (up to {np.nanmax(res2.ic[res2.index("T1"), ~responding]):.2f}), and
+    they are still not information.
+""")
 
 # %%
 ic_figure(res2, "K", 18, "information content of the gain, second run")
 identifiability_figure(res2, "K", 19, "identifiability of the gain, second run")
 
-# %% [markdown]
-# **Agreement with the thesis.** The gain gains the most. Its information
-# content at the responses doubles, from about 0.3 to about 0.6, and the
-# numbers compare directly because K's range is the same in both runs. The band
-# there narrows to about [1.4, 3.4] and contains the true value 2. This matches
-# the thesis's Figures 3.18 and 3.19: in the second run the gain is identified
-# where the input actuates the output.
-#
-# **Where we differ, or add to the thesis.** The gradient, summed over the
-# responding windows, peaks near the truth (at about 2.2 with this seed, cell
-# above Figure 3.16), but its mass is skewed upwards: its likelihood-weighted mean is
-# about 3. Most behavioural samples still have lags slower than the truth,
-# because the lag ranges are wide. A slow lag needs a larger gain to reach the
-# measured peak within a 10-step pulse, so the gain is pulled up. In the zero
-# state the gain changes nothing in the output, and what shows there is again
-# the ranking effect of Figure 3.12.
+# %%
+k_ic1, k_ic2 = summary(res1, "K")[0], summary(res2, "K")[0]
+k_band2 = summary(res2, "K")[2]
+gains = {name: summary(res2, name)[0] - summary(res1, name)[0] for name in ("K", "T1", "T2")}
+k_peak = res2.bin_centres[p_k][np.argmax(k_mass)]
+k_mean = np.sum(k_mass * res2.bin_centres[p_k]) / k_mass.sum()
+lags_slow = float(np.mean(res2.samples[:, res2.index("T1")] + res2.samples[:, res2.index("T2")]
+                          > TRUE["T1"] + TRUE["T2"]))
+say(f"""
+    **Agreement with the thesis.** The gain {either(max(gains, key=gains.get) == "K", "gains the most",
+    "gains too")}: its information content at the responses rises from {k_ic1:.2f} to {k_ic2:.2f}
+    ({k_ic2 / k_ic1:.1f} times), and the numbers compare directly because K's range is the same in both runs.
+    The band there is [{k_band2[0]:.2f}, {k_band2[1]:.2f}] and {either(bool(k_band2[0] <= TRUE["K"] <= k_band2[1]),
+    "contains", "misses")} the true value 2. This matches the thesis's Figures 3.18 and 3.19: in the second run
+    the gain is identified where the input actuates the output.
+
+    **Where we differ, or add to the thesis.** The gradient, summed over the responding windows, peaks at
+    {k_peak:.2f} (cell above Figure 3.16), but its likelihood-weighted mean is {k_mean:.2f}:
+    {either(bool(k_mean > k_peak), "its mass is skewed upwards", "its mass is not skewed upwards")}. The lag
+    ranges are wide, and {lags_slow:.0%} of the samples have lags slower in sum than the truth's. A slow lag needs
+    a larger gain to reach the measured peak within a 10-step pulse, so the gain is pulled up. In the zero state
+    the gain changes nothing in the output, and what shows there is again the ranking effect of Figure 3.12.
+""")
 
 # %% [markdown]
 # ## What limits T1 (beyond the thesis)
@@ -560,14 +625,22 @@ for label, data, change in cases:
     print(f"{label:<30}" + "".join(f"{extra[label][name][0]:6.2f}" for name in ("K", "T1", "T2"))
           + f"   [{low:.2f}, {high:.2f}]")
 
-# %% [markdown]
-# Knowing the dead time exactly lifts T1 only to about 0.4, because K and the
-# other lag still span their wide ranges. Narrowing T2 as well is what makes T1
-# clearly better (about 0.6, with a band of about [0.6, 3.5] around the true 2)
-# and the gain better still (about 0.8). That is the thesis's
-# second-run result, and it needs the T2 narrowing that our first run gives no
-# grounds for. A quarter of the noise leaves the first run almost unchanged:
-# what limits the first run is the share of the box that fits, not the noise.
+# %%
+known, both = extra["theta known"], extra["theta known, T2 in [0, 4/3]"]
+quiet, base = extra["first run, noise / 4"], extra["first run"]
+quiet_change = max(abs(quiet[name][0] - base[name][0]) for name in ("K", "T1", "T2"))
+claim(both["T1"][0] > known["T1"][0] and both["K"][0] > known["K"][0],
+      "narrowing T2 as well lifts T1 and the gain above what knowing the dead time gives")
+say(f"""
+    Knowing the dead time exactly lifts T1 only to {known["T1"][0]:.2f}, because K and the other lag still span
+    their wide ranges. Narrowing T2 as well is what makes T1 clearly better ({both["T1"][0]:.2f}, with a band of
+    [{both["T1"][2][0]:.2f}, {both["T1"][2][1]:.2f}], which {either(bool(both["T1"][2][0] <= TRUE["T1"] <= both["T1"][2][1]),
+    "holds", "misses")} the true 2) and the gain better still ({both["K"][0]:.2f}). That is the thesis's second-run
+    result, and it needs the T2 narrowing that our first run {either("T2" in well_identified, "gives",
+    "gives no")} grounds for. A quarter of the noise changes the first run's maximum IC of K, T1 and T2 by at
+    most {quiet_change:.2f}: {either(bool(quiet_change < 0.1), "what limits the first run is the share of the box "
+    "that fits, not the noise", "the noise matters here too")}.
+""")
 
 # %% [markdown]
 # ## The thesis's code path
@@ -611,26 +684,39 @@ print("samples per theta bin around the truth (corrected bins): " + ", ".join(
     f"{edges[b]:.1f}-{edges[b + 1]:.1f}: {counts[b]}" for b in range(bins) if abs(edges[b] - TRUE["theta"]) <= 5)
     + f" (mean {n_samples / bins:.0f})")
 
-# %% [markdown]
-# What this says about the thesis's observations for this example (numbers
-# above, default parameters):
-#
-# * **The dead time identified when the response arrives** (Figures 3.10,
-#   3.11) and **T1 and the gain poorly identified in the first run**: the
-#   data. The information content and limits are the same on both paths.
-# * **T2's gradient "considerably larger for the lower part of the
-#   uncertainty interval"** (Figure 3.15) does not come from `cld_gradient`:
-#   on the same costs its gradient holds less than a flat third of its mass
-#   in the lower third (0.29 for T1, 0.30 for T2), about as little as the
-#   likelihood mass (0.27, 0.28). Nor can the data give it (the
-#   two lags are interchangeable, see under Figure 3.15). What the thesis saw
-#   there came from its own ranges, samples or record, none of which it gives.
-# * **Where the dead time's gradient is darkest**: just below the truth on
-#   both paths, 97.5-100.0 on the engine's 2.5-wide bins and 96.2-98.7 on
-#   `cld_gradient`'s 100/39-wide rows, as the band's centre (about 98, under
-#   Figure 3.11) is: the data, through the trade-off between dead time and
-#   lags. The bins around the truth hold between about 480 and 520 samples,
-#   against 500 expected, too even to move the darkest bin.
+# %%
+port_shares = {name: lower_share(thesis_first, name, resp_steps, third[name]) for name in ("T1", "T2")}
+
+
+def darkest_theta(result):
+    p = result.index("theta")
+    mass = np.nansum(result.gradient[p][:, resp_steps], axis=1)
+    half = (result.bin_centres[p, 1] - result.bin_centres[p, 0]) / 2
+    row = int(np.argmax(mass))
+    return result.bin_centres[p, row] - half, result.bin_centres[p, row] + half
+
+
+dark_engine, dark_port = darkest_theta(res1), darkest_theta(thesis_first)
+near = [counts[b] for b in range(bins) if abs(edges[b] - TRUE["theta"]) <= 5]
+below_truth = bool(dark_engine[1] <= TRUE["theta"] and dark_port[1] <= TRUE["theta"])
+say(f"""
+    What this says about the thesis's observations for this example (numbers above):
+
+    * **The dead time identified when the response arrives** (Figures 3.10, 3.11) and **T1 and the gain poorly
+      identified in the first run**: the data. The information content and limits are the same on both paths.
+    * **T2's gradient "considerably larger for the lower part of the uncertainty interval"** (Figure 3.15)
+      {either(port_shares["T2"] < 0.5, "does not come from `cld_gradient`", "could come from `cld_gradient`")}: on
+      the same costs its gradient holds {port_shares["T1"]:.2f} of T1's mass and {port_shares["T2"]:.2f} of T2's
+      in the lower third (a flat gradient: 0.33), against {shares["T1"]:.2f} and {shares["T2"]:.2f} for the
+      likelihood mass. Nor can the data give it (the two lags are interchangeable, see under Figure 3.15). What the
+      thesis saw there came from its own ranges, samples or record, none of which it gives.
+    * **Where the dead time's gradient is darkest**: {dark_engine[0]:.1f}-{dark_engine[1]:.1f} on the engine's
+      {edges[1] - edges[0]:g}-wide bins and {dark_port[0]:.1f}-{dark_port[1]:.1f} on `cld_gradient`'s
+      100/{bins - 1}-wide rows{either(below_truth, ", just below the truth on both paths", "")}, with the band's
+      centre at {theta_band.mean():.1f} (under Figure 3.11): the data, through the trade-off between dead time
+      and lags. The bins within 5 of the truth hold {min(near)} to {max(near)} samples, against
+      {n_samples / bins:.0f} expected.
+""")
 
 # %% [markdown]
 # ## Checked numbers

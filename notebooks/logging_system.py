@@ -81,9 +81,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 import sqlalchemy as sa
-from IPython.display import Markdown, display
 
 import dynia
+from dynia.claims import say
 
 os.makedirs(figure_dir, exist_ok=True)
 
@@ -315,12 +315,14 @@ fig.savefig(f"{figure_dir}/logging_system_rounds.png", dpi=120, bbox_inches="tig
 # from the last commit.
 
 # %%
-display(Markdown(
+say(
     f"The live follower was killed after {killed['seconds']:.1f} s with {killed['steps']} steps committed "
     f"({killed['steps'] - rounds[live_round][0]} of the round's {rounds[live_round][1] - rounds[live_round][0]}), "
     f"while the logger had written {killed['rows_logged']} rows. These numbers depend on the machine's speed, "
-    "and are not checked."
-))
+    "and are not checked. Its log up to the kill:"
+)
+
+# %%
 print(killed["stderr"])
 
 # %% [markdown]
@@ -414,12 +416,12 @@ for change in changes.itertuples():
     lines.append(f"- **{change.parameter}** went from `{change.previous}` to `{change.verdict}` when the follower "
                  f"judged the log at {change.time:g} s ({rows} rows){because}.")
 first = events[events.previous.isna()]
-display(Markdown(
+say(
     "The first judgement (after round 1) gave "
     + ", ".join(f"{row.parameter} `{row.verdict}`" + (f" ({row.reasons})" if row.reasons else "")
                 for row in first.itertuples())
     + ". Then:\n\n" + "\n".join(lines)
-))
+)
 
 # %%
 gain_turned = changes[(changes.parameter == "K") & (changes.previous == "identified") & (changes.verdict == "suspect")]

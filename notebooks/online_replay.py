@@ -55,6 +55,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import dynia
+from dynia.claims import claim, either, say
 from dynia.online import OnlineDynia
 
 os.makedirs(figure_dir, exist_ok=True)
@@ -153,18 +154,44 @@ for p, name in enumerate(online.names):
           f"offline (centred) {centred.ic[p, best_centred]:.2f} at {seconds[best_centred]:g} s")
 print(f"the online trend runs n*dt = {n * data.dt:g} s behind the centred analysis")
 
+# %%
+input_changes = np.flatnonzero(np.diff(data.u)) + 1  # samples where the lamp voltage steps
+
+
+def level_at(t):
+    """The lamp voltage at time t and the time of the step that set it (0 for the first level)."""
+    i = int(np.searchsorted(seconds, t))
+    earlier = input_changes[input_changes <= i]
+    return float(data.u[i]), float(seconds[earlier[-1]]) if earlier.size else 0.0
+
+
+def window_text(t):
+    """The trailing window that ends at time t, and the lamp steps inside it (or the level it sits on)."""
+    volts, since = level_at(t)
+    start = t - 2 * n * data.dt
+    inside = [i for i in input_changes if start < seconds[i] <= t]
+    if not inside:
+        return f"the window from {start:g} to {t:g} s, on the {volts:g} V level set at {since:g} s"
+    return f"the window from {start:g} to {t:g} s, which holds " + " and ".join(
+        f"the step from {data.u[i - 1]:g} V to {data.u[i]:g} V at {seconds[i]:g} s" for i in inside)
+
+
+best_k, best_t = (int(np.nanargmax(trend_ic[p])) for p in range(2))
+t_band_best = trend_band[1, best_t]
+at_end = bool(best_t >= u.size - 2 * n - 1)
+say(f"""
+    The gain's information content builds up while the plate settles on each input level; it is highest, at
+    {trend_ic[0, best_k]:.2f}, at {seconds[best_k]:g} s, in {window_text(seconds[best_k])}, with the band
+    [{trend_band[0, best_k, 0]:.1f}, {trend_band[0, best_k, 1]:.1f}] degC/V. The time constant's rises in the
+    transients just after each step, while the window holds them, and falls once the window has moved past. Its
+    highest value, {trend_ic[1, best_t]:.2f}, comes at {seconds[best_t]:g} s{either(at_end, ", at the end of the record",
+    "")}, with the band [{t_band_best[0]:.1f}, {t_band_best[1]:.1f}] s{either(bool(t_band_best[0] < 5), ", pressed "
+    "against zero", "")}. {either(at_end, "There the plate drifts below its starting temperature although the lamp "
+    "is back at the operating point's 6 V, which no linear model around that point can follow. ", "")}Whether that
+    peak is an estimate, the verdicts below say.
+""")
+
 # %% [markdown]
-# The gain's information content builds up while the plate settles on each
-# input level and is highest at the end of the first 9 V plateau, where its
-# band closes; the time constant's rises in the transients just after each
-# step, while the window holds them, and falls once the window has moved past.
-# Its highest value, though, comes at the end of the record with the band
-# pressed against zero: there the plate drifts below its starting temperature
-# although the lamp is back at the operating point's 6 V, which no linear
-# model around that point can follow. As the README says for the offline
-# analysis, that peak is no estimate: the sets the window keeps fit the drift
-# equally well within the noise (the verdicts below leave it out).
-#
 # The printed times show the price of being online: each result is known n
 # samples after the middle of its window, so the trend shows the centred
 # analysis's peaks n*dt later; wherever both exist the values are identical
@@ -224,26 +251,43 @@ for name, line in replayed.summary().items():
     print(f"{name}: reported IC {line['max_ic']:.2f} at {line['time_of_max_ic']:g} s, band [{low:.1f}, {high:.1f}]: "
           f"{line['verdict']} ({', '.join(reason['code'] for reason in line['reasons']) or 'no reason for doubt'})")
 
-# %% [markdown]
-# Only the first two windows, ending at 0 and 2 s while the window is still
-# filling up, lie below the floor; the rest of the record tells parameter
-# values apart. Each verdict judges the window of highest IC among those
-# that can be evidence (whole, above the floor, behavioural set not tied
-# within noise) when one reaches 0.5: the printed "reported IC". The
-# verdicts say what the trend alone does not. The time constant is
-# `identified` at 856 s, in the transient after the step to 8 V at 800 s (IC
-# 0.83, band [40.3, 73.5] s). Its highest IC of all, 0.91 at the end of the
-# record (1600 s, band [1.3, 18.7] s), is not the one reported: that window
-# is whole and above the floor, but its behavioural set ties within noise: in
-# the plate's slow drift at the end the sets the window keeps fit it equally
-# well, so which of them it keeps, and the band, is a ranking of noise. The
-# gain's highest IC, 0.87 at 416 s (the window from 376 to 416 s, over the
-# end of the first 9 V plateau and the step down at 400 s), is `suspect`
-# (`windows_disagree`): grouped into stretches, the windows where its IC
-# reaches 0.5 give bands that rule each other out, so no single gain fits
-# them all. That is the thesis's warning about the model structure (section
-# 4.4), the one the README finds offline: the gain of a linear model of this
-# plate moves with the operating point.
+# %%
+verdict_lines = replayed.summary()
+below_floor = seconds[~replayed.informative]
+evidence = replayed.informative_windows(0.0)
+
+
+def reasons_of(line):
+    return ", ".join(f"`{reason['code']}`" for reason in line["reasons"])
+
+
+def line_sentence(name):
+    line = verdict_lines[name]
+    return (f"`{line['verdict']}`" + (f" ({reasons_of(line)})" if line["reasons"] else "")
+            + f" at {line['time_of_max_ic']:g} s, in {window_text(line['time_of_max_ic'])} (IC "
+            f"{line['max_ic']:.2f}, band [{line['band'][0]:.1f}, {line['band'][1]:.1f}])")
+
+
+t_all = int(np.nanargmax(replayed.ic[1]))
+t_not_reported = bool(seconds[t_all] != verdict_lines["T"]["time_of_max_ic"])
+claim(bool(np.all(below_floor <= 2 * n * data.dt)), "only windows that are still filling up lie below the floor")
+say(f"""
+    Only {below_floor.size} window(s), ending at {" and ".join(f"{t:g}" for t in below_floor)} s while the window is still
+    filling up, lie below the floor; the rest of the record tells parameter values apart. Each verdict judges the
+    window of highest IC among those that can be evidence (whole, above the floor, behavioural set not tied within
+    noise) when one reaches 0.5: the printed "reported IC". The verdicts say what the trend alone does not. The
+    time constant is {line_sentence("T")}. Its highest IC of all, {replayed.ic[1, t_all]:.2f} at {seconds[t_all]:g} s
+    (band [{replayed.ci[1, t_all, 0]:.1f}, {replayed.ci[1, t_all, 1]:.1f}] s),
+    {either(t_not_reported, "is not the one reported", "is the one reported")}{either(t_not_reported and not bool(
+    evidence[1, t_all]) and bool(replayed.informative[t_all]), ": that window is whole and above the floor, but its "
+    "behavioural set ties within noise: in the plate's slow drift at the end the sets the window keeps fit it "
+    "equally well, so which of them it keeps, and the band, is a ranking of noise", "")}. The gain is
+    {line_sentence("K")}{either(verdict_lines["K"]["verdict"] == "suspect" and any(reason["code"] == "windows_disagree"
+    for reason in verdict_lines["K"]["reasons"]), ": grouped into stretches, the windows where its IC reaches 0.5 "
+    "give bands that rule each other out, so no single gain fits them all. That is the thesis's warning about the "
+    "model structure (section 4.4), the one the README finds offline: the gain of a linear model of this plate "
+    "moves with the operating point", "")}.
+""")
 
 # %%
 # NBVAL_CHECK_OUTPUT

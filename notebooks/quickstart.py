@@ -37,6 +37,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import dynia
+from dynia.claims import claim, either, say
 
 os.makedirs(figure_dir, exist_ok=True)
 
@@ -60,13 +61,21 @@ for row, (name, true_value) in enumerate(example.truth.items()):
     res.plot_identifiability(name, ax=axes[row, 1], true_value=true_value)
 fig.savefig(f"{figure_dir}/quickstart_example1.png", dpi=120)
 
+# %%
+steady = np.r_[40:130, 180:320, 350:390]  # away from every input change
+k_steady, k_settled = float(res.ic[0, steady].mean()), float(res.ic[0, 450:].mean())
+t_peak_step = int(np.nanargmax(res.ic[1]))
+claim(k_settled < k_steady and t_peak_step >= 399,
+      "the gain loses its information at zero; the time constant's highest IC follows the final step to zero")
+say(f"""
+    The gain is well identified (a mean IC of {k_steady:.2f}) wherever the input is steady and non-zero, and loses
+    its information once the system has settled at zero (a mean of {k_settled:.2f} over steps 450-499); the time
+    constant is the mirror image, with small peaks at the two short dips and its highest information content
+    after the final step to zero (step {t_peak_step}). That is the thesis's finding for this example (its Figures
+    3.3 to 3.6).
+""")
+
 # %% [markdown]
-# The gain is well identified (IC near 0.9) wherever the input is steady and
-# non-zero, and loses its information once the system has settled at zero; the
-# time constant is the mirror image, with small peaks at the two short dips and
-# its highest information content after the final step to zero. That is the
-# thesis's finding for this example (its Figures 3.3 to 3.6).
-#
 # Two things the thesis's figures do not show. `ic_error=True` adds the Monte
 # Carlo standard error of every IC value (`res.ic_se`, shaded as IC +- 2 SE
 # in the left panels): another sample of the same size would give another
@@ -90,24 +99,36 @@ for name, line in res.summary().items():
 print(f"informative windows: {res.informative.mean():.0%} of the steps, the last at step "
       f"{np.flatnonzero(res.informative)[-1]}")
 
-# %% [markdown]
-# With the default parameters the gain's reported IC, 0.92 at step 342, is
-# `identified`, with a band that holds K = 2. The time constant's highest IC
-# of all is not the one reported: it lies in the steps after the final step to
-# zero (about 0.9 in the figure; 0.68 on average over steps 405-440, printed
-# below), where every fast or small-gain parameter set predicts about zero, so
-# the sets those windows keep tie within the noise, and from step 434 on the
-# windows lie below the floor. Neither can be evidence. The summary reports
-# the highest IC among the windows that can: 0.57 at step 411, in the decay
-# twelve steps after the step to zero. Its band [1.68, 4.67] holds T = 3, and
-# the verdict is `identified`. After the last informative step printed above
-# the data are the noise around zero, and no window is informative. Read the
-# IC together with its verdict; the README's "What the verdicts mean" lists
-# the rules.
+# %%
+lines = res.summary()
+K_line, T_line = lines["K"], lines["T"]
+t_all = int(np.nanargmax(res.ic[1]))
+evidence = res.informative_windows(0.0)[1]
+last_informative = int(np.flatnonzero(res.informative)[-1])
+t_reported = int(T_line["time_of_max_ic"])
+
+
+def holds_truth(line, name):
+    return bool(line["band"][0] <= example.truth[name] <= line["band"][1])
+
+
+not_evidence = either(not bool(evidence[t_all]), ": that window cannot be evidence, since it lies below the noise "
+                      "floor or the sets it keeps tie within the noise (after the final step to zero every fast or "
+                      "small-gain parameter set predicts about zero)", "")
+say(f"""
+    The gain's reported IC, {K_line["max_ic"]:.2f} at step {K_line["time_of_max_ic"]:.0f}, is `{K_line["verdict"]}`,
+    with a band that {either(holds_truth(K_line, "K"), "holds", "misses")} K = 2. The time constant's highest IC of
+    all, {res.ic[1, t_all]:.2f} at step {t_all}, {either(t_all != t_reported, "is not the one reported",
+    "is the one reported")}{not_evidence}. From step {last_informative + 1} on the windows lie below the
+    floor. The summary reports the highest IC among the windows that can be evidence: {T_line["max_ic"]:.2f} at
+    step {t_reported}, {t_reported - 399} steps after the step to zero. Its band [{T_line["band"][0]:.2f},
+    {T_line["band"][1]:.2f}] {either(holds_truth(T_line, "T"), "holds", "misses")} T = 3, and the verdict is
+    `{T_line["verdict"]}`. After the last informative step the data are the noise around zero, and no window is
+    informative. Read the IC together with its verdict; the README's "What the verdicts mean" lists the rules.
+""")
 
 # %%
 # NBVAL_CHECK_OUTPUT
-steady = np.r_[40:130, 180:320, 350:390]
 print("mean IC of K on steady non-zero input:", round(float(res.ic[0, steady].mean()), 2))
 print("mean IC of T after the final step (steps 405-440):", round(float(res.ic[1, 405:440].mean()), 2))
 print("verdicts:", {name: line["verdict"] for name, line in res.summary().items()})
@@ -166,20 +187,32 @@ for label, options in (("thesis defaults", {}), ("suggested", dict(n=proposal.n,
           f"band [{low:.0f}, {high:.0f}] s (true 170): {line['verdict']} "
           f"({', '.join(reason['code'] for reason in line['reasons']) or 'no reason for doubt'})")
 
-# %% [markdown]
-# With the thesis's defaults the time constant is not found: a 21-second
-# window sees a few percent of a 170-second response, and the best 10 % of the
-# samples span most of T's range wherever the response bends. No window that
-# can be evidence brings T's IC to 0.5, so the summary reports the highest IC
-# of all; with the default parameters that is 0.61 at 54 s, at the first step
-# (60 s), in a window whose best sets tie within the noise: its band [291,
-# 484] s misses 170 s, and the verdict is `suspect` (`noise_ranked`). With the
-# suggested window, share and sample count the reported IC, 0.76 at 3382 s,
-# comes from the step at 3360 s, its band [113, 236] s holds the true 170 s,
-# and the verdict is `identified` (the printed lines). The proposal is a
-# starting point: its reasons say what it assumed (one dominant time constant,
-# a model that can fit the record), and `dynia suggest` on the command line
-# prints the command to run.
+# %%
+default_line, suggested_line = (heater_runs[label].summary()["T"] for label in ("thesis defaults", "suggested"))
+steps_at = np.flatnonzero(np.diff(heater_input)) + 1  # the heater's step times (s)
+
+
+def nearest_step(t):
+    return int(steps_at[np.argmin(np.abs(steps_at - t))])
+
+
+def heater_sentence(line):
+    reasons = ", ".join(f"`{reason['code']}`" for reason in line["reasons"])
+    return (f"{line['max_ic']:.2f} at {line['time_of_max_ic']:.0f} s, near the step at "
+            f"{nearest_step(line['time_of_max_ic'])} s; its band [{line['band'][0]:.0f}, {line['band'][1]:.0f}] s "
+            f"{either(bool(line['band'][0] <= 170 <= line['band'][1]), 'holds', 'misses')} the true 170 s, and the "
+            f"verdict is `{line['verdict']}`" + (f" ({reasons})" if reasons else ""))
+
+
+default_found = bool(default_line["verdict"] == "identified" and default_line["band"][0] <= 170 <= default_line["band"][1])
+say(f"""
+    With the thesis's defaults the time constant is {either(default_found, "found", "not found")}: a 21-second window
+    sees a few percent of a 170-second response, and the best 10 % of the samples span most of T's range wherever
+    the response bends. The summary reports {heater_sentence(default_line)}. With the suggested window, share and
+    sample count the reported IC is {heater_sentence(suggested_line)} (the printed lines). The proposal is a
+    starting point: its reasons say what it assumed (one dominant time constant, a model that can fit the record),
+    and `dynia suggest` on the command line prints the command to run.
+""")
 
 # %%
 # NBVAL_CHECK_OUTPUT
