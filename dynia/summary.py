@@ -71,7 +71,8 @@ def verdict_table(parameters):
 
     The evidence is the number of windows with IC >= 0.5 above the noise
     floor and the times of the first and the last of them ("from", "to").
-    ``parameters`` is ``summary["parameters"]`` of :func:`write_analysis`.
+    ``parameters`` is ``summary["parameters"]`` of :func:`dynia.cli.report.write_analysis`, or a result's
+    :meth:`~dynia.result.DyniaResult.summary`.
     """
     header, rows, notes = verdict_parts(parameters)
     return "\n".join(aligned(header, rows) + notes)

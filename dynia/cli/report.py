@@ -1,7 +1,7 @@
 """What the command line writes: result tables, ``summary.json``, figures, ``report.html`` and the verdict table.
 
 :func:`write_analysis` fills a result directory of ``dynia analyse``,
-:func:`write_identification` one of ``dynia identify``; :func:`verdict_table`
+:func:`write_identification` one of ``dynia identify``; :func:`dynia.summary.verdict_table`
 is the short table ``dynia analyse`` prints on success, :func:`identification_table`
 the one ``dynia identify`` prints. Times are written as
 the data file wrote them (:func:`file_times`). Figures are decimated
