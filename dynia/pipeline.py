@@ -495,15 +495,21 @@ def warn_unreached_output(u, y, model, box, settings):
         return
     corners = np.array(list(itertools.product(*box)))
     order = [model.names.index(name) for name in model.names]
-    try:
-        with warnings.catch_warnings(), np.errstate(all="ignore"):
-            warnings.simplefilter("ignore")
+    # Corners that overflow or give NaN (an unstable corner, a record of missing values) are no reach: no warnings.
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        warnings.simplefilter("ignore")
+        try:
             sims = np.asarray(model.simulate(corners[:, order], u, dt=settings.dt, x0=settings.x0), dtype=float)
-    except DyniaError:
+        except DyniaError:
+            return
+        sims[~np.isfinite(sims)] = np.nan
+        corner_sizes = np.nanpercentile(np.abs(sims), 99, axis=1)
+        size = float(np.nanpercentile(np.abs(y), 99))
+    known = np.isfinite(corner_sizes)
+    if not known.any():  # every corner overflowed: what the box reaches is unknown
         return
-    reach = np.nanmax(np.nanpercentile(np.abs(sims), 99, axis=1), initial=0.0)
-    size = float(np.nanpercentile(np.abs(y), 99))
-    if np.isfinite(size) and size > 0 and np.isfinite(reach) and reach < _REACHED_SHARE * size:
+    reach = float(corner_sizes[known].max())
+    if np.isfinite(size) and size > 0 and reach < _REACHED_SHARE * size:
         warnings.warn(
             f"no parameter set in the box reaches the output's size: the largest output of the box's corners is "
             f"{reach:.3g}, the output's {size:.3g} (99th percentiles of the magnitudes), three decades and more "

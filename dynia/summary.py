@@ -138,8 +138,8 @@ def aligned(header, rows):
 
 
 def _time_format(parameters):
-    """How the table writes the summary's times: seconds as short numbers; dates as days when every date shown is a
-    midnight (a daily record), else to the second; the command's own texts as they are."""
+    """How the table writes the summary's times: seconds as the command prints them (``1580.0``); dates as days when
+    every date shown is a midnight (a daily record), else to the second; the command's own texts as they are."""
     dates = [
         value
         for entry in parameters.values()
@@ -153,8 +153,6 @@ def _time_format(parameters):
             return "-"
         if isinstance(value, np.datetime64):
             return str(np.datetime_as_string(value, unit="D" if daily else "s"))
-        if isinstance(value, float):
-            return f"{value:g}"
         return str(value)
 
     return text

@@ -145,13 +145,21 @@ def test_every_sample_overflowing_is_a_clear_error(client):
         run(u, u, unstable_model(), {"K": (0.1, 2.0), "a": (900.0, 1000.0)}, client=client, n_samples=20, n=3, rng=1)
 
 
+def _refuses_negative_time_constants(params, u, dt):
+    """A user's model (not probed before the run, as dynia's own are) that refuses some sets on a worker."""
+    if (params[:, 1] < 0).any():
+        raise ValueError("T must be >= 0")
+    return FirstOrder().simulate(params, u, dt=dt)
+
+
 def test_a_model_error_on_a_worker_reaches_the_caller_with_its_sample_chunk(client, record):
     u, y = record
     bounds = {"K": (0.0, 7.0), "T": (-1.0, 7.0)}  # negative time constants: rejected by the model
     samples = dynia.sampling.uniform(300, [[0.0, 7.0], [-1.0, 7.0]], rng=6)
     assert samples[0, 1] >= 0 and (samples[100:, 1] < 0).any()  # the first chunk's samples pass the client check
+    model = dynia.models.FunctionModel(_refuses_negative_time_constants, ["K", "T"])
     with pytest.raises(ValueError, match=r"sample chunk of samples \d+ to \d+.*T must be >= 0"):
-        run(u, y, FirstOrder(), bounds, client=client, sample_chunks=100, n_samples=300, n=5, rng=6)
+        run(u, y, model, bounds, client=client, sample_chunks=100, n_samples=300, n=5, rng=6)
 
 
 @pytest.mark.parametrize(
