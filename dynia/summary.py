@@ -15,8 +15,9 @@ Examples
 >>> summary["K"]["verdict"], list(summary.to_frame().columns[:3])
 ('identified', ['max IC', 'at', 'band'])
 >>> print(summary)  # doctest: +ELLIPSIS
-parameter  max IC  at  band ...  verdict
-K          ...
+parameter  max IC  at...verdict
+K          0.910...identified
+T...
 """
 
 import html
