@@ -329,7 +329,7 @@ def run(
         )
         screened = screened.result()
     result = _result(u, y, model, names, box, samples, settings, flavour_impl, windows, analysed, totals, screened)
-    warn_unreached_output(u, y, model, box, settings)
+    warn_unreached_output(u, y, model, names, box, settings)
     # The least squares simulates a few sets at a time, some ten times: through the kernel where dynia.run does.
     result = record_least_squares(result, u, y, KernelSimulated(model) if windows.fused else model)
     return result if timestamps is None else dataclasses.replace(result, timestamps=timestamps)

@@ -236,7 +236,7 @@ def run(
         else:
             result = _analyse_to_target(u, y, model, names, box, samples, settings, generator, progress, output)
         result = dataclasses.replace(result, run=dataclasses.replace(result.run, screened=screened))
-        warn_unreached_output(u, y, model, box, settings)
+        warn_unreached_output(u, y, model, names, box, settings)
         # The least squares simulates a few sets at a time: through the kernel where the analysis ran on it.
         kernel = result.settings.engine == "numba" and compiled_simulation(model)
         result = record_least_squares(result, u, y, KernelSimulated(model) if kernel else model)
@@ -476,9 +476,10 @@ _REACHED_SHARE = 1e-3
 _MOST_CORNERS = 6
 
 
-def warn_unreached_output(u, y, model, box, settings):
+def warn_unreached_output(u, y, model, names, box, settings):
     """Warn (:class:`UnreachedOutputWarning`) when no corner of the parameter box reaches a thousandth of the output.
 
+    ``box`` holds the bounds of the parameters ``names``, in that order.
     The size of a signal is its 99th percentile of ``|value|`` (one spike
     does not set it). The corners of the box hold each parameter's extremes,
     so for the usual models the largest output any set in the box can give;
@@ -494,7 +495,7 @@ def warn_unreached_output(u, y, model, box, settings):
     if n_params > _MOST_CORNERS:
         return
     corners = np.array(list(itertools.product(*box)))
-    order = [model.names.index(name) for name in model.names]
+    order = [names.index(name) for name in model.names]  # the box's rows follow names, the model's columns its own
     # Corners that overflow or give NaN (an unstable corner, a record of missing values) are no reach: no warnings.
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")

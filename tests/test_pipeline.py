@@ -199,3 +199,13 @@ def test_a_range_the_model_refuses_is_named_by_its_parameter_before_any_set_is_d
     ) as refused:
         dynia.run(u, y, FirstOrder(), {"K": (0, 7), "T": (-1, 7)}, n_samples=300, rng=1)
     assert refused.value.setting == "T" and "sample" not in str(refused.value)
+
+
+def test_the_reach_of_the_box_follows_the_bounds_order_not_the_models():
+    """Bounds given T first: the corners must still put K's range in K's column (a gain up to 1e5 reaches 1e4)."""
+    u = np.r_[np.zeros(20), np.ones(80), np.zeros(100)]
+    y = FirstOrder().simulate([[1e4, 3.0]], u)[0]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        dynia.run(u, y, FirstOrder(), {"T": (0.1, 7), "K": (0, 1e5)}, n_samples=300, n=5, rng=1)
+    assert not [item for item in caught if item.category is dynia.pipeline.UnreachedOutputWarning]
