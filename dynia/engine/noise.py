@@ -152,13 +152,14 @@ parameters, puts the minimum MAE far below the best fit's (the minimum of N
 independent MAEs): there the windows' estimate is low; give sigma to
 :func:`noise_floor` when it is known.
 
-Measured (``notebooks/ch2_method.py``, section "The noise floor under
+Measured in ``notebooks/ch2_method.py`` (section "The noise floor under
 coloured noise"; 20 records of 500 steps, first-order model, 2000 samples,
 n = 10, AR(1) noise of SD 1 with lag-1 autocorrelation 0, 0.5, 0.9, 0.98):
-on pure noise (K in [0, 1] on input levels in [0, 1], every set's output
-within one noise SD) no record has an informative window at any of the four
-(the white-noise floor: 0, 0, 13 and 19 of 20); on a response of up to 6
-noise SDs 88, 84, 83 and 92 % of the windows are informative.
+how many pure-noise records (K in [0, 1] on input levels in [0, 1], every
+set's output within one noise SD) still show an informative window, against
+the white-noise floor, and which share of the windows of a response of up to
+6 noise SDs is informative. The counts are printed by that report
+(``reports/ch2_method.html``) from its run, so they stay those of the code.
 
 Examples
 --------
