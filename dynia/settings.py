@@ -219,7 +219,8 @@ class AnalysisSettings:
         "band" would hold less than half of the behavioural set.
     flavour : {"thesis", "mcat", "weighted"}, default "thesis"
         The variant of the method: the thesis's, MCAT's, or the thesis's with
-        likelihood-weighted limits (the README's table of flavours).
+        likelihood-weighted limits (the table of flavours in the user guide,
+        docs/guide/package.rst).
     x0 : {"zero", "steady"}, default "zero"
         Initial state of every simulation: zero, or steady at the first input.
     min_points : int, default 1

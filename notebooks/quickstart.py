@@ -124,7 +124,7 @@ say(f"""
     step {t_reported}, {t_reported - 399} steps after the step to zero. Its band [{T_line["band"][0]:.2f},
     {T_line["band"][1]:.2f}] {either(holds_truth(T_line, "T"), "holds", "misses")} T = 3, and the verdict is
     `{T_line["verdict"]}`. After the last informative step the data are the noise around zero, and no window is
-    informative. Read the IC together with its verdict; the README's "What the verdicts mean" lists the rules.
+    informative. Read the IC together with its verdict; the user guide's "What the verdicts mean" lists the rules.
 """)
 
 # %%
@@ -144,7 +144,7 @@ print("share of informative windows:", round(float(res.informative.mean()), 2))
 # with gain 0.6 degC per % and a time constant of 170 s, noise 0.15 degC.
 # `dynia.suggestion` proposes settings from the record itself, and says
 # why (the same as `dynia suggest DATA.csv ...` on the command line; the
-# README's "Settings for your record" explains each rule):
+# user guide's "Settings for your record" explains each rule):
 #
 # * the **window** spans about one dominant time constant, found by a
 #   least-squares first-order fit of the whole record with the time constant
