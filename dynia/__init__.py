@@ -78,6 +78,7 @@ _SUBMODULES = frozenset(
         "identification",
         "io",
         "mcat",
+        "memory",
         "models",
         "online",
         "pipeline",
@@ -93,6 +94,7 @@ _SUBMODULES = frozenset(
         "summary",
         "synthetic",
         "thesis",
+        "timescale",
         "verdicts",
     }
 )

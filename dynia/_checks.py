@@ -3,10 +3,14 @@
 import math
 import numbers
 import os
+import re
 
 import numpy as np
 
 from .errors import DataError, SettingsError
+
+# A quantity written as a number and a unit, "2min", "1.5 GB" or "90": groups (number, unit), the unit maybe empty.
+QUANTITY = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*([a-zA-Z]*)\s*$")
 
 
 def as_1d_float(value, name, *, allow_nan=False):

@@ -70,15 +70,16 @@ Examples
 """
 
 import math
-import numbers
 import warnings
-from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.optimize import least_squares
 
 from . import _checks
+from ._fit_covariance import hac_covariance, inverse_normal_matrix, masked
+from ._fit_parameters import free_parameters, named_bounds, named_values, search_starts
+from ._fit_residuals import Residuals, SegmentSimulator
 from .engine.noise import steady_size_factor
 from .errors import DataError, ModelError, SettingsError
 from .io.frames import unpack
@@ -124,24 +125,6 @@ def check_starts(n_starts):
 # x_scale), the finite-difference steps and the rank decision, so that none
 # depends on the parameter's units.
 
-# Relative finite-difference steps, times max(|value|, typical scale): about
-# sqrt(eps) for the forward differences that steer the search and eps^(1/3)
-# for the central differences of the reported covariance, the steps that
-# balance truncation against rounding error for each formula.
-_FORWARD_STEP = 1.5e-8
-_CENTRAL_STEP = 6e-6
-
-# Singular values of the Jacobian (columns scaled by the typical scales)
-# below this fraction of the largest are taken as zero. The central
-# differences are accurate to about 1e-10 relative, so this sits well above
-# their noise; a direction this weak would have a standard error 1e7 times
-# the best one, which is no estimate either.
-_RANK_RTOL = 1e-7
-
-# A parameter belongs to an unidentifiable direction when its component in
-# the Jacobian's null space exceeds this (null vectors have unit norm).
-_NULL_COMPONENT = 1e-6
-
 # An estimate closer than this fraction of its typical scale to a bound is
 # reported as lying on it (trf keeps iterates strictly inside the bounds).
 _AT_BOUND_RTOL = 1e-6
@@ -151,10 +134,6 @@ _AT_BOUND_RTOL = 1e-6
 # buy estimates whose error is the data's, not the solver's.
 _LSQ_TOLERANCE = 1e-12
 
-# The HAC prewhitening's VAR(1) singular values and the bandwidth rule's
-# autocorrelation are capped here: (I - A)^-1 and the lag count grow without
-# bound as they approach 1 (Andrews and Monahan 1992 cap at 0.97).
-_HAC_MAX_RHO = 0.97
 # --------------------------------------------------------------- the fit
 
 
@@ -252,7 +231,7 @@ class FitResult:
         settings = self.settings
         if segments is None:
             segments = [(0, u.shape[0])]
-        simulator = _SegmentSimulator(
+        simulator = SegmentSimulator(
             u,
             np.zeros(u.shape[0]),
             self.model,
@@ -310,111 +289,6 @@ class FitResult:
 
     def _vector(self):
         return np.array([self.parameters[name] for name in self.model.names])
-
-
-class _SegmentSimulator:
-    """Simulated output at the measured steps of every segment, for many parameter sets.
-
-    Segments whose simulation starts at the same step share one simulation
-    (with ``warmup=None`` all of them do).
-    """
-
-    def __init__(self, u, y, model, segments, *, dt, x0, warmup):
-        self._u, self._model, self._dt, self._x0 = u, model, dt, x0
-        self._kernel = _kernel_simulated(model)
-        measured = [start + np.flatnonzero(~np.isnan(y[start:stop])) for start, stop in segments]
-        self.steps = np.concatenate(measured)
-        self.observed = y[self.steps]
-        bounds = np.cumsum([0] + [steps.size for steps in measured])
-        self.parts = [slice(low, high) for low, high in zip(bounds[:-1], bounds[1:])]
-        groups = {}
-        for (start, stop), steps, part in zip(segments, measured, self.parts):
-            origin = 0 if warmup is None else max(0, start - warmup)
-            groups.setdefault(origin, []).append((stop, steps - origin, part))
-        self._groups = [
-            (origin, max(stop for stop, _, _ in members), [(local, part) for _, local, part in members])
-            for origin, members in groups.items()
-        ]
-
-    def outputs(self, params):
-        """Simulated output, (n_sets, n_points), of the parameter sets ``params`` (n_sets, n_params)."""
-        out = np.empty((params.shape[0], self.steps.size))
-        for origin, stop, members in self._groups:
-            try:
-                with np.errstate(over="ignore", invalid="ignore"):
-                    simulated = self._simulate(params, self._u[origin:stop])
-            except ValueError as error:
-                raise SettingsError(
-                    f"{type(self._model).__name__} cannot simulate the parameters "
-                    f"{dict(zip(self._model.names, params[0].tolist()))} (or a finite-difference "
-                    f"step from them): {error}; choose bounds that keep the parameters admissible"
-                ) from None
-            for local, part in members:
-                out[:, part] = simulated[:, local]
-        return out
-
-    def _simulate(self, params, u):
-        if self._kernel is not None:
-            try:
-                return self._kernel.simulate(params, u, dt=self._dt, x0=self._x0)
-            except ModelError:  # not finite somewhere (or not simulable): the recursion's own answer, as before
-                pass
-        return self._model.simulate(params, u, dt=self._dt, x0=self._x0)
-
-
-def _kernel_simulated(model):
-    """The model simulated by the compiled kernel where it can be (its outputs bit for bit), else None.
-
-    A fit simulates a few parameter sets at a time, some ten times per start: the numpy recursion's Python loop over
-    the steps is most of a fit's time (about 0.5 s a fit of 2000 steps), the kernel's a few milliseconds.
-    """
-    from .engine import kernels
-    from .pipeline import KernelSimulated, compiled_simulation
-
-    return KernelSimulated(model) if kernels.AVAILABLE and compiled_simulation(model) else None
-
-
-class _Residuals:
-    """Residuals y - sim (offsets projected out) and their Jacobians in the free parameters."""
-
-    def __init__(self, simulator, base, free, lower, upper, typical, offset):
-        self._simulator, self._base, self._free = simulator, base, free
-        self._lower, self._upper, self._typical = lower, upper, typical
-        self._offset = offset == "segment"
-
-    def full(self, free_rows):
-        params = np.tile(self._base, (free_rows.shape[0], 1))
-        params[:, self._free] = free_rows
-        return params
-
-    def rows(self, free_rows):
-        residuals = self._simulator.observed - self._simulator.outputs(self.full(free_rows))
-        if self._offset:
-            # The best offset of a segment is its mean residual; removing it
-            # is the exact elimination of these linear nuisance parameters.
-            for part in self._simulator.parts:
-                residuals[:, part] -= residuals[:, part].mean(axis=1, keepdims=True)
-        return residuals
-
-    def __call__(self, theta):
-        return self.rows(theta[None, :])[0]
-
-    def forward_jacobian(self, theta):
-        step = _FORWARD_STEP * np.maximum(np.abs(theta), self._typical)
-        step = np.where(theta + step > self._upper, -step, step)
-        residuals = self.rows(np.vstack([theta, theta + np.diag(step)]))
-        return (residuals[1:] - residuals[0]).T / step
-
-    def central_jacobian(self, theta):
-        step = _CENTRAL_STEP * np.maximum(np.abs(theta), self._typical)
-        # At a bound the difference turns one-sided instead of leaving the box.
-        up, down = np.minimum(theta + step, self._upper), np.maximum(theta - step, self._lower)
-        k = theta.size
-        trial = np.tile(theta, (2 * k, 1))
-        trial[np.arange(k), np.arange(k)] = up
-        trial[k + np.arange(k), np.arange(k)] = down
-        residuals = self.rows(trial)
-        return (residuals[:k] - residuals[k:]).T / (up - down)
 
 
 def fit_segments(
@@ -512,18 +386,18 @@ def fit_segments(
         raise SettingsError("segments is empty; give at least one (start, stop) segment to fit")
     dt, x0, warmup, offset = _scheme(dt, x0, warmup, offset)
     n_starts = check_starts(n_starts)
-    fixed = _named_values(fixed, "fixed", model.names)
-    initial = _named_values(initial, "initial", model.names)
-    bounds = _named_bounds(bounds, model.names)
-    free_names, lower, upper, start = _free_parameters(model, fixed, initial, bounds)
+    fixed = named_values(fixed, "fixed", model.names)
+    initial = named_values(initial, "initial", model.names)
+    bounds = named_bounds(bounds, model.names)
+    free_names, lower, upper, start = free_parameters(model, fixed, initial, bounds)
     _check_measured(y, segments)
 
-    simulator = _SegmentSimulator(u, y, model, segments, dt=dt, x0=x0, warmup=warmup)
+    simulator = SegmentSimulator(u, y, model, segments, dt=dt, x0=x0, warmup=warmup)
     free = np.array([model.names.index(name) for name in free_names])
     base = np.array([fixed.get(name, 0.0) for name in model.names], dtype=float)
     typical = np.where(np.isfinite(upper - lower), upper - lower, np.maximum(np.abs(start), 1.0))
-    residuals = _Residuals(simulator, base, free, lower, upper, typical, offset)
-    starts = _starts(start, lower, upper, n_starts, rng)
+    residuals = Residuals(simulator, base, free, lower, upper, typical, offset)
+    starts = search_starts(start, lower, upper, n_starts, rng)
     best, nfev = _best_solution(residuals, starts, lower, upper, typical, free_names)
     return _summarise(
         best,
@@ -626,37 +500,11 @@ def record_least_squares(result, u, y, model):
     return replace(result, run=replace(result.run, **fields))
 
 
-def _free_parameters(model, fixed, initial, bounds):
-    """The names of the parameters to fit, their box (lower, upper) and the first start, all checked."""
-    free_names = [name for name in model.names if name not in fixed]
-    if not free_names:
-        raise SettingsError(f"fixed holds every parameter of {type(model).__name__}; nothing is left to fit")
-    clash = [name for name in initial if name in fixed]
-    if clash:
-        raise SettingsError(f"initial and fixed both name {clash}; a parameter is either fitted or fixed")
-    lower, upper, start = _box_and_start(free_names, bounds, initial)
-    _check_fixed_in_bounds(fixed, bounds)
-    return free_names, lower, upper, start
-
-
 def _check_measured(y, segments):
     """Raise a DataError naming the first segment without a measured output."""
     for position, ((low, high), part) in enumerate(zip(segments, _measured_counts(y, segments))):
         if part == 0:
             raise DataError(f"segments[{position}] = ({low}, {high}) has no measured output (all NaN)")
-
-
-def _starts(start, lower, upper, n_starts, rng):
-    """``start``, then ``n_starts - 1`` starts drawn uniformly in the (finite) box from ``rng``."""
-    starts = [start]
-    if n_starts > 1:
-        if not (np.isfinite(lower).all() and np.isfinite(upper).all()):
-            raise SettingsError(
-                "n_starts > 1 draws starts uniformly in the bounds, which must then be finite "
-                "for every fitted parameter"
-            )
-        starts += list(_checks.generator(rng).uniform(lower, upper, (n_starts - 1, start.size)))
-    return starts
 
 
 def _best_solution(residuals, starts, lower, upper, typical, free_names):
@@ -697,79 +545,6 @@ def _scheme(dt, x0, warmup, offset):
     return float(dt), x0, warmup, offset
 
 
-def _named_values(values, name, names):
-    if values is None:
-        return {}
-    if not isinstance(values, Mapping):
-        raise TypeError(f"{name} must map parameter names to values, e.g. {{'K': 2.0}}; got {type(values).__name__}")
-    unknown = [key for key in values if key not in names]
-    if unknown:
-        raise SettingsError(f"{name} names unknown parameters {unknown}; the model has {list(names)}")
-    checked = {}
-    for key in names:
-        if key in values:
-            value = values[key]
-            if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
-                raise SettingsError(f"{name}[{key!r}] must be a finite number; got {value!r}")
-            checked[key] = float(value)
-    return checked
-
-
-def _named_bounds(bounds, names):
-    if bounds is None:
-        return {}
-    if not isinstance(bounds, Mapping):
-        raise TypeError(
-            f"bounds must map parameter names to (low, high), e.g. {{'K': (0, 7)}}; got {type(bounds).__name__}"
-        )
-    unknown = [key for key in bounds if key not in names]
-    if unknown:
-        raise SettingsError(f"bounds names unknown parameters {unknown}; the model has {list(names)}")
-    checked = {}
-    for key in names:
-        if key not in bounds:
-            continue
-        pair = bounds[key]
-        try:
-            if isinstance(pair, (str, bytes)):
-                raise TypeError
-            low, high = (float(value) for value in pair)
-        except (TypeError, ValueError):
-            raise SettingsError(f"bounds[{key!r}] must be a (low, high) pair of numbers; got {pair!r}") from None
-        if math.isnan(low) or math.isnan(high) or not low < high:
-            raise SettingsError(f"bounds[{key!r}]: need low < high; got ({low}, {high})")
-        checked[key] = (low, high)
-    return checked
-
-
-def _box_and_start(free_names, bounds, initial):
-    lower, upper, start = [], [], []
-    for name in free_names:
-        low, high = bounds.get(name, (-math.inf, math.inf))
-        if name in initial:
-            value = initial[name]
-            if not low <= value <= high:
-                raise SettingsError(f"initial[{name!r}] = {value} lies outside its bounds [{low}, {high}]")
-        elif math.isfinite(low) and math.isfinite(high):
-            value = 0.5 * (low + high)
-        else:
-            raise SettingsError(
-                f"parameter {name!r} needs finite bounds (its start is their middle) or an "
-                f"initial value; give bounds={{{name!r}: (low, high)}} or "
-                f"initial={{{name!r}: value}}"
-            )
-        lower.append(low)
-        upper.append(high)
-        start.append(value)
-    return np.array(lower), np.array(upper), np.array(start)
-
-
-def _check_fixed_in_bounds(fixed, bounds):
-    for name, value in fixed.items():
-        if name in bounds and not bounds[name][0] <= value <= bounds[name][1]:
-            raise SettingsError(f"fixed[{name!r}] = {value} lies outside its bounds {list(bounds[name])}")
-
-
 def _measured_counts(y, segments):
     return [int(np.count_nonzero(~np.isnan(y[start:stop]))) for start, stop in segments]
 
@@ -781,14 +556,14 @@ def _summarise(solution, nfev, residuals, simulator, u, model, free_names, lower
     n_points = final.size
     rss = float(final @ final)
     jacobian = residuals.central_jacobian(theta)
-    inverse, identifiable, rank = _inverse_normal_matrix(jacobian, typical)
+    inverse, identifiable, rank = inverse_normal_matrix(jacobian, typical)
     # Degrees of freedom count what the data determine: the rank of J (an
     # unidentifiable direction fits nothing) plus one offset per segment.
     dof = n_points - rank - (len(segments) if with_offsets else 0)
     variance = rss / dof if dof > 0 else math.nan
-    covariance = _masked(variance * inverse, identifiable)
-    sandwich, hac_lags = _hac_covariance(jacobian, final, simulator.steps, inverse, typical)
-    covariance_hac = _masked(sandwich * (n_points / dof if dof > 0 else math.nan), identifiable)
+    covariance = masked(variance * inverse, identifiable)
+    sandwich, hac_lags = hac_covariance(jacobian, final, simulator.steps, inverse, typical)
+    covariance_hac = masked(sandwich * (n_points / dof if dof > 0 else math.nan), identifiable)
     std_errors, std_errors_hac = (
         np.where(identifiable, np.sqrt(np.abs(np.diag(matrix))), np.inf) for matrix in (covariance, covariance_hac)
     )
@@ -796,7 +571,7 @@ def _summarise(solution, nfev, residuals, simulator, u, model, free_names, lower
         std_errors[:] = std_errors_hac[:] = np.nan
 
     params = residuals.full(theta[None, :])
-    every_step = _SegmentSimulator(
+    every_step = SegmentSimulator(
         u, np.zeros(u.shape[0]), model, segments, dt=settings["dt"], x0=settings["x0"], warmup=settings["warmup"]
     )
     fitted = np.full(u.shape[0], np.nan)
@@ -835,78 +610,6 @@ def _summarise(solution, nfev, residuals, simulator, u, model, free_names, lower
         model=model,
         settings=settings,
     )
-
-
-def _inverse_normal_matrix(jacobian, scale):
-    """``(J^T J)^+``, which parameters it determines, and the rank of J.
-
-    Columns are scaled by the parameters' typical scales first, so that the
-    rank decision does not depend on their units. A parameter with a
-    component in the null space of J is not determined; every other one is
-    an estimable function, whose variance the pseudo-inverse gives (the
-    rows and columns of the others are blanked by :func:`_masked`).
-    """
-    scaled = jacobian * scale
-    # Only the right singular vectors are used: the left ones of a long record (n_points x n_points) would take
-    # seconds and gigabytes. Full matrices only where there are fewer points than parameters, so that the right
-    # ones span the null space too.
-    _, singular, right = np.linalg.svd(scaled, full_matrices=scaled.shape[0] < scaled.shape[1])
-    # With fewer points than parameters J has fewer singular values than
-    # columns; the missing ones are zeros.
-    singular = np.concatenate((singular, np.zeros(right.shape[0] - singular.size)))
-    largest = singular.max()
-    kept = singular > _RANK_RTOL * largest if largest > 0 else np.zeros(singular.size, dtype=bool)
-    identifiable = ~(np.abs(right[~kept].T) > _NULL_COMPONENT).any(axis=1)
-    inverse = (right[kept].T / singular[kept] ** 2) @ right[kept] * np.outer(scale, scale)
-    return inverse, identifiable, int(kept.sum())
-
-
-def _masked(covariance, identifiable):
-    """``covariance`` with NaN in the rows and columns of the parameters the data do not determine."""
-    covariance = covariance.copy()
-    covariance[~identifiable, :] = np.nan
-    covariance[:, ~identifiable] = np.nan
-    return covariance
-
-
-def _hac_covariance(jacobian, residuals, steps, inverse, scale):
-    """Prewhitened Newey-West sandwich ``A^+ S A^+`` (module docs) without the small-sample factor, and its L.
-
-    ``inverse`` is ``A^+ = (J^T J)^+``. The scores ``g_t = J_t r_t`` are
-    laid out on the record's time axis (zero where nothing was fitted), so
-    that a lag is a distance in time steps, and scaled by the parameters'
-    typical scales so that the VAR(1) fit does not depend on their units.
-    """
-    scores = np.zeros((steps[-1] - steps[0] + 1, jacobian.shape[1]))
-    scores[steps - steps[0]] = jacobian * scale * residuals[:, None]
-    previous, current = scores[:-1], scores[1:]
-    transition = np.zeros((scores.shape[1], scores.shape[1]))
-    if current.shape[0] > scores.shape[1]:
-        transition = (current.T @ previous) @ np.linalg.pinv(previous.T @ previous)
-        # Andrews and Monahan (1992): a nearly unit-root fit would blow (I - A)^-1 up; cap its singular values.
-        left, singular, right = np.linalg.svd(transition)
-        transition = (left * np.minimum(singular, _HAC_MAX_RHO)) @ right
-    whitened = current - previous @ transition.T
-    lags = _bartlett_lags(whitened)
-    spread = whitened.T @ whitened
-    for lag in range(1, lags + 1):
-        product = whitened[lag:].T @ whitened[:-lag]
-        spread += (1 - lag / (lags + 1)) * (product + product.T)
-    recolour = np.linalg.pinv(np.eye(transition.shape[0]) - transition)
-    spread = recolour @ spread @ recolour.T
-    return inverse @ (spread * np.outer(1 / scale, 1 / scale)) @ inverse, lags
-
-
-def _bartlett_lags(series):
-    """Andrews' (1991) AR(1) plug-in bandwidth of the Bartlett kernel for ``series`` (n, k), as whole lags."""
-    n_points = series.shape[0]
-    total = float(np.sum(series * series))
-    if n_points < 3 or total == 0:
-        return 0
-    # One autocorrelation pooled over the components, each weighted by its variance.
-    rho = float(np.clip(np.sum(series[1:] * series[:-1]) / total, -_HAC_MAX_RHO, _HAC_MAX_RHO))
-    alpha = 4 * rho**2 / ((1 - rho) ** 2 * (1 + rho) ** 2)
-    return int(min(math.floor(1.1447 * (alpha * n_points) ** (1 / 3)), n_points - 1))
 
 
 # -------------------------------------------------------------- validation
@@ -958,15 +661,15 @@ def validation_error(u, y, model, parameters, segments, *, dt=None, x0="steady",
         segments = mask_to_segments(mask)
     segments = check_segments(segments, u.shape[0])
     dt, x0, warmup, offset = _scheme(dt, x0, warmup, offset)
-    values = _named_values(parameters, "parameters", model.names)
+    values = named_values(parameters, "parameters", model.names)
     missing = [name for name in model.names if name not in values]
     if missing:
         raise SettingsError(f"parameters lacks {missing}; give a value for every parameter of {list(model.names)}")
     if sum(_measured_counts(y, segments)) == 0:
         raise DataError("the validation segments hold no measured output (empty, or all NaN)")
     kept = [segment for segment, count in zip(segments, _measured_counts(y, segments)) if count]
-    simulator = _SegmentSimulator(u, y, model, kept, dt=dt, x0=x0, warmup=warmup)
+    simulator = SegmentSimulator(u, y, model, kept, dt=dt, x0=x0, warmup=warmup)
     vector = np.array([values[name] for name in model.names])
-    residuals = _Residuals(simulator, vector, np.array([], dtype=int), np.array([]), np.array([]), np.array([]), offset)
+    residuals = Residuals(simulator, vector, np.array([], dtype=int), np.array([]), np.array([]), np.array([]), offset)
     error = residuals(np.array([]))
     return math.sqrt(float(error @ error) / error.size)

@@ -73,7 +73,7 @@ from .pipeline import KernelSimulated, compiled_simulation, run
 from .quality import screen
 from .result import DyniaResult
 from .settings import RunRecord
-from .suggestion import window_half_width
+from .timescale import window_half_width
 from .verdicts import assess
 
 __all__ = ["VERDICT_CHANGE", "Follower", "FollowerSettings"]

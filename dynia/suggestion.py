@@ -8,75 +8,15 @@ three minutes they identify nothing, and nothing says why. :func:`suggest`
 behavioural share and a number of samples, and checks the parameter ranges,
 by the reasoning below.
 
-The dominant time constant
---------------------------
-A first-order model ``y = c + sum_j K_j r_j(T)`` is fitted to the whole
-record, ``r_j(T)`` being the unit-gain first-order response (zero-order
-hold) of input j in the analysis's initial state: with ``x0="zero"`` from
-rest at zero input, so that a record whose input is already on in its first
-row (a heater switched on before logging began) shows the response still
-rising toward it; with ``x0="steady"`` from rest at the input's first value,
-so that only its changes drive the response. ``u`` and ``y`` are those the
-analysis sees, the offsets (``--input-offset``, ``--offset``) already taken
-off; the level c is fitted all the same, so that a level the offsets leave
-does not pass for dynamics. For a given T the output is
-linear in the gains and the level c, which ordinary least squares gives
-exactly (variable projection), so only T is searched: on a logarithmic grid
-from dt to the record's length, then refined between the neighbours of the
-best grid point. This needs no starting value and finds the best T on the
-grid, not a local minimum; it uses every measured point, so the noise
-averages out over the record; it takes any input (steps that never settle,
-several inputs) and missing output values. A dead time or a second, faster
-lag adds roughly its length to the fitted T, which is what a window must
-span anyway. Rejected: reading the time to 63 % after each step (needs
-clean steps that settle, and reads one noisy crossing per step) and the
-decay of the autocorrelation of the output's increments (at fast sampling
-they are mostly measurement noise).
-
-When the fit explains less than :data:`MIN_EXPLAINED` (50 %) of the
-output's variance (``R^2 = 1 - RSS/TSS``), the time constant it finds is no
-property of the record (an input that never changes as the analysis sees
-it gives the shortest one, whatever the output does), and a window sized by
-it would mislead: :func:`suggest` raises
-:class:`~dynia.errors.SuggestionError` saying so, and which initial state
-would explain the output instead, rather than proposing one. It raises the
-same, saying what is missing, for an output that never changes, for one
-value (a logger's 1.797e308) that holds most of the output's variance, and
-for a fit whose best time constant is the shortest tried, dt (an output that
-follows the input within one sample resolves no time constant). The fit
-runs on values scaled to unit size, so that neither 1e200 overflows nor
-1e-170 underflows; T does not depend on the scale.
-
 The window
 ----------
-A window of about one time constant, ``2n+1 = T/dt``, so ``n = round(T /
-(2 dt))`` (at least 1). The window centred on a step then holds the settled
-level before it and the first half time constant of the response, where the
-response bends most: there gain and time constant act differently on the
-output. A much shorter window sees a straight line, along which gain and
-time constant trade off (only their ratio, the initial slope, shows); a
-much longer one averages the transient with settled stretches, which
-inform the gain only, or with the response to the next input change
-(several regimes in one window). Input changes closer together than one
-window are reported.
-
-The window must also beat the measurement noise. A parameter a tenth off
-its value (the resolution the behavioural share aims at, below) moves the
-response by about a tenth of its size A, the standard deviation of the
-first-order fit's response (the part of the output the input explains,
-``sqrt(R^2) * SD(y)``); noise of standard deviation sigma hides a shift of
-the mean over a window of m measured points below ``sigma / sqrt(m)``. The
-window tells the two apart when that tenth is at least :data:`NOISE_MARGIN`
-(2) such standard errors, ``A / 10 >= 2 sigma / sqrt(m)``, so it holds at
-least ``m = (2 * 10 * sigma / A)^2`` steps, and the window is the longer of
-the two. sigma is :func:`dynia.verdicts.noise_sigma` of the output (the
-median absolute difference of neighbours, which steps and slow dynamics
-barely move). On a first-order record with T = 5 s at 1 s, responses of
-about 1 degC and noise of 0.4 degC, one time constant is a 5 s window in
-which neither gain nor time constant is identified (every window's
-behavioural set ties within the noise); the noise asks for about 45 s, which
-identifies both. On a clean record (the TCLab-like step test: responses of
-20 degC under 0.15 degC of noise) the time constant sets the window alone.
+About one dominant time constant of the record (the time constant of a
+first-order fit to the whole record), and long enough that a parameter a
+tenth off moves a window's mean by more than the measurement noise hides:
+:mod:`dynia.timescale` gives the reasoning, and why no window is proposed
+(a :class:`~dynia.errors.SuggestionError`) for a record that shows no time
+scale to size one by. Input changes closer together than one window are
+reported.
 
 A window given (``n=``, ``dynia suggest --n`` or ``--window``) is kept as
 given: the rest is proposed around it, and the reasons say what the record
@@ -119,7 +59,7 @@ digits, and at least enough for 50 behavioural sets, at most
 
 Memory
 ------
-The pilot's memory is estimated before it starts (:func:`run_memory`: the
+The pilot's memory is estimated before it starts (:func:`~dynia.memory.run_memory`: the
 moving window holds about four arrays of n_samples x (chunk + 2n) values,
 plus the samples, plus the whole simulation for a model that does not
 stream; within 10 % of the growth of the peak memory measured with 50 000
@@ -154,33 +94,18 @@ input still remembers its state; across the rest the state has forgotten
 where it started (less than e^-10 of it remains). The reasons say how
 many steps were left out. The analysis the suggestion proposes runs through
 the whole record.
-
-Examples
---------
->>> import numpy as np
->>> from dynia.models import FirstOrder
->>> u = np.repeat([0.0, 50.0, 20.0, 70.0], 600)
->>> y = FirstOrder().simulate([[0.6, 60.0]], u)[0]
->>> round(dominant_time_constant(u, y).time_constant, 3)
-60.0
->>> window_half_width(parse_duration("1min"), dt=1.0, n_steps=u.size)
-30
 """
 
 import math
-import os
-import re
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import minimize_scalar
-from scipy.signal import lfilter
 
 from . import _checks
-from .engine.windows import default_chunk_steps
-from .errors import DataError, ModelError, SettingsError, SuggestionError
+from .errors import ModelError, SettingsError
 from .fit import fit_segments
 from .io.frames import unpack
+from .memory import available_memory, parse_size, run_memory, size_text
 from .pipeline import KernelSimulated, compiled_simulation, run
 from .progress import shows_progress
 from .segments import mask_to_segments
@@ -195,65 +120,23 @@ from .settings import (
     parameter_box,
     sample_count,
 )
-from .verdicts import noise_sigma
+from .timescale import MIN_EXPLAINED, RANGE_SHARE_INVERSE, TimeScale, proposed_window
 
 __all__ = [
     "Suggestion",
-    "TimeScale",
     "suggest",
-    "dominant_time_constant",
-    "parse_duration",
-    "window_half_width",
-    "parse_size",
-    "run_memory",
-    "available_memory",
     "IC_SE_TARGET",
     "MEMORY_SHARE",
-    "MIN_EXPLAINED",
-    "NOISE_MARGIN",
 ]
 
 # The Monte Carlo standard error of the IC the proposed number of samples aims at.
 IC_SE_TARGET = 0.02
 # Without a max_memory, a pilot may take this share of the memory available when suggest starts.
 MEMORY_SHARE = 0.5
-# Below this share of the output's variance explained (R^2) the first-order fit sizes no window.
-MIN_EXPLAINED = 0.5
-#: A parameter a tenth off must move a window's mean by this many standard errors of the noise (The window).
-NOISE_MARGIN = 2.0
 #: The pilot and the fit keep this many dominant time constants of a gap without output (see Gaps in the output).
 GAP_MEMORY = 10
 
-_UNITS = {
-    "s": 1.0,
-    "sec": 1.0,
-    "second": 1.0,
-    "seconds": 1.0,
-    "min": 60.0,
-    "minute": 60.0,
-    "minutes": 60.0,
-    "h": 3600.0,
-    "hour": 3600.0,
-    "hours": 3600.0,
-    "d": 86400.0,
-    "day": 86400.0,
-    "days": 86400.0,
-}
-_DURATION = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*([a-zA-Z]*)\s*$")
-_BYTES = {"": 1, "b": 1, "k": 1e3, "kb": 1e3, "m": 1e6, "mb": 1e6, "g": 1e9, "gb": 1e9, "t": 1e12, "tb": 1e12}
-_BYTES.update({"kib": 2**10, "mib": 2**20, "gib": 2**30, "tib": 2**40})
-# run_memory: live arrays of n_samples x (chunk + 2n) float64 in the moving window (the errors pulled
-# from the simulation, their padded and transposed copies, the chunks in flight), measured with 1 and 2
-# workers on the heater (n = 85) and HYMOD (n = 3) pilots; and float64 values kept per sample besides
-# its parameters (states, costs, ranks).
-_WINDOW_ARRAYS = 4
-_PER_SAMPLE_VALUES = 16
-
-# Trial time constants of the first-order fit: this many, log-spaced from dt to the record's length.
-_GRID_POINTS = 60
-# A share 1/_RANGE_SHARE_INVERSE of each range is the aim of the proposed percentage (module docs);
-# an integer, so that 100 / 10**d is the float nearest the intended 1 % or 0.1 %.
-_RANGE_SHARE_INVERSE = 10
+# The proposed percentage never exceeds the default's.
 _MAX_PERCENTAGE = 10.0
 # The pilot holds this many behavioural sets (and at least _PILOT_MIN samples): IC_BATCHES batches of
 # MIN_BATCH_BEHAVIOURAL for its Monte Carlo error. The proposal keeps at least _MIN_BEHAVIOURAL.
@@ -262,238 +145,8 @@ _PILOT_MIN = 500
 _MIN_BEHAVIOURAL = 50
 # The IC standard error is pooled over the steps whose pilot IC lies within this of the parameter's highest.
 _PEAK_MARGIN = 0.05
-# An input change counts when it exceeds this share of the input's range; the input is step-like when
-# fewer than _STEP_LIKE of its steps change.
-_CHANGE_SHARE = 0.01
-_STEP_LIKE = 0.1
 # A bound is probed this share of its range beyond it (_refusal_beyond).
 _BEYOND = 0.05
-# No window is proposed when one value holds more than this share of the output's squared deviations.
-_ONE_VALUE_SHARE = 0.5
-# The other initial state is noted when its residual variance is below this share of the chosen one's.
-_BETTER_RESIDUAL = 0.5
-
-
-def parse_duration(text, name="window"):
-    """Seconds in a duration such as ``"60s"``, ``"2min"``, ``"1.5h"``, ``"1d"`` or ``"90"`` (seconds).
-
-    Raises :class:`~dynia.errors.SettingsError` naming ``name`` for anything
-    else, or a duration that is not positive and finite.
-
-    >>> parse_duration("2min"), parse_duration("1h"), parse_duration("90")
-    (120.0, 3600.0, 90.0)
-    """
-    match = _DURATION.match(str(text))
-    unit = match.group(2).lower() if match else None
-    if match is None or (unit and unit not in _UNITS):
-        raise SettingsError(
-            f"{name} must be a duration such as 60s, 2min or 1h (units s, min, h, d; a bare number is seconds); "
-            f"got {text!r}",
-            name,
-        )
-    seconds = float(match.group(1)) * _UNITS.get(unit, 1.0)
-    if not (math.isfinite(seconds) and seconds > 0):
-        raise SettingsError(f"{name} must be a positive, finite duration; got {text!r}", name)
-    return seconds
-
-
-def parse_size(text, name="max_memory"):
-    """Bytes in a size such as ``"4GB"``, ``"512MiB"``, ``"2e9"`` or ``2e9`` (a bare number is bytes).
-
-    kB, MB, GB, TB (and k, M, G, T) are powers of 1000; KiB, MiB, GiB, TiB
-    powers of 1024. Raises :class:`~dynia.errors.SettingsError` naming
-    ``name`` for anything else, or a size that is not positive and finite.
-
-    >>> parse_size("4GB"), parse_size("1.5 MiB"), parse_size(1000)
-    (4000000000.0, 1572864.0, 1000.0)
-    """
-    match = _DURATION.match(str(text))
-    unit = match.group(2).lower() if match else None
-    if match is None or unit not in _BYTES:
-        raise SettingsError(
-            f"{name} must be a size such as 4GB, 512MB or 2GiB (a bare number is bytes); got {text!r}", name
-        )
-    size = float(match.group(1)) * _BYTES[unit]
-    if not (math.isfinite(size) and size > 0):
-        raise SettingsError(f"{name} must be a positive, finite size; got {text!r}", name)
-    return size
-
-
-def run_memory(model, n_samples, n_steps, n, *, n_params=None, bins=40, ic_error=True):
-    """Bytes a uniform :func:`dynia.run` of ``n_samples`` over ``n_steps`` adds, about (module docs).
-
-    The moving window holds a few arrays of ``n_samples x (chunk + 2n)``
-    float64 values, the chunk of :func:`dynia.engine.windows.default_chunk_steps`;
-    each sample keeps its parameters and a few values more; a model that
-    does not stream (``model.streams`` False) holds its whole simulation;
-    the result holds IC, limits and gradient (and their errors) per step.
-
-    >>> from dynia.models import FirstOrder
-    >>> round(run_memory(FirstOrder(), 5000, 7200, 85) / 1e6)
-    142
-    """
-    n_params = len(model.names) if n_params is None else n_params
-    width = default_chunk_steps(n_samples, 2 * n) + 2 * n
-    per_sample = _WINDOW_ARRAYS * width + n_params + _PER_SAMPLE_VALUES
-    if not getattr(model, "streams", True):
-        per_sample += n_steps
-    per_step = n_params * (bins + 3 + (3 if ic_error else 0))
-    return 8.0 * (n_samples * per_sample + n_steps * per_step)
-
-
-def available_memory():
-    """Bytes of memory available to a new allocation now (Linux's MemAvailable), or None where unknown."""
-    try:
-        with open("/proc/meminfo") as handle:
-            for line in handle:
-                if line.startswith("MemAvailable:"):
-                    return float(line.split()[1]) * 1024
-    except OSError:
-        pass
-    try:
-        return float(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
-    except (AttributeError, OSError, ValueError):
-        return None
-
-
-def window_half_width(seconds, dt, n_steps, name="window"):
-    """Half window n of a window lasting ``seconds``: ``round(seconds / (2 dt))``, rounded half up.
-
-    Raises :class:`~dynia.errors.SettingsError` naming ``name`` when the
-    window is shorter than 3 steps or when its 2n+1 steps exceed the
-    record's ``n_steps``.
-
-    >>> window_half_width(171.0, dt=1.0, n_steps=7200), window_half_width(60.0, dt=2.0, n_steps=100)
-    (86, 15)
-    """
-    dt = check_dt(dt)
-    steps = seconds / dt
-    if steps < 3:
-        raise SettingsError(
-            f"{name} {seconds:g} s is {steps:.3g} steps of {dt:g} s; a window needs at least 3 steps ({3 * dt:g} s)",
-            name,
-        )
-    if steps > max(n_steps, 10**12):  # not as a whole number: 1e308 s would print 309 digits
-        raise SettingsError(
-            f"{name} {seconds:g} s is {steps:.6g} steps of {dt:g} s, longer than the record's "
-            f"{n_steps} steps ({n_steps * dt:g} s)",
-            name,
-        )
-    n = math.floor(steps / 2 + 0.5)
-    if 2 * n + 1 > n_steps:
-        raise SettingsError(
-            f"{name} {seconds:g} s is {2 * n + 1} steps of {dt:g} s (2n+1 with n = {n}), longer than the record's "
-            f"{n_steps} steps ({n_steps * dt:g} s)",
-            name,
-        )
-    return n
-
-
-@dataclass(frozen=True)
-class TimeScale:
-    """The first-order fit of :func:`dominant_time_constant`.
-
-    Attributes
-    ----------
-    time_constant : float
-        T, in the units of dt.
-    gains : tuple of float
-        K of each input.
-    level : float
-        The output's level c where the response starts: at rest, at zero
-        input (``x0="zero"``) or at the inputs' first values (``"steady"``).
-    rmse : float
-        Root mean square of the residuals.
-    explained : float
-        Share of the output's variance the fit explains (1 - RSS/TSS).
-    edge : str or None
-        "fast" when T came out at the grid's lower end (the output follows
-        the input within a sample), "slow" at its upper end (slower than the
-        record); None otherwise.
-    x0 : str
-        The initial state the responses start from ("zero" or "steady").
-    """
-
-    time_constant: float
-    gains: tuple
-    level: float
-    rmse: float
-    explained: float
-    edge: str | None = None
-    x0: str = "zero"
-
-
-def dominant_time_constant(u, y, dt=None, x0="zero"):
-    """The time constant of a first-order fit to the whole record (module docs).
-
-    Parameters
-    ----------
-    u : array_like, shape (n_steps,) or (n_steps, n_inputs), or pandas Series / DataFrame
-    y : array_like, shape (n_steps,), or pandas Series
-        NaN marks a missing value. pandas objects as :func:`dynia.run` takes
-        them (:func:`dynia.io.frames.unpack`): one index, whose time gives dt.
-    dt : float, optional
-        Sample time; default the spacing of a time index, else 1.0.
-    x0 : {"zero", "steady"}, default "zero"
-        The analysis's initial state: the responses start at rest at zero
-        input, or at rest at the inputs' first values.
-
-    Returns
-    -------
-    TimeScale
-    """
-    u, y, dt, _ = unpack(u, y, dt)
-    dt, x0 = check_dt(1.0 if dt is None else dt), check_x0(x0)
-    columns = np.asarray(u, dtype=float)
-    n_inputs = 1 if columns.ndim == 1 else columns.shape[1]
-    u, y = _checks.record(u, y, n_inputs=n_inputs)
-    columns = u.reshape(u.shape[0], -1)
-    if x0 == "steady":
-        # At rest at the first input only the changes from it move the output; its level is in c.
-        columns = columns - columns[0]
-    measured = ~np.isnan(y)
-    if measured.sum() < n_inputs + 2:
-        raise DataError(f"y has {int(measured.sum())} measured values; a first-order fit needs {n_inputs + 2}")
-    # The fit on unit-scaled values, so that neither the squares of 1e200 overflow nor those of 1e-170 underflow:
-    # T and the share explained do not depend on the scale; gains, level and RMS residual are scaled back.
-    centre = float(np.median(y[measured]))
-    spread_y = _unit(y[measured] - centre)
-    observed = (y[measured] - centre) / spread_y
-    spread_u = np.array([_unit(column) for column in columns.T])
-    columns = columns / spread_u
-
-    def solve(log_tau):
-        pole = math.exp(-dt / math.exp(log_tau))
-        responses = lfilter([0.0, 1.0 - pole], [1.0, -pole], columns, axis=0)[measured]
-        design = np.column_stack([np.ones(observed.size), responses])
-        coefficients, *_ = np.linalg.lstsq(design, observed, rcond=None)
-        residual = observed - design @ coefficients
-        return float(residual @ residual), coefficients
-
-    grid = np.linspace(math.log(dt), math.log(max(u.shape[0] * dt, 2 * dt)), _GRID_POINTS)
-    costs = [solve(point)[0] for point in grid]
-    best = int(np.argmin(costs))
-    low, high = grid[max(best - 1, 0)], grid[min(best + 1, grid.size - 1)]
-    refined = minimize_scalar(lambda point: solve(point)[0], bounds=(low, high), method="bounded")
-    log_tau = refined.x if refined.fun < costs[best] else grid[best]
-    rss, coefficients = solve(log_tau)
-    spread = float(np.sum((observed - observed.mean()) ** 2))
-    edge = "fast" if best == 0 else "slow" if best == grid.size - 1 else None
-    return TimeScale(
-        time_constant=float(math.exp(log_tau)),
-        gains=tuple(float(value) * spread_y / scale for value, scale in zip(coefficients[1:], spread_u)),
-        level=float(coefficients[0]) * spread_y + centre,
-        rmse=math.sqrt(rss / observed.size) * spread_y,
-        explained=1.0 - rss / spread if spread > 0 else 0.0,
-        edge=edge,
-        x0=x0,
-    )
-
-
-def _unit(values):
-    """The largest magnitude among ``values``, or 1 where all are 0: a divisor that leaves them within [-1, 1]."""
-    largest = float(np.max(np.abs(values))) if values.size else 0.0
-    return largest if largest > 0 else 1.0
 
 
 @dataclass(frozen=True)
@@ -510,7 +163,7 @@ class Suggestion:
         Behavioural share in percent.
     n_samples : int
         Monte Carlo samples.
-    time_scale : TimeScale
+    time_scale : dynia.timescale.TimeScale
         The first-order fit that set the window.
     pilot : dict
         ``n_samples``, ``seed`` and per parameter ``max_ic`` and ``ic_se``
@@ -528,7 +181,7 @@ class Suggestion:
     dt : float
     memory : dict
         Estimated bytes of the ``pilot`` and of the ``proposed`` run
-        (:func:`run_memory`), and the ``limit`` the pilot was held to.
+        (:func:`~dynia.memory.run_memory`), and the ``limit`` the pilot was held to.
     given : tuple of str
         The settings given to :func:`suggest` and kept as given ("n",
         "percentage", "n_samples"): :meth:`arguments` leaves them out.
@@ -653,7 +306,7 @@ def suggest(
         The most samples of the pilot and of the proposal; the share is
         raised so that the pilot's behavioural sets fit in it.
     max_memory : float, optional
-        Bytes the pilot may take (:func:`parse_size` reads "4GB");
+        Bytes the pilot may take (:func:`~dynia.memory.parse_size` reads "4GB");
         default: :data:`MEMORY_SHARE` of the memory available now.
     progress : bool or "auto", default "auto"
         Show the pilot's progress bar (tqdm, on stderr), as :func:`dynia.run`.
@@ -667,7 +320,7 @@ def suggest(
     Raises
     ------
     dynia.errors.SuggestionError
-        When a first-order fit explains less than :data:`MIN_EXPLAINED` of
+        When a first-order fit explains less than :data:`~dynia.timescale.MIN_EXPLAINED` of
         the output's variance: the record shows no time scale to size a
         window by.
     dynia.errors.SettingsError
@@ -696,7 +349,7 @@ def suggest(
         n = AnalysisSettings(n=n).n  # checked as the analysis checks it
         if 2 * n + 1 > y.size:
             raise SettingsError(f"n {n}: the window 2n+1 = {2 * n + 1} is longer than the record ({y.size} steps)", "n")
-    scale, n, reasons, notes = _window(u, y, dt, x0, n)
+    scale, n, reasons, notes = proposed_window(u, y, dt, x0, n)
     percentage = _share(len(names), max_samples, reasons, notes, given.get("percentage"))
     base = AnalysisSettings() if settings is None else settings
     if base.flavour == "mcat":
@@ -726,7 +379,7 @@ def suggest(
     memory["proposed"] = run_memory(model, n_samples, y.size, n)
     if limit is not None and memory["proposed"] > limit:
         notes.append(
-            f"the proposed run would need about {_size(memory['proposed'])}, more than {_size(limit)} "
+            f"the proposed run would need about {size_text(memory['proposed'])}, more than {size_text(limit)} "
             f"({limit_source}): give fewer samples"
         )
     for name, entry in pilot["parameters"].items():
@@ -750,100 +403,6 @@ def suggest(
         memory=memory,
         given=tuple(given),
     )
-
-
-def _window(u, y, dt, x0, given=None):
-    """The half window n: the time scale, n, and their reasons and notes.
-
-    n is the longer of one dominant time constant and what beats the noise (module docs), or ``given`` as given.
-    Raises :class:`~dynia.errors.SuggestionError` when the record shows no time scale to size a window by and
-    none is given.
-    """
-    n_steps = y.size
-    measured = y[~np.isnan(y)]
-    if measured.size and (measured == measured[0]).all():
-        raise SuggestionError(
-            f"cannot propose a window: the output never changes (every measured value is {measured[0]:g}), so the "
-            "record holds no response to size a window by, nor any information on the parameters"
-        )
-    scale = dominant_time_constant(u, y, dt, x0)
-    other = dominant_time_constant(u, y, dt, "steady" if x0 == "zero" else "zero")
-    unusable = None
-    if not scale.explained >= MIN_EXPLAINED:  # NaN too
-        unusable = _no_time_scale(u, y, scale, other, dt)
-    elif scale.edge == "fast":
-        # The shortest trial time constant fits best: a step in the output one sample after the input's, or a pure
-        # delay, looks the same; a 3-step window sized by it would rest on no time scale of the record.
-        unusable = (
-            f"cannot propose a window: the output follows the input within one sample ({dt:g} s), so the record "
-            "resolves no time constant at this sampling to size a window by (a first-order fit finds the shortest "
-            "it tries, dt); sample faster, or give the window yourself (--window or --n)"
-        )
-    if unusable is not None:
-        if given is None:
-            raise SuggestionError(unusable)
-        why = unusable.removeprefix("cannot propose a window: ").split("; ")[0]
-        reasons = [
-            f"no dominant time constant: {why}",
-            f"window 2n+1 = {2 * given + 1} steps ({(2 * given + 1) * dt:g} s), as given (n = {given})",
-        ]
-        return scale, given, reasons, _close_changes(u, given, dt)
-    wanted, reasons = _window_reasons(scale, y, dt, x0, given)
-    n = min(wanted, (n_steps - 1) // 2) if given is None else given
-    notes = []
-    if scale.edge == "slow":
-        notes.append("the first-order fit finds a time constant as long as the record: the record may not settle")
-    if (1 - other.explained) < _BETTER_RESIDUAL * (1 - scale.explained):
-        notes.append(
-            f"with x0 {other.x0} a first-order model explains {100 * other.explained:.0f} % of the output's variance, "
-            f"against {100 * scale.explained:.0f} % with x0 {x0}: check the initial state and the offsets"
-        )
-    if n < wanted and given is None:
-        notes.append(f"the window is capped at the record's length ({n_steps} steps); a longer record would help")
-    notes += _close_changes(u, n, dt)
-    return scale, n, reasons, notes
-
-
-def _window_reasons(scale, y, dt, x0, given):
-    """The half window the record asks for (one time constant, or what beats the noise), and the two reasons."""
-    tau = scale.time_constant
-    by_tau = max(math.floor(tau / (2 * dt) + 0.5), 1)
-    sigma = noise_sigma(y)
-    # The response's size: the standard deviation of the fitted first-order response, sqrt(R^2) SD(y).
-    size = math.sqrt(max(scale.explained, 0.0)) * float(np.nanstd(y))
-    points = (NOISE_MARGIN * _RANGE_SHARE_INVERSE * sigma / size) ** 2 if size > 0 else math.inf
-    by_noise = max(math.ceil((points - 1) / 2), 0) if math.isfinite(points) else y.size
-    wanted = max(by_tau, by_noise)
-    gains = ", ".join(f"{gain:.3g}" for gain in scale.gains)
-    noise = (
-        f"the noise (SD {sigma:.3g}, from the output's differences) against the response's size {size:.3g} (the "
-        f"fitted response's SD) asks for m >= ({NOISE_MARGIN:g} x {_RANGE_SHARE_INVERSE} x {sigma:.3g} / "
-        f"{size:.3g})^2 = {points:.3g} points, for a parameter a tenth off to move a window's mean by "
-        f"{NOISE_MARGIN:g} standard errors of the noise"
-    )
-    if by_noise > by_tau:
-        window = (
-            f"window 2n+1 = {2 * wanted + 1} steps ({(2 * wanted + 1) * dt:g} s), longer than one time constant "
-            f"({2 * by_tau + 1} steps) to beat the noise: {noise}"
-        )
-    else:
-        window = (
-            f"window 2n+1 = {2 * wanted + 1} steps ({(2 * wanted + 1) * dt:g} s), about one time constant: centred on "
-            "an input change it holds the level before and the bend of the response, where gain and time constant "
-            f"act differently; shorter windows see a line (only their ratio), longer ones mix in settled stretches; "
-            + noise.replace("asks for", "asks for no more than one time constant:", 1)
-        )
-    if given is not None:
-        window = f"window 2n+1 = {2 * given + 1} steps ({(2 * given + 1) * dt:g} s), as given (n = {given}); " + (
-            f"the record would ask for n = {wanted}: " + window.split(": ", 1)[1] if wanted != given else "as proposed"
-        )
-    reasons = [
-        f"dominant time constant {tau:.4g} s: a first-order fit to the whole record from the analysis's initial "
-        f"state (x0 {x0}; gain {gains}, RMS residual {scale.rmse:.3g}, {100 * scale.explained:.0f} % of the "
-        "output's variance explained)",
-        window,
-    ]
-    return wanted, reasons
 
 
 def _shorten_gaps(u, y, keep, reasons):
@@ -883,7 +442,7 @@ def _share(d, max_samples, reasons, notes, given=None):
             + ("" if given == proposed else f"; with {d} parameter(s) suggest would propose {proposed:g} (module docs)")
         )
         return float(given)
-    wanted_percentage = min(_MAX_PERCENTAGE, 100.0 / _RANGE_SHARE_INVERSE**d)
+    wanted_percentage = min(_MAX_PERCENTAGE, 100.0 / RANGE_SHARE_INVERSE**d)
     percentage = max(wanted_percentage, _round_up_share(100.0 * _PILOT_BEHAVIOURAL / max_samples))
     if percentage > wanted_percentage:
         reasons.append(
@@ -914,8 +473,8 @@ def _pilot_memory(model, settings, n_steps, limit, limit_source):
     if limit is not None and memory["pilot"] > limit:
         raise SettingsError(
             f"max_memory: the pilot run ({settings.n_samples} samples, window {settings.window_length} steps, "
-            f"{n_steps} steps) would need about {_size(memory['pilot'])}, more than the limit of {_size(limit)} "
-            f"({limit_source}); lower max_samples or raise max_memory",
+            f"{n_steps} steps) would need about {size_text(memory['pilot'])}, more than the limit of "
+            f"{size_text(limit)} ({limit_source}); lower max_samples or raise max_memory",
             "max_memory",
         )
     return memory
@@ -1019,42 +578,6 @@ def _refusal_beyond(model, estimates, name, bound, width, side):
     return None
 
 
-def _no_time_scale(u, y, scale, other, dt):
-    """Why no window can be proposed from ``scale``, the fit in the analysis's initial state, in one line."""
-    columns = u.reshape(u.shape[0], -1)
-    if scale.x0 == "steady":
-        columns = columns - columns[0]
-    explained = max(scale.explained, 0.0) if math.isfinite(scale.explained) else 0.0
-    message = (
-        f"cannot propose a window: a first-order model from the analysis's initial state (x0 {scale.x0}) explains "
-        f"{100 * explained:.0f} % of the output's variance, below {100 * MIN_EXPLAINED:.0f} %, so "
-        "the record shows no time constant to size a window by"
-    )
-    # One value far from the rest (a logger's overflow or fill value) is the variance no model explains.
-    deviation = np.abs(y - np.nanmedian(y))
-    deviation = np.nan_to_num(deviation / _unit(deviation[~np.isnan(deviation)]), nan=0.0)
-    largest = int(np.argmax(deviation))
-    if deviation[largest] ** 2 > _ONE_VALUE_SHARE * np.sum(deviation**2):
-        message += (
-            f" (one value, {y[largest]:g} at step {largest} ({largest * dt:g} s from the start), holds "
-            f"{100 * deviation[largest] ** 2 / np.sum(deviation**2):.0f} % of the output's variance: check the data)"
-        )
-    if not columns.any():
-        message += (
-            " (the input never moves the model: "
-            + ("it stays at its first value" if scale.x0 == "steady" else "it is zero throughout")
-            + ")"
-        )
-    if other.explained >= MIN_EXPLAINED:
-        message += (
-            f"; with x0 {other.x0} it explains {100 * other.explained:.0f} % (time constant "
-            f"{other.time_constant:.4g} s): check --x0 and the offsets"
-        )
-    else:
-        message += "; check the offsets and the model, or give the window yourself (--window or --n)"
-    return message
-
-
 def _memory_limit(max_memory):
     """The pilot's memory limit in bytes and where it comes from; (None, None) where nothing is known."""
     if max_memory is not None:
@@ -1062,15 +585,7 @@ def _memory_limit(max_memory):
     available = available_memory()
     if available is None:
         return None, None
-    return MEMORY_SHARE * available, f"{100 * MEMORY_SHARE:.0f} % of the {_size(available)} available; max_memory"
-
-
-def _size(size):
-    """Bytes for a person: "3.2 GB", "450 MB"."""
-    for unit, scale in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
-        if size >= scale:
-            return f"{size / scale:.2g} {unit}"
-    return f"{size:.0f} B"
+    return MEMORY_SHARE * available, f"{100 * MEMORY_SHARE:.0f} % of the {size_text(available)} available; max_memory"
 
 
 def _pilot(u, y, model, bounds, settings, *, progress, rng):
@@ -1087,29 +602,6 @@ def _pilot(u, y, model, bounds, settings, *, progress, rng):
         near = ic[p] >= highest - _PEAK_MARGIN
         parameters[name] = dict(max_ic=highest, ic_se=float(math.sqrt(np.nanmean(variance[p][near]))))
     return dict(n_samples=settings.n_samples, seed=seed, parameters=parameters)
-
-
-def _close_changes(u, n, dt):
-    """A note when a step-like input changes again within one window of an earlier change."""
-    notes = []
-    columns = u.reshape(u.shape[0], -1)
-    for column in columns.T:
-        span = float(column.max() - column.min())
-        if span == 0:
-            continue
-        changed = np.abs(np.diff(column)) > _CHANGE_SHARE * span
-        if changed.mean() >= _STEP_LIKE:
-            continue
-        changes = np.flatnonzero(changed) + 1
-        # A ramp is one change: only a change after a quiet step starts a new one.
-        starts = changes[np.r_[True, np.diff(changes) > 1]] if changes.size else changes
-        close = np.flatnonzero(np.diff(starts) < 2 * n + 1)
-        if close.size:
-            notes.append(
-                f"{close.size} input change(s) follow the previous one within a window ({(2 * n + 1) * dt:g} s), "
-                f"the first at {starts[close[0] + 1] * dt:g} s: windows there see two responses at once"
-            )
-    return notes
 
 
 def _round_up_share(value):

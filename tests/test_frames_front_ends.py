@@ -15,7 +15,8 @@ from dynia.errors import DataError, SettingsError
 from dynia.models import FirstOrder
 from dynia.online import OnlineDynia
 from dynia.refine import second_run
-from dynia.suggestion import dominant_time_constant, suggest
+from dynia.suggestion import suggest
+from dynia.timescale import dominant_time_constant
 
 pd = pytest.importorskip("pandas")
 

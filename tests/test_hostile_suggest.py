@@ -14,7 +14,8 @@ from cli_cases import cli_one_error, write_text_file
 from dynia.cli import main
 from dynia.errors import SuggestionError
 from dynia.models import FOPDT, FirstOrder
-from dynia.suggestion import dominant_time_constant, suggest
+from dynia.suggestion import suggest
+from dynia.timescale import dominant_time_constant
 
 DATA = "--time time --input u --output y --model first-order".split()
 OPTIONS = [*DATA, *"--param K=0:5 --param T=0:5 --seed 1".split()]

@@ -9,9 +9,11 @@ import dynia
 from dynia.cli import main
 from dynia.errors import DataError, SettingsError, SuggestionError
 from dynia.fit import fit_segments
+from dynia.memory import parse_size, run_memory
 from dynia.models import FirstOrder, FunctionModel
 from dynia.models.conceptual import hymod, hymod_record
-from dynia.suggestion import dominant_time_constant, parse_duration, parse_size, run_memory, suggest, window_half_width
+from dynia.suggestion import suggest
+from dynia.timescale import dominant_time_constant, parse_duration, window_half_width
 
 # A TCLab-like heater step test: 1 s sampling, about two hours, heater steps in %, a time constant of
 # 170 s, a gain of 0.6 degC/%, ambient 21 degC, sensor noise of 0.15 degC.

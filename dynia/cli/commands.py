@@ -41,14 +41,16 @@ from ..errors import DyniaError, NothingSelected, OutputError, SettingsError
 from ..identification import identify
 from ..io.csv import load_csv
 from ..io.outdir import OutputDirectory
+from ..memory import parse_size
 from ..models.base import user_code_failed
 from ..pipeline import DroppedSamplesWarning, TargetNotReachedWarning, UnreachedOutputWarning, run
 from ..progress import stderr_is_terminal
 from ..quality import SCREENED_KINDS, check_quality
 from ..refine import check_margin, narrowed_bounds
 from ..settings import MAX_PARAMETER, AnalysisSettings, check_ic_threshold
-from ..suggestion import parse_duration, parse_size, suggest, window_half_width
+from ..suggestion import suggest
 from ..summary import verdict_table
+from ..timescale import parse_duration, window_half_width
 from ..verdicts import assess
 from . import report
 from .figures import Labels

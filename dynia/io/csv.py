@@ -32,19 +32,28 @@ array([1.        , 1.        , 1.        , 2.33333333])
 array([2., 3., 4., 5.])
 """
 
-import csv
 import dataclasses
 import datetime
-import io
 import math
 import numbers
-import os
-import re
 
 import numpy as np
 
 from .. import _checks
 from ..errors import DataError, SettingsError
+from ._csv_columns import (
+    at_least_two_rows,
+    averaged_repeats,
+    column_log,
+    common_origin,
+    elapsed,
+    filled_input,
+    output_gaps,
+    parse_times,
+    parse_values,
+    tag_logs,
+)
+from ._csv_table import counted, read_table
 
 __all__ = ["DataError", "ProcessData", "load_csv", "resample_events"]
 
@@ -52,9 +61,6 @@ __all__ = ["DataError", "ProcessData", "load_csv", "resample_events"]
 # start is rarely an exact float multiple of dt (0.3/0.1 = 2.9999999999999996),
 # and a grid that loses its last point to rounding would surprise.
 _GRID_SNAP = 1e-9
-
-# What spreadsheets, pandas, R and databases write into a cell without a value.
-_MISSING = frozenset({"", "nan", "na", "null"})
 
 # Rows count as uniformly spaced when every spacing is this close to their
 # mean, relative to it: times printed with a few decimals or summed in floats
@@ -71,19 +77,8 @@ _MAX_GRID_STEPS = 10_000_000
 # with thousands of them should not bury the other notes.
 _LISTED_GAPS = 5
 
-# Longer cells are cut in messages, so that a garbled file still gives one readable line.
-_SHOWN_CHARS = 40
-
-# How many column or tag names a message lists before it only counts the rest.
-_LISTED_NAMES = 20
-
 # What load_csv does with rows of one log that share a time: stop, or average them.
 _DUPLICATES = ("error", "mean")
-
-# The three kinds of time a time column may hold; one column holds one kind.
-_SECONDS = "a number of seconds"
-_NAIVE = "a timestamp without UTC offset"
-_AWARE = "a timestamp with UTC offset"
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -348,13 +343,13 @@ def load_csv(
         )
     average = duplicates == "mean"
     if long_format:
-        table = _read_table(path, time_format)
-        input_log, output_log = _tag_logs(table, time, tag_column, value_column, input, output, average)
+        table = read_table(path, time_format)
+        input_log, output_log = tag_logs(table, time, tag_column, value_column, input, output, average)
     elif output_path is not None:
-        input_log = _column_log(_read_table(path, time_format), time, input, "input", average)
-        output_log = _column_log(_read_table(output_path, time_format), time, output, "output", average)
+        input_log = column_log(read_table(path, time_format), time, input, "input", average)
+        output_log = column_log(read_table(output_path, time_format), time, output, "output", average)
     else:
-        return _from_rows(_read_table(path, time_format), time, input, output, dt, max_gap, average)
+        return _from_rows(read_table(path, time_format), time, input, output, dt, max_gap, average)
     return _from_logs(input_log, output_log, dt, max_gap)
 
 
@@ -533,220 +528,30 @@ def _median_spacing(times_u, times_y, start, stop):
     return float(np.median(np.diff(union)))
 
 
-@dataclasses.dataclass(frozen=True)
-class _Table:
-    """A CSV file as read: its header and its data records, each with the row a spreadsheet shows."""
-
-    path: str
-    header_row: int
-    header: tuple
-    rows: list
-    records: list
-    notes: tuple
-    time_format: str | None = None
-
-    def cells(self, name, argument):
-        """The cells of column ``name`` (the ``argument`` of load_csv that named it), '' past a short record's end."""
-        index = self._index(name, argument)
-        return [record[index] if index < len(record) else "" for record in self.records]
-
-    def _index(self, name, argument):
-        wanted = name.strip()
-        found = [index for index, column in enumerate(self.header) if column == wanted]
-        if len(found) == 1:
-            return found[0]
-        where = f"{self.path}: row {self.header_row} (the header)"
-        if found:
-            raise DataError(f"{where} names {len(found)} columns {wanted!r}; expected one, to read {argument} from")
-        hint = (
-            " (they are numbers: the file seems to lack a header row naming the columns)"
-            if all(_is_number(column) for column in self.header)
-            else ""
-        )
-        raise DataError(
-            f"{where} has no column {wanted!r} (given as {argument}); available columns: {_listed(self.header)}{hint}"
-        )
-
-
-@dataclasses.dataclass(frozen=True)
-class _Timeline:
-    """The time column of one log: its first time, its kind, every cell as written and in seconds from the first."""
-
-    column: str
-    first: object
-    kind: str
-    first_row: int
-    cells: tuple
-    seconds: np.ndarray
-
-    @property
-    def first_cell(self):
-        return self.cells[0]
-
-    @property
-    def last_cell(self):
-        return self.cells[-1]
-
-
-@dataclasses.dataclass(frozen=True)
-class _Log:
-    """One signal as an event log: the table it came from, its times and its values (NaN where missing)."""
-
-    table: _Table
-    label: str
-    rows: list
-    timeline: _Timeline
-    values: np.ndarray
-    notes: list
-
-
-def _read_table(path, time_format=None):
-    """Header and data records of a CSV file or stream, or a DataError saying why there are none.
-
-    ``time_format`` is kept with the table for reading its time column.
-    """
-    if hasattr(path, "read"):
-        name, raw = _read_stream(path)
-    else:
-        name = os.fspath(path)
-        try:
-            with open(path, "rb") as file:
-                raw = file.read()
-        except FileNotFoundError:
-            raise DataError(f"{name}: no such file; expected a CSV file with a header row") from None
-        except OSError as error:
-            raise DataError(f"{name}: cannot be read ({error.strerror or error}); expected a CSV file") from None
-    text, notes = _decoded(name, raw)
-    header_line = next((line for line in io.StringIO(text) if line.strip()), "")
-    delimiter = _delimiter(header_line)
-    reader = csv.reader(io.StringIO(text, newline=""), delimiter=delimiter)
-    header_row = header = None
-    rows, records = [], []
-    row = 0  # a csv.Error is raised before its record is counted
-    try:
-        for row, record in enumerate(reader, start=1):
-            if not any(cell.strip() for cell in record):
-                continue
-            if header is None:
-                header_row, header = row, tuple(cell.strip() for cell in record)
-                continue
-            if any(cell.strip() for cell in record[len(header) :]):
-                raise DataError(
-                    f"{name}: row {row} has {len(record)} cells but the header (row {header_row}) names "
-                    f"{len(header)} columns; expected one cell per column"
-                    + (
-                        " (a decimal comma in a comma-separated file splits a number in two: export the CSV with "
-                        "'.' as the decimal separator)"
-                        if delimiter == "," and _split_decimals(record)
-                        else ""
-                    )
-                )
-            rows.append(row)
-            records.append(record)
-    except csv.Error as error:
-        raise DataError(f"{name}: row {row + 1} cannot be read as CSV ({error})") from None
-    if header is None:
-        raise DataError(f"{name}: the file is empty; expected a header row and at least 2 data rows")
-    if not records:
-        raise DataError(f"{name}: the file has a header (row {header_row}) but no data rows; expected at least 2")
-    return _Table(name, header_row, header, rows, records, notes, time_format)
-
-
-def _decoded(name, raw):
-    """The text of a file's bytes, and a note when it was not UTF-8; a DataError for what is no text."""
-    notes = ()
-    if isinstance(raw, str):  # a text stream is already decoded; only its byte order mark is left to drop
-        text = raw.removeprefix("\ufeff")
-    elif raw.startswith((b"\xff\xfe", b"\xfe\xff")):
-        # Excel's "Unicode text" and Windows' Notepad write UTF-16 with a byte order mark.
-        try:
-            text = raw.decode("utf-16")
-        except UnicodeDecodeError as error:
-            raise DataError(
-                f"{name}: starts like UTF-16 text but byte {error.start} is not UTF-16; expected a text CSV file"
-            ) from None
-        notes = (f"read {name} as UTF-16 text (it starts with UTF-16's byte order mark)",)
-    else:
-        try:
-            text = raw.decode("utf-8-sig")
-        except UnicodeDecodeError:
-            # Excel on Windows saves "CSV" in the ANSI code page; a degree sign in
-            # a column name should not stop a load.
-            text = raw.decode("cp1252", errors="replace")
-            notes = (f"read {name} as Windows-1252 text, since it is not valid UTF-8",)
-    text = text.removesuffix("\x1a")  # the end-of-file mark of DOS-era text files
-    control = _CONTROL.search(text)
-    if control is not None:
-        offset = control.start()
-        line = text.count("\n", 0, offset) + 1
-        kind = (
-            "NUL bytes (UTF-16 text without a byte order mark, or binary data)"
-            if control.group() == "\x00"
-            else f"the control character {control.group()!r}"
-        )
-        raise DataError(
-            f"{name}: line {line} holds {kind}, which no CSV text holds; expected a CSV text file "
-            "(UTF-8, UTF-16 with byte order mark, or Windows-1252); export the data as CSV"
-        )
-    return text, notes
-
-
-# Characters no CSV text file holds: C0 controls but tab, line feed, vertical tab, form feed and carriage return.
-_CONTROL = re.compile(r"[\x00-\x08\x0e-\x1f\x7f]")
-
-
-def _read_stream(stream):
-    """The name messages give an open stream, and all it holds from where it stands: str or bytes."""
-    name = getattr(stream, "name", None)
-    name = name if isinstance(name, str) else "<stream>"
-    try:
-        raw = stream.read()
-    except (OSError, ValueError) as error:
-        # ValueError: a closed stream.
-        raise DataError(f"{name}: cannot be read ({error}); expected an open CSV stream") from None
-    if not isinstance(raw, (str, bytes, bytearray)):
-        raise DataError(f"{name}: read() gave a {type(raw).__name__}; expected a text or binary CSV stream")
-    return name, raw
-
-
-def _split_decimals(record):
-    """Whether a record's cells look like numbers whose decimal comma split them: a digit-only cell after a number."""
-    cells = [cell.strip() for cell in record]
-    return any(_is_number(a) and b.isdigit() for a, b in zip(cells, cells[1:]))
-
-
-def _delimiter(header_line):
-    """Comma, unless the header holds (outside quotes) no comma and exactly one of semicolon and tab."""
-    bare = re.sub(r'"[^"]*"', "", header_line)
-    if "," not in bare and (";" in bare) != ("\t" in bare):
-        return ";" if ";" in bare else "\t"
-    return ","
-
-
 def _from_rows(table, time, input, output, dt, max_gap, average=False):
     """A wide table: its rows as they are when uniformly spaced at ``dt``, else resampled.
 
     With ``average``, rows sharing a time are first merged into their mean.
     """
     rows = table.rows
-    _at_least_two_rows(table, "the file", rows)
-    timeline = _timeline(table, time, rows, table.cells(time, "time"), average)
-    u = _values(table, input, rows, table.cells(input, "input"))
-    y = _values(table, output, rows, table.cells(output, "output"))
+    at_least_two_rows(table, "the file", rows)
+    timeline = parse_times(table, time, rows, table.cells(time, "time"), average)
+    u = parse_values(table, input, rows, table.cells(input, "input"))
+    y = parse_values(table, output, rows, table.cells(output, "output"))
     notes = list(table.notes)
     if average:
-        rows, timeline, (u, y), note = _averaged_repeats(table, "the file", rows, timeline, (u, y))
+        rows, timeline, (u, y), note = averaged_repeats(table, "the file", rows, timeline, (u, y))
         notes += [note] if note else []
     seconds = timeline.seconds
-    u = _filled_input(table, f"column {input.strip()!r}", rows, seconds, u, notes)
-    missing = _output_gaps(table, f"column {output.strip()!r}", rows, y)
+    u = filled_input(table, f"column {input.strip()!r}", rows, seconds, u, notes)
+    missing = output_gaps(table, f"column {output.strip()!r}", rows, y)
     start = timeline.first
     spacing = seconds[-1] / (seconds.size - 1)
     uniform = np.abs(np.diff(seconds) - spacing).max() <= _UNIFORM * spacing
     if uniform and (dt is None or abs(dt - spacing) <= _UNIFORM * spacing):
         step = spacing if dt is None else dt
         if missing.any():
-            notes.append(f"{_counted(missing.sum(), 'output value')} missing, left as NaN in y")
+            notes.append(f"{counted(missing.sum(), 'output value')} missing, left as NaN in y")
         return ProcessData(step * np.arange(seconds.size), u, y, float(step), start, tuple(notes))
     grid, u_grid, y_grid, step = _resampled(table.path, seconds, u, seconds, y, dt)
     if uniform:
@@ -765,23 +570,23 @@ def _from_rows(table, time, input, output, dt, max_gap, average=False):
 
 def _from_logs(input_log, output_log, dt, max_gap):
     """Two event logs resampled onto a common grid over the span both cover."""
-    origin = _common_origin(input_log, output_log)
-    times_u = input_log.timeline.seconds + _elapsed(input_log.timeline.first, origin)
-    times_y = output_log.timeline.seconds + _elapsed(output_log.timeline.first, origin)
+    origin = common_origin(input_log, output_log)
+    times_u = input_log.timeline.seconds + elapsed(input_log.timeline.first, origin)
+    times_y = output_log.timeline.seconds + elapsed(output_log.timeline.first, origin)
     if not max(times_u[0], times_y[0]) < min(times_u[-1], times_y[-1]):
         raise DataError(
             f"{output_log.table.path}: the output log ({_described(output_log)}) does not overlap the input log "
             f"({_described(input_log)}) of {input_log.table.path} in time; expected a stretch where both have data"
         )
     notes = list(dict.fromkeys(input_log.table.notes + output_log.table.notes)) + input_log.notes + output_log.notes
-    u = _filled_input(input_log.table, input_log.label, input_log.rows, times_u, input_log.values, notes)
-    missing = _output_gaps(output_log.table, output_log.label, output_log.rows, output_log.values)
+    u = filled_input(input_log.table, input_log.label, input_log.rows, times_u, input_log.values, notes)
+    missing = output_gaps(output_log.table, output_log.label, output_log.rows, output_log.values)
     grid, u_grid, y_grid, step = _resampled(output_log.table.path, times_u, u, times_y, output_log.values, dt)
     dt_source = "given" if dt is not None else "inferred: the median spacing of both logs' timestamps"
     notes.append(
         f"resampled the input log ({input_log.label} of {input_log.table.path}, "
-        f"{_counted(len(input_log.rows), 'row')}) and the output log ({output_log.label} of "
-        f"{output_log.table.path}, {_counted(len(output_log.rows), 'row')}) onto a common {step:g} s grid "
+        f"{counted(len(input_log.rows), 'row')}) and the output log ({output_log.label} of "
+        f"{output_log.table.path}, {counted(len(output_log.rows), 'row')}) onto a common {step:g} s grid "
         f"from {grid[0]:g} s to {grid[-1]:g} s by linear interpolation (dt {dt_source})"
     )
     _note_output_gaps(notes, missing, y_grid)
@@ -793,265 +598,11 @@ def _from_logs(input_log, output_log, dt, max_gap):
     return ProcessData(grid, u_grid, y_grid, step, origin, tuple(notes), gaps)
 
 
-def _column_log(table, time, column, argument, average=False):
-    """The log of one column of a two-file layout: every data row of ``table``."""
-    label = f"column {column.strip()!r}"
-    return _event_log(table, label, time, column, argument, range(len(table.rows)), average)
-
-
-def _tag_logs(table, time, tag_column, value_column, input, output, average=False):
-    """The input and output logs of a long table: the rows of each tag."""
-    tags = [cell.strip() for cell in table.cells(tag_column, "tag_column")]
-    logs = []
-    for argument, tag in (("input", input), ("output", output)):
-        wanted = tag.strip()
-        picks = [index for index, cell in enumerate(tags) if cell == wanted]
-        if not picks:
-            present = [cell for cell in dict.fromkeys(tags) if cell]
-            raise DataError(
-                f"{table.path}: column {tag_column.strip()!r} holds no tag {wanted!r} "
-                f"(given as {argument}) in rows {table.rows[0]} to {table.rows[-1]}; "
-                f"tags present: {_listed(present)}"
-            )
-        logs.append(_event_log(table, f"tag {wanted!r}", time, value_column, "value_column", picks, average))
-    return logs
-
-
-def _event_log(table, label, time, column, argument, picks, average=False):
-    """The log of the records ``picks`` of ``table``: their times and the values of ``column``.
-
-    With ``average``, records sharing a time are merged into their mean.
-    """
-    rows = [table.rows[index] for index in picks]
-    _at_least_two_rows(table, label, rows)
-    time_cells, value_cells = table.cells(time, "time"), table.cells(column, argument)
-    timeline = _timeline(table, time, rows, [time_cells[index] for index in picks], average)
-    values = _values(table, column, rows, [value_cells[index] for index in picks])
-    notes = []
-    if average:
-        rows, timeline, (values,), note = _averaged_repeats(table, label, rows, timeline, (values,))
-        notes += [f"{note} ({label} of {table.path})"] if note else []
-    return _Log(table, label, rows, timeline, values, notes)
-
-
-def _averaged_repeats(table, label, rows, timeline, columns):
-    """Rows sharing a time as one row: its first row number and cell, each column's mean with NaN ignored.
-
-    The mean is NaN where all the rows' values are. Returns the rows, the
-    timeline and the columns left, and a note (None when no time repeats).
-    """
-    first = np.r_[True, np.diff(timeline.seconds) > 0]
-    if first.all():
-        return rows, timeline, columns, None
-    kept = np.flatnonzero(first)
-    if kept.size < 2:
-        raise DataError(
-            f"{table.path}: {label} has {len(rows)} rows (rows {rows[0]} to {rows[-1]}) but all at one time "
-            f"{_shown(timeline.first_cell)}; expected at least 2 times"
-        )
-    group = np.cumsum(first) - 1
-    averaged = []
-    for values in columns:
-        present = ~np.isnan(values)
-        totals = np.bincount(group, weights=np.where(present, values, 0.0))
-        counts = np.bincount(group, weights=present)
-        with np.errstate(invalid="ignore"):  # 0 / 0 where every value of the time is missing: NaN
-            averaged.append(totals / counts)
-    sizes = np.bincount(group)
-    note = (
-        f"{int(sizes[sizes > 1].sum())} rows with repeated timestamps averaged into "
-        f"{_counted(int((sizes > 1).sum()), 'row')}"
-    )
-    merged = dataclasses.replace(
-        timeline, cells=tuple(timeline.cells[index] for index in kept), seconds=timeline.seconds[kept]
-    )
-    return [rows[index] for index in kept], merged, tuple(averaged), note
-
-
-def _at_least_two_rows(table, label, rows):
-    if len(rows) < 2:
-        raise DataError(
-            f"{table.path}: {label} has only one data row (row {rows[0]}); expected at least 2 to span a time"
-        )
-
-
-def _timeline(table, column, rows, cells, repeats=False):
-    """Parse a time column: one kind of time throughout, strictly increasing; seconds from its first row.
-
-    With ``repeats`` consecutive rows may share a time (non-decreasing).
-    """
-    column = column.strip()
-    stamps = [
-        _time_stamp(table.path, column, row, cell, table.time_format) for row, cell in zip(rows, cells, strict=True)
-    ]
-    kind = _kind(stamps[0])
-    for row, cell, stamp in zip(rows, cells, stamps, strict=True):
-        if _kind(stamp) != kind:
-            raise DataError(
-                f"{table.path}: row {row}, column {column!r}: {_shown(cell)} is {_kind(stamp)}, "
-                f"but row {rows[0]} holds {kind} ({_shown(cells[0])}); expected one kind of time "
-                "throughout"
-            )
-    first = stamps[0]
-    if kind == _SECONDS:
-        with np.errstate(over="ignore"):  # an overflow is reported below, with its row
-            seconds = np.array(stamps) - first
-    else:
-        seconds = np.array([(stamp - first).total_seconds() for stamp in stamps])
-    if not np.isfinite(seconds).all():
-        far = int(np.argmin(np.isfinite(seconds)))
-        raise DataError(
-            f"{table.path}: row {rows[far]}, column {column!r}: {_shown(cells[far])} is so far from "
-            f"{_shown(cells[0])} on row {rows[0]} that the seconds between them overflow; "
-            "expected times of one record"
-        )
-    steps = np.diff(seconds)
-    backwards = steps < 0 if repeats else steps <= 0
-    if backwards.any():
-        later = int(np.argmax(backwards)) + 1
-        where = f"{table.path}: row {rows[later]}, column {column!r}"
-        if steps[later - 1] == 0:
-            raise DataError(
-                f"{where}: duplicate timestamp {_shown(cells[later])}, already on row {rows[later - 1]}; "
-                "expected strictly increasing times, or pass --duplicates mean (duplicates='mean') to average "
-                "the rows that share a time"
-            )
-        raise DataError(
-            f"{where}: {_shown(cells[later])} is earlier than {_shown(cells[later - 1])} on row "
-            f"{rows[later - 1]}; expected strictly increasing times"
-        )
-    return _Timeline(column, first, kind, rows[0], tuple(cell.strip() for cell in cells), seconds)
-
-
-def _time_stamp(path, column, row, cell, time_format=None):
-    """A time cell as float seconds or a datetime, or a DataError naming the row.
-
-    With ``time_format`` the cell is read by :meth:`datetime.datetime.strptime` only.
-    """
-    text = cell.strip()
-    where = f"{path}: row {row}, column {column!r}"
-    if text.lower() in _MISSING:
-        expected = (
-            f"a time in the format {time_format!r}" if time_format else "a number of seconds or an ISO 8601 timestamp"
-        )
-        raise DataError(f"{where}: the time is missing ({_shown(cell)}); expected {expected}")
-    if time_format is not None:
-        try:
-            return datetime.datetime.strptime(text, time_format)
-        except ValueError:
-            raise DataError(
-                f"{where}: {_shown(cell)} does not match the time format {time_format!r} (--time-format)"
-            ) from None
-    try:
-        seconds = float(text)
-    except ValueError:
-        # fromisoformat reads a trailing Z only from Python 3.11 on.
-        iso = text[:-1] + "+00:00" if text.endswith(("Z", "z")) else text
-        try:
-            return datetime.datetime.fromisoformat(iso)
-        except ValueError:
-            hint = (
-                " (decimals need a point, not a comma)"
-                if _DECIMAL_COMMA.fullmatch(text)
-                else "; give the format of other timestamps with --time-format (time_format=), "
-                "e.g. '%d.%m.%Y %H:%M' for 01.01.2012 00:15"
-            )
-            raise DataError(
-                f"{where}: {_shown(cell)} is neither a number of seconds nor an ISO 8601 timestamp "
-                f"such as 2024-05-01T12:00:00{hint}"
-            ) from None
-    if not math.isfinite(seconds):
-        raise DataError(f"{where}: {_shown(cell)} is not a finite time; expected a number of seconds")
-    return seconds
-
-
-# A number written with a decimal comma: 0,5 or -1,25e3.
-_DECIMAL_COMMA = re.compile(r"[+-]?\d*,\d+([eE][+-]?\d+)?")
-
-
-def _kind(stamp):
-    if isinstance(stamp, float):
-        return _SECONDS
-    return _NAIVE if stamp.utcoffset() is None else _AWARE
-
-
-def _common_origin(input_log, output_log):
-    """Time zero of two logs: the earlier first time, once both hold the same kind of time."""
-    first_u, first_y = input_log.timeline, output_log.timeline
-    if first_u.kind != first_y.kind:
-        raise DataError(
-            f"{output_log.table.path}: row {first_y.first_row}, column {first_y.column!r}: "
-            f"{_shown(first_y.first_cell)} is {first_y.kind}, but row {first_u.first_row} of "
-            f"{input_log.table.path} ({input_log.label}) holds {first_u.kind} ({_shown(first_u.first_cell)}); "
-            "expected one kind of time for both signals"
-        )
-    return min(first_u.first, first_y.first)
-
-
-def _elapsed(stamp, origin):
-    """Seconds from ``origin`` to ``stamp``, both numbers of seconds or both datetimes."""
-    difference = stamp - origin
-    return difference if isinstance(difference, float) else difference.total_seconds()
-
-
-def _values(table, column, rows, cells):
-    """Parse a value column: float per cell, NaN for a missing one."""
-    values = np.empty(len(cells))
-    for index, (row, cell) in enumerate(zip(rows, cells, strict=True)):
-        text = cell.strip()
-        if text.lower() in _MISSING:
-            values[index] = np.nan
-            continue
-        where = f"{table.path}: row {row}, column {column.strip()!r}"
-        expected = "expected a number, or an empty cell, NaN, NA or null where the value is missing"
-        try:
-            value = float(text)
-        except ValueError:
-            if _DECIMAL_COMMA.fullmatch(text):
-                raise DataError(
-                    f"{where}: {_shown(cell)} is not a number (decimals need a point, not a comma: "
-                    f"{text.replace(',', '.')}); export the CSV with '.' as the decimal separator"
-                ) from None
-            raise DataError(f"{where}: {_shown(cell)} is not a number; {expected}") from None
-        if not math.isfinite(value):
-            raise DataError(f"{where}: {_shown(cell)} is not a finite number; {expected}")
-        values[index] = value
-    return values
-
-
-def _filled_input(table, label, rows, times, values, notes):
-    """The input with its missing values interpolated in time, ends held; a note says how many."""
-    missing = np.isnan(values)
-    if missing.all():
-        raise DataError(
-            f"{table.path}: {label} has no value in rows {rows[0]} to {rows[-1]}; "
-            "expected at least one number for the input"
-        )
-    if not missing.any():
-        return values
-    notes.append(
-        f"filled {_counted(missing.sum(), 'missing input value')} by linear interpolation "
-        "between the nearest present values"
-    )
-    return np.interp(times, times[~missing], values[~missing])
-
-
-def _output_gaps(table, label, rows, values):
-    """Where the output is missing; a DataError when it is missing everywhere."""
-    missing = np.isnan(values)
-    if missing.all():
-        raise DataError(
-            f"{table.path}: {label} has no value in rows {rows[0]} to {rows[-1]}; "
-            "expected at least one number for the output"
-        )
-    return missing
-
-
 def _note_output_gaps(notes, missing, y_grid):
     if missing.any():
         notes.append(
-            f"{_counted(missing.sum(), 'output value')} missing, leaving "
-            f"{_counted(np.isnan(y_grid).sum(), 'grid point')} NaN in y"
+            f"{counted(missing.sum(), 'output value')} missing, leaving "
+            f"{counted(np.isnan(y_grid).sum(), 'grid point')} NaN in y"
         )
 
 
@@ -1141,7 +692,7 @@ def _blank_gaps(grid, y_grid, step, max_gap, logs, notes):
                         start,
                         stop,
                         f"gap of {_duration(length)} s with no rows{where} from {cells[index]} "
-                        f"to {cells[index + 1]}: {_counted(stop - start, 'grid point')} left "
+                        f"to {cells[index + 1]}: {counted(stop - start, 'grid point')} left "
                         "missing in y",
                     )
                 )
@@ -1151,8 +702,8 @@ def _blank_gaps(grid, y_grid, step, max_gap, logs, notes):
     if rest:
         points = sum(stop - start for start, stop, _ in rest)
         notes.append(
-            f"and {_counted(len(rest), 'more gap')} longer than {max_gap:g} grid steps "
-            f"({_duration(max_gap * step)} s): {_counted(points, 'more grid point')} left missing in y"
+            f"and {counted(len(rest), 'more gap')} longer than {max_gap:g} grid steps "
+            f"({_duration(max_gap * step)} s): {counted(points, 'more grid point')} left missing in y"
         )
     merged = []
     for start, stop, _ in found:
@@ -1168,28 +719,6 @@ def _described(log):
     return f"{log.label}, {log.timeline.first_cell} to {log.timeline.last_cell}"
 
 
-def _is_number(text):
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
-
-
-def _shown(cell):
-    """A cell for a message: quoted, and cut when long."""
-    return repr(cell if len(cell) <= _SHOWN_CHARS else cell[: _SHOWN_CHARS - 3] + "...")
-
-
-def _listed(names):
-    shown = ", ".join(repr(name) for name in names[:_LISTED_NAMES])
-    return shown if len(names) <= _LISTED_NAMES else f"{shown}, ... ({len(names)} in all)"
-
-
 def _duration(seconds):
     """Seconds as a short number, without the float noise of subtracted timestamps."""
     return f"{round(seconds, 6):.15g}"
-
-
-def _counted(number, noun):
-    return f"{number} {noun}" if number == 1 else f"{number} {noun}s"

@@ -4,9 +4,10 @@
 simulation of many parameter sets, streamed in time chunks) and the shape
 convention every model follows; :mod:`~dynia.models.linear` the exact
 zero-order-hold linear models (:class:`FirstOrder`, :class:`FOPDT`,
-:class:`SecondOrderDelay`, :class:`TransferFunction` for any python-control
-model); :mod:`~dynia.models.custom` wraps your own simulator
-(:class:`FunctionModel`) or state update (:class:`StateSpaceModel`).
+:class:`SecondOrderDelay`), and :mod:`~dynia.models.transfer` any
+python-control model simulated the same way (:class:`TransferFunction`);
+:mod:`~dynia.models.custom` wraps your own simulator (:class:`FunctionModel`)
+or state update (:class:`StateSpaceModel`).
 :mod:`~dynia.models.conceptual` holds nonlinear conceptual models built on
 them (HYMOD, a draining tank), loaded on first use.
 
@@ -27,7 +28,8 @@ import importlib
 
 from .base import Model, SimulationState
 from .custom import FunctionModel, StateSpaceModel
-from .linear import FOPDT, FirstOrder, LinearModel, SecondOrderDelay, Stepper, TransferFunction
+from .linear import FOPDT, FirstOrder, LinearModel, SecondOrderDelay, Stepper
+from .transfer import TransferFunction
 
 __all__ = [
     "Model",
