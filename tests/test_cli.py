@@ -13,8 +13,8 @@ from hypothesis import strategies as st
 
 from dynia import __version__, load
 from dynia.cli import main
-from dynia.cli.commands import _bounds
-from dynia.cli.parser import UsageError
+from dynia.cli.common import bounds
+from dynia.cli.options import UsageError
 from dynia.models import FirstOrder
 
 HEATING_ARGS = (
@@ -243,19 +243,19 @@ def test_param_ranges_round_trip(low, width):
     t_low, t_high = abs(low), abs(low) + width
     if not (low < high and t_low < t_high):  # width lost to rounding at this magnitude
         return
-    bounds = _bounds([f"T={t_low!r}:{t_high!r}", f"K={low!r}:{high!r}"], FirstOrder())
-    assert bounds == {"T": (t_low, t_high), "K": (low, high)}
-    assert list(bounds) == ["T", "K"]  # the order given is the order of the results
+    ranges = bounds([f"T={t_low!r}:{t_high!r}", f"K={low!r}:{high!r}"], FirstOrder())
+    assert ranges == {"T": (t_low, t_high), "K": (low, high)}
+    assert list(ranges) == ["T", "K"]  # the order given is the order of the results
 
 
 @given(text=st.text(max_size=12))
 def test_malformed_param_ranges_are_usage_errors(text):
     try:
-        bounds = _bounds([f"K={text}", "T=0:1"], FirstOrder())
+        ranges = bounds([f"K={text}", "T=0:1"], FirstOrder())
     except UsageError as error:
         assert "\n" not in str(error)
     else:  # only well-formed increasing ranges get through
-        low, high = bounds["K"]
+        low, high = ranges["K"]
         assert low < high
 
 

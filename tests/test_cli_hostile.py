@@ -7,7 +7,6 @@ are byte-identical afterwards, and that no staging (``.partial``) or lock litter
 """
 
 import hashlib
-import importlib
 import json
 import os
 import re
@@ -42,9 +41,6 @@ from dynia.io.outdir import MARKER, OutputDirectory
 from dynia.models import FOPDT, TransferFunction
 from dynia.pipeline import DroppedSamplesWarning
 from dynia.verdicts import VERDICTS
-
-# The module (dynia.cli.main is the function the package exports under the same name).
-CLI_MODULE = importlib.import_module("dynia.cli.commands")
 
 
 def _csv(path, time, u, y):
@@ -85,8 +81,8 @@ def never_analysed(monkeypatch):
     def refuse(*args, **kwargs):
         raise AssertionError("the analysis started although the command should have stopped before")
 
-    for name in ("run", "load_csv", "identify"):
-        monkeypatch.setattr(dynia.cli.commands, name, refuse)
+    # Reading the data is every command's first work: the analysis cannot start without it.
+    monkeypatch.setattr("dynia.cli.common.load_csv", refuse)
 
 
 # ------------------------------------------------------------------ output directory: never destroy anything
@@ -129,7 +125,7 @@ def test_out_current_directory_or_its_parent_is_refused(tmp_path, capsys, monkey
     def refuse(*args, **kwargs):
         raise AssertionError("the analysis started")
 
-    monkeypatch.setattr(dynia.cli.commands, "run", refuse)
+    monkeypatch.setattr("dynia.cli.common.load_csv", refuse)
     cli_one_error(*cli_analyse(capsys, data, *BASE, "--out", out, "--overwrite"), "--out")
     cli_one_error(*cli_analyse(capsys, data, *BASE, "--out", out), "--out")
     assert tree_state(tmp_path) == before

@@ -3,18 +3,17 @@ one check, and errors naming the option through ``SettingsError.setting``."""
 
 import ast
 import dataclasses
-import importlib
 import re
 
 import pytest
 from cli_cases import BASE, GOOD, cli_analyse, cli_one_error, write_text_file
 
-from dynia.cli import main
-from dynia.cli.parser import OPTIONS, parser
+from dynia.cli import COMMANDS, main
+from dynia.cli.options import named_as_options, parser
 from dynia.errors import SettingsError
 from dynia.settings import AnalysisSettings
 
-CLI_MODULE = importlib.import_module("dynia.cli.commands")
+OPTIONS = {name: command.OPTIONS for name, command in COMMANDS.items()}
 FIELDS = {field.name: field for field in dataclasses.fields(AnalysisSettings)}
 
 
@@ -52,7 +51,7 @@ def test_every_option_of_a_setting_has_the_fields_default_and_shows_it():
                 # A negated flag (--no-quality) is off by default, leaving its setting at its default.
                 default = not option.default if option.negated else option.default
                 assert default == FIELDS[option.setting].default, (command, option.key)
-    text = parser()._subparsers._group_actions[0].choices["analyse"].format_help()
+    text = parser(COMMANDS.values())._subparsers._group_actions[0].choices["analyse"].format_help()
     flat = " ".join(text.split())
     assert "--samples N Monte Carlo parameter sets (default 2000)" in flat
     assert "(50, 100) (default 90)" in flat and "(default uniform)" in flat
@@ -95,14 +94,14 @@ def test_the_analysis_options_are_the_settings_with_their_option_names():
 )
 def test_a_settings_error_names_the_option_of_its_setting(setting, message, expected):
     command = "suggest" if setting == "max_memory" else "analyse"
-    with pytest.raises(SettingsError) as caught, CLI_MODULE._named_as_options(command):
+    with pytest.raises(SettingsError) as caught, named_as_options(OPTIONS[command]):
         raise SettingsError(message, setting)
     assert str(caught.value).startswith(expected), str(caught.value)
 
 
 def test_a_settings_error_of_no_option_of_the_command_is_left_as_it_is():
     for setting in (None, "workers", "bins"):  # bins is no option of identify
-        with pytest.raises(SettingsError, match="^as it was$"), CLI_MODULE._named_as_options("identify"):
+        with pytest.raises(SettingsError, match="^as it was$"), named_as_options(OPTIONS["identify"]):
             raise SettingsError("as it was", setting)
 
 
@@ -152,6 +151,6 @@ def test_an_abbreviated_option_is_refused_naming_what_was_typed(tmp_path, capsys
 
 
 def test_every_parser_of_the_command_refuses_abbreviations():
-    top = parser()
+    top = parser(COMMANDS.values())
     commands = top._subparsers._group_actions[0].choices
     assert not top.allow_abbrev and all(not sub.allow_abbrev for sub in commands.values())

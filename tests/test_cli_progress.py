@@ -9,7 +9,6 @@ import pytest
 from cli_cases import HEATING, cli_run, cli_succeeded
 
 import dynia
-from dynia.cli import commands
 from dynia.engine import kernels
 from dynia.models import FirstOrder
 
@@ -35,7 +34,7 @@ def on_terminal(monkeypatch):
 @pytest.fixture
 def uncompiled(monkeypatch):
     """The kernels as in a fresh process, whatever the tests before compiled in this one."""
-    monkeypatch.setattr(commands.kernels, "compiled", lambda: False)
+    monkeypatch.setattr(kernels, "compiled", lambda: False)
 
 
 def _identify(capsys, tmp_path, *extra):
@@ -96,11 +95,11 @@ def test_quiet_silences_the_progress_but_not_the_result(tmp_path, capsys, uncomp
 
 def test_the_compilation_notice_only_before_the_kernels_are_compiled(tmp_path, capsys, monkeypatch):
     on_terminal(monkeypatch)
-    monkeypatch.setattr(commands.kernels, "compiled", lambda: True)
+    monkeypatch.setattr(kernels, "compiled", lambda: True)
     _, stderr, _ = _identify(capsys, tmp_path)
     assert BAR in stderr and NOTICE not in stderr
     # The baseline and whole methods run no DYNIA: no bar, no notice, even before any compilation.
-    monkeypatch.setattr(commands.kernels, "compiled", lambda: False)
+    monkeypatch.setattr(kernels, "compiled", lambda: False)
     for method in ("baseline", "whole"):
         _, stderr, _ = _identify(capsys, tmp_path / method, "--method", method)
         assert BAR not in stderr and NOTICE not in stderr and WROTE in stderr
@@ -110,7 +109,7 @@ def test_a_second_run_shows_the_progress_of_both_analyses(tmp_path, capsys, monk
     on_terminal(monkeypatch)
     # Uncompiled until the first analysis has run, as in a fresh process.
     answers = iter([False])
-    monkeypatch.setattr(commands.kernels, "compiled", lambda: next(answers, True))
+    monkeypatch.setattr(kernels, "compiled", lambda: next(answers, True))
     out = tmp_path / "runs"
     status, stdout, stderr = cli_run(
         capsys, "analyse", HEATING, *HEATING_ARGS, "--no-plots", "--second-run", "--out", out

@@ -206,13 +206,13 @@ def test_min_length_selects_longer_segments_and_is_recorded_in_steps(tmp_path, c
 
 
 def test_the_library_names_become_options():
-    from dynia.cli.commands import _in_options
+    from dynia.cli.identify import in_options
 
     text = (
         "segments_from_ic selected nothing: no run of at least min_length=21 steps; lower ic_threshold or min_length, "
         "or use mode 'any'; hold out another part (held_out); exclude them with exclude_flagged=True"
     )
-    assert _in_options(text) == (
+    assert in_options(text) == (
         "DYNIA selected nothing: no run of at least --min-length 21 steps; lower --ic-threshold or --min-length, "
         "or use --mode any; hold out another part (--held-out); exclude them with --exclude-flagged"
     )

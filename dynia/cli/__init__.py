@@ -1,12 +1,18 @@
-"""The ``dynia`` command: ``dynia analyse``, ``dynia identify`` and ``dynia suggest`` on logged data.
+"""The ``dynia`` command: ``dynia analyse``, ``identify``, ``suggest`` and ``follow`` on logged data.
 
-:func:`main` is the entry point. :mod:`~dynia.cli.parser` makes the options
-(those of the analysis from the fields of
-:class:`~dynia.settings.AnalysisSettings`); :mod:`~dynia.cli.commands` runs
-them on the library; :mod:`~dynia.cli.report` writes the tables,
+:func:`main` is the entry point. Each command is a module:
+:mod:`~dynia.cli.analyse`, :mod:`~dynia.cli.identify`,
+:mod:`~dynia.cli.suggest` and :mod:`~dynia.cli.follow` hold its options
+(``OPTIONS``, and ``cli_parse``, which adds them to the parser), its own
+``check`` of them, the class of its typed options object (``Options``) and
+its run (``cli_action``). :mod:`~dynia.cli.options` holds what the commands'
+options share (those of the analysis made from the fields of
+:class:`~dynia.settings.AnalysisSettings`); :mod:`~dynia.cli.common` what
+their runs share; :mod:`~dynia.cli.report` writes the tables,
 ``summary.json`` and the printed verdicts; :mod:`~dynia.cli.figures` draws
-the figures. The commands and the library load only once a command is to
-run, so ``dynia --version`` and ``dynia analyse --help`` answer at once.
+the figures. The library loads only once a command is to run, so ``dynia
+--version`` and ``dynia analyse --help`` answer at once. Bad input ends the
+command with one line on stderr and exit status 2.
 """
 
 import signal
@@ -16,9 +22,13 @@ import warnings
 import numpy as np
 
 from ..errors import DyniaError, Interrupted
-from .parser import attached, parser
+from . import analyse, follow, identify, suggest
+from .options import attached, named_as_options, parser
 
 __all__ = ["main"]
+
+# Each command's module, by the command's name, in the order of dynia --help.
+COMMANDS = {"analyse": analyse, "identify": identify, "suggest": suggest, "follow": follow}
 
 
 def main(argv=None):
@@ -29,7 +39,7 @@ def main(argv=None):
     128 + its number and nothing written. Any other exception is a bug in
     dynia and keeps its traceback.
     """
-    command_parser = parser()
+    command_parser = parser(COMMANDS.values())
     command_line = ["dynia", *(sys.argv[1:] if argv is None else map(str, argv))]
     try:
         # Warnings of numpy, matplotlib and the rest would break the promise of
@@ -40,9 +50,11 @@ def main(argv=None):
             if args.command is None:
                 command_parser.print_help()
                 return 2
-            from . import commands
+            command = COMMANDS[args.command]
+            from .common import checked_options
 
-            return commands.execute(args, command_line, caught)
+            with named_as_options(command.OPTIONS):
+                return command.cli_action(checked_options(command, args, command_line), caught)
     except DyniaError as error:
         print(f"dynia: error: {' '.join(str(error).split())}", file=sys.stderr)
         return 2
