@@ -101,6 +101,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _checks
+from .bounds import parameter_box
 from .engine.flavours import WindowResults, compiled_engine, flavour_analysis, monte_carlo_errors
 from .engine.kernels import CompiledErrors
 from .engine.noise import (
@@ -133,7 +134,7 @@ from .progress import progress_bar, shows_progress
 from .quality import screening
 from .result import DyniaResult
 from .sampling import sample
-from .settings import SAMPLERS, RunRecord, merged_settings, parameter_box
+from .settings import SAMPLERS, AnalysisSettings, RunRecord, merged_settings, split_overrides
 
 __all__ = ["run"]
 
@@ -169,22 +170,9 @@ def run(
     sample_chunks=None,
     time_chunks=None,
     settings=None,
-    dt=None,
-    n_samples=None,
-    sampler=None,
-    n=None,
-    percentage=None,
-    bins=None,
-    conf_level=None,
-    flavour=None,
-    x0=None,
     rng=None,
     progress="auto",
-    min_points=None,
-    window=None,
-    engine=None,
-    ic_error=None,
-    quality=None,
+    **overrides,
 ):
     """:func:`dynia.run` on a ``dask.distributed`` cluster, with the same result.
 
@@ -211,24 +199,23 @@ def run(
         most about 4e6 result values per task). Any size works, also one
         below the window's reach ``n``. Memory on the cluster grows with it
         (see the module docstring), not with the record.
-    settings, dt, n_samples, n, percentage, bins, conf_level, flavour, x0, rng, progress, min_points, window
-        As :func:`dynia.run`; ``settings.workers`` must be None (the
-        cluster's workers do the work).
-    engine : {"auto", "numba", "numpy"}, default "auto"
-        As :func:`dynia.run`: the compiled kernels (simulation and windows)
-        or plain numpy on the workers; "auto" takes the compiled ones where
-        they cover the flavour. Results do not depend on it.
-    sampler : {"uniform", "lhs", "sobol"}
-        As :func:`dynia.run`; its adaptive schemes need every simulation at
-        once and run on one machine only.
-    ic_error : bool, default False
-        As :func:`dynia.run`: the Monte Carlo standard errors ``ic_se`` and
-        ``ci_se``, the batches read off in each time chunk's analysis.
-        (``target_se``, ``dtype`` and ``store`` are :func:`dynia.run`'s
-        only.)
-    quality : bool, default True
-        As :func:`dynia.run`: the record is screened on the client before
-        the result is made, and ``run.screened`` records what was found.
+    settings : dynia.settings.AnalysisSettings, optional
+        As :func:`dynia.run`. ``engine`` picks the compiled kernels
+        (simulation and windows) or plain numpy on the workers; results do
+        not depend on it. ``sampler`` is "uniform", "lhs" or "sobol": the
+        adaptive schemes need every simulation at once and run on one
+        machine only. With ``ic_error`` the batches of the Monte Carlo
+        errors are read off in each time chunk's analysis. With ``quality``
+        the record is screened on the client before the result is made.
+        ``workers`` must be None (the cluster's workers do the work);
+        ``target_se``, ``dtype`` and ``store`` are :func:`dynia.run`'s only.
+    rng, progress
+        As :func:`dynia.run`.
+    **overrides
+        Single settings over ``settings``: any field of
+        :class:`~dynia.settings.AnalysisSettings` (see :mod:`dynia.settings`
+        for the list), e.g. ``n_samples=100_000, n=10``; any other name is a
+        :class:`~dynia.errors.SettingsError`.
 
     Returns
     -------
@@ -264,15 +251,17 @@ def run(
     >>> np.array_equal(res.ic, same.ic) and np.array_equal(res.gradient, same.gradient)
     True
     """
+    (setting_overrides,) = split_overrides(run, overrides, AnalysisSettings)
     distributed = _import_distributed()
     if client is not None and not isinstance(client, distributed.Client):
         raise TypeError(
             f"client must be a distributed.Client, or None for a local cluster; got {type(client).__name__}"
         )
     # pandas in, as dynia.run takes it: a time index gives dt (so before the settings), dates the result's time axis.
+    dt = setting_overrides.pop("dt", None)
     u, y, dt, timestamps = unpack(u, y, dt if dt is not None else getattr(settings, "dt", None))
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
-    settings = merged_settings(settings, locals())
+    settings = merged_settings(settings, {**setting_overrides, "dt": dt}, front_end=run)
     progress = shows_progress(progress)
     settings.require(
         "dynia.distributed.run",

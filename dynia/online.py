@@ -43,6 +43,7 @@ import warnings
 import numpy as np
 
 from . import _checks
+from .bounds import parameter_box
 from .engine.flavours import FLAVOUR_CLASSES, McatFlavour
 from .engine.noise import (
     RESIDUAL_CHUNK,
@@ -61,7 +62,7 @@ from .models.base import SameOutput, check_model, refuse_ignored_params
 from .quality import screen
 from .result import DyniaResult
 from .sampling import sample
-from .settings import SAMPLERS, AnalysisSettings, RunRecord, merged_settings, parameter_box
+from .settings import SAMPLERS, AnalysisSettings, RunRecord, merged_settings, split_overrides
 
 __all__ = ["OnlineDynia", "SharedArrays"]
 
@@ -76,31 +77,29 @@ class OnlineDynia:
     bounds : mapping of str to (low, high)
         Sampling range of every model parameter; the parameter axis of every
         result follows this order (as in :func:`dynia.run`).
-    n_samples : int, default 2000
-        Number of parameter sets, drawn once.
-    n : int, default 10
-        Half window: the window at step t holds the 2n+1 steps t-2n .. t.
-    percentage, bins, conf_level, flavour
-        As :func:`dynia.engine.moving_window`.
-    dt : float, default 1.0
-        Sample time of the log.
+    settings : dynia.settings.AnalysisSettings, optional
+        As for :func:`dynia.run`, with ``window="trailing"`` by default (and
+        only): the window at step t holds the 2n+1 steps t-2n .. t. The
+        ``n_samples`` parameter sets are drawn once; ``dt`` is the sample
+        time of the log; ``x0="steady"`` is the steady state at the first
+        input logged. ``sampler`` is "uniform", "lhs" or "sobol": the
+        adaptive schemes need the whole record. A window with fewer
+        measured points than ``min_points`` has NaN results, so the first
+        results appear once ``min_points`` measurements are in. A stream
+        cannot be screened before it is analysed: with ``quality``,
+        :meth:`replay` screens the record it was given once it is replayed
+        (``run.screened`` of its result) and :meth:`update` screens nothing.
+        The engine is numpy, in the calling thread (``engine`` "auto" or
+        "numpy", ``workers`` None), without ``ic_error``, ``target_se``,
+        ``dtype`` or ``store``.
     rng : numpy.random.Generator or int, optional
         Source of the parameter draw; the same seed draws the same
         ``.samples`` as :func:`dynia.run`.
-    x0 : {"zero", "steady"}, default "zero"
-        Initial state of every simulation; ``"steady"`` is the steady state
-        at the first input logged.
-    sampler : {"uniform", "lhs", "sobol"}, default "uniform"
-        How the box is sampled (:mod:`dynia.sampling`). The adaptive schemes
-        of :func:`dynia.run` need the whole record and are not available.
-    min_points : int, default 1
-        A window with fewer measured points than this has NaN results, so
-        the first results appear once ``min_points`` measurements are in.
-    quality : bool, default True
-        As :func:`dynia.run`, but a stream cannot be screened before it is
-        analysed: :meth:`replay` screens the record it was given once it is
-        replayed (``run.screened`` of its result); :meth:`update` screens
-        nothing.
+    **overrides
+        Single settings over ``settings``: any field of
+        :class:`~dynia.settings.AnalysisSettings` (see :mod:`dynia.settings`
+        for the list), e.g. ``n_samples=500, n=5``; any other name is a
+        :class:`~dynia.errors.SettingsError`.
 
     Attributes
     ----------
@@ -171,27 +170,12 @@ class OnlineDynia:
     True
     """
 
-    def __init__(
-        self,
-        model,
-        bounds,
-        *,
-        settings=None,
-        n_samples=None,
-        n=None,
-        percentage=None,
-        bins=None,
-        conf_level=None,
-        flavour=None,
-        dt=None,
-        rng=None,
-        x0=None,
-        sampler=None,
-        min_points=None,
-        quality=None,
-    ):
+    def __init__(self, model, bounds, *, settings=None, rng=None, **overrides):
+        (setting_overrides,) = split_overrides(OnlineDynia, overrides, AnalysisSettings)
         check_model(model)
-        settings = merged_settings(settings, locals(), default=AnalysisSettings(window="trailing"))
+        settings = merged_settings(
+            settings, setting_overrides, front_end=OnlineDynia, default=AnalysisSettings(window="trailing")
+        )
         settings.require(
             "OnlineDynia",
             window=("trailing",),

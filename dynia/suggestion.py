@@ -177,6 +177,7 @@ from scipy.optimize import minimize_scalar
 from scipy.signal import lfilter
 
 from . import _checks
+from .bounds import parameter_box
 from .engine.windows import default_chunk_steps
 from .errors import DataError, ModelError, SettingsError, SuggestionError
 from .fit import fit_segments
@@ -192,7 +193,6 @@ from .settings import (
     AnalysisSettings,
     check_dt,
     check_x0,
-    parameter_box,
     sample_count,
 )
 from .verdicts import noise_sigma
