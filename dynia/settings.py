@@ -833,7 +833,7 @@ def split_overrides(front_end, overrides, *kinds):
     object of their own (:class:`dynia.identification.IdentifyOptions`); a
     name two kinds share goes to the first. A name no kind has is a
     :class:`~dynia.errors.SettingsError` naming it, with the closest names
-    ``front_end`` takes (:func:`difflib.get_close_matches`) and the list.
+    ``front_end`` takes (``difflib.get_close_matches``) and the list.
 
     Examples
     --------
@@ -856,18 +856,19 @@ def split_overrides(front_end, overrides, *kinds):
             split[owner][name] = value
     if not unknown:
         return split
-    valid = sorted(set().union(*fields))
     arguments = inspect.signature(front_end).parameters.values()
     own = [argument.name for argument in arguments if argument.kind != argument.VAR_KEYWORD]
-    takes = list(dict.fromkeys(own + valid))
+    takes = list(dict.fromkeys(own + sorted(set().union(*fields))))
     hints = []
     for name in unknown:
         close = difflib.get_close_matches(name, takes, n=3)
         hints.append(f"{name!r}" + (f" (did you mean {' or '.join(map(repr, close))}?)" if close else ""))
-    homes = " and ".join(f"{kind.__module__}.{kind.__qualname__}" for kind in kinds)
+    lists = [
+        f"{kind.__module__}.{kind.__qualname__} ({', '.join(sorted(names))})" for kind, names in zip(kinds, fields)
+    ]
     raise SettingsError(
         f"{front_end.__module__}.{front_end.__qualname__} takes no keyword {', '.join(hints)}; besides its own "
-        f"arguments it takes the fields of {homes}: {', '.join(valid)}",
+        f"arguments it takes the fields of {' and of '.join(lists)}",
         unknown[0],
     )
 
