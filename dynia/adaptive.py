@@ -58,6 +58,7 @@ import numpy as np
 from scipy.optimize import differential_evolution
 
 from . import _checks
+from .bounds import parameter_box
 from .engine.selection import lowest_weighted
 from .engine.windows import ArrayErrors, analyse_errors, window_costs
 from .errors import SettingsError
@@ -66,10 +67,10 @@ from .io.frames import unpack
 from .progress import shows_progress
 from .quality import screening
 from .settings import ADAPTIVE_SAMPLERS as SCHEMES
-from .settings import AnalysisSettings, RunRecord, merged_settings, parameter_box
+from .settings import AnalysisSettings, RunRecord, merged_options, merged_settings, split_overrides
 from .verdicts import assess
 
-__all__ = ["BoxMixture", "adaptive_run", "SCHEMES"]
+__all__ = ["AdaptiveOptions", "BoxMixture", "adaptive_run", "SCHEMES"]
 
 
 class BoxMixture:
@@ -120,77 +121,68 @@ class BoxMixture:
         return (1 / np.prod(self.prior[:, 1] - self.prior[:, 0])) / self.density(points)
 
 
+@dataclasses.dataclass(frozen=True)
+class AdaptiveOptions:
+    """How :func:`adaptive_run` places its boxes and shares its evaluations (see the module documentation).
+
+    Attributes
+    ----------
+    blocks : int or None, default None
+        Number of blocks of consecutive windows that get their own box
+        (None: one per 2n+1 steps, at most 50).
+    initial_share : float, default 0.25
+        Share of the evaluations drawn uniformly over the prior first.
+    stages : int, default 3
+        "iis": number of box stages after the uniform one.
+    margin : float, default 0.25
+        Boxes are enlarged by this share of their width on each side, so
+        that the edges of a region are not cut off (and are at least 2 % of
+        the prior's width).
+    de_share : float, default 0.3
+        "de": share of the evaluations given to the differential evolution.
+    """
+
+    blocks: int | None = None
+    initial_share: float = 0.25
+    stages: int = 3
+    margin: float = 0.25
+    de_share: float = 0.3
+
+
 def adaptive_run(
-    u,
-    y,
-    model,
-    bounds,
-    *,
-    scheme=None,
-    settings=None,
-    rng=None,
-    blocks=None,
-    initial_share=0.25,
-    stages=3,
-    margin=0.25,
-    de_share=0.3,
-    dt=None,
-    n_samples=None,
-    n=None,
-    percentage=None,
-    bins=None,
-    conf_level=None,
-    flavour=None,
-    x0=None,
-    min_points=None,
-    window=None,
-    engine=None,
-    workers=None,
-    ic_error=None,
-    quality=None,
-    progress="auto",
+    u, y, model, bounds, *, scheme=None, settings=None, options=None, rng=None, progress="auto", **overrides
 ):
     """DYNIA with evaluations concentrated in the windows' low-cost regions.
 
     Parameters
     ----------
-    u, y, model, bounds, dt, n, percentage, bins, conf_level, flavour, x0, rng, min_points, window, workers, progress
-    quality
+    u, y, model, bounds, rng, progress
         As :func:`dynia.run`; ``bounds`` is a mapping name -> (low, high).
         pandas ``u`` and ``y`` too, as :func:`dynia.run` takes them
         (:func:`dynia.io.frames.unpack`): one index, whose time gives dt and
         whose dates become the result's ``timestamps``.
     scheme : {"iis", "de"}, optional
-        How the boxes are placed (see the module documentation); the
-        settings' ``sampler``. Default "iis".
+        How the boxes are placed (see the module documentation): the
+        settings' ``sampler``, which it overrides. Default "iis".
     settings : dynia.settings.AnalysisSettings, optional
         Every analysis setting at once, as for :func:`dynia.run`; its
         ``sampler`` must be "iis" or "de". Without it the defaults are those
         of :class:`~dynia.settings.AnalysisSettings` except
         ``n_samples=10_000`` and ``percentage=1``, where the adaptive
-        schemes pay off.
-    n_samples : int
-        Model evaluations in all, for every scheme.
-    engine : {"auto", "numpy"}
-        The weighted analysis runs on numpy; "numba" is an error.
-    ic_error : bool, default False
-        Also estimate the Monte Carlo standard errors of IC and limits, as
-        :func:`dynia.run` does, from the importance-weighted samples: each
-        batch (every B-th sample, so every stage of the sampling is in
-        every batch) is analysed with its own weights, renormalised.
-    blocks : int, optional
-        Number of blocks of consecutive windows that get their own box
-        (default: one per 2n+1 steps, at most 50).
-    initial_share : float
-        Share of the evaluations drawn uniformly over the prior first.
-    stages : int
-        "iis": number of box stages after the uniform one.
-    margin : float
-        Boxes are enlarged by this share of their width on each side, so
-        that the edges of a region are not cut off (and are at least 2 % of
-        the prior's width).
-    de_share : float
-        "de": share of the evaluations given to the differential evolution.
+        schemes pay off. ``n_samples`` counts model evaluations in all, for
+        every scheme; ``engine`` "numba" is an error (the weighted analysis
+        runs on numpy); with ``ic_error`` the Monte Carlo standard errors of
+        IC and limits come from the importance-weighted samples: each batch
+        (every B-th sample, so every stage of the sampling is in every
+        batch) is analysed with its own weights, renormalised.
+    options : AdaptiveOptions, optional
+        The boxes and the share of the evaluations of each stage.
+    **overrides
+        Single settings over ``settings``: any field of
+        :class:`~dynia.settings.AnalysisSettings` (see :mod:`dynia.settings`
+        for the list), e.g. ``n=10, percentage=1``, or of
+        :class:`AdaptiveOptions` over ``options``, e.g. ``stages=2``; any
+        other name is a :class:`~dynia.errors.SettingsError`.
 
     Returns
     -------
@@ -198,12 +190,28 @@ def adaptive_run(
         With ``run.weights`` holding the importance weights of
         ``.samples``, ``run.n_evaluations`` the evaluations spent and
         ``run.n_blocks`` the blocks of windows.
+
+    Examples
+    --------
+    >>> import numpy as np, dynia
+    >>> from dynia.adaptive import adaptive_run
+    >>> u = np.r_[np.zeros(20), np.full(60, 1.0)]
+    >>> y = dynia.models.FirstOrder().simulate([[2.0, 3.0]], u)[0]
+    >>> res = adaptive_run(u, y, dynia.models.FirstOrder(), {"K": (0, 7), "T": (0, 7)},
+    ...                    n_samples=600, n=5, percentage=5, stages=2, rng=1)
+    >>> res.run.n_evaluations, res.settings.sampler
+    (600, 'iis')
     """
+    option_overrides, setting_overrides = split_overrides(adaptive_run, overrides, AdaptiveOptions, AnalysisSettings)
+    options = merged_options(AdaptiveOptions, options, option_overrides)
     # pandas in, as dynia.run takes it: a time index gives dt (so before the settings), dates the result's time axis.
+    dt = setting_overrides.pop("dt", None)
     u, y, dt, timestamps = unpack(u, y, dt if dt is not None else getattr(settings, "dt", None))
+    sampler = {} if scheme is None else {"sampler": scheme}
     settings = merged_settings(
         settings,
-        dict(locals(), sampler=scheme),
+        {**setting_overrides, **sampler, "dt": dt},
+        front_end=adaptive_run,
         default=AnalysisSettings(n_samples=10_000, percentage=1, sampler="iis"),
     )
     if settings.sampler not in SCHEMES:
@@ -212,7 +220,7 @@ def adaptive_run(
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
     names, prior = parameter_box(bounds, model.names, type(model).__name__)
     order = [names.index(name) for name in model.names]
-    n_blocks = blocks or max(1, min(50, y.size // settings.window_length))
+    n_blocks = options.blocks or max(1, min(50, y.size // settings.window_length))
 
     def simulate(points):
         return model.simulate(points[:, order], u, dt=settings.dt, x0=settings.x0)
@@ -224,10 +232,7 @@ def adaptive_run(
         settings,
         np.linspace(0, y.size, n_blocks + 1).astype(int),
         _checks.generator(rng),
-        initial_share=initial_share,
-        stages=stages,
-        margin=margin,
-        de_share=de_share,
+        options,
     )
     weights = mixture.importance_weights(samples)
     run = dataclasses.replace(
@@ -255,13 +260,14 @@ def adaptive_run(
     return dataclasses.replace(result, verdicts=assess(result))
 
 
-def _staged_samples(y, simulate, prior, settings, edges, rng, *, initial_share, stages, margin, de_share):
+def _staged_samples(y, simulate, prior, settings, edges, rng, options):
     """Every stage's samples and simulations, the mixture they were drawn from and the evaluations spent.
 
     A uniform stage over the prior first, then the scheme's boxes around
     the low-cost regions of each block of windows (``edges``).
     """
     n_samples, fraction, n, window = settings.n_samples, settings.percentage / 100, settings.n, settings.window
+    initial_share, stages, margin, de_share = options.initial_share, options.stages, options.margin, options.de_share
     mixture = BoxMixture(prior)
     initial = max(10, int(n_samples * initial_share))
     samples = _uniform_in(prior, initial, rng)

@@ -93,7 +93,6 @@ import dataclasses
 import itertools
 import math
 import operator
-import os
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -101,6 +100,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _checks
+from .bounds import parameter_box
+from .cluster import chunk_need, connected, import_distributed, worker_loss_explained
 from .engine.flavours import WindowResults, compiled_engine, flavour_analysis, monte_carlo_errors
 from .engine.kernels import CompiledErrors
 from .engine.noise import (
@@ -125,7 +126,7 @@ from .engine.windows import (
     window_inputs,
     window_mean,
 )
-from .errors import DataError, DyniaError, ModelError, SettingsError
+from .errors import DataError, DyniaError, ModelError
 from .fit import record_least_squares
 from .io.frames import unpack
 from .pipeline import KernelSimulated, compiled_simulation, warn_dropped, warn_unreached_output
@@ -133,25 +134,13 @@ from .progress import progress_bar, shows_progress
 from .quality import screening
 from .result import DyniaResult
 from .sampling import sample
-from .settings import SAMPLERS, RunRecord, merged_settings, parameter_box
+from .settings import SAMPLERS, AnalysisSettings, RunRecord, merged_settings, split_overrides
 
 __all__ = ["run"]
 
 
 # Flavours whose analysis of a window depends on the windows before it.
 _STATEFUL_FLAVOURS = ("mcat",)
-
-# Time chunks per worker thread by default: enough for a worker that finishes early (another job on its core) to
-# take over a share of the rest, few enough that a task's fixed costs (its halo simulated twice, the flavour and
-# model sent, the results returned) stay a fraction of a percent of its work.
-_CHUNKS_PER_THREAD = 4
-
-# Ceiling on the result values of one time chunk (IC, limits, median, gradient...): 4e6 float64 = 32 MB, which the
-# task holds and sends back.
-_RESULT_VALUES = 4_000_000
-
-# Without resuming, default ceiling on the values of one time chunk's blocks: 4e6 float64 = 32 MB.
-_BLOCK_VALUES = 4_000_000
 
 # Without resuming, time chunks submitted and not yet analysed, per worker thread: enough to keep every worker
 # busy while the next chunk's blocks are cut, few enough that the blocks waiting on the cluster stay a few time
@@ -169,22 +158,9 @@ def run(
     sample_chunks=None,
     time_chunks=None,
     settings=None,
-    dt=None,
-    n_samples=None,
-    sampler=None,
-    n=None,
-    percentage=None,
-    bins=None,
-    conf_level=None,
-    flavour=None,
-    x0=None,
     rng=None,
     progress="auto",
-    min_points=None,
-    window=None,
-    engine=None,
-    ic_error=None,
-    quality=None,
+    **overrides,
 ):
     """:func:`dynia.run` on a ``dask.distributed`` cluster, with the same result.
 
@@ -211,24 +187,23 @@ def run(
         most about 4e6 result values per task). Any size works, also one
         below the window's reach ``n``. Memory on the cluster grows with it
         (see the module docstring), not with the record.
-    settings, dt, n_samples, n, percentage, bins, conf_level, flavour, x0, rng, progress, min_points, window
-        As :func:`dynia.run`; ``settings.workers`` must be None (the
-        cluster's workers do the work).
-    engine : {"auto", "numba", "numpy"}, default "auto"
-        As :func:`dynia.run`: the compiled kernels (simulation and windows)
-        or plain numpy on the workers; "auto" takes the compiled ones where
-        they cover the flavour. Results do not depend on it.
-    sampler : {"uniform", "lhs", "sobol"}
-        As :func:`dynia.run`; its adaptive schemes need every simulation at
-        once and run on one machine only.
-    ic_error : bool, default False
-        As :func:`dynia.run`: the Monte Carlo standard errors ``ic_se`` and
-        ``ci_se``, the batches read off in each time chunk's analysis.
-        (``target_se``, ``dtype`` and ``store`` are :func:`dynia.run`'s
-        only.)
-    quality : bool, default True
-        As :func:`dynia.run`: the record is screened on the client before
-        the result is made, and ``run.screened`` records what was found.
+    settings : dynia.settings.AnalysisSettings, optional
+        As :func:`dynia.run`. ``engine`` picks the compiled kernels
+        (simulation and windows) or plain numpy on the workers; results do
+        not depend on it. ``sampler`` is "uniform", "lhs" or "sobol": the
+        adaptive schemes need every simulation at once and run on one
+        machine only. With ``ic_error`` the batches of the Monte Carlo
+        errors are read off in each time chunk's analysis. With ``quality``
+        the record is screened on the client before the result is made.
+        ``workers`` must be None (the cluster's workers do the work);
+        ``target_se``, ``dtype`` and ``store`` are :func:`dynia.run`'s only.
+    rng, progress
+        As :func:`dynia.run`.
+    **overrides
+        Single settings over ``settings``: any field of
+        :class:`~dynia.settings.AnalysisSettings` (see :mod:`dynia.settings`
+        for the list), e.g. ``n_samples=100_000, n=10``; any other name is a
+        :class:`~dynia.errors.SettingsError`.
 
     Returns
     -------
@@ -264,15 +239,17 @@ def run(
     >>> np.array_equal(res.ic, same.ic) and np.array_equal(res.gradient, same.gradient)
     True
     """
-    distributed = _import_distributed()
+    (setting_overrides,) = split_overrides(run, overrides, AnalysisSettings)
+    distributed = import_distributed()
     if client is not None and not isinstance(client, distributed.Client):
         raise TypeError(
             f"client must be a distributed.Client, or None for a local cluster; got {type(client).__name__}"
         )
     # pandas in, as dynia.run takes it: a time index gives dt (so before the settings), dates the result's time axis.
+    dt = setting_overrides.pop("dt", None)
     u, y, dt, timestamps = unpack(u, y, dt if dt is not None else getattr(settings, "dt", None))
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
-    settings = merged_settings(settings, locals())
+    settings = merged_settings(settings, {**setting_overrides, "dt": dt}, front_end=run)
     progress = shows_progress(progress)
     settings.require(
         "dynia.distributed.run",
@@ -308,8 +285,8 @@ def run(
 
     with (
         ThreadPoolExecutor(max_workers=1) as aside,
-        _connected(client, distributed) as client,
-        _worker_loss_explained(client, distributed) as need,
+        connected(client, distributed) as client,
+        worker_loss_explained(client, distributed) as need,
     ):
         # The record's screening needs nothing of the analysis: the client does it while the cluster works.
         screened = aside.submit(screening, u, y, settings)
@@ -340,14 +317,14 @@ def _on_cluster(client, need, model, u, y, box, samples, model_order, settings, 
 
     ``chunk_sizes`` are the sample and time chunks given (None: set here for
     the cluster's worker threads); ``need`` is filled with what one time
-    chunk needs (:func:`_worker_loss_explained`).
+    chunk needs (:func:`dynia.cluster.worker_loss_explained`).
     """
     sample_chunks, time_chunks = chunk_sizes
     threads = max(1, sum(client.nthreads().values()))
     sample_chunks = sample_chunks or math.ceil(settings.n_samples / threads)
     n_steps = y.size
     # Should a worker be lost before the chunks are set: what a chunk of every sample needs, as below.
-    need.update(_chunk_need(model, settings, windows, settings.n_samples, time_chunks, threads, n_steps))
+    need.update(chunk_need(model, settings, windows, settings.n_samples, time_chunks, threads, n_steps))
     u_data, y_data = client.scatter([u, y], broadcast=True, hash=False)
     samples = _finite_samples(client, model, samples, model_order, u_data, u, settings, sample_chunks)
     flavour_impl = flavour_analysis(
@@ -361,7 +338,7 @@ def _on_cluster(client, need, model, u, y, box, samples, model_order, settings, 
         settings.min_points,
         ic_error=settings.ic_error,
     )
-    need.update(_chunk_need(model, settings, windows, samples.shape[0], time_chunks, threads, n_steps))
+    need.update(chunk_need(model, settings, windows, samples.shape[0], time_chunks, threads, n_steps))
     time_chunks = need["steps"]
     spans = [(start, min(start + time_chunks, n_steps)) for start in range(0, n_steps, time_chunks)]
     row_chunks = list(_scatter_rows(client, samples[:, model_order], sample_chunks))
@@ -410,39 +387,6 @@ def _on_cluster(client, need, model, u, y, box, samples, model_order, settings, 
     )
     # Every sample's record total absolute error, added step by step as dynia.run adds them.
     return samples, flavour_impl, analysed, np.concatenate(client.gather(totals))
-
-
-def _chunk_need(model, settings, windows, n_samples, time_chunks, threads, n_steps):
-    """The steps of a time chunk (``time_chunks``, or the default) and the memory its task needs, in MB.
-
-    Resumed, a task holds its chunk's results and dynia.run's working arrays of one chunk of time; otherwise it
-    joins every sample's errors over the time chunk and its halo, and holds the window sums and the flavour's
-    working copies of them: about three such arrays.
-    """
-    n_bins = settings.bins + (settings.flavour == "mcat")
-    # Per step: IC, two limits, median and the gradient of every parameter, three MAEs, and with ic_error the IC
-    # and limits of each of at most ten batches.
-    per_step = len(model.names) * (4 + n_bins + (30 if settings.ic_error else 0)) + 3
-    if model.resumable:
-        chunk_steps = default_chunk_steps(n_samples, 2 * settings.n)
-        time_chunks = time_chunks or _resumed_time_chunks(n_steps, threads, chunk_steps, per_step)
-        values = per_step * time_chunks + 3 * n_samples * (chunk_steps + windows.slots - 1)
-        what = (
-            f"{time_chunks} steps of results, dynia.run's working arrays of {chunk_steps} steps x {n_samples} samples"
-        )
-    else:
-        time_chunks = time_chunks or _time_chunks(n_steps, threads, n_samples)
-        values = 3 * n_samples * (time_chunks + windows.slots - 1)
-        what = f"{n_samples} samples x {time_chunks + windows.slots - 1} steps with its halo"
-    return dict(steps=time_chunks, what=what, mb=8 * values / 2**20)
-
-
-def _resumed_time_chunks(n_steps, threads, chunk_steps, per_step):
-    """Steps per time chunk of a resumed run: about ``_CHUNKS_PER_THREAD`` per worker thread, in whole chunks of
-    dynia.run's ``chunk_steps``, and at most ``_RESULT_VALUES`` values of results."""
-    wanted = math.ceil(n_steps / (_CHUNKS_PER_THREAD * threads))
-    ceiling = max(chunk_steps, _RESULT_VALUES // per_step // chunk_steps * chunk_steps)
-    return min(math.ceil(wanted / chunk_steps) * chunk_steps, ceiling)
 
 
 def _result(u, y, model, names, box, samples, settings, flavour_impl, windows, analysed, totals, screened):
@@ -501,11 +445,6 @@ def _result(u, y, model, names, box, samples, settings, flavour_impl, windows, a
         ci_se=ci_se,
         **floor_fields(floor),
     )
-
-
-def _time_chunks(n_steps, threads, n_samples):
-    """Steps per time chunk without resuming: about four per worker thread, at most ``_BLOCK_VALUES`` values."""
-    return max(1, min(math.ceil(n_steps / (4 * threads)), _BLOCK_VALUES // n_samples))
 
 
 def _finite_samples(client, model, samples, model_order, u_data, u, settings, sample_chunks):
@@ -586,59 +525,6 @@ def _analyse_on_cluster(client, submit, flavour, spans, *, stateful, progress, a
     if bar is not None:
         bar.close()
     return ic, ci, median, gradient, best, upper, threshold, ic_se, ci_se, overflowed
-
-
-def _import_distributed():
-    try:
-        import distributed
-    except ImportError:
-        raise ImportError("dynia.distributed needs dask.distributed: pip install 'dynia[distributed]'") from None
-    return distributed
-
-
-@contextmanager
-def _connected(client, distributed):
-    """The client given, left open, or a client of a new local cluster, closed on exit."""
-    if client is not None:
-        yield client
-        return
-    # Port 0: a free port for the scheduler's web server, which otherwise
-    # wants 8787 and warns when another cluster holds it.
-    with (
-        distributed.LocalCluster(
-            n_workers=os.cpu_count() or 1, threads_per_worker=1, processes=True, dashboard_address=":0"
-        ) as cluster,
-        distributed.Client(cluster, set_as_default=False) as own,
-    ):
-        yield own
-
-
-@contextmanager
-def _worker_loss_explained(client, distributed):
-    """Turn a worker lost mid-run (killed at its memory limit, mostly) into a SettingsError saying what one chunk needs.
-
-    Yields a dict the caller fills with ``what`` one time chunk's task
-    holds and the ``mb`` it needs (:func:`_chunk_need`).
-    """
-    limits = [info.get("memory_limit") or 0 for info in client.scheduler_info().get("workers", {}).values()]
-    need = {}
-    try:
-        yield need
-    except (
-        distributed.KilledWorker,
-        distributed.comm.CommClosedError,
-        distributed.client.FutureCancelledError,
-    ) as error:
-        if limits and all(limits):
-            limit = f"the smallest worker memory limit is {min(limits) / 2**20:.0f} MB"
-        else:
-            limit = "the workers have no memory limit, so the machine's memory ran out"
-        chunk = f"; one time chunk ({need['what']}) needs about {need['mb']:.0f} MB on one worker" if need else ""
-        raise SettingsError(
-            f"a worker of the cluster was lost ({type(error).__name__}), most likely killed at its memory limit: "
-            f"{limit}{chunk}; give a smaller time_chunks or sample_chunks, or the workers more memory",
-            "time_chunks",
-        ) from None
 
 
 def _scatter_rows(client, rows, size):

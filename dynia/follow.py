@@ -55,6 +55,7 @@ from pathlib import Path
 import numpy as np
 import sqlalchemy
 
+from .checkpoint import SharedArrays
 from .engine.noise import (
     add_record_errors,
     floor_fields,
@@ -68,7 +69,7 @@ from .errors import DataError, ModelError, SettingsError
 from .fit import record_least_squares
 from .io.database import Clock, FollowerTables
 from .io.stream import StreamGrid
-from .online import OnlineDynia, SharedArrays
+from .online import OnlineDynia
 from .pipeline import KernelSimulated, compiled_simulation, run
 from .quality import screen
 from .result import DyniaResult

@@ -74,12 +74,14 @@ Examples
 """
 
 import numbers
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from . import _checks
 from .baseline import find_intervals
+from .bounds import parameter_box
 from .errors import NothingSelected, SettingsError
 from .fit import check_starts, fit_segments
 from .io.frames import unpack
@@ -95,10 +97,18 @@ from .segments import (
     segments_to_times,
 )
 from .serial import json_number
-from .settings import IC_THRESHOLD, merged_settings, parameter_box
+from .settings import IC_THRESHOLD, AnalysisSettings, merged_options, merged_settings, split_overrides
 from .structure import structure_warnings
 
-__all__ = ["Identification", "identify", "METHODS", "SELECTED_ALL_SHARE", "MIN_POINTS_PER_PARAMETER", "OVERFIT_RATIO"]
+__all__ = [
+    "Identification",
+    "IdentifyOptions",
+    "identify",
+    "METHODS",
+    "SELECTED_ALL_SHARE",
+    "MIN_POINTS_PER_PARAMETER",
+    "OVERFIT_RATIO",
+]
 
 METHODS = ("dynia", "baseline", "whole", "given")
 
@@ -199,6 +209,43 @@ class Identification:
         return summary
 
 
+@dataclass(frozen=True)
+class IdentifyOptions:
+    """What :func:`identify` does besides the DYNIA run: from IC to segments, the data's quality, the fit.
+
+    Attributes
+    ----------
+    ic_threshold : float or mapping of str to float, default :data:`~dynia.settings.IC_THRESHOLD` (0.5)
+    mode : {"any", "joint"}, default "any"
+    min_length, merge_gap : int, optional
+        From IC to segments, as :func:`dynia.segments.segments_from_ic`.
+    baseline_options : dict, optional
+        Tuning of :func:`dynia.baseline.find_intervals`.
+    quality : bool, default False
+        Check the data with :func:`dynia.quality.check_quality` first. It
+        is identify's one switch for the data's quality: the DYNIA run
+        screens its record (:attr:`dynia.settings.AnalysisSettings.quality`,
+        which it replaces) exactly when it is True.
+    exclude_flagged : bool, default False
+        Exclude what the check flags (implies the check).
+    quality_options : dict, optional
+        Tuning of :func:`dynia.quality.check_quality`.
+    n_starts : int, default 1
+        Starting points of the least-squares fit (the middle of the bounds,
+        then random ones).
+    """
+
+    ic_threshold: float | Mapping = IC_THRESHOLD
+    mode: str = "any"
+    min_length: int | None = None
+    merge_gap: int | None = None
+    baseline_options: dict | None = None
+    quality: bool = False
+    exclude_flagged: bool = False
+    quality_options: dict | None = None
+    n_starts: int = 1
+
+
 def identify(
     u,
     y,
@@ -206,28 +253,13 @@ def identify(
     bounds,
     *,
     method="dynia",
-    settings=None,
-    dt=None,
-    x0=None,
     held_out=0.3,
     segments=None,
-    n_samples=None,
-    sampler=None,
-    n=None,
-    percentage=None,
-    flavour=None,
-    ic_threshold=IC_THRESHOLD,
-    mode="any",
-    min_length=None,
-    merge_gap=None,
-    min_points=None,
-    baseline_options=None,
-    quality=False,
-    exclude_flagged=False,
-    quality_options=None,
-    n_starts=1,
+    settings=None,
+    options=None,
     rng=None,
     progress="auto",
+    **overrides,
 ):
     """Select data by ``method``, fit the model there and validate it on held-out data.
 
@@ -244,10 +276,6 @@ def identify(
         Every model parameter's range: DYNIA's prior and the fit's bounds.
     method : {"dynia", "baseline", "whole", "given"}
         How the fitting data are chosen (see the module documentation).
-    dt : float, default 1.0
-        Sample time; with a time index its spacing (a ``dt`` given must agree).
-    x0 : {"zero", "steady"}, default "zero"
-        Initial state of every simulation, in DYNIA and in the fit.
     held_out : float or list of (start, stop), default 0.3
         Validation data, never used to select or fit: that share of the
         record at its end, or explicit segments
@@ -255,62 +283,58 @@ def identify(
     segments : list of (start, stop), optional
         The segments to fit on, for ``method="given"``.
     settings : dynia.settings.AnalysisSettings, optional
-        The DYNIA run's settings, as for :func:`dynia.run`; its ``dt`` and
-        ``x0`` serve the fit too.
-    n_samples, sampler, n, percentage, flavour
-        The DYNIA run, as :func:`dynia.run` (override ``settings``).
-    ic_threshold, mode, min_length, merge_gap
-        From IC to segments, as :func:`dynia.segments.segments_from_ic`.
-    min_points : int, default 1
-        Windows with fewer measured points get no IC (:func:`dynia.run`);
-        ``2n+1`` keeps windows that reach into missing or excluded data
-        from selecting segments.
-    baseline_options : dict, optional
-        Tuning of :func:`dynia.baseline.find_intervals`.
-    quality : bool, default False
-        Check the data with :func:`dynia.quality.check_quality` first.
-    exclude_flagged : bool, default False
-        Exclude what the check flags (implies ``quality``).
-    quality_options : dict, optional
-        Tuning of :func:`dynia.quality.check_quality`.
-    n_starts : int, default 1
-        Starting points of the least-squares fit (the middle of the bounds,
-        then random ones).
+        The DYNIA run's settings, as for :func:`dynia.run`; its ``dt``
+        (default 1.0; with a time index its spacing, and a ``dt`` given
+        must agree) and ``x0`` serve the fit too. ``min_points=2n+1`` keeps
+        windows that reach into missing or excluded data from selecting
+        segments.
+    options : IdentifyOptions, optional
+        The selection, the data-quality checks and the fit.
     rng : numpy.random.Generator or int, optional
         Every random draw (the DYNIA samples, the extra fit starts).
     progress : bool or "auto", default "auto"
         Show the DYNIA run's progress bar (tqdm, on stderr), as :func:`dynia.run`.
+    **overrides
+        Single settings over ``settings`` (any field of
+        :class:`~dynia.settings.AnalysisSettings`, see :mod:`dynia.settings`
+        for the list), e.g. ``n=200, n_samples=5000, dt=60``, and single
+        options over ``options`` (any field of :class:`IdentifyOptions`),
+        e.g. ``ic_threshold=0.6, n_starts=5``. ``quality`` names the
+        option. Any other name is a :class:`~dynia.errors.SettingsError`.
 
     Returns
     -------
     Identification
     """
+    option_overrides, setting_overrides = split_overrides(identify, overrides, IdentifyOptions, AnalysisSettings)
+    options = merged_options(IdentifyOptions, options, option_overrides)
     # pandas in, as dynia.run takes it, before anything is cut out of the record by step.
+    dt = setting_overrides.pop("dt", None)
     u, y, dt, timestamps = unpack(u, y, dt if dt is not None else getattr(settings, "dt", None))
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)
+    quality, exclude_flagged = options.quality, options.exclude_flagged
     _check_method(model, method, segments, quality or exclude_flagged)
-    analysis = merged_settings(settings, locals())
+    # The DYNIA run screens its record exactly when identify checks the data's quality (IdentifyOptions.quality).
+    analysis = merged_settings(settings, {**setting_overrides, "dt": dt, "quality": quality}, front_end=identify)
     progress = shows_progress(progress)
     dt, x0 = analysis.dt, analysis.x0
     names, box = parameter_box(bounds, model.names, type(model).__name__)
     bounds = {name: tuple(map(float, row)) for name, row in zip(names, box)}
     rng = _checks.generator(rng)
-    n_starts = check_starts(n_starts)  # before the analysis, which the fit waits for
-    u, y, report = _quality_checked(u, y, dt, quality, exclude_flagged, quality_options)
+    n_starts = check_starts(options.n_starts)  # before the analysis, which the fit waits for
+    u, y, report = _quality_checked(u, y, dt, quality, exclude_flagged, options.quality_options)
     fit_part, validation = _split(y.size, held_out, method, analysis, len(names))
     y_fit = np.where(segments_to_mask(validation, y.size), np.nan, y)
+    segmenting = dict(
+        ic_threshold=options.ic_threshold, mode=options.mode, min_length=options.min_length, merge_gap=options.merge_gap
+    )
     notes = []
     dynia_result = baseline_result = None
     if method == "dynia":
         dynia_result = run(u, y_fit, model, bounds, settings=analysis, rng=rng, progress=progress)
         if timestamps is not None:
             dynia_result = dated(dynia_result, timestamps)
-        chosen = intersect_segments(
-            segments_from_ic(
-                dynia_result, ic_threshold=ic_threshold, mode=mode, min_length=min_length, merge_gap=merge_gap
-            ),
-            fit_part,
-        )
+        chosen = intersect_segments(segments_from_ic(dynia_result, **segmenting), fit_part)
         notes += [str(warning) for warning in structure_warnings(dynia_result)]
         # DYNIA's own model-structure warning (its verdicts): the windows that identify a parameter disagree.
         notes += [
@@ -321,7 +345,7 @@ def identify(
         ]
     elif method == "baseline":
         fitting = segments_to_mask(fit_part, y.size)
-        baseline_result = find_intervals(np.where(fitting, u, np.nan), y_fit, dt=dt, **(baseline_options or {}))
+        baseline_result = find_intervals(np.where(fitting, u, np.nan), y_fit, dt=dt, **(options.baseline_options or {}))
         chosen = intersect_segments([tuple(map(int, pair)) for pair in baseline_result.accepted], fit_part)
     elif method == "whole":
         chosen = list(fit_part)
@@ -330,7 +354,6 @@ def identify(
     if not chosen:
         raise NothingSelected(f"method {method!r} selected no data to fit on: {_NOTHING_SELECTED[method]}")
     fit = fit_segments(u, y_fit, model, chosen, bounds=bounds, dt=dt, x0=x0, n_starts=n_starts, rng=rng)
-    segmenting = dict(ic_threshold=ic_threshold, mode=mode, min_length=min_length, merge_gap=merge_gap)
     asked = dict(method=method, n_starts=n_starts, quality=quality, exclude_flagged=exclude_flagged)
     recorded = _recorded(asked, analysis, bounds, validation, baseline_result, segmenting)
     found = dict(dynia_result=dynia_result, baseline_result=baseline_result, quality=report, settings=recorded)

@@ -35,14 +35,14 @@ grows with the number of steps.
 
 import copy
 import dataclasses
-import io
 import numbers
-import pickle
 import warnings
 
 import numpy as np
 
 from . import _checks
+from .bounds import parameter_box
+from .checkpoint import restored_state, state_bytes
 from .engine.flavours import FLAVOUR_CLASSES, McatFlavour
 from .engine.noise import (
     RESIDUAL_CHUNK,
@@ -61,9 +61,9 @@ from .models.base import SameOutput, check_model, refuse_ignored_params
 from .quality import screen
 from .result import DyniaResult
 from .sampling import sample
-from .settings import SAMPLERS, AnalysisSettings, RunRecord, merged_settings, parameter_box
+from .settings import SAMPLERS, AnalysisSettings, RunRecord, merged_settings, split_overrides
 
-__all__ = ["OnlineDynia", "SharedArrays"]
+__all__ = ["OnlineDynia"]
 
 
 class OnlineDynia:
@@ -76,31 +76,29 @@ class OnlineDynia:
     bounds : mapping of str to (low, high)
         Sampling range of every model parameter; the parameter axis of every
         result follows this order (as in :func:`dynia.run`).
-    n_samples : int, default 2000
-        Number of parameter sets, drawn once.
-    n : int, default 10
-        Half window: the window at step t holds the 2n+1 steps t-2n .. t.
-    percentage, bins, conf_level, flavour
-        As :func:`dynia.engine.moving_window`.
-    dt : float, default 1.0
-        Sample time of the log.
+    settings : dynia.settings.AnalysisSettings, optional
+        As for :func:`dynia.run`, with ``window="trailing"`` by default (and
+        only): the window at step t holds the 2n+1 steps t-2n .. t. The
+        ``n_samples`` parameter sets are drawn once; ``dt`` is the sample
+        time of the log; ``x0="steady"`` is the steady state at the first
+        input logged. ``sampler`` is "uniform", "lhs" or "sobol": the
+        adaptive schemes need the whole record. A window with fewer
+        measured points than ``min_points`` has NaN results, so the first
+        results appear once ``min_points`` measurements are in. A stream
+        cannot be screened before it is analysed: with ``quality``,
+        :meth:`replay` screens the record it was given once it is replayed
+        (``run.screened`` of its result) and :meth:`update` screens nothing.
+        The engine is numpy, in the calling thread (``engine`` "auto" or
+        "numpy", ``workers`` None), without ``ic_error``, ``target_se``,
+        ``dtype`` or ``store``.
     rng : numpy.random.Generator or int, optional
         Source of the parameter draw; the same seed draws the same
         ``.samples`` as :func:`dynia.run`.
-    x0 : {"zero", "steady"}, default "zero"
-        Initial state of every simulation; ``"steady"`` is the steady state
-        at the first input logged.
-    sampler : {"uniform", "lhs", "sobol"}, default "uniform"
-        How the box is sampled (:mod:`dynia.sampling`). The adaptive schemes
-        of :func:`dynia.run` need the whole record and are not available.
-    min_points : int, default 1
-        A window with fewer measured points than this has NaN results, so
-        the first results appear once ``min_points`` measurements are in.
-    quality : bool, default True
-        As :func:`dynia.run`, but a stream cannot be screened before it is
-        analysed: :meth:`replay` screens the record it was given once it is
-        replayed (``run.screened`` of its result); :meth:`update` screens
-        nothing.
+    **overrides
+        Single settings over ``settings``: any field of
+        :class:`~dynia.settings.AnalysisSettings` (see :mod:`dynia.settings`
+        for the list), e.g. ``n_samples=500, n=5``; any other name is a
+        :class:`~dynia.errors.SettingsError`.
 
     Attributes
     ----------
@@ -171,27 +169,12 @@ class OnlineDynia:
     True
     """
 
-    def __init__(
-        self,
-        model,
-        bounds,
-        *,
-        settings=None,
-        n_samples=None,
-        n=None,
-        percentage=None,
-        bins=None,
-        conf_level=None,
-        flavour=None,
-        dt=None,
-        rng=None,
-        x0=None,
-        sampler=None,
-        min_points=None,
-        quality=None,
-    ):
+    def __init__(self, model, bounds, *, settings=None, rng=None, **overrides):
+        (setting_overrides,) = split_overrides(OnlineDynia, overrides, AnalysisSettings)
         check_model(model)
-        settings = merged_settings(settings, locals(), default=AnalysisSettings(window="trailing"))
+        settings = merged_settings(
+            settings, setting_overrides, front_end=OnlineDynia, default=AnalysisSettings(window="trailing")
+        )
         settings.require(
             "OnlineDynia",
             window=("trailing",),
@@ -467,41 +450,14 @@ class OnlineDynia:
 
         Parameters
         ----------
-        shared : SharedArrays, optional
+        shared : dynia.checkpoint.SharedArrays, optional
             Arrays of a series of checkpoints that are written once: every
             array of the state that equals one of them is stored as a
             reference to it (the samples, the models' coefficients: two
             thirds of a checkpoint). An empty one takes every large array of
             this state.
         """
-        buffer = io.BytesIO()
-        pickler = pickle.Pickler(buffer, protocol=pickle.HIGHEST_PROTOCOL)
-        model = self._model
-        if shared is None or shared.accepting:
-
-            def persistent_id(value):
-                if value is model:
-                    return _MODEL_ID
-                return None if shared is None else shared.reference(value)
-
-        else:
-            # Called for every object pickled: a dict look-up of the shared arrays checked beforehand.
-            references = shared.unchanged()
-
-            def persistent_id(value):
-                return _MODEL_ID if value is model else references.get(id(value))
-
-        pickler.persistent_id = persistent_id
-        try:
-            pickler.dump(self)
-        except (pickle.PicklingError, TypeError, AttributeError) as error:  # what pickle raises varies by object
-            raise ModelError(
-                f"the state of {self._model!r}'s simulation cannot be saved: {error}; a checkpoint holds numpy "
-                "arrays and plain values (a model's own functions are taken from the model itself)"
-            ) from None
-        if shared is not None:
-            shared.accepting = False
-        return buffer.getvalue()
+        return state_bytes(self, self._model, shared)
 
     @classmethod
     def from_bytes(cls, data, model, shared=None):
@@ -510,7 +466,7 @@ class OnlineDynia:
         Only the classes of numpy's arrays and of dynia's own models,
         settings, flavours and this class are rebuilt: bytes naming any
         other (a damaged or foreign checkpoint) raise a DataError instead of
-        running code. ``shared`` are the :class:`SharedArrays` it was
+        running code. ``shared`` are the :class:`~dynia.checkpoint.SharedArrays` it was
         written with.
 
         Raises
@@ -519,22 +475,7 @@ class OnlineDynia:
             ``data`` is not a state written by :meth:`to_bytes`, or was
             written for another kind of model or other shared arrays.
         """
-        unpickler = _StateUnpickler(io.BytesIO(data))
-
-        def load(key):
-            if key == _MODEL_ID:
-                return model
-            if shared is not None and key in shared.arrays:
-                return shared.copy(key)
-            return _refuse_state(f"reference {key!r}")
-
-        unpickler.persistent_load = load
-        try:
-            state = unpickler.load()
-        except DataError:
-            raise
-        except Exception as error:  # what a damaged pickle raises varies: truncated, bad opcode, bad arguments
-            raise DataError(f"the saved OnlineDynia state cannot be read ({type(error).__name__}: {error})") from None
+        state = restored_state(data, model, shared)
         if not isinstance(state, cls):
             raise DataError(f"the saved state is a {type(state).__name__}, not an OnlineDynia")
         return state
@@ -773,121 +714,8 @@ class OnlineDynia:
         self.gradient = np.full((n_params, n_bins), np.nan)
 
 
-class SharedArrays:
-    """The large arrays that a series of :meth:`OnlineDynia.to_bytes` checkpoints share, written once.
-
-    The first checkpoint written with an empty one takes every array of at
-    least :attr:`SMALLEST` bytes; later ones refer to each that still equals
-    it (compared byte for byte: an array changed in place is written out
-    again) and write the others in full.
-
-    Attributes
-    ----------
-    arrays : dict of str to ndarray
-        The shared arrays by key, as first written.
-    """
-
-    SMALLEST = 1024
-
-    def __init__(self, arrays=None):
-        self.arrays = dict(arrays or {})
-        self.accepting = not self.arrays
-        self._keys = {}  # id of an array of the state -> its key
-        self._bytes = {}  # key -> the shared array's bytes, to compare with
-        self._holders = {}  # key -> the array of the state that held it when last seen
-
-    def reference(self, value):
-        """The key of ``value`` when it is a shared array, else None (a persistent id of pickle)."""
-        if not isinstance(value, np.ndarray) or value.nbytes < self.SMALLEST:
-            return None
-        key = self._keys.get(id(value))
-        # A read-only array (the samples) cannot have changed in place: no comparison needed.
-        if key is not None and (not value.flags.writeable or self._same(value, key)):
-            return key
-        if not self.accepting:
-            return None
-        key = f"a{len(self.arrays)}"
-        self.arrays[key] = value.copy()
-        self._keys[id(value)] = key
-        self._holders[key] = value
-        return key
-
-    def unchanged(self):
-        """{id: key} of the arrays of the state that still hold their shared array (see :meth:`reference`)."""
-        return {
-            id(value): key
-            for key, value in self._holders.items()
-            if not value.flags.writeable or self._same(value, key)
-        }
-
-    def _same(self, value, key):
-        """Whether ``value`` holds shared array ``key`` byte for byte (NaN payloads and signed zeros included)."""
-        kept = self.arrays[key]
-        if value.dtype != kept.dtype or value.shape != kept.shape:
-            return False
-        if key not in self._bytes:
-            self._bytes[key] = kept.tobytes()
-        return value.tobytes() == self._bytes[key]
-
-    def copy(self, key):
-        """A copy of shared array ``key`` for a restored state, remembered as that array."""
-        value = self.arrays[key].copy()
-        self._keys[id(value)] = key
-        self._holders[key] = value
-        return value
-
-    def to_bytes(self):
-        buffer = io.BytesIO()
-        np.savez(buffer, **self.arrays)
-        return buffer.getvalue()
-
-    @classmethod
-    def from_bytes(cls, data):
-        try:
-            with np.load(io.BytesIO(data), allow_pickle=False) as stored:
-                return cls({key: stored[key] for key in stored.files})
-        except Exception as error:  # a damaged archive: zipfile's, numpy's or the OS's error
-            raise DataError(f"the saved shared arrays cannot be read ({type(error).__name__}: {error})") from None
-
-
 # Steps whose outputs advance() holds at once: 8 MB at 2 000 samples.
 _ADVANCE_BLOCK = 512
-
-# Where the model was in the state of to_bytes: the restorer gives it back.
-_MODEL_ID = "model"
-
-# What a saved state may rebuild besides dynia's own classes: numpy's arrays, dtypes and scalars.
-_NUMPY_REBUILDERS = frozenset(
-    {
-        ("numpy", "dtype"),
-        ("numpy", "ndarray"),
-        *(
-            (f"numpy.{core}.{module}", name)
-            for core in ("core", "_core")
-            for module, name in (("numeric", "_frombuffer"), ("multiarray", "_reconstruct"), ("multiarray", "scalar"))
-        ),
-    }
-)
-
-# The modules of the classes an OnlineDynia holds: its flavour, its settings, the model's stepper.
-_STATE_MODULES = ("dynia.online", "dynia.settings", "dynia.engine.flavours", "dynia.models.")
-
-
-def _refuse_state(what):
-    raise DataError(f"the saved OnlineDynia state names {what}, which no state written by to_bytes holds")
-
-
-class _StateUnpickler(pickle.Unpickler):
-    """Rebuilds numpy arrays and the classes of dynia's own state, nothing else (see :meth:`OnlineDynia.from_bytes`)."""
-
-    def find_class(self, module, name):
-        if (module, name) in _NUMPY_REBUILDERS:
-            return super().find_class(module, name)
-        if module.startswith(_STATE_MODULES) or module == "dynia.models":
-            found = super().find_class(module, name)
-            if isinstance(found, type):
-                return found
-        return _refuse_state(f"{module}.{name}")
 
 
 def _functions(model):

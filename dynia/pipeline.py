@@ -9,6 +9,7 @@ import numpy as np
 
 from . import _checks
 from .adaptive import adaptive_run
+from .bounds import parameter_box
 from .engine.flavours import compiled_engine
 from .engine.kernels import CompiledErrors
 from .engine.noise import RESIDUAL_CHUNK
@@ -23,7 +24,7 @@ from .models.custom import StateErrors
 from .progress import shows_progress
 from .quality import screening
 from .sampling import sample
-from .settings import ADAPTIVE_SAMPLERS, IC_THRESHOLD, MAX_PARAMETER, RunRecord, merged_settings, parameter_box
+from .settings import ADAPTIVE_SAMPLERS, IC_THRESHOLD, MAX_PARAMETER, RunRecord, merged_settings
 from .verdicts import assess
 
 __all__ = [
@@ -213,7 +214,28 @@ def run(
     """
     # pandas in: a time index (dates, durations, seconds) gives dt; dates become the result's time axis.
     u, y, dt, timestamps = unpack(u, y, dt if dt is not None else getattr(settings, "dt", None))
-    settings = merged_settings(settings, locals())
+    given = dict(
+        dt=dt,
+        n_samples=n_samples,
+        sampler=sampler,
+        n=n,
+        percentage=percentage,
+        bins=bins,
+        conf_level=conf_level,
+        flavour=flavour,
+        x0=x0,
+        min_points=min_points,
+        window=window,
+        engine=engine,
+        workers=workers,
+        ic_error=ic_error,
+        target_se=target_se,
+        max_samples=max_samples,
+        dtype=dtype,
+        store=store,
+        quality=quality,
+    )
+    settings = merged_settings(settings, given, front_end=run)
     progress = shows_progress(progress)
     check_model(model)
     u, y = _checks.record(u, y, n_inputs=model.n_inputs)

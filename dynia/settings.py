@@ -3,9 +3,11 @@
 :class:`AnalysisSettings` holds what decides a DYNIA analysis: the Monte
 Carlo sample, the window, the behavioural share, the band, the flavour and the
 engine. :func:`dynia.run`, :func:`dynia.adaptive.adaptive_run`,
-:func:`dynia.distributed.run`, :class:`dynia.online.OnlineDynia` and the
-command line all build or take one, so a setting is checked in one place, and
-a front-end that cannot honour a setting says so instead of dropping it
+:func:`dynia.distributed.run`, :class:`dynia.online.OnlineDynia`,
+:func:`dynia.identify` and the command line all build or take one (as
+``settings=``, with single settings as keywords over it:
+:func:`merged_settings`), so a setting is checked in one place, and a
+front-end that cannot honour a setting says so instead of dropping it
 (:meth:`AnalysisSettings.require`).
 
 Types are checked strictly: ``percentage="10"`` or ``n=2.5`` is a
@@ -26,6 +28,8 @@ dynia.errors.SettingsError: conf_level is a percentage in (50, 100); got 0.9 (di
 """
 
 import dataclasses
+import difflib
+import inspect
 import math
 import numbers
 import os
@@ -62,7 +66,8 @@ __all__ = [
     "check_ic_threshold",
     "ic_batches",
     "merged_settings",
-    "parameter_box",
+    "merged_options",
+    "split_overrides",
 ]
 
 SAMPLERS = ("uniform", "lhs", "sobol")
@@ -821,87 +826,72 @@ def _screened_entries(entries):
     return checked
 
 
-def merged_settings(settings, keywords, default=None):
-    """The settings of a front-end call: ``settings`` (else ``default``, else the defaults) with its keywords put in.
+def split_overrides(front_end, overrides, *kinds):
+    """The keywords ``overrides`` of a call of ``front_end``, one dict per kind (a dataclass) whose fields they name.
 
-    Every front-end (:func:`dynia.run`, :func:`dynia.adaptive.adaptive_run`,
-    :func:`dynia.distributed.run`, :class:`dynia.online.OnlineDynia`,
-    :func:`dynia.identify`) takes ``settings=`` and names its setting
-    keywords after the fields of :class:`AnalysisSettings`, defaulting to
-    None; this is the one place they are merged, so a keyword given
-    overrides the object and nothing given is dropped.
-
-    Parameters
-    ----------
-    settings : AnalysisSettings or None
-    keywords : mapping
-        The front-end's arguments (its ``locals()`` before it assigns
-        anything else); those named after a setting and not None are put in,
-        the others are not settings and are left out.
-    default : AnalysisSettings, optional
-        The front-end's own defaults, used when ``settings`` is None.
+    The front-ends take their settings as ``**overrides`` named after the
+    fields of :class:`AnalysisSettings`, some also after those of an options
+    object of their own (:class:`dynia.identification.IdentifyOptions`); a
+    name two kinds share goes to the first. A name no kind has is a
+    :class:`~dynia.errors.SettingsError` naming it, with the closest names
+    ``front_end`` takes (``difflib.get_close_matches``) and the list.
 
     Examples
     --------
-    >>> merged_settings(None, dict(n=3, percentage=None, rng=1)).n
-    3
-    >>> merged_settings(AnalysisSettings(n=5), {"n": None}).n
-    5
+    >>> def analyse(u, *, settings=None, **overrides):
+    ...     return split_overrides(analyse, overrides, AnalysisSettings)
+    >>> analyse([1.0], n=3)
+    [{'n': 3}]
+    >>> analyse([1.0], windw="trailing")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+        ...
+    dynia.errors.SettingsError: dynia.settings.analyse takes no keyword 'windw' (did you mean 'window'?); besides ...
     """
-    given = {name: keywords[name] for name in _FIELDS if keywords.get(name) is not None}
+    fields = [{field.name for field in dataclasses.fields(kind)} for kind in kinds]
+    split, unknown = [{} for _ in kinds], []
+    for name, value in overrides.items():
+        owner = next((index for index, names in enumerate(fields) if name in names), None)
+        if owner is None:
+            unknown.append(name)
+        else:
+            split[owner][name] = value
+    if not unknown:
+        return split
+    arguments = inspect.signature(front_end).parameters.values()
+    own = [argument.name for argument in arguments if argument.kind != argument.VAR_KEYWORD]
+    takes = list(dict.fromkeys(own + sorted(set().union(*fields))))
+    hints = []
+    for name in unknown:
+        close = difflib.get_close_matches(name, takes, n=3)
+        hints.append(f"{name!r}" + (f" (did you mean {' or '.join(map(repr, close))}?)" if close else ""))
+    lists = [
+        f"{kind.__module__}.{kind.__qualname__} ({', '.join(sorted(names))})" for kind, names in zip(kinds, fields)
+    ]
+    raise SettingsError(
+        f"{front_end.__module__}.{front_end.__qualname__} takes no keyword {', '.join(hints)}; besides its own "
+        f"arguments it takes the fields of {' and of '.join(lists)}",
+        unknown[0],
+    )
+
+
+def merged_settings(settings, overrides, *, front_end, default=None):
+    """The settings of a call of ``front_end``: ``settings`` (else ``default``, else the defaults) with ``overrides``.
+
+    The one place the front-ends merge their settings: ``overrides`` names
+    settings (:func:`split_overrides` refuses any other name), one given
+    overrides the object, one given as None is not given. ``dt`` is 1.0
+    where neither gives one.
+    """
+    (given,) = split_overrides(front_end, overrides, AnalysisSettings)
     merged = AnalysisSettings.build(default if settings is None else settings, **given)
     # A record without a time index, and no dt given anywhere: the unit step.
     return merged if merged.dt is not None else merged.replace(dt=1.0)
 
 
-_FIELDS = tuple(field.name for field in dataclasses.fields(AnalysisSettings))
-
-
-def parameter_box(bounds, model_names, model_label="the model"):
-    """Names in the order given and an (n_params, 2) box; every model parameter exactly once.
-
-    Parameters
-    ----------
-    bounds : mapping of str to (low, high)
-    model_names : sequence of str
-        The model's parameter names.
-    model_label : str
-        How messages name the model.
-
-    Returns
-    -------
-    names : list of str
-    box : ndarray (n_params, 2)
-    """
-    if not isinstance(bounds, Mapping):
-        raise SettingsError(
-            f"bounds must map each parameter name to (low, high), e.g. {{'K': (0, 7)}}; got {type(bounds).__name__}"
-        )
-    names = [str(name) for name in bounds]
-    unknown = [name for name in names if name not in model_names]
-    missing = [name for name in model_names if name not in names]
-    if unknown or missing:
-        raise SettingsError(
-            f"bounds must name every parameter of {model_label} {list(model_names)} once"
-            + (f"; unknown: {unknown}" if unknown else "")
-            + (f"; missing: {missing}" if missing else "")
-        )
-    rows = []
-    for name in names:
-        pair = bounds[name]
-        try:
-            if isinstance(pair, (str, bytes)):
-                raise TypeError
-            low, high = (float(value) for value in pair)
-        except (TypeError, ValueError):
-            raise SettingsError(f"bounds[{name!r}] must be a (low, high) pair of numbers; got {pair!r}") from None
-        if not (math.isfinite(low) and math.isfinite(high) and low < high):
-            raise SettingsError(f"bounds[{name!r}]: need finite low < high; got ({low}, {high})")
-        if max(abs(low), abs(high)) > MAX_PARAMETER:
-            raise SettingsError(
-                f"bounds[{name!r}] = ({low:g}, {high:g}) reaches beyond {MAX_PARAMETER:g}; no "
-                "parameter of a process model is that large, and the arithmetic on such values "
-                "overflows"
-            )
-        rows.append((low, high))
-    return names, np.array(rows)
+def merged_options(kind, options, given):
+    """``options`` (a ``kind``; None: its defaults) with the keywords ``given`` in, None a value like any other."""
+    if options is None:
+        options = kind()
+    elif not isinstance(options, kind):
+        raise SettingsError(f"options must be a {kind.__module__}.{kind.__qualname__}; got {type(options).__name__}")
+    return dataclasses.replace(options, **given)

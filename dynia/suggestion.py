@@ -102,6 +102,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import _checks
+from .bounds import parameter_box
 from .errors import ModelError, SettingsError
 from .fit import fit_segments
 from .io.frames import unpack
@@ -117,7 +118,6 @@ from .settings import (
     AnalysisSettings,
     check_dt,
     check_x0,
-    parameter_box,
     sample_count,
 )
 from .timescale import MIN_EXPLAINED, RANGE_SHARE_INVERSE, TimeScale, proposed_window

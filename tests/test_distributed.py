@@ -191,6 +191,14 @@ def test_other_bad_arguments_are_clear_errors(client, record):
         run(u, y, FirstOrder(), BOUNDS, client=client, n_samples=100, percentage=1)
 
 
+def test_a_settings_object_and_keywords_go_together_and_the_keywords_win(client, record):
+    u, y = record
+    settings = dynia.AnalysisSettings(n_samples=300, n=8, conf_level=80)
+    both = run(u, y, FirstOrder(), BOUNDS, client=client, settings=settings, n=5, rng=1)
+    assert_same(both, dynia.run(u, y, FirstOrder(), BOUNDS, settings=settings.replace(n=5), rng=1))
+    assert (both.settings.n, both.settings.conf_level) == (5, 80)
+
+
 def test_a_client_passed_in_stays_open(client, record):
     u, y = record
     run(u, y, FirstOrder(), BOUNDS, client=client, n_samples=100, n=5, rng=1)

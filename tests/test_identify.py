@@ -5,10 +5,11 @@ import json
 import numpy as np
 import pytest
 
-from dynia.errors import NothingSelected
-from dynia.identification import identify
+from dynia.errors import NothingSelected, SettingsError
+from dynia.identification import IdentifyOptions, identify
 from dynia.models import FirstOrder, SecondOrderDelay
 from dynia.segments import random_segments
+from dynia.settings import AnalysisSettings
 
 BOUNDS = {"K": (0, 7), "T": (0, 20)}
 
@@ -60,6 +61,39 @@ def test_a_glitch_is_reported_and_excluded_on_request():
     assert any("inside the fitted segments" in note for note in kept.warnings)
     assert excluded.fit.rmse < kept.fit.rmse / 2
     assert abs(excluded.parameters["K"] - 2.0) < abs(kept.parameters["K"] - 2.0) + 1e-3
+
+
+def test_settings_options_and_their_keywords_go_together_and_the_keywords_win():
+    u, y = _record()
+    settings = AnalysisSettings(n_samples=400, n=8, percentage=10, conf_level=80)
+    options = IdentifyOptions(ic_threshold=0.6, n_starts=3)
+    both = identify(u, y, FirstOrder(), BOUNDS, settings=settings, options=options, n=5, n_starts=2, rng=1)
+    merged = identify(
+        u,
+        y,
+        FirstOrder(),
+        BOUNDS,
+        settings=settings.replace(n=5),
+        options=IdentifyOptions(ic_threshold=0.6, n_starts=2),
+        rng=1,
+    )
+    analysis = dict(n_samples=400, n=5, percentage=10, conf_level=80)
+    keywords = identify(u, y, FirstOrder(), BOUNDS, **analysis, ic_threshold=0.6, n_starts=2, rng=1)
+    for found in (merged, keywords):
+        assert found.parameters == both.parameters and found.segments == both.segments
+        assert found.settings == both.settings and found.dynia_result.settings == both.dynia_result.settings
+    assert (both.dynia_result.settings.n, both.dynia_result.settings.conf_level) == (5, 80)
+    assert (both.settings["ic_threshold"], both.settings["n_starts"]) == (0.6, 2)
+    with pytest.raises(SettingsError, match="options must be a dynia.identification.IdentifyOptions; got dict"):
+        identify(u, y, FirstOrder(), BOUNDS, options={"n_starts": 2})
+
+
+@pytest.mark.parametrize("quality", [False, True])
+def test_identifys_quality_is_the_dynia_runs_screening_whatever_the_settings_say(quality):
+    u, y = _record(steps=300)
+    settings = AnalysisSettings(n_samples=300, quality=not quality)
+    found = identify(u, y, FirstOrder(), BOUNDS, settings=settings, quality=quality, rng=1)
+    assert found.dynia_result.settings.quality is quality and (found.quality is not None) is quality
 
 
 def test_to_dict_has_the_checked_keys():

@@ -15,11 +15,12 @@ import pytest
 from numpy.testing import assert_array_equal
 
 import dynia
+from dynia.checkpoint import SharedArrays
 from dynia.engine.noise import add_record_errors
 from dynia.engine.windows import OverflowedWindowsWarning, moving_window
 from dynia.errors import DataError
 from dynia.models import FOPDT, FirstOrder, SecondOrderDelay, StateSpaceModel, TransferFunction
-from dynia.online import OnlineDynia, SharedArrays
+from dynia.online import OnlineDynia
 
 FIRST_ORDER_BOUNDS = {"K": (0.0, 5.0), "T": (0.0, 8.0)}
 # Bounds in another order than the model's columns, to check the reordering.

@@ -1,13 +1,17 @@
 """AnalysisSettings: checked once, strictly typed, and honoured (or refused) by every front-end."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 import dynia
+import dynia.distributed
+from dynia.adaptive import AdaptiveOptions, adaptive_run
 from dynia.errors import DataError, DyniaError, ModelError, OutputError, SettingsError
 from dynia.models import FirstOrder
 from dynia.online import OnlineDynia
-from dynia.settings import MAX_BINS, AnalysisSettings
+from dynia.settings import MAX_BINS, AnalysisSettings, merged_settings
 
 U = np.r_[np.zeros(20), np.full(60, 1.0)]
 Y = FirstOrder().simulate([[2.0, 3.0]], U)[0]
@@ -141,3 +145,80 @@ def test_every_count_has_a_bound_and_a_reason(call, needle):
     with pytest.raises(SettingsError, match=needle) as refused:
         call()
     assert refused.value.setting == needle.split()[0]
+
+
+# The front-ends that take their settings as settings= and **overrides, each called on U, Y with FirstOrder.
+FRONT_ENDS = {
+    "identify": lambda **keywords: dynia.identify(U, Y, FirstOrder(), BOUNDS, **keywords),
+    "adaptive_run": lambda **keywords: adaptive_run(U, Y, FirstOrder(), BOUNDS, **keywords),
+    "distributed.run": lambda **keywords: dynia.distributed.run(U, Y, FirstOrder(), BOUNDS, **keywords),
+    "OnlineDynia": lambda **keywords: OnlineDynia(FirstOrder(), BOUNDS, **keywords),
+}
+
+
+@pytest.mark.parametrize("front_end", FRONT_ENDS)
+def test_an_unknown_keyword_is_a_settings_error_naming_it_with_the_closest_names_and_the_list(front_end):
+    # distributed.run checks its keywords before it looks for a cluster.
+    with pytest.raises(SettingsError, match=r"takes no keyword 'windw' \(did you mean 'window'\?\); ") as caught:
+        FRONT_ENDS[front_end](windw="trailing", n=3)
+    assert caught.value.setting == "windw"
+    assert "bins, conf_level, dt, dtype, engine, flavour, ic_error, max_samples, min_points, n, n_samples" in str(
+        caught.value
+    )
+
+
+def test_an_unknown_keyword_is_matched_against_the_front_ends_own_arguments_and_options_too():
+    with pytest.raises(SettingsError, match=r"'n_start' \(did you mean 'n_starts'"):
+        dynia.identify(U, Y, FirstOrder(), BOUNDS, n_start=3)
+    with pytest.raises(SettingsError, match=r"'hold_out' \(did you mean 'held_out'"):
+        dynia.identify(U, Y, FirstOrder(), BOUNDS, hold_out=0.2)
+    with pytest.raises(SettingsError, match=r"takes no keyword 'stage' \(did you mean 'stages'"):
+        adaptive_run(U, Y, FirstOrder(), BOUNDS, stage=2)
+    with pytest.raises(SettingsError, match="options must be a dynia.adaptive.AdaptiveOptions; got dict"):
+        adaptive_run(U, Y, FirstOrder(), BOUNDS, options={"stages": 2})
+
+
+def test_no_local_variable_of_a_front_end_becomes_a_setting():
+    """Issue 33: the front-ends merged locals(), so any local named like a setting (n, window, engine) became one."""
+    package = Path(dynia.__file__).parent
+    assert not [str(path) for path in package.rglob("*.py") if "locals()" in path.read_text()]
+
+    def front_end(u, *, settings=None, **overrides):
+        window = "centred"  # a local named like a setting, as the front-ends have (n, engine, quality...)
+        return merged_settings(settings, overrides, front_end=front_end), window
+
+    assert front_end([1.0], n=3)[0] == AnalysisSettings(n=3, dt=1.0)
+    # The merge takes settings by name, never a namespace to pick setting-named variables from: locals() holds the
+    # arguments (u, model, ...), which are no settings.
+    with pytest.raises(SettingsError, match="takes no keyword 'u'"):
+        merged_settings(None, dict(u=[1.0], window="trailing"), front_end=front_end)
+
+
+SETTINGS = AnalysisSettings(n_samples=400, n=5, percentage=10, conf_level=80, window="trailing")
+
+
+def test_dynia_run_takes_a_settings_object_and_keywords_together_and_the_keywords_win():
+    both = dynia.run(U, Y, FirstOrder(), BOUNDS, settings=SETTINGS, n=3, percentage=20, rng=3)
+    merged = dynia.run(U, Y, FirstOrder(), BOUNDS, settings=SETTINGS.replace(n=3, percentage=20), rng=3)
+    assert both.settings == merged.settings and np.array_equal(both.ic, merged.ic, equal_nan=True)
+    assert (both.settings.n, both.settings.percentage, both.settings.conf_level) == (3, 20, 80)
+
+
+def test_adaptive_run_takes_settings_options_and_their_keywords_together_and_the_keywords_win():
+    settings = SETTINGS.replace(sampler="iis", percentage=5)
+    options = AdaptiveOptions(blocks=4, stages=2)
+    both = adaptive_run(U, Y, FirstOrder(), BOUNDS, settings=settings, options=options, n=3, blocks=2, rng=3)
+    merged = adaptive_run(
+        U, Y, FirstOrder(), BOUNDS, settings=settings.replace(n=3), options=AdaptiveOptions(blocks=2, stages=2), rng=3
+    )
+    assert both.settings == merged.settings and np.array_equal(both.ic, merged.ic, equal_nan=True)
+    assert both.settings.n == 3 and both.settings.conf_level == 80 and both.run.n_blocks == 2
+    # The scheme is the settings' sampler, and overrides it.
+    assert adaptive_run(U, Y, FirstOrder(), BOUNDS, settings=settings, scheme="de", rng=3).settings.sampler == "de"
+
+
+def test_online_takes_a_settings_object_and_keywords_together_and_the_keywords_win():
+    both = OnlineDynia(FirstOrder(), BOUNDS, settings=SETTINGS, n=3, percentage=20, rng=2)
+    merged = OnlineDynia(FirstOrder(), BOUNDS, settings=SETTINGS.replace(n=3, percentage=20), rng=2)
+    assert both.settings == merged.settings and (both.settings.n, both.settings.conf_level) == (3, 80)
+    assert np.array_equal(both.replay(U, Y).ic, merged.replay(U, Y).ic, equal_nan=True)
