@@ -298,3 +298,34 @@ def test_unstable_sets_of_a_compiled_state_space_model_are_dropped_as_on_the_pla
     assert 0 < fast.run.n_dropped == slow.run.n_dropped < 400
     assert np.array_equal(fast.samples, slow.samples)
     assert np.array_equal(fast.ic, slow.ic, equal_nan=True)
+
+
+TWO_INPUTS = """
+import numpy as np
+from dynia.models import FunctionModel
+
+def gains(params, u, dt):
+    u = np.asarray(u)
+    return params[:, :1] * u[None, :, 0] + params[:, 1:2] * u[None, :, 1]
+
+model = FunctionModel(gains, ["K1", "K2"], n_inputs=2)
+"""
+
+
+def test_identify_on_two_inputs_says_that_the_record_is_not_screened(tmp_path, capsys, monkeypatch):
+    """identify's data-quality check takes one input; with two the DYNIA run is not screened, and it says so."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "twoinputs.py").write_text(TWO_INPUTS)
+    rng = np.random.default_rng(5)
+    u = np.repeat(rng.uniform(0, 2, (12, 2)), 25, axis=0)
+    y = 2.0 * u[:, 0] + 0.5 * u[:, 1] + rng.normal(0, 0.05, u.shape[0])
+    rows = "".join(
+        f"{t},{a!r},{b!r},{c!r}\n" for t, (a, b, c) in enumerate(zip(u[:, 0].tolist(), u[:, 1].tolist(), y.tolist()))
+    )
+    (tmp_path / "data.csv").write_text("time,a,b,y\n" + rows)
+    arguments = ["identify", "data.csv", "--time", "time", "--input", "a", "--input", "b", "--output", "y"]
+    options = ["--model", "twoinputs.py:model", "--param", "K1=0:4", "--param", "K2=0:4", "--samples", "300"]
+    status = main([*arguments, *options, "--n", "3", "--seed", "1", "--out", "out"])
+    captured = capsys.readouterr()
+    assert status == 0, captured.err
+    assert "the record is not screened for saturated, frozen or quantised readings" in captured.err

@@ -205,6 +205,11 @@ def cli_action(options, caught):
         data = record.data
         analysis = options.analysis.replace(dt=data.dt)
         notices, _ = data_warnings(data, options, quality=False)
+        if options.quality and options.model_object.n_inputs > 1:
+            notices.append(
+                "the record is not screened for saturated, frozen or quantised readings: identify checks a "
+                "one-input record only, so its DYNIA run takes every reading as evidence"
+            )
         for line in notices:
             print(f"dynia: warning: {line}", file=sys.stderr)
         if options.method == "dynia":
@@ -259,7 +264,7 @@ def _identified(options, record, analysis):
         ic_threshold=options.ic_threshold,
         mode=options.mode,
         min_length=options.min_length,
-        # identify checks one input; with several, the run still screens the output.
+        # identify checks one input; with several, neither the check nor the run's screening is done (a notice says so).
         quality=options.quality and options.model_object.n_inputs == 1,
         exclude_flagged=options.exclude_flagged,
         n_starts=options.starts,
