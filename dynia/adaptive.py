@@ -70,7 +70,11 @@ from .settings import ADAPTIVE_SAMPLERS as SCHEMES
 from .settings import AnalysisSettings, RunRecord, merged_options, merged_settings, split_overrides
 from .verdicts import assess
 
-__all__ = ["AdaptiveOptions", "BoxMixture", "adaptive_run", "SCHEMES"]
+__all__ = [
+    "AdaptiveOptions",
+    "BoxMixture",
+    "adaptive_run",
+]
 
 
 class BoxMixture:

@@ -94,10 +94,6 @@ __all__ = [
     "fit_segments",
     "record_least_squares",
     "validation_error",
-    "OFFSETS",
-    "X0_CHOICES",
-    "MAX_STARTS",
-    "check_starts",
 ]
 
 OFFSETS = ("none", "segment")

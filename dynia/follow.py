@@ -77,7 +77,7 @@ from .settings import RunRecord
 from .timescale import window_half_width
 from .verdicts import assess
 
-__all__ = ["VERDICT_CHANGE", "Follower", "FollowerSettings"]
+__all__ = ["Follower", "FollowerSettings"]
 
 log = logging.getLogger("dynia.follow")
 

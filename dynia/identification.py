@@ -104,10 +104,6 @@ __all__ = [
     "Identification",
     "IdentifyOptions",
     "identify",
-    "METHODS",
-    "SELECTED_ALL_SHARE",
-    "MIN_POINTS_PER_PARAMETER",
-    "OVERFIT_RATIO",
 ]
 
 METHODS = ("dynia", "baseline", "whole", "given")

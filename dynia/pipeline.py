@@ -31,13 +31,9 @@ __all__ = [
     "run",
     "dated",
     "ic_se_that_matters",
-    "DROPPED_WARNING_SHARE",
     "DroppedSamplesWarning",
     "TargetNotReachedWarning",
     "UnreachedOutputWarning",
-    "warn_unreached_output",
-    "TARGET_MARGIN",
-    "TARGET_MIN_GROWTH",
     "KernelSimulated",
 ]
 
@@ -59,7 +55,7 @@ class DroppedSamplesWarning(UserWarning):
 
 
 class UnreachedOutputWarning(UserWarning):
-    """No parameter set in the box reaches the output's size (see :func:`warn_unreached_output`)."""
+    """No parameter set in the box reaches the output's size (see ``warn_unreached_output``)."""
 
 
 class TargetNotReachedWarning(UserWarning):

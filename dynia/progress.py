@@ -25,7 +25,10 @@ import numpy as np
 
 from .errors import SettingsError
 
-__all__ = ["PROGRESS_CHOICES", "shows_progress", "progress_bar", "stderr_is_terminal"]
+__all__ = [
+    "shows_progress",
+    "progress_bar",
+]
 
 #: The values ``progress`` takes.
 PROGRESS_CHOICES = (True, False, "auto")

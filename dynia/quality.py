@@ -195,8 +195,6 @@ __all__ = [
     "screening",
     "screened_windows",
     "KINDS",
-    "SCREENED_KINDS",
-    "SIGNALS",
     "QUANTISED_MIN_STEPS",
 ]
 

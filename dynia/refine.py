@@ -37,7 +37,10 @@ from .segments import mask_to_segments
 from .settings import IC_THRESHOLD
 from .structure import clear_of_bounds
 
-__all__ = ["narrowed_bounds", "second_run", "check_margin"]
+__all__ = [
+    "narrowed_bounds",
+    "second_run",
+]
 
 
 def narrowed_bounds(result, bounds, *, ic_threshold=IC_THRESHOLD, margin=0.5, min_windows=3):

@@ -20,7 +20,9 @@ from .errors import SettingsError
 from .settings import IC_THRESHOLD, AnalysisSettings, RunRecord, check_ic_threshold
 from .summary import Summary
 
-__all__ = ["DyniaResult", "date_axis", "timestamps_problem"]
+__all__ = [
+    "DyniaResult",
+]
 
 
 @dataclass(frozen=True, eq=False)

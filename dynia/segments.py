@@ -70,7 +70,6 @@ __all__ = [
     "segments_to_times",
     "random_segments",
     "holdout_split",
-    "MODES",
 ]
 
 MODES = ("any", "joint", "per_parameter")

@@ -44,30 +44,13 @@ __all__ = [
     "AnalysisSettings",
     "RunRecord",
     "SAMPLERS",
-    "ADAPTIVE_SAMPLERS",
-    "FLAVOURS",
-    "WINDOWS",
-    "ENGINES",
-    "X0",
-    "DTYPES",
     "MAX_BINS",
-    "MAX_PARAMETER",
     "MAX_SAMPLES",
-    "DEFAULT_MAX_SAMPLES",
-    "MAD_TO_STD",
     "MAX_HALF_WINDOW",
     "MAX_WORKERS",
     "IC_THRESHOLD",
-    "IC_BATCHES",
-    "MIN_BATCH_BEHAVIOURAL",
-    "check_dt",
-    "check_x0",
-    "sample_count",
-    "check_ic_threshold",
     "ic_batches",
     "merged_settings",
-    "merged_options",
-    "split_overrides",
 ]
 
 SAMPLERS = ("uniform", "lhs", "sobol")
@@ -878,7 +861,7 @@ def merged_settings(settings, overrides, *, front_end, default=None):
     """The settings of a call of ``front_end``: ``settings`` (else ``default``, else the defaults) with ``overrides``.
 
     The one place the front-ends merge their settings: ``overrides`` names
-    settings (:func:`split_overrides` refuses any other name), one given
+    settings (``split_overrides`` refuses any other name), one given
     overrides the object, one given as None is not given. ``dt`` is 1.0
     where neither gives one.
     """

@@ -93,11 +93,9 @@ __all__ = [
     "structure_warnings",
     "clear_of_bounds",
     "Disagreement",
-    "band_disagreement",
-    "window_stretches",
-    "stretch_bands",
-    "noise_widening",
     "widened",
+    "band_disagreement",
+    "noise_widening",
 ]
 
 # A band closer to a bound than this fraction of its width (or one gradient bin)
@@ -351,10 +349,10 @@ class Disagreement:
 def band_disagreement(result, p, windows):
     """Whether the bands of parameter ``p`` in the marked windows rule each other out.
 
-    The windows are grouped into stretches by :func:`window_stretches`
+    The windows are grouped into stretches by ``window_stretches``
     (joined across gaps shorter than one window, cut into stretches of one
     window length, 2n+1 steps), and each stretch's band is the median of
-    its windows' limits (:func:`stretch_bands`), as for the structure
+    its windows' limits (``stretch_bands``), as for the structure
     warnings. Each band is widened by :func:`noise_widening` half-widths on
     either side (none under white noise), and the stretches disagree when
     the highest lower limit exceeds the lowest upper limit by more than the

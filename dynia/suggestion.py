@@ -125,8 +125,6 @@ from .timescale import MIN_EXPLAINED, RANGE_SHARE_INVERSE, TimeScale, proposed_w
 __all__ = [
     "Suggestion",
     "suggest",
-    "IC_SE_TARGET",
-    "MEMORY_SHARE",
 ]
 
 # The Monte Carlo standard error of the IC the proposed number of samples aims at.

@@ -24,7 +24,11 @@ import html
 
 import numpy as np
 
-__all__ = ["Summary", "verdict_table", "verdict_parts", "aligned", "NO_EVIDENCE"]
+__all__ = [
+    "Summary",
+    "verdict_table",
+    "aligned",
+]
 
 
 class Summary(dict):

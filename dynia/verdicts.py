@@ -165,12 +165,12 @@ __all__ = [
     "evidence_needed",
     "evidence_windows",
     "high_ic_windows",
-    "no_evidence_reasons",
     "noise_only",
     "noise_sigma",
     "record_fit_conflict",
     "record_fit_noise_error",
     "reported_step",
+    "no_evidence_reasons",
 ]
 
 VERDICTS = ("identified", "weak", "suspect")

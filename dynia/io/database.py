@@ -10,10 +10,10 @@ SQLAlchemy, never pasted into SQL.
 The source (:class:`Source`) is a table as :func:`dynia.io.csv.load_csv`
 reads a file: wide (one row per time, a column per signal) or long (time,
 tag, value rows, as historians store them). Its time column holds numbers
-of seconds, timestamps (a date-time column) or ISO 8601 text; :class:`Clock`
+of seconds, timestamps (a date-time column) or ISO 8601 text; ``Clock``
 turns them into seconds from the first one and back.
 
-The follower's tables (:class:`FollowerTables`), named after ``results``:
+The follower's tables (``FollowerTables``), named after ``results``:
 
 ``results``
     One row per step and parameter: ``time`` (as the source writes it),
@@ -47,7 +47,10 @@ import numpy as np
 
 from ..errors import DataError, SettingsError
 
-__all__ = ["Clock", "FollowerTables", "Source", "connect", "error_line"]
+__all__ = [
+    "Source",
+    "connect",
+]
 
 # The longest name PostgreSQL keeps (it cuts longer ones, so that two names could become one).
 _MAX_NAME = 63

@@ -54,8 +54,6 @@ from .layout import (
 
 __all__ = [
     "load",
-    "check_time_block",
-    "DeferredVerdicts",
     "StoredVerdictsWarning",
     "StoredSettingsWarning",
 ]
@@ -78,7 +76,7 @@ def load(path, *, lazy=False):
 
     Nothing in the file is trusted. The arrays carry Fletcher-32 checksums
     (files written before them load unchecked); every array is checked
-    against what an analysis can produce (:func:`check_time_block` and the
+    against what an analysis can produce (``check_time_block`` and the
     rules for the fixed arrays); the verdicts are derived again from the
     arrays (:func:`dynia.verdicts.assess`): a stored verdict that agrees
     with its derived one, in verdict and reason codes, is kept (with its
@@ -87,7 +85,7 @@ def load(path, *, lazy=False):
     derived one, with a :class:`StoredVerdictsWarning`. A lazy load checks the fixed arrays at once and the arrays
     along time one on-disk block at a time, when a read first touches the
     block, so it stays as fast as the reads it is asked for; its verdicts
-    (:class:`DeferredVerdicts`) are checked when first used, which reads IC
+    (``DeferredVerdicts``) are checked when first used, which reads IC
     (all of it) and some limits, once.
 
     Raises
@@ -443,7 +441,7 @@ def _lazy(name, dataset, names, bounds, spans):
 
 
 def _check_stored_block(name, names, bounds, spans, key, file, start, stop):
-    """:func:`check_time_block` for steps [start, stop) of variable ``key`` of the open h5py ``file``."""
+    """``check_time_block`` for steps [start, stop) of variable ``key`` of the open h5py ``file``."""
     companions = {other: read_block(file, other, start, stop) for other in _companions(key) if other in file}
     check_time_block(name, names, bounds, spans, key, read_block(file, key, start, stop), companions)
 

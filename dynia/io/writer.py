@@ -14,7 +14,10 @@ from ..errors import OutputError
 from .arrays import DiskArray, write_netcdf, write_result
 from .layout import ARRAYS, COORDINATES, OPTIONAL_ARRAYS, SECONDS_ATTRIBUTES, SIDES, TIMESTAMP_ATTRIBUTES, metadata
 
-__all__ = ["to_xarray", "save", "add_attributes"]
+__all__ = [
+    "to_xarray",
+    "save",
+]
 
 
 def to_xarray(result):

@@ -28,14 +28,13 @@ import importlib
 
 from .base import Model, SimulationState
 from .custom import FunctionModel, StateSpaceModel
-from .linear import FOPDT, FirstOrder, LinearModel, SecondOrderDelay, Stepper
+from .linear import FOPDT, FirstOrder, LinearModel, SecondOrderDelay
 from .transfer import TransferFunction
 
 __all__ = [
     "Model",
     "SimulationState",
     "LinearModel",
-    "Stepper",
     "FirstOrder",
     "FOPDT",
     "SecondOrderDelay",

@@ -52,14 +52,7 @@ from ..errors import DataError, DyniaError, Interrupted, ModelError
 __all__ = [
     "Model",
     "SimulationState",
-    "SameOutput",
-    "VALUES_PER_CHUNK",
     "FLUSH_BELOW",
-    "check_model",
-    "check_names",
-    "flush_tiny",
-    "refuse_ignored_params",
-    "user_code_failed",
 ]
 
 # States of smaller magnitude are set to zero after every step (see "Subnormal states" above).

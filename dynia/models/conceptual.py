@@ -40,10 +40,6 @@ except ImportError:  # the numpy update serves
 
 __all__ = [
     "HYMOD_NAMES",
-    "HYMOD_STATES",
-    "HYMOD_TRUTH",
-    "TANK_NAMES",
-    "TANK_TRUTH",
     "SyntheticRecord",
     "hymod",
     "hymod_fluxes",

@@ -58,7 +58,7 @@ from ..errors import DataError, ModelError, SettingsError
 from ..settings import check_dt, check_x0
 from .base import Model, SimulationState, flush_tiny
 
-__all__ = ["LinearModel", "Stepper", "FirstOrder", "FOPDT", "SecondOrderDelay"]
+__all__ = ["LinearModel", "FirstOrder", "FOPDT", "SecondOrderDelay"]
 
 
 # Time constants are clamped to this fraction of dt. Below it every factor

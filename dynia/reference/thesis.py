@@ -139,7 +139,6 @@ __all__ = [
     "plot_parameter_estimation",
     "thesis_code_result",
     "plot_thesis_code_result",
-    "CODE_PATHS",
     "check_code_path",
     "run_dynia",
     "select_best_parameters",
