@@ -337,7 +337,7 @@ class KernelSimulated(Model):
     """A single-input linear model whose :meth:`simulate` runs the compiled kernel.
 
     The kernel's outputs equal the model's numpy recursion bit for bit
-    (:meth:`dynia.engine.kernels.CompiledErrors.output_chunks`), without its
+    (:meth:`dynia.engine.kernels.driver.CompiledErrors.output_chunks`), without its
     Python loop over every step: the record's least squares
     (:func:`dynia.fit.record_least_squares`) simulates a few sets at a time,
     some ten times, where that loop costs about 0.5 s a call on 20 000 steps.
