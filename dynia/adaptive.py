@@ -58,8 +58,9 @@ import numpy as np
 from scipy.optimize import differential_evolution
 
 from . import _checks
+from .engine.error_sources import ArrayErrors
 from .engine.selection import lowest_weighted
-from .engine.windows import ArrayErrors, analyse_errors, window_costs
+from .engine.windows import analyse_errors, window_costs
 from .errors import SettingsError
 from .fit import record_least_squares
 from .io.frames import unpack

@@ -101,6 +101,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _checks
+from .engine.error_sources import ArrayErrors, ScaledErrors, StreamedErrors
 from .engine.flavours import WindowResults, compiled_engine, flavour_analysis, monte_carlo_errors
 from .engine.kernels import CompiledErrors
 from .engine.noise import (
@@ -113,9 +114,6 @@ from .engine.noise import (
     window_points,
 )
 from .engine.windows import (
-    ArrayErrors,
-    ScaledErrors,
-    StreamedErrors,
     blank_overflowed,
     default_chunk_steps,
     error_scale,

@@ -9,10 +9,11 @@ import numpy as np
 
 from . import _checks
 from .adaptive import adaptive_run
+from .engine.error_sources import ArrayErrors, StreamedErrors
 from .engine.flavours import compiled_engine
 from .engine.kernels import CompiledErrors
 from .engine.noise import RESIDUAL_CHUNK
-from .engine.windows import ArrayErrors, StreamedErrors, analyse_errors, default_chunk_steps
+from .engine.windows import analyse_errors, default_chunk_steps
 from .errors import DyniaError, ModelError, SettingsError
 from .fit import record_least_squares
 from .io.arrays import result_arrays

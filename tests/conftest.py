@@ -100,8 +100,9 @@ def compiled_window_costs(y, sims, n, window="centred", chunk_steps=None):
     Formed with the compiled kernel's own helpers, chunk by chunk as the windows pass cuts the record, so that they
     are the bits the engine used (the fused linear-model path gives the same, tests/test_running_sums.py).
     """
+    from dynia.engine.error_sources import ArrayErrors
     from dynia.engine.kernels.sums import first_window, next_window
-    from dynia.engine.windows import ArrayErrors, default_chunk_steps, window_halos, window_inputs
+    from dynia.engine.windows import default_chunk_steps, window_halos, window_inputs
 
     y, sims = np.asarray(y, dtype=float), np.asarray(sims, dtype=float)
     errors = ArrayErrors(y, sims)
