@@ -566,7 +566,7 @@ def _analyse_on_cluster(client, submit, flavour, spans, *, stateful, progress, a
     waiting = iter(enumerate(spans))
     for k, (start, stop) in itertools.islice(waiting, ahead):
         submit_chunk(k, start, stop)
-    bar = progress_bar(progress, total=len(spans), desc="DYNIA windows", unit="chunk")
+    bar = progress_bar(progress, total=n_steps, desc="DYNIA windows", unit="window")
     for future in finished:
         start, stop = chunk_spans.pop(future)
         results = future.result()
@@ -580,7 +580,7 @@ def _analyse_on_cluster(client, submit, flavour, spans, *, stateful, progress, a
         if following is not None:
             submit_chunk(following[0], *following[1])
         if bar is not None:
-            bar.update()
+            bar.update(stop - start)
     if bar is not None:
         bar.close()
     return ic, ci, median, gradient, best, upper, threshold, ic_se, ci_se, overflowed

@@ -597,6 +597,8 @@ def _windows_pass(errors, flavour_impl, compiled, output, settings, halos, chunk
 
     # A source that forms the window sums itself (the built-in linear models, compiled) hands over no error rows.
     fused = compiled and getattr(errors, "fused", False)
+    # The bar counts the windows analysed, as each chunk's results are written.
+    bar = progress_bar(progress, total=n_steps, desc="DYNIA windows", unit="window")
 
     def analyse_chunk(start, stop, window_errors, measured):
         if fused:
@@ -614,10 +616,9 @@ def _windows_pass(errors, flavour_impl, compiled, output, settings, halos, chunk
             chunks["ic_se"], chunks["ci_se"] = monte_carlo_errors(results.batch_ic, results.batch_ci)
         output.write(start, stop, chunks)
         best[start:stop], threshold[start:stop], upper[start:stop] = results.best, results.threshold, results.upper
+        if bar is not None:
+            bar.update(stop - start)
 
-    starts = range(0, n_steps, chunk_steps)
-    bar = progress_bar(progress, starts, desc="DYNIA windows", unit="chunk")
-    starts = starts if bar is None else bar
     # Errors are pulled in time order (a simulation stream is sequential); the
     # windows of each chunk are then analysed on a worker, while this thread
     # pulls the next chunk. One worker means one thread: the chunk is analysed
@@ -626,7 +627,7 @@ def _windows_pass(errors, flavour_impl, compiled, output, settings, halos, chunk
     # store's partial file).
     with _InlineExecutor() if workers == 1 else ThreadPoolExecutor(max_workers=workers) as pool, output:
         pending = deque()
-        for start in starts:
+        for start in range(0, n_steps, chunk_steps):
             stop = min(start + chunk_steps, n_steps)
             if fused:
                 inputs = errors.window_sums(start, stop, (before, after), totals)
@@ -643,6 +644,8 @@ def _windows_pass(errors, flavour_impl, compiled, output, settings, halos, chunk
                 write(pending.popleft())
         while pending:
             write(pending.popleft())
+    if bar is not None:
+        bar.close()
     return best, threshold, upper, totals, overflowed
 
 
