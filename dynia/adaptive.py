@@ -59,8 +59,9 @@ from scipy.optimize import differential_evolution
 
 from . import _checks
 from .bounds import parameter_box
+from .engine.error_sources import ArrayErrors
 from .engine.selection import lowest_weighted
-from .engine.windows import ArrayErrors, analyse_errors, window_costs
+from .engine.windows import analyse_errors, window_costs
 from .errors import SettingsError
 from .fit import record_least_squares
 from .io.frames import unpack

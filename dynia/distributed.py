@@ -102,6 +102,7 @@ import numpy as np
 from . import _checks
 from .bounds import parameter_box
 from .cluster import chunk_need, connected, import_distributed, worker_loss_explained
+from .engine.error_sources import ArrayErrors, ScaledErrors, StreamedErrors
 from .engine.flavours import WindowResults, compiled_engine, flavour_analysis, monte_carlo_errors
 from .engine.kernels import CompiledErrors
 from .engine.noise import (
@@ -114,9 +115,6 @@ from .engine.noise import (
     window_points,
 )
 from .engine.windows import (
-    ArrayErrors,
-    ScaledErrors,
-    StreamedErrors,
     blank_overflowed,
     default_chunk_steps,
     error_scale,
@@ -507,7 +505,7 @@ def _analyse_on_cluster(client, submit, flavour, spans, *, stateful, progress, a
     waiting = iter(enumerate(spans))
     for k, (start, stop) in itertools.islice(waiting, ahead):
         submit_chunk(k, start, stop)
-    bar = progress_bar(progress, total=len(spans), desc="DYNIA windows", unit="chunk")
+    bar = progress_bar(progress, total=n_steps, desc="DYNIA windows", unit="window")
     for future in finished:
         start, stop = chunk_spans.pop(future)
         results = future.result()
@@ -521,7 +519,7 @@ def _analyse_on_cluster(client, submit, flavour, spans, *, stateful, progress, a
         if following is not None:
             submit_chunk(following[0], *following[1])
         if bar is not None:
-            bar.update()
+            bar.update(stop - start)
     if bar is not None:
         bar.close()
     return ic, ci, median, gradient, best, upper, threshold, ic_se, ci_se, overflowed

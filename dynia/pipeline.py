@@ -10,10 +10,11 @@ import numpy as np
 from . import _checks
 from .adaptive import adaptive_run
 from .bounds import parameter_box
+from .engine.error_sources import ArrayErrors, StreamedErrors
 from .engine.flavours import compiled_engine
 from .engine.kernels import CompiledErrors
 from .engine.noise import RESIDUAL_CHUNK
-from .engine.windows import ArrayErrors, StreamedErrors, analyse_errors, default_chunk_steps
+from .engine.windows import analyse_errors, default_chunk_steps
 from .errors import DyniaError, ModelError, SettingsError
 from .fit import record_least_squares
 from .io.arrays import result_arrays
@@ -355,7 +356,7 @@ class KernelSimulated(Model):
     """A single-input linear model whose :meth:`simulate` runs the compiled kernel.
 
     The kernel's outputs equal the model's numpy recursion bit for bit
-    (:meth:`dynia.engine.kernels.CompiledErrors.output_chunks`), without its
+    (:meth:`dynia.engine.kernels.driver.CompiledErrors.output_chunks`), without its
     Python loop over every step: the record's least squares
     (:func:`dynia.fit.record_least_squares`) simulates a few sets at a time,
     some ten times, where that loop costs about 0.5 s a call on 20 000 steps.

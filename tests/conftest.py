@@ -100,8 +100,9 @@ def compiled_window_costs(y, sims, n, window="centred", chunk_steps=None):
     Formed with the compiled kernel's own helpers, chunk by chunk as the windows pass cuts the record, so that they
     are the bits the engine used (the fused linear-model path gives the same, tests/test_running_sums.py).
     """
-    from dynia.engine import kernels
-    from dynia.engine.windows import ArrayErrors, default_chunk_steps, window_halos, window_inputs
+    from dynia.engine.error_sources import ArrayErrors
+    from dynia.engine.kernels.sums import first_window, next_window
+    from dynia.engine.windows import default_chunk_steps, window_halos, window_inputs
 
     y, sims = np.asarray(y, dtype=float), np.asarray(sims, dtype=float)
     errors = ArrayErrors(y, sims)
@@ -113,10 +114,10 @@ def compiled_window_costs(y, sims, n, window="centred", chunk_steps=None):
     for start in range(0, y.size, chunk_steps):
         stop = min(start + chunk_steps, y.size)
         rows, measured = window_inputs(errors, start, stop, before, after, y.size, time_major=True)
-        present = kernels._first_window(rows, measured, slots, high, low, total)
+        present = first_window(rows, measured, slots, (high, low), total)
         for t in range(stop - start):
             if t:
-                present = kernels._next_window(rows, measured, t, slots, present, high, low, total)
+                present = next_window(rows, measured, t, slots, present, (high, low), total)
             with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
                 costs.append((total / present) ** 2)
     return np.array(costs)

@@ -103,7 +103,8 @@ def test_weighted_flavour_equals_dynia_run(client, record, capsys, engine):
     options = dict(n_samples=300, n=5, flavour="weighted", percentage=20, conf_level=80, bins=15, rng=4, engine=engine)
     result = run(u, y, FirstOrder(), BOUNDS, client=client, sample_chunks=120, time_chunks=25, progress=True, **options)
     assert_same(result, dynia.run(u, y, FirstOrder(), BOUNDS, **options))
-    assert "DYNIA windows" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "DYNIA windows" in err and f"{y.size}/{y.size}" in err  # it counts the windows, one a step
 
 
 def test_mcat_flavour_chains_its_state_like_dynia_run(client, record):

@@ -140,7 +140,7 @@ def test_thesis_example1_keeps_the_contract(example1):
     (a tie for the numpy path, ranked by index) has a compensated sum a few
     units in the last place apart, or the reverse; sets whose errors agree
     over the window still tie on both. The numpy path keeps the thesis
-    port's numbers bit for bit (tests/test_analysis.py).
+    port's numbers bit for bit (tests/test_engine_against_ports.py).
     """
     e = example1
     args = (e["y"], e["sims"], e["params"], e["bounds"])

@@ -62,7 +62,9 @@ def test_dynia_run_shows_its_bar_by_default_on_a_terminal_only(monkeypatch, caps
     assert "DYNIA windows" not in capsys.readouterr().err
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
     dynia.run(U, Y, FirstOrder(), BOUNDS, n=5, n_samples=200, rng=1)
-    assert "DYNIA windows" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "DYNIA windows" in err
+    assert f"{U.size}/{U.size}" in err and ("window/s" in err or "s/window" in err)  # it counts the windows
     dynia.run(U, Y, FirstOrder(), BOUNDS, n=5, n_samples=200, rng=1, progress=False)
     assert capsys.readouterr().err == ""
 

@@ -4,8 +4,8 @@ The numpy path's left-to-right sums are the reference; the contract between
 the two is stated and checked in tests/test_fast.py. Here: the running sum
 survives what breaks a plain one (a huge error leaving a window of small
 ones, an infinite error), and compiled against compiled stays bit for bit:
-the fused kernel (:meth:`dynia.engine.kernels.CompiledErrors.window_sums`)
-gives the sums the error rows give (:func:`dynia.engine.kernels.analyse_windows`),
+the fused kernel (:meth:`dynia.engine.kernels.driver.CompiledErrors.window_sums`)
+gives the sums the error rows give (:func:`dynia.engine.kernels.readoff.analyse_windows`),
 hence the same results, for every built-in linear model, dead time, missing
 measurement, error scale, half window and worker count.
 """
@@ -19,6 +19,7 @@ from conftest import compiled_window_costs, example_firstorder_input
 
 import dynia
 from dynia.engine import kernels
+from dynia.engine.kernels.sums import first_window, next_window
 from dynia.engine.noise import window_points
 from dynia.engine.windows import default_chunk_steps, moving_window, window_costs, window_halos
 from dynia.errors import ModelError, SettingsError
@@ -48,9 +49,9 @@ def _running_sums(rows, slots):
     sums = []
     for t in range(rows.shape[0] - slots + 1):
         if t:
-            kernels._next_window(rows, measured, t, slots, 0.0, high, low, total)
+            next_window(rows, measured, t, slots, 0.0, (high, low), total)
         else:
-            kernels._first_window(rows, measured, slots, high, low, total)
+            first_window(rows, measured, slots, (high, low), total)
         sums.append(total.copy())
     return np.array(sums)
 
@@ -166,11 +167,11 @@ def test_the_cost_of_a_window_does_not_depend_on_its_length():
     measured = np.ones(500)
     for slots in (3, 201):
         high, low, total = np.empty(3), np.empty(3), np.empty(3)
-        kernels._first_window(rows, measured, slots, high, low, total)
+        first_window(rows, measured, slots, (high, low), total)
         # Window 1 reads row 0 (leaving) and row ``slots`` (entering) only: every other row is poisoned.
         rows_copy = np.full_like(rows, np.nan)
         rows_copy[[0, slots]] = rows[[0, slots]]
-        present = kernels._next_window(rows_copy, measured, 1, slots, float(slots), high, low, total)
+        present = next_window(rows_copy, measured, 1, slots, float(slots), (high, low), total)
         assert present == slots
         np.testing.assert_allclose(total, rows[1 : slots + 1].sum(axis=0), rtol=4 * slots * 2.0**-53)
 

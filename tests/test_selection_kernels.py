@@ -14,6 +14,8 @@ import numpy as np
 import pytest
 
 from dynia.engine import kernels
+from dynia.engine.kernels import selection
+from dynia.engine.kernels.ranks import parameter_ranks, ranked_order_statistics
 
 pytestmark = pytest.mark.skipif(not kernels.AVAILABLE, reason="numba is not installed")
 
@@ -31,12 +33,12 @@ def _picked(sums, count, bracket):
     """The kernels' costs, threshold and behavioural set for one window's ``sums``, searched first in ``bracket``."""
     n_samples = sums.size
     cost = np.empty(n_samples)
-    kernels._costs(sums, PRESENT, cost)
+    selection.costs_from_sums(sums, PRESENT, cost)
     candidates = (np.empty(n_samples, dtype=np.int64), np.empty(n_samples))
-    found = kernels._candidates(cost, 0, 1, count, bracket[1], candidates)
-    threshold, _ = kernels._select_near(candidates[1], found, count - 1, bracket, np.empty(n_samples))
+    found = selection.find_candidates(cost, 0, 1, count, bracket[1], candidates)
+    threshold, _ = selection.select_near(candidates[1], found, count - 1, bracket, np.empty(n_samples))
     selected, chosen = np.empty(count, dtype=np.int64), np.empty(count)
-    kernels._behavioural(count, candidates, found, threshold, selected, chosen)
+    selection.behavioural(count, candidates, found, threshold, selected, chosen)
     return cost, threshold, selected, chosen
 
 
@@ -83,20 +85,20 @@ def test_the_quantile_near_a_bracket_is_the_sorted_value(seed, where):
     position = int(0.9 * n_samples)
     expected = np.sort(costs)[position]
     bracket = tuple(expected * np.array(BRACKETS.get(where, (np.nan, np.nan))))
-    value, density = kernels._select_near(costs, n_samples, position, bracket, np.empty(n_samples))
+    value, density = selection.select_near(costs, n_samples, position, bracket, np.empty(n_samples))
     assert value == expected
     assert density >= 0
 
 
 def test_the_next_bracket_follows_the_last_change_within_its_limits():
-    assert kernels._next_bracket(1.0, np.nan, 0.0) == (0.5, 1.5)  # the first window: widest
-    low, high = kernels._next_bracket(1.0, 0.98, 0.0)  # changed by 2 %: thrice that either side
+    assert selection.next_bracket(1.0, np.nan, 0.0) == (0.5, 1.5)  # the first window: widest
+    low, high = selection.next_bracket(1.0, 0.98, 0.0)  # changed by 2 %: thrice that either side
     assert low == pytest.approx(0.94) and high == pytest.approx(1.06)
-    low, high = kernels._next_bracket(1.0, 1.0, 0.0)  # unchanged: the narrowest
-    assert low == pytest.approx(1 - kernels._NARROWEST) and high == pytest.approx(1 + kernels._NARROWEST)
-    low, high = kernels._next_bracket(1.0, 0.9, 1000.0)  # 1000 values a unit there: 128 either side, not 0.3
+    low, high = selection.next_bracket(1.0, 1.0, 0.0)  # unchanged: the narrowest
+    assert low == pytest.approx(1 - selection.NARROWEST) and high == pytest.approx(1 + selection.NARROWEST)
+    low, high = selection.next_bracket(1.0, 0.9, 1000.0)  # 1000 values a unit there: 128 either side, not 0.3
     assert low == pytest.approx(1 - 0.128) and high == pytest.approx(1 + 0.128)
-    assert kernels._next_bracket(0.0, 1.0, 0.0) == (0.0, 0.0)
+    assert selection.next_bracket(0.0, 1.0, 0.0) == (0.0, 0.0)
 
 
 @pytest.mark.parametrize("seed", range(10))
@@ -105,7 +107,7 @@ def test_rank_bitset_order_statistics_are_the_sorted_values(seed):
     n_samples = int(rng.integers(2, 5000))
     # Parameter values with ties (a coarse grid), and sets of every size from one sample to all.
     column = np.round(rng.uniform(0, 3, n_samples), 1)
-    ranks, ordered = kernels.parameter_ranks(column[None, :])
+    ranks, ordered = parameter_ranks(column[None, :])
     words = np.zeros((n_samples + 63) // 64, dtype=np.uint64)
     for count in {1, 2, n_samples, int(rng.integers(1, n_samples + 1))}:
         selected = np.sort(rng.choice(n_samples, count, replace=False))
@@ -114,29 +116,27 @@ def test_rank_bitset_order_statistics_are_the_sorted_values(seed):
             positions = np.array(
                 [int(np.floor(lower_share * (count - 1))), int(np.floor((1 - lower_share) * (count - 1)))]
             )
-            lower, upper, middle = kernels._ranked_order_statistics(
-                ranks[0], ordered[0], selected, count, positions, words
-            )
+            lower, upper, middle = ranked_order_statistics(ranks[0], ordered[0], selected, count, positions, words)
             assert (lower, upper, middle) == (values[positions[0]], values[positions[1]], values[(count - 1) // 2])
             assert not words.any()  # cleared for the next window
 
 
 def test_parameter_ranks_are_the_stable_sort():
     columns = np.array([[0.2, 0.1, 0.2, 0.0], [1.0, 1.0, 1.0, 1.0]])
-    ranks, ordered = kernels.parameter_ranks(columns)
+    ranks, ordered = parameter_ranks(columns)
     np.testing.assert_array_equal(ranks, [[2, 1, 3, 0], [0, 1, 2, 3]])
     np.testing.assert_array_equal(ordered, np.sort(columns, axis=1))
 
 
 def test_a_crowd_of_equal_values_is_answered_without_selection():
     # Every sample simulating alike (a record resting at zero): the bracket holds them all, one value.
-    values = np.full(3 * kernels._CROWDED, 0.25)
+    values = np.full(3 * selection.CROWDED, 0.25)
     values[:5] = 0.1
     scratch = np.full(values.size, np.nan)
-    value, _ = kernels._select_near(values, values.size, 100, (0.2, 0.3), scratch)
+    value, _ = selection.select_near(values, values.size, 100, (0.2, 0.3), scratch)
     assert value == 0.25
     assert np.isnan(scratch).all()  # answered by the check, nothing copied
-    value, _ = kernels._select_near(values, values.size, 3, (0.05, 0.3), scratch)
+    value, _ = selection.select_near(values, values.size, 3, (0.05, 0.3), scratch)
     assert value == 0.1  # a crowd of two values still selects
 
 
@@ -147,5 +147,5 @@ def test_an_answer_just_outside_the_bracket_is_found_on_its_side(seed):
     ordered = np.sort(values)
     k = int(rng.integers(10, 490))
     for bracket in ((ordered[k - 6], ordered[k - 1]), (ordered[k + 1], ordered[k + 6])):
-        value, _ = kernels._select_near(values, values.size, k, bracket, np.empty(values.size))
+        value, _ = selection.select_near(values, values.size, k, bracket, np.empty(values.size))
         assert value == ordered[k]

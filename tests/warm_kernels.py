@@ -43,7 +43,7 @@ def _windows():
 
 
 def _fused_simulation():
-    """kernels.simulate_window_sums: a linear model's simulation fused with the window sums, as dynia.run does it."""
+    """kernels.fused: a linear model's simulation fused with the window sums, as dynia.run does it."""
     from dynia.engine.kernels import CompiledErrors
 
     for model, u, y, params in _records():
@@ -55,7 +55,7 @@ def _fused_simulation():
 
 
 def _simulation():
-    """kernels.simulate_errors: a linear model's outputs or error rows, for the fits and the other error sources."""
+    """kernels.simulate: a linear model's outputs or error rows, for the fits and the other error sources."""
     from dynia.engine.kernels import CompiledErrors
 
     for model, u, y, params in _records():

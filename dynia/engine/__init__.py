@@ -1,6 +1,7 @@
 """The DYNIA engine: moving windows, behavioural selection, flavours, CLD and compiled kernels.
 
 :mod:`~dynia.engine.windows` runs the moving window over time chunks,
+reading the absolute errors from a source (:mod:`~dynia.engine.error_sources`),
 :mod:`~dynia.engine.selection` picks each window's behavioural set,
 :mod:`~dynia.engine.flavours` turns it into limits, IC and CLD gradient,
 :mod:`~dynia.engine.cld` holds the likelihood and CLD arithmetic,
@@ -19,7 +20,7 @@ _NAMES = {
     "FLAVOURS": "flavours",
     "ENGINES": "flavours",
 }
-_SUBMODULES = frozenset({"cld", "flavours", "kernels", "noise", "selection", "windows"})
+_SUBMODULES = frozenset({"cld", "error_sources", "flavours", "kernels", "noise", "selection", "windows"})
 
 __all__ = ["moving_window", "FLAVOURS", "WINDOWS", "ENGINES"]
 

@@ -8,7 +8,7 @@ importance-weighted samples take :class:`ImportanceFlavour`; ``"mcat"`` is
 
 With ``ic_error`` every analysis also reads IC and limits off each batch of
 the samples (:func:`~dynia.settings.ic_batches`, :class:`BatchedFlavour`, and the compiled
-kernel :func:`dynia.engine.kernels.analyse_windows_batched`), from which
+kernel :func:`dynia.engine.kernels.batches.analyse_windows_batched`), from which
 :func:`monte_carlo_errors` gives their standard errors.
 """
 
@@ -267,10 +267,10 @@ class WeightedFlavour(ThesisFlavour):
 
 
 class CompiledFlavour:
-    """The thesis and weighted flavours on the compiled kernel :func:`dynia.engine.kernels.analyse_windows`.
+    """The thesis and weighted flavours on the compiled kernel :func:`~dynia.engine.kernels.readoff.analyse_windows`.
 
     With ``batches`` > 0 (see :func:`~dynia.settings.ic_batches`) on
-    :func:`dynia.engine.kernels.analyse_windows_batched`, which also reads IC and
+    :func:`~dynia.engine.kernels.batches.analyse_windows_batched`, which also reads IC and
     limits off each batch of samples, from the same window costs.
     """
 
@@ -312,7 +312,7 @@ class CompiledFlavour:
         """The :class:`WindowResults` of the windows whose error sums are ``sums`` (m, n_samples), time-major.
 
         ``present`` (m,) holds each window's measured points; the sums come
-        from :meth:`dynia.engine.kernels.CompiledErrors.window_sums` and are
+        from :meth:`dynia.engine.kernels.driver.CompiledErrors.window_sums` and are
         overwritten.
         """
         return self._analyse(sums, present, sums.shape[0], 0)
@@ -326,30 +326,21 @@ class CompiledFlavour:
             measured,
             m,
             slots,
-            self.count,
-            self.upper_position,
-            self.columns,
-            self.ranks,
-            self.ordered,
-            self.lows,
-            self.highs,
+            (self.count, self.upper_position),
+            (self.columns, self.ranks, self.ordered),
+            (self.lows, self.highs),
             self.n_bins,
-            self.positions,
-            self.levels,
-            self.weighted,
+            (self.positions, self.levels, self.weighted),
             self.min_points,
-            ic,
-            ci,
-            median,
-            gradient,
-            extreme_costs,
+            (ic, ci, median, gradient, extreme_costs),
         )
         # The square roots are taken here, as the numpy flavours take them.
         if not self.batches:
             kernels.analyse_windows(*common)
             return WindowResults(ic, ci, median, gradient, *np.sqrt(extreme_costs))
         batch_ic, batch_ci = np.empty((self.batches, n_params, m)), np.empty((self.batches, n_params, m, 2))
-        kernels.analyse_windows_batched(*common, self.batch_counts, self.batch_positions, batch_ic, batch_ci)
+        batches = (self.batch_counts, self.batch_positions)
+        kernels.analyse_windows_batched(*common, batches, (batch_ic, batch_ci))
         return WindowResults(ic, ci, median, gradient, *np.sqrt(extreme_costs), batch_ic, batch_ci)
 
 

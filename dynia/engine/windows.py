@@ -116,6 +116,7 @@ from ..io.arrays import ResultArrays, result_arrays
 from ..progress import progress_bar
 from ..result import DyniaResult
 from ..settings import FLAVOURS, WINDOWS, AnalysisSettings, RunRecord
+from .error_sources import ArrayErrors, ScaledErrors, StreamedErrors
 from .flavours import compiled_engine, flavour_analysis, monte_carlo_errors
 from .noise import add_record_errors, floor_fields, floor_settings, record_fit, record_noise_floor, window_points
 
@@ -128,9 +129,6 @@ __all__ = [
     "default_chunk_steps",
     "window_inputs",
     "window_mean",
-    "StreamedErrors",
-    "ArrayErrors",
-    "ScaledErrors",
     "error_scale",
     "blank_overflowed",
     "report_overflowed",
@@ -344,7 +342,7 @@ def analyse_stream(
     ``sim_chunks`` yields (n_samples, m) arrays in time order that together
     cover ``y``; otherwise as :func:`moving_window`, which wraps this.
     ``sim_chunks`` may instead be a source of absolute errors with a
-    ``rows(start, stop)`` method, such as ``dynia.engine.kernels.CompiledErrors``.
+    ``rows(start, stop)`` method, such as :class:`dynia.engine.kernels.CompiledErrors`.
     ``simulations(indices)`` yields the simulated output of the samples
     ``indices`` again, (len(indices), m) arrays in time order covering
     ``y``: the noise floor estimates the noise's autocorrelation from the
@@ -434,8 +432,9 @@ def analyse_errors(
         The record, checked (NaN marks a missing sample).
     errors : source of absolute errors
         ``rows(start, stop)`` and ``columns(start, stop)``, e.g.
-        :class:`ArrayErrors`, :class:`StreamedErrors` or
-        ``dynia.engine.kernels.CompiledErrors``, in time order.
+        :class:`~dynia.engine.error_sources.ArrayErrors`,
+        :class:`~dynia.engine.error_sources.StreamedErrors` or
+        :class:`dynia.engine.kernels.CompiledErrors`, in time order.
     params : ndarray (n_samples, n_params)
         The parameter sets analysed, inside ``bounds``.
     bounds : ndarray (n_params, 2)
@@ -598,6 +597,8 @@ def _windows_pass(errors, flavour_impl, compiled, output, settings, halos, chunk
 
     # A source that forms the window sums itself (the built-in linear models, compiled) hands over no error rows.
     fused = compiled and getattr(errors, "fused", False)
+    # The bar counts the windows analysed, as each chunk's results are written.
+    bar = progress_bar(progress, total=n_steps, desc="DYNIA windows", unit="window")
 
     def analyse_chunk(start, stop, window_errors, measured):
         if fused:
@@ -615,10 +616,9 @@ def _windows_pass(errors, flavour_impl, compiled, output, settings, halos, chunk
             chunks["ic_se"], chunks["ci_se"] = monte_carlo_errors(results.batch_ic, results.batch_ci)
         output.write(start, stop, chunks)
         best[start:stop], threshold[start:stop], upper[start:stop] = results.best, results.threshold, results.upper
+        if bar is not None:
+            bar.update(stop - start)
 
-    starts = range(0, n_steps, chunk_steps)
-    bar = progress_bar(progress, starts, desc="DYNIA windows", unit="chunk")
-    starts = starts if bar is None else bar
     # Errors are pulled in time order (a simulation stream is sequential); the
     # windows of each chunk are then analysed on a worker, while this thread
     # pulls the next chunk. One worker means one thread: the chunk is analysed
@@ -627,7 +627,7 @@ def _windows_pass(errors, flavour_impl, compiled, output, settings, halos, chunk
     # store's partial file).
     with _InlineExecutor() if workers == 1 else ThreadPoolExecutor(max_workers=workers) as pool, output:
         pending = deque()
-        for start in starts:
+        for start in range(0, n_steps, chunk_steps):
             stop = min(start + chunk_steps, n_steps)
             if fused:
                 inputs = errors.window_sums(start, stop, (before, after), totals)
@@ -644,6 +644,8 @@ def _windows_pass(errors, flavour_impl, compiled, output, settings, halos, chunk
                 write(pending.popleft())
         while pending:
             write(pending.popleft())
+    if bar is not None:
+        bar.close()
     return best, threshold, upper, totals, overflowed
 
 
@@ -685,66 +687,6 @@ class _InlineExecutor:
         return done
 
 
-class StreamedErrors:
-    """Absolute errors ``|y - sim|`` over a sliding range of time, pulled from simulation chunks.
-
-    Missing measurements (NaN in y) give an error of 0. Requests must move
-    forward in time; columns before a request are dropped.
-    """
-
-    def __init__(self, y, sim_chunks, n_samples):
-        self.y = y
-        self._chunks = iter(sim_chunks)
-        self._n_samples = n_samples
-        self._start = 0  # time of the first buffered column
-        self._buffer = np.zeros((n_samples, 0))
-
-    def columns(self, start, stop):
-        """Errors for times [start, stop), shape (n_samples, stop - start)."""
-        self._buffer = self._buffer[:, start - self._start :]
-        self._start = start
-        pieces = [self._buffer]
-        buffered = self._buffer.shape[1]
-        while self._start + buffered < stop:
-            chunk = self._next_chunk(self._start + buffered)
-            pieces.append(chunk)
-            buffered += chunk.shape[1]
-        if len(pieces) > 1:
-            self._buffer = np.concatenate(pieces, axis=1)
-        return self._buffer[:, : stop - start]
-
-    def rows(self, start, stop):
-        """Errors for times [start, stop), time-major: shape (stop - start, n_samples)."""
-        return np.ascontiguousarray(self.columns(start, stop).T)
-
-    def _next_chunk(self, at):
-        try:
-            sims = np.asarray(next(self._chunks), dtype=float)
-        except StopIteration:
-            raise SettingsError(f"the simulation ended at step {at}, before the {self.y.size} steps of y") from None
-        if sims.ndim != 2 or sims.shape[0] != self._n_samples or sims.shape[1] == 0:
-            raise SettingsError(
-                f"a simulation chunk at step {at} has shape {sims.shape}; expected ({self._n_samples}, m>0)"
-            )
-        if at + sims.shape[1] > self.y.size:
-            raise SettingsError(f"the simulation runs past the {self.y.size} steps of y")
-        return _absolute_errors(self.y[at : at + sims.shape[1]], sims, at)
-
-
-class ArrayErrors:
-    """The same interface over a whole (n_samples, n_steps) array of simulations."""
-
-    def __init__(self, y, sims):
-        self.y = y
-        self._sims = sims
-
-    def columns(self, start, stop):
-        return _absolute_errors(self.y[start:stop], self._sims[:, start:stop], start)
-
-    def rows(self, start, stop):
-        return np.ascontiguousarray(self.columns(start, stop).T)
-
-
 def error_scale(y):
     """The power of two every absolute error is multiplied by before costs are formed; 1.0 for most records.
 
@@ -765,26 +707,6 @@ def error_scale(y):
     if exponent < -SAFE_EXPONENT:
         return 2.0 ** (-SAFE_EXPONENT - exponent)
     return 1.0
-
-
-class ScaledErrors:
-    """An error source (``rows``; ``columns`` or ``window_sums`` where it has them), errors times ``scale``."""
-
-    def __init__(self, errors, scale):
-        self.y = errors.y
-        self.scale = scale
-        self._errors = errors
-        self.fused = getattr(errors, "fused", False)
-
-    def rows(self, start, stop):
-        return self._errors.rows(start, stop) * self.scale
-
-    def window_sums(self, start, stop, halos, totals, scale=1.0):
-        """The fused source's window sums (see ``CompiledErrors.window_sums``), its errors scaled."""
-        return self._errors.window_sums(start, stop, halos, totals, scale * self.scale)
-
-    def columns(self, start, stop):
-        return self._errors.columns(start, stop) * self.scale
 
 
 class OverflowedWindowsWarning(UserWarning):
@@ -829,20 +751,6 @@ def report_overflowed(overflowed, best, time, y):
     if np.isnan(best).all():
         raise DataError(what)
     warnings.warn(f"{what}; those windows are left without results", OverflowedWindowsWarning, stacklevel=4)
-
-
-def _absolute_errors(measured, sims, at):
-    """|measured - sims| with missing measurements (NaN) giving 0; rejects non-finite sims."""
-    bad = ~np.isfinite(sims)
-    if bad.any():
-        row, col = np.argwhere(bad)[0]
-        raise DataError(f"sims holds a non-finite value for sample {row} at step {at + col}")
-    errors = np.subtract(sims, measured)  # |s - y| == |y - s| bit for bit
-    np.abs(errors, out=errors)
-    missing = np.isnan(measured)
-    if missing.any():
-        errors[:, missing] = 0.0
-    return errors
 
 
 def window_inputs(errors, start, stop, before, after, n_steps, time_major=False):

@@ -1,0 +1,257 @@
+"""A window's behavioural set and order statistics, found by selection: no sort, which cannot change their value.
+
+A window's costs are ``(sums / present)^2`` (:func:`costs_from_sums`). Its
+behavioural threshold, the count-th smallest cost (and every Monte Carlo
+batch's), and the noise floor's quantile are found by selection among the
+few costs within a bracket around the previous window's value, which a
+counting pass finds (:func:`select_near`, moved outward when it misses);
+the behavioural set is then the first ``count`` of a stable sort of the
+costs, ties to the lowest indices (:func:`behavioural`). The limits and
+median of a small set are order statistics of its values
+(:func:`order_statistics`); a large set's are counted through the samples'
+ranks instead (:mod:`dynia.engine.kernels.ranks`).
+"""
+
+import numpy as np
+
+from .compile import inner, jit
+
+__all__ = ["costs_from_sums", "find_candidates", "select_near", "next_bracket", "behavioural", "order_statistics"]
+
+# A window's behavioural threshold and quantile are searched first within a bracket around the previous
+# window's (select_near): its half-width thrice the last change, at least NARROWEST of the value, at most
+# WIDEST, and holding about BRACKET_RANKS values either side at the last window's density of values there.
+# A miss moves the bracket and widens it fourfold, RETRIES times, each a counting pass; the bench's record and
+# thesis example 1 need 0.1 to 1 such moves a window on average.
+NARROWEST, WIDEST = 0.002, 0.5
+BRACKET_RANKS = 128
+RETRIES = 3
+# More values than this within a bracket are first checked for being all the same, which no selection then needs.
+CROWDED = 1024
+
+# Order statistics this close to either end (a batch's limits: the 3rd smallest and 4th largest of 50 at 90 %)
+# are kept in a short sorted buffer in one pass, cheaper than a selection's unpredictable branches.
+_FEW = 12
+
+
+@jit
+def costs_from_sums(sums, present, cost):
+    """``cost`` = (sums / present)^2, a window's costs.
+
+    A pass of its own, which vectorises: it streams the sums from memory,
+    and the passes that pick candidates then read the costs from cache.
+    """
+    for s in range(cost.shape[0]):
+        mae = sums[s] / present
+        cost[s] = mae * mae
+
+
+@inner
+def _select(values, length, k):
+    """Rearrange ``values[:length]`` so that position k holds its k-th smallest; return it.
+
+    Hoare partitioning around a median of three: equal values are spread
+    over both sides, so long runs of ties (all samples simulating 0) stay
+    O(length).
+    """
+    low, high = 0, length - 1
+    while high > low:
+        middle = (low + high) // 2
+        a, b, d = values[low], values[middle], values[high]
+        pivot = max(min(a, b), min(max(a, b), d))
+        i, j = low, high
+        while i <= j:
+            while values[i] < pivot:
+                i += 1
+            while values[j] > pivot:
+                j -= 1
+            if i <= j:
+                values[i], values[j] = values[j], values[i]
+                i += 1
+                j -= 1
+        if k <= j:
+            high = j
+        elif k >= i:
+            low = i
+        else:
+            break
+    return values[k]
+
+
+@jit
+def find_candidates(cost, first, stride, count, bound, candidates):
+    """Indices (ascending) of the samples first, first + stride, ... whose cost is at or below ``bound``.
+
+    Written into ``candidates`` = (indices, their costs); returns how many. ``bound`` is a guess at
+    or above the count-th smallest of these costs (a bracket's top): when
+    at least ``count`` costs lie at or below it, the behavioural set is
+    among them; otherwise (or when ``bound`` is NaN) every one of the
+    samples is a candidate.
+    """
+    n = cost.shape[0]
+    indices, costs = candidates
+    found = 0
+    if bound == bound:  # not NaN
+        # Branch-free: every index is written, and kept (by counting it) when its cost is at or below the bound.
+        for s in range(first, n, stride):
+            indices[found] = s
+            costs[found] = cost[s]
+            found += cost[s] <= bound
+    if found < count:
+        found = 0
+        for s in range(first, n, stride):
+            indices[found] = s
+            costs[found] = cost[s]
+            found += 1
+    return found
+
+
+@jit
+def select_near(values, n, k, bracket, scratch):
+    """The k-th smallest (0-based) of ``values[:n]``, searched first within ``bracket`` = (low, high).
+
+    A pass counts the values below and within the bracket; when the answer
+    lies within, the few values there are copied to ``scratch`` and
+    selected. Otherwise the bracket moves to the side of the answer,
+    fourfold wider, up to ``RETRIES - 1`` times, then reaches to that
+    side's infinity, so the answer is always found (a NaN bracket starts
+    there). Returns it and the values' density near it, the count within
+    the last bracket over its width (0 when that is infinite or none), for
+    :func:`next_bracket`.
+    """
+    low, high = bracket
+    if not low <= high:
+        low, high = -np.inf, np.inf
+    for attempt in range(RETRIES + 1):
+        below = 0
+        inside = 0
+        for i in range(n):
+            below += values[i] < low
+            inside += (values[i] >= low) & (values[i] <= high)
+        if below <= k < below + inside:
+            break
+        width = max(high - low, NARROWEST * max(abs(low), abs(high)))
+        if k < below:
+            low, high = (low - 4 * width if width > 0 and attempt < RETRIES - 1 else -np.inf), low
+        else:
+            low, high = high, (high + 4 * width if width > 0 and attempt < RETRIES - 1 else np.inf)
+    density = inside / (high - low) if high > low else 0.0
+    if inside > CROWDED:
+        # Every value within may be the same (samples that simulate alike, as all do once a record rests at zero).
+        smallest, largest = np.inf, -np.inf
+        for i in range(n):
+            within = (values[i] >= low) & (values[i] <= high)
+            smallest = min(smallest, values[i] if within else np.inf)
+            largest = max(largest, values[i] if within else -np.inf)
+        if smallest == largest:
+            return smallest, density
+    taken = 0
+    # Branch-free: every value is written, and kept (by counting it) when it is within the bracket.
+    for i in range(n):
+        scratch[taken] = values[i]
+        taken += (values[i] >= low) & (values[i] <= high)
+    return _select(scratch, taken, k - below), density
+
+
+@jit
+def next_bracket(value, previous, density):
+    """(low, high) in which to look first for the next window's value, from ``value`` and the last two.
+
+    ``density`` is :func:`select_near`'s, values per unit near ``value``.
+    """
+    change = abs(value - previous)
+    width = max(3.0 * change, NARROWEST * value) if change == change else WIDEST * value
+    if density > 0:
+        width = min(width, BRACKET_RANKS / density)
+    width = min(width, WIDEST * value)
+    return value - width, value + width
+
+
+@jit
+def behavioural(count, candidates, found, threshold, selected, chosen):
+    """Indices (ascending) of the first ``count`` of a stable ascending sort of the costs, into ``selected``.
+
+    ``candidates`` = (indices, costs): ``indices[:found]`` (ascending) hold
+    every index of a cost at or below ``threshold``, the count-th smallest
+    cost, and ``costs`` theirs, side by side so that they are read in order.
+    Of the costs tied with the threshold, the lowest indices are taken.
+    Their costs go to ``chosen``, in the same order.
+    """
+    indices, costs = candidates
+    below = 0
+    for i in range(found):
+        below += costs[i] < threshold
+    ties = count - below
+    taken = 0
+    for i in range(found):
+        s = indices[i]
+        value = costs[i]
+        if value < threshold or (value == threshold and ties > 0):
+            if value == threshold:
+                ties -= 1
+            selected[taken] = s
+            chosen[taken] = value
+            taken += 1
+            if taken == count:  # the costs below the threshold are among them: no later one can be
+                break
+
+
+@inner
+def _keep(buffer, size, seen, value, larger):
+    """Insert ``value``, the ``seen``-th value met, into ``buffer[:size]``: the smallest met so far, ascending.
+
+    With ``larger`` the largest met so far, descending. Returns nothing; the
+    value is dropped when the buffer is full and it would come last.
+    """
+    if seen < size or (value > buffer[size - 1] if larger else value < buffer[size - 1]):
+        j = min(seen, size - 1) - 1
+        while j >= 0 and (buffer[j] < value if larger else buffer[j] > value):
+            buffer[j + 1] = buffer[j]
+            j -= 1
+        buffer[j + 1] = value
+
+
+@inner
+def _extreme_order_statistics(values, count, first, last, scratch):
+    """The ``first``-th smallest and ``last``-th smallest of ``values[:count]``, both within ``_FEW`` of an end.
+
+    One pass keeps the first + 1 smallest values (ascending, in
+    ``scratch[:first + 1]``) and the count - last largest (descending, after
+    them); returns (lower, upper, NaN) as :func:`order_statistics` does.
+    """
+    small, large = first + 1, count - last
+    low = scratch[:small]
+    high = scratch[small : small + large]
+    for i in range(count):
+        _keep(low, small, i, values[i], False)
+        _keep(high, large, i, values[i], True)
+    return low[small - 1], high[large - 1], np.nan
+
+
+@inner
+def order_statistics(values, count, positions, with_median, scratch):
+    """The ``positions[0]``-th and ``positions[1]``-th smallest of ``values[:count]``, and the median's if asked.
+
+    The median's position is ``(count - 1) // 2``, between the two (NaN when
+    not asked). Found in one copy, ``scratch``, so that ``values`` stays as
+    it is: the selection leaves nothing larger before its answer and
+    nothing smaller after, so the upper is searched after the lower only, and
+    the median between the two.
+    """
+    first, last = positions[0], positions[1]
+    if not with_median and first < _FEW and count - 1 - last < _FEW:
+        return _extreme_order_statistics(values, count, first, last, scratch)
+    for i in range(count):
+        scratch[i] = values[i]
+    lower = _select(scratch, count, first)
+    upper = lower if last == first else _select(scratch[first + 1 :], count - first - 1, last - first - 1)
+    middle = np.nan
+    if with_median:
+        k = (count - 1) // 2
+        if k == first:
+            middle = lower
+        elif k == last:
+            middle = upper
+        else:
+            middle = _select(scratch[first + 1 : last], last - first - 1, k - first - 1)
+    return lower, upper, middle

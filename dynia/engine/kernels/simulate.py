@@ -1,0 +1,281 @@
+"""The linear models' recursion, compiled: every sample's outputs or absolute errors, a block of steps at a time.
+
+A discretised linear model (``dynia.models.linear``) reaches the kernels as
+a ``recursion`` = (coefficients, delays, terms): ``coefficients`` =
+(phi, gamma_now, gamma_prev, c, feed_now, feed_prev), every sample's
+(phi (n_states, n_states, n_samples), gamma_now, gamma_prev and c
+(n_states, n_samples), feed_now and feed_prev (n_samples,)); ``delays`` one
+dead time in steps, or one per sample; ``terms`` = (state_terms,
+output_terms), (n_states, n_states + 2) and (n_states + 2,), flagging the
+terms the numpy path keeps (sources: the states, then u[k-d], then
+u[k-d-1]). A lag model (one state that carries over, seen in the output,
+one dead time) reaches them as a ``lag`` = (coefficients, delay, flags):
+its one state's coefficients (phi, gamma_now, gamma_prev and c of
+(n_samples,)), its dead time and (now_out, prev_out, now_state,
+prev_state), whether u[k-d] and u[k-d-1] enter the output and the state.
+Which form a model takes, and so which kernels, is decided in one place:
+:func:`dynia.engine.kernels.driver.recursion_kernels`.
+
+Products and sums run term by term in the numpy path's order (LLVM does
+not fuse them into FMAs without fast-math, which stays off), so the
+outputs equal ``model.simulate``'s bit for bit. The loops run over time
+outside and samples inside, as the numpy path does, so each pass is a
+contiguous vector loop.
+"""
+
+import numpy as np
+
+from ...models.base import FLUSH_BELOW
+from .compile import inner, jit
+
+__all__ = [
+    "general_errors",
+    "simulate_lag",
+    "lag_states",
+    "combine",
+    "coefficient_tables",
+    "delayed_inputs",
+    "absolute_errors",
+]
+
+
+@inner
+def _add_term(target, coefficient, source, first, start, stop):
+    """target = coefficient*source (first term) or target += coefficient*source, over [start, stop)."""
+    if first:
+        for s in range(start, stop):
+            target[s] = coefficient[s] * source[s]
+    else:
+        for s in range(start, stop):
+            target[s] = target[s] + coefficient[s] * source[s]
+
+
+@inner
+def combine(target, coefficients, used, sources, start, stop):
+    """target = sum of coefficients[term] * sources[term] over the used terms, in term order."""
+    first = True
+    for term in range(used.shape[0]):
+        if used[term]:
+            _add_term(target, coefficients[term], sources[term], first, start, stop)
+            first = False
+    if first:
+        target[start:stop] = 0.0
+
+
+@jit
+def general_errors(recursion, padded_input, measured, first_step, last_step, state, errors, samples, outputs):
+    """Advance samples [lo, hi) = ``samples`` of any linear ``recursion`` through steps [first_step, first_step + m).
+
+    ``state`` (n_states, n_samples) holds the state at ``first_step`` and is
+    left at the state of the step after the block (not advanced past
+    ``last_step``, the record's last step, where it could only overflow).
+    ``errors`` (m, n_samples) receives ``|sim - measured|``, 0 where the
+    measurement is NaN, or with ``outputs`` the outputs themselves; term by
+    term, as the numpy path. Returns the first (step, sample) whose output
+    is not finite, or (-1, -1).
+    """
+    coefficients, delays, terms = recursion
+    state_terms, output_terms = terms
+    n_states, n_samples = coefficients[3].shape
+    lo, hi = samples
+    output_coefficients, state_coefficients = coefficient_tables(coefficients)
+    sources = np.empty((n_states + 2, n_samples))
+    upcoming = np.empty((n_states, n_samples))
+    output = np.empty(n_samples)
+    _copy_states(sources, state, n_states, lo, hi)
+    bad_step, bad_sample = -1, -1
+    for j in range(errors.shape[0]):
+        k = first_step + j
+        delayed_inputs((sources[n_states], sources[n_states + 1]), padded_input, delays, k, lo, hi)
+        combine(output, output_coefficients, output_terms, sources, lo, hi)
+        _output_row(errors[j], output, measured[j], lo, hi, outputs)
+        if bad_step < 0:
+            for s in range(lo, hi):
+                if not np.isfinite(output[s]):
+                    bad_step, bad_sample = k, s
+                    break
+        if k == last_step:
+            break
+        for i in range(n_states):
+            combine(upcoming[i], state_coefficients[i], state_terms[i], sources, lo, hi)
+        for i in range(n_states):
+            for s in range(lo, hi):
+                x = upcoming[i, s]
+                sources[i, s] = x if abs(x) >= FLUSH_BELOW else 0.0
+    _copy_states(state, sources, n_states, lo, hi)
+    return bad_step, bad_sample
+
+
+@inner
+def _copy_states(target, source, n_states, lo, hi):
+    """target[:n_states, lo:hi] = source[:n_states, lo:hi], element by element: no shape check to compile."""
+    for i in range(n_states):
+        for s in range(lo, hi):
+            target[i, s] = source[i, s]
+
+
+@inner
+def coefficient_tables(coefficients):
+    """The recursion's coefficients per source (the states, then u[k-d], then u[k-d-1]), every sample's.
+
+    Returns the output's (n_states + 2, n_samples) and each next state's
+    (n_states, n_states + 2, n_samples), the tables :func:`combine` sums.
+    """
+    phi, gamma_now, gamma_prev, c, feed_now, feed_prev = coefficients
+    n_states, n_samples = c.shape
+    output_coefficients = np.empty((n_states + 2, n_samples))
+    state_coefficients = np.empty((n_states, n_states + 2, n_samples))
+    # Element by element: row assignments would compile numba's shape check and its message, seconds of a first run.
+    for s in range(n_samples):
+        for i in range(n_states):
+            output_coefficients[i, s] = c[i, s]
+            for j in range(n_states):
+                state_coefficients[i, j, s] = phi[i, j, s]
+            state_coefficients[i, n_states, s] = gamma_now[i, s]
+            state_coefficients[i, n_states + 1, s] = gamma_prev[i, s]
+        output_coefficients[n_states, s] = feed_now[s]
+        output_coefficients[n_states + 1, s] = feed_prev[s]
+    return output_coefficients, state_coefficients
+
+
+@inner
+def delayed_inputs(delayed, padded_input, delays, k, lo, hi):
+    """u[k-d] and u[k-d-1] into ``delayed`` = (now, previous) for samples [lo, hi): one dead time, or one each."""
+    now, previous = delayed
+    if delays.shape[0] == 1:
+        now[lo:hi] = padded_input[max(k - delays[0], -1) + 1]
+        previous[lo:hi] = padded_input[max(k - delays[0] - 1, -1) + 1]
+    else:
+        for s in range(lo, hi):
+            now[s] = padded_input[max(k - delays[s], -1) + 1]
+            previous[s] = padded_input[max(k - delays[s] - 1, -1) + 1]
+
+
+@inner
+def _output_row(row, output, y, lo, hi, outputs):
+    """``row[lo:hi]`` = the ``output`` itself, or (without ``outputs``) its error (see :func:`absolute_errors`)."""
+    if outputs:
+        for s in range(lo, hi):
+            row[s] = output[s]
+    else:
+        absolute_errors(row, output, y, lo, hi)
+
+
+@inner
+def absolute_errors(row, output, y, lo, hi):
+    """``row[lo:hi]`` = ``|output - y|``, or 0 where the measurement ``y`` is missing (NaN)."""
+    if np.isnan(y):
+        row[lo:hi] = 0.0
+    else:
+        for s in range(lo, hi):
+            row[s] = abs(output[s] - y)
+
+
+@jit
+def simulate_lag(lag, padded_input, measured, first_step, last_step, state, errors, samples, outputs):
+    """:func:`general_errors` for a ``lag`` (one state, one common dead time), fused; ``state`` is (1, n_samples).
+
+    The same products and sums in the same order, with each term present
+    exactly when the general kernel uses it; one pass over the samples per
+    step instead of one per term. When every sample's pole underflows to 0
+    (a time constant far below dt) the general loop, which skips unused
+    terms as the numpy path does, gives the same numbers as this one, which
+    assumes the state carries over.
+    """
+    coefficients, delay, flags = lag
+    phi, gamma_now, gamma_prev, c, feed_now, feed_prev = coefficients
+    now_out, prev_out, now_state, prev_state = flags
+    lo, hi = samples
+    current = state[0]
+    bad_step, bad_sample = -1, -1
+    for j in range(errors.shape[0]):
+        k = first_step + j
+        now = padded_input[max(k - delay, -1) + 1]
+        previous = padded_input[max(k - delay - 1, -1) + 1]
+        y = measured[j]
+        missing = np.isnan(y)
+        row = errors[j]
+        advance = k != last_step
+        finite = True
+        for s in range(lo, hi):
+            x = current[s]
+            output = c[s] * x
+            if now_out:
+                output = output + feed_now[s] * now
+            if prev_out:
+                output = output + feed_prev[s] * previous
+            finite &= np.isfinite(output)
+            row[s] = output if outputs else (0.0 if missing else abs(output - y))
+            if advance:
+                x = phi[s] * x
+                if now_state:
+                    x = x + gamma_now[s] * now
+                if prev_state:
+                    x = x + gamma_prev[s] * previous
+                current[s] = x if abs(x) >= FLUSH_BELOW else 0.0
+        if not finite and bad_step < 0:
+            bad_step = k
+            # The row holds the output or |output - y|, non-finite exactly where the
+            # output is, unless y is missing; then the sample is not known (-1).
+            for s in range(lo, hi):
+                if not np.isfinite(row[s]):
+                    bad_sample = s
+                    break
+        if not advance:
+            break
+    return bad_step, bad_sample
+
+
+# Samples the state pass of a lag model runs through every step at a time: their eight arrays (2 kB each) stay in
+# the L1 cache.
+_STATE_BLOCK = 256
+
+
+@jit
+def lag_states(lag, record, scale, steps, state, totals, states):
+    """A ``lag``'s recursions through the ``record`` = (padded_input, y), without window sums: states and totals.
+
+    Every sample runs from ``state`` (n_samples,), its state at step 0, to
+    the end; ``states[j]`` receives its state at step ``steps[j]``
+    (ascending), and ``totals`` adds each step's absolute error (0 where
+    ``y`` is missing) times ``scale``, in time order. The products and sums
+    are those of :func:`simulate_lag`, term by term and in the same order, so
+    the states and totals are bit for bit those of :func:`dynia.run`. A
+    block of samples at a time runs through every step, in the L1 cache and
+    vectorised: the least work of an analysis.
+    """
+    coefficients, delay, flags = lag
+    padded_input, y = record
+    phi, gamma_now, gamma_prev, c, feed_now, feed_prev = coefficients
+    now_out, prev_out, now_state, prev_state = flags
+    n_samples = state.shape[0]
+    for lo in range(0, n_samples, _STATE_BLOCK):
+        hi = min(lo + _STATE_BLOCK, n_samples)
+        x, total = state[lo:hi].copy(), totals[lo:hi].copy()
+        # Views from the block's start: the loop over them vectorises.
+        block_phi, block_now, block_previous = phi[lo:hi], gamma_now[lo:hi], gamma_prev[lo:hi]
+        block_c, block_feed_now, block_feed_previous = c[lo:hi], feed_now[lo:hi], feed_prev[lo:hi]
+        kept = 0
+        for e in range(y.shape[0]):
+            while kept < steps.shape[0] and steps[kept] == e:
+                states[kept, lo:hi] = x
+                kept += 1
+            now = padded_input[max(e - delay, -1) + 1]
+            previous = padded_input[max(e - delay - 1, -1) + 1]
+            y_e = y[e]
+            missing = np.isnan(y_e)
+            for i in range(hi - lo):
+                output = block_c[i] * x[i]
+                if now_out:
+                    output = output + block_feed_now[i] * now
+                if prev_out:
+                    output = output + block_feed_previous[i] * previous
+                total[i] = total[i] + (0.0 if missing else abs(output - y_e)) * scale
+                # Also past the record's last step, whose state is never kept.
+                following = block_phi[i] * x[i]
+                if now_state:
+                    following = following + block_now[i] * now
+                if prev_state:
+                    following = following + block_previous[i] * previous
+                x[i] = following if abs(following) >= FLUSH_BELOW else 0.0
+        totals[lo:hi] = total
