@@ -10,6 +10,7 @@ hence the same results, for every built-in linear model, dead time, missing
 measurement, error scale, half window and worker count.
 """
 
+import os
 from fractions import Fraction
 
 import control
@@ -217,3 +218,28 @@ def test_the_kernels_outputs_are_the_models_own_bit_for_bit(model, bounds, x0):
     used.rows(0, 5)
     with pytest.raises(SettingsError, match="outputs were requested after rows"):
         used.output_chunks(37)
+
+
+def test_a_cached_kernel_older_than_any_source_of_the_package_is_dropped(tmp_path, monkeypatch):
+    """numba checks only the kernel's own file: an edit of a helper's module must still recompile the kernel."""
+    from dynia.engine.kernels.compile import drop_stale_cache
+
+    package, elsewhere = tmp_path / "kernels", tmp_path / "numba-cache"
+    (package / "__pycache__").mkdir(parents=True)
+    for name in ("readoff.py", "sums.py"):
+        (package / name).write_text("")
+    mapped = elsewhere / package.resolve().relative_to(package.resolve().anchor)
+    mapped.mkdir(parents=True)
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(elsewhere))
+    stale = [package / "__pycache__" / "readoff.analyse-1.nbi", mapped / "readoff.analyse-1.py311.1.nbc"]
+    fresh = [package / "__pycache__" / "readoff.analyse-2.nbi", mapped / "readoff.analyse-2.py311.1.nbc"]
+    for path in stale + fresh:
+        path.write_text("")
+    os.utime(package / "readoff.py", (1000, 1000))
+    os.utime(package / "sums.py", (3000, 3000))  # the helper's module edited after the kernel was cached
+    for path in stale:
+        os.utime(path, (2000, 2000))
+    for path in fresh:
+        os.utime(path, (4000, 4000))
+    assert drop_stale_cache(package) == 2
+    assert not any(path.exists() for path in stale) and all(path.exists() for path in fresh)

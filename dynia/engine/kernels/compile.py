@@ -6,10 +6,14 @@ leave the function as it is, and :data:`AVAILABLE` says so: the engine then
 runs the numpy path.
 
 numba's cache notices a change of the file that holds the kernel it loads,
-not of the files whose helpers that kernel calls: after editing a module of
-this package, delete the cache (the ``__pycache__/*.nbi`` and ``*.nbc``
-files next to it, or those under ``NUMBA_CACHE_DIR``) before running again.
+not of the files whose helpers that kernel calls: a kernel of ``readoff.py``
+cached before ``sums.py`` was edited would go on running the old sums. So on
+import :func:`drop_stale_cache` deletes every cached kernel of the package
+older than its newest source file, and they compile afresh.
 """
+
+import os
+from pathlib import Path
 
 try:
     import numba
@@ -18,7 +22,30 @@ except ImportError:  # the numpy path serves
 
 AVAILABLE = numba is not None
 
-__all__ = ["AVAILABLE", "jit", "inner"]
+__all__ = ["AVAILABLE", "jit", "inner", "drop_stale_cache"]
+
+
+def drop_stale_cache(package=Path(__file__).parent):
+    """Delete the cached kernels of ``package`` written before its newest source file changed.
+
+    numba caches next to the sources (``__pycache__``), or under ``NUMBA_CACHE_DIR`` at the sources' absolute path
+    when that is set. An installed package's sources do not change after the install, so this finds nothing to do.
+    Returns the number of files deleted.
+    """
+    newest = max(source.stat().st_mtime for source in package.glob("*.py"))
+    folders = [package / "__pycache__"]
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        folders.append(Path(os.environ["NUMBA_CACHE_DIR"]) / package.resolve().relative_to(package.resolve().anchor))
+    deleted = 0
+    for folder in folders:
+        for cached in [*folder.glob("*.nbi"), *folder.glob("*.nbc")]:
+            try:
+                if cached.stat().st_mtime < newest:
+                    cached.unlink()
+                    deleted += 1
+            except OSError:  # gone already (another process dropped it), or not ours to delete: numba copes
+                pass
+    return deleted
 
 
 def jit(function, **options):
@@ -38,3 +65,7 @@ def inner(function):
     Each wrapper is compiled with the function; leaving them out takes about a seventh off a first run's compile.
     """
     return jit(function, no_cpython_wrapper=True, no_cfunc_wrapper=True)
+
+
+if AVAILABLE:
+    drop_stale_cache()
