@@ -78,6 +78,13 @@ def stored_record(steps=120, seed=3):
     return u, y
 
 
+def example1_record(steps=500, seed=0, noise=0.5):
+    """Thesis example 1 simulated by dynia.models: K=2, T=3 on the thesis's input, white noise of SD ``noise``."""
+    u = dynia.synthetic.example_firstorder_input(steps)
+    y = dynia.models.FirstOrder().simulate([[2.0, 3.0]], u)[0] + np.random.default_rng(seed).normal(0, noise, steps)
+    return u, y
+
+
 def example_firstorder_input(steps=500):
     """The input of example_firstorder.m, 0-based: 35, with two dips to 10 and a final 0."""
     return dynia.synthetic.example_firstorder_input(steps)

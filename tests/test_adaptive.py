@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from conftest import example1_record
 
 import dynia
 from dynia.adaptive import BoxMixture
@@ -24,15 +25,12 @@ def test_box_mixture_density_is_a_density_and_weights_undo_it():
 
 
 @pytest.fixture(scope="module")
-def example1():
-    u = dynia.synthetic.example_firstorder_input()
-    rng = np.random.default_rng(0)
-    y = FirstOrder().simulate([[2.0, 3.0]], u)[0] + rng.normal(0, 0.5, u.size)
-    return u, y
+def record():
+    return example1_record(seed=0)
 
 
-def test_equal_weights_select_the_same_set_and_limits_one_position_apart_at_most(example1):
-    u, y = example1
+def test_equal_weights_select_the_same_set_and_limits_one_position_apart_at_most(record):
+    u, y = record
     params = np.random.default_rng(1).uniform(0, 7, (4000, 2))
     sims = FirstOrder().simulate(params, u)
     # Importance weights run on numpy: the plain run on numpy too, whose costs window_costs gives bit for bit.
@@ -52,8 +50,8 @@ def test_equal_weights_select_the_same_set_and_limits_one_position_apart_at_most
             np.testing.assert_array_equal(plain.ci[p, :, side], ordered[:, position])
 
 
-def test_importance_weights_recover_the_uniform_result_from_another_proposal(example1):
-    u, y = example1
+def test_importance_weights_recover_the_uniform_result_from_another_proposal(record):
+    u, y = record
     rng = np.random.default_rng(2)
     uniform = rng.uniform(0, 7, (20_000, 2))
     reference = dynia.moving_window(y, FirstOrder().simulate(uniform, u), uniform, [[0, 7], [0, 7]], n=10)
@@ -76,8 +74,8 @@ def test_importance_weights_recover_the_uniform_result_from_another_proposal(exa
 
 
 @pytest.mark.parametrize("scheme", ["iis", "de"])
-def test_adaptive_runs_spend_exactly_their_budget_and_repeat_with_the_seed(example1, scheme):
-    u, y = example1
+def test_adaptive_runs_spend_exactly_their_budget_and_repeat_with_the_seed(record, scheme):
+    u, y = record
     runs = [
         dynia.run(
             u, y, FirstOrder(), {"K": (0, 7), "T": (0, 7)}, sampler=scheme, n_samples=3000, n=10, percentage=1, rng=5
@@ -89,8 +87,8 @@ def test_adaptive_runs_spend_exactly_their_budget_and_repeat_with_the_seed(examp
     assert runs[0].samples.shape[0] == runs[0].run.weights.size <= 3000
 
 
-def test_iterated_importance_sampling_beats_uniform_at_the_same_budget(example1):
-    u, y = example1
+def test_iterated_importance_sampling_beats_uniform_at_the_same_budget(record):
+    u, y = record
     bounds = {"K": (0, 7), "T": (0, 7)}
     reference = dynia.run(u, y, FirstOrder(), bounds, n_samples=100_000, n=10, percentage=0.5, rng=1)
     uniform = dynia.run(u, y, FirstOrder(), bounds, n_samples=5000, n=10, percentage=0.5, rng=2)
@@ -115,7 +113,7 @@ def test_weights_are_checked():
         dynia.moving_window(y, sims, params, [[0, 1]], n=1, weights=np.ones(10), flavour="mcat")
 
 
-def test_de_says_how_many_evaluations_it_needs(example1):
-    u, y = example1
+def test_de_says_how_many_evaluations_it_needs(record):
+    u, y = record
     with pytest.raises(ValueError, match=r"needs at least \d+ evaluations for 23 blocks"):
         dynia.run(u, y, FirstOrder(), {"K": (0, 7), "T": (0, 7)}, sampler="de", n_samples=500, n=10, percentage=1)

@@ -7,6 +7,7 @@ import sys
 import control
 import numpy as np
 import pytest
+from conftest import example1_record
 from numpy.testing import assert_array_equal
 
 import dynia
@@ -33,9 +34,7 @@ def client():
 @pytest.fixture(scope="module")
 def record():
     """Thesis example 1 shortened: K=2, T=3, noise 0.5."""
-    u = dynia.synthetic.example_firstorder_input(STEPS)
-    y = FirstOrder().simulate([[2.0, 3.0]], u)[0] + np.random.default_rng(7).normal(0, 0.5, STEPS)
-    return u, y
+    return example1_record(STEPS, seed=7)
 
 
 def assert_same(result, reference):
