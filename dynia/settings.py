@@ -69,7 +69,7 @@ SAMPLERS = ("uniform", "lhs", "sobol")
 ADAPTIVE_SAMPLERS = ("iis", "de")
 FLAVOURS = ("thesis", "mcat", "weighted")
 WINDOWS = ("centred", "trailing")
-ENGINES = ("auto", "numba", "numpy")
+ENGINES = ("auto", "numba", "numpy", "twin")
 X0 = ("zero", "steady")
 DTYPES = ("float64", "float32")
 # A finer CLD-gradient grid only spreads the behavioural set (a few hundred
@@ -228,9 +228,11 @@ class AnalysisSettings:
     window : {"centred", "trailing"}, default "centred"
         Where a window lies: centred on its step, or trailing it (the 2n+1
         steps up to the step, as an online analysis sees them).
-    engine : {"auto", "numba", "numpy"}, default "auto"
-        The compiled kernels (numba), plain numpy, or numba where it can;
-        results agree to rounding (:mod:`dynia.engine.kernels`).
+    engine : {"auto", "numba", "numpy", "twin"}, default "auto"
+        The compiled kernels (numba), plain numpy, the kernels' numpy twin
+        (:mod:`dynia.engine.twin`: their numbers bit for bit, nothing to
+        compile), or the twin for a small run and numba where it can;
+        numba and numpy agree to rounding (:mod:`dynia.engine.kernels`).
     workers : int or None, default None
         Threads (None: every core), at most :data:`MAX_WORKERS`. Results do
         not depend on it.
@@ -312,7 +314,10 @@ class AnalysisSettings:
     )
     engine: str = dataclasses.field(
         default="auto",
-        metadata=dict(help="the compiled kernels (numba), plain numpy, or numba where it can", choices=ENGINES),
+        metadata=dict(
+            help="the compiled kernels (numba), plain numpy, their numpy twin, or the twin or numba where it can",
+            choices=ENGINES,
+        ),
     )
     workers: int | None = dataclasses.field(default=None, metadata=dict(help="threads (None: every core)", metavar="N"))
     dt: float | None = dataclasses.field(
