@@ -93,13 +93,14 @@ def chosen_engine(settings, params, n_steps, weights=None, model=None):
     """The engine that analyses a run, as its result records it: "twin", "numba" or "numpy".
 
     "auto" takes the numpy twin of the compiled kernels (:mod:`dynia.engine.twin`), which gives their numbers and
-    compiles nothing, for a run of at most :data:`~dynia.engine.twin.AUTO_MOST_VALUES` samples x steps that it
-    covers; otherwise the compiled kernels where they can (:func:`compiled_engine`), else numpy. "twin" refuses a run
-    the twin does not cover. ``params`` (n_samples, n_params) are the sets analysed, ``model`` the model a run
-    simulates (none for given simulations or errors).
+    compiles nothing, for a small run that it covers (at most :data:`~dynia.engine.twin.AUTO_MOST_VALUES` samples x
+    steps and :data:`~dynia.engine.twin.AUTO_MOST_STEPS` steps); otherwise the compiled kernels where they can
+    (:func:`compiled_engine`), else numpy. "twin" refuses a run the twin does not cover. ``params`` (n_samples,
+    n_params) are the sets analysed, ``model`` the model a run simulates (none for given simulations or errors).
     """
     engine = settings.engine
-    if engine == "twin" or (engine == "auto" and params.shape[0] * n_steps <= twin.AUTO_MOST_VALUES):
+    small = n_steps <= twin.AUTO_MOST_STEPS and params.shape[0] * n_steps <= twin.AUTO_MOST_VALUES
+    if engine == "twin" or (engine == "auto" and small):
         if twin.covers(settings.flavour, params, weights, settings.ic_error, model):
             return "twin"
         if engine == "twin":

@@ -44,19 +44,23 @@ importance weights, the Monte Carlo batches of ``ic_error``, models that
 simulate in compiled code (a StateSpaceModel of numba functions) and
 parameter values holding a negative zero (where both zeros tie at an order
 statistic, the kernel's selection may return either). ``engine="auto"``
-takes it for a run of at most :data:`AUTO_MOST_VALUES` sample-steps that it
-covers (:func:`dynia.engine.flavours.chosen_engine`), ``engine="twin"`` for
-any it covers. tests/test_twin.py checks it against the kernels bit for bit.
+takes it for a run it covers of at most :data:`AUTO_MOST_VALUES` samples x
+steps and :data:`AUTO_MOST_STEPS` steps
+(:func:`dynia.engine.flavours.chosen_engine`), ``engine="twin"`` for any
+it covers. tests/test_twin.py checks it against the kernels bit for bit.
 """
 
 import numpy as np
 
-__all__ = ["AUTO_MOST_VALUES", "covers", "analyse_windows", "window_sums"]
+__all__ = ["AUTO_MOST_VALUES", "AUTO_MOST_STEPS", "covers", "analyse_windows", "window_sums"]
 
-# Samples x steps of the largest run that engine "auto" analyses on the twin, not on the compiled kernels. At that size
-# (4000 samples x 250 steps, n = 10) the twin's analysis takes about a CPU-second; the kernels' takes a twentieth of
-# that once compiled, or about 20 CPU-s to compile in a fresh process, a second to load from numba's cache.
-AUTO_MOST_VALUES = 1_000_000
+# The largest run that engine "auto" analyses on the twin rather than on the compiled kernels: samples x steps, and
+# steps. A run on the twin costs about 0.3 ms of Python a step (the models' numpy recursion, the window sums, the
+# record fit's simulations of a few sets) and 0.2 us a sample-step; on a first-order model 0.6 CPU-s at 2000 samples
+# x 1000 steps (as the README's heating record), 0.9 at 1000 x 2000, 0.4 at 20 000 x 100, twice that on a two-state
+# model. The kernels cost about 20 CPU-s to compile in a fresh process, a second to load from numba's cache.
+AUTO_MOST_VALUES = 2_000_000
+AUTO_MOST_STEPS = 1_000
 
 
 def covers(flavour, params, weights=None, ic_error=False, model=None):
