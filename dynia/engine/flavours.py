@@ -92,15 +92,17 @@ def compiled_engine(engine, flavour, weights=None):
 def chosen_engine(settings, params, n_steps, weights=None, model=None):
     """The engine that analyses a run, as its result records it: "twin", "numba" or "numpy".
 
-    "auto" takes the numpy twin of the compiled kernels (:mod:`dynia.engine.twin`), which gives their numbers and
-    compiles nothing, for a small run that it covers (at most :data:`~dynia.engine.twin.AUTO_MOST_VALUES` samples x
-    steps and :data:`~dynia.engine.twin.AUTO_MOST_STEPS` steps); otherwise the compiled kernels where they can
-    (:func:`compiled_engine`), else numpy. "twin" refuses a run the twin does not cover. ``params`` (n_samples,
-    n_params) are the sets analysed, ``model`` the model a run simulates (none for given simulations or errors).
+    "auto" takes the compiled kernels where they can (:func:`compiled_engine`), else numpy; and, where it would take
+    the kernels, their numpy twin (:mod:`dynia.engine.twin`), which gives their numbers and compiles nothing, for a
+    small run that the twin covers (at most :data:`~dynia.engine.twin.AUTO_MOST_VALUES` samples x steps and
+    :data:`~dynia.engine.twin.AUTO_MOST_STEPS` steps). "twin" refuses a run the twin does not cover. ``params``
+    (n_samples, n_params) are the sets analysed, ``model`` the model a run simulates (none for given simulations or
+    errors).
     """
     engine = settings.engine
+    compiled = compiled_engine(engine, settings.flavour, weights)
     small = n_steps <= twin.AUTO_MOST_STEPS and params.shape[0] * n_steps <= twin.AUTO_MOST_VALUES
-    if engine == "twin" or (engine == "auto" and small):
+    if engine == "twin" or (engine == "auto" and compiled and small):
         if twin.covers(settings.flavour, params, weights, settings.ic_error, model):
             return "twin"
         if engine == "twin":
@@ -109,7 +111,7 @@ def chosen_engine(settings, params, n_steps, weights=None, model=None):
                 "of models simulated in numpy and parameters without a negative zero; use engine 'auto', 'numba' or "
                 "'numpy' for this analysis"
             )
-    return "numba" if compiled_engine(engine, settings.flavour, weights) else "numpy"
+    return "numba" if compiled else "numpy"
 
 
 def flavour_analysis(
