@@ -229,10 +229,11 @@ class AnalysisSettings:
         Where a window lies: centred on its step, or trailing it (the 2n+1
         steps up to the step, as an online analysis sees them).
     engine : {"auto", "numba", "numpy", "twin"}, default "auto"
-        The compiled kernels (numba), plain numpy, the kernels' numpy twin
-        (:mod:`dynia.engine.twin`: their numbers bit for bit, nothing to
-        compile), or the twin for a small run and numba where it can;
-        numba and numpy agree to rounding (:mod:`dynia.engine.kernels`).
+        The compiled kernels (numba), plain numpy, their numpy twin, or the
+        twin for a small run and numba where it can. The twin
+        (:mod:`dynia.engine.twin`) gives the kernels' numbers bit for bit with
+        nothing to compile; numba and numpy agree to rounding
+        (:mod:`dynia.engine.kernels`).
     workers : int or None, default None
         Threads (None: every core), at most :data:`MAX_WORKERS`. Results do
         not depend on it.
@@ -315,7 +316,8 @@ class AnalysisSettings:
     engine: str = dataclasses.field(
         default="auto",
         metadata=dict(
-            help="the compiled kernels (numba), plain numpy, their numpy twin, or the twin or numba where it can",
+            help="the compiled kernels (numba), plain numpy, their numpy twin, or the twin for a small run and numba "
+            "where it can",
             choices=ENGINES,
         ),
     )
