@@ -24,7 +24,7 @@ from conftest import example_firstorder_input
 import dynia
 from dynia.engine import kernels, twin
 from dynia.engine.flavours import CompiledFlavour, TwinFlavour, chosen_engine
-from dynia.engine.windows import moving_window
+from dynia.engine.windows import OverflowedWindowsWarning, moving_window
 from dynia.errors import SettingsError
 from dynia.models import FOPDT, FirstOrder, FunctionModel, SecondOrderDelay, StateSpaceModel, TransferFunction
 from dynia.settings import AnalysisSettings
@@ -147,7 +147,7 @@ def test_lag_models_with_a_dead_time(theta, x0):
 def test_transfer_functions_and_two_lags():
     u, y = record(160)
     lead_lag = TransferFunction(lambda p: control.tf([p[0] * p[1], p[0]], [p[2], 1.0]), names=("K", "a", "T"))
-    run_both(u, y, lead_lag, {"K": (0.5, 4), "a": (0, 2), "T": (0.5, 6)}, n_samples=300, n=4, x0="steady", rng=7)
+    run_both(u, y, lead_lag, {"K": (0.5, 4), "a": (0.1, 2), "T": (0.5, 6)}, n_samples=300, n=4, x0="steady", rng=7)
     bounds = {"K": (0, 4), "T1": (0, 6), "T2": (0, 3), "theta": (0, 3)}
     run_both(u, y, SecondOrderDelay(), bounds, n_samples=800, n=5, rng=8, window="trailing")
 
@@ -212,6 +212,22 @@ def test_many_sets_tied_exactly(flavour):
     params = rng.uniform(0, 7, (25, 2))[rng.integers(0, 25, 1000)]  # each set about 40 times: its costs tie
     sims = FirstOrder().simulate(params, u)
     window_both(y, sims, params, [[0, 7], [0, 7]], n=4, percentage=7, flavour=flavour)
+
+
+@needs_numba
+# The noise floor's fit meets the overflowing outputs too, on either engine.
+@pytest.mark.filterwarnings("ignore:overflow encountered in dot", "ignore:invalid value encountered in scalar divide")
+def test_one_step_windows_every_set_behavioural_and_costs_that_overflow():
+    u, y = record(200)
+    params = np.random.default_rng(17).uniform(0, 7, (400, 2))
+    sims = FirstOrder().simulate(params, u)
+    window_both(y, sims, params, [[0, 7], [0, 7]], n=0)
+    window_both(y, sims, params, [[0, 7], [0, 7]], n=2, percentage=100, flavour="weighted", dtype="float32")
+    sims[:150, 60:70] = 1e170  # these sets' costs overflow to inf, the behavioural set's stay finite
+    window_both(y, sims, params, [[0, 7], [0, 7]], n=3)
+    sims[:, 60:70] = 1e170  # every set's: the windows are left without results
+    with pytest.warns(OverflowedWindowsWarning):
+        window_both(y, sims, params, [[0, 7], [0, 7]], n=3)
 
 
 @needs_numba
