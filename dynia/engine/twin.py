@@ -55,10 +55,11 @@ import numpy as np
 __all__ = ["AUTO_MOST_VALUES", "AUTO_MOST_STEPS", "covers", "analyse_windows", "window_sums"]
 
 # The largest run that engine "auto" analyses on the twin rather than on the compiled kernels: samples x steps, and
-# steps. A run on the twin costs about 0.3 ms of Python a step (the models' numpy recursion, the window sums, the
-# record fit's simulations of a few sets) and 0.2 us a sample-step; on a first-order model 0.6 CPU-s at 2000 samples
-# x 1000 steps (as the README's heating record), 0.9 at 1000 x 2000, 0.4 at 20 000 x 100, twice that on a two-state
-# model. The kernels cost about 20 CPU-s to compile in a fresh process, a second to load from numba's cache.
+# steps, since much of a run on the twin is Python per step (the models' numpy recursion, the window sums, the
+# record fit's simulations of a few sets). A whole dynia.run on the twin then costs at most about a CPU-second: on a
+# first-order model 0.25 for the README's quick start (2000 x 300), 0.75 at 2000 x 1000, 0.5 at 20 000 x 100; on a
+# two-state one (SecondOrderDelay) 1.2 at 2000 x 1000. The kernels take a fifth of that once compiled, but cost about
+# 20 CPU-s to compile in a fresh process, or a second to load from numba's cache.
 AUTO_MOST_VALUES = 2_000_000
 AUTO_MOST_STEPS = 1_000
 
