@@ -479,9 +479,10 @@ class AnalysisSettings:
                 f"sampler {self.sampler!r} draws importance-weighted samples, which the mcat flavour cannot "
                 "use; take flavour 'thesis' or 'weighted'"
             )
-        if self.engine == "numba":
+        if self.engine in ("numba", "twin"):
+            which = "compiled engine" if self.engine == "numba" else "twin engine"
             raise SettingsError(
-                f"sampler {self.sampler!r} draws importance-weighted samples, which the compiled engine does "
+                f"sampler {self.sampler!r} draws importance-weighted samples, which the {which} does "
                 "not take; use engine 'auto' or 'numpy'"
             )
         if self.n_samples < 10:

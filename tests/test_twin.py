@@ -270,7 +270,10 @@ def test_what_the_twin_does_not_cover_it_refuses():
             dynia.run(u, y, FirstOrder(), bounds, n_samples=200, n=3, rng=1, engine="twin", **options)
     params = np.random.default_rng(16).uniform(0, 1, (100, 1))
     sims = params * u
-    with pytest.raises(SettingsError, match="engine 'twin' covers"):
+    # Importance weights, of the adaptive samplers or given: refused with the settings.
+    with pytest.raises(SettingsError, match="which the twin engine does not take"):
+        dynia.run(u, y, FirstOrder(), bounds, n_samples=200, n=3, rng=1, engine="twin", sampler="iis")
+    with pytest.raises(SettingsError, match="which the twin engine does not take"):
         moving_window(y, sims, params, [[0, 1]], n=3, engine="twin", weights=np.ones(100))
     params[3] = -0.0  # where zeros tie, the kernel's selection may return either
     with pytest.raises(SettingsError, match="negative zero"):
