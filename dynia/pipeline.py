@@ -11,7 +11,7 @@ from . import _checks
 from .adaptive import adaptive_run
 from .bounds import parameter_box
 from .engine.error_sources import ArrayErrors, StreamedErrors
-from .engine.flavours import compiled_engine
+from .engine.flavours import chosen_engine
 from .engine.kernels import CompiledErrors
 from .engine.noise import RESIDUAL_CHUNK
 from .engine.windows import analyse_errors, default_chunk_steps
@@ -36,6 +36,7 @@ __all__ = [
     "TargetNotReachedWarning",
     "UnreachedOutputWarning",
     "KernelSimulated",
+    "RecursionSimulated",
 ]
 
 # Above this share of dropped (non-finite) parameter sets the analysis no longer
@@ -256,9 +257,11 @@ def run(
             result = _analyse_to_target(u, y, model, names, box, samples, settings, generator, progress, output)
         result = dataclasses.replace(result, run=dataclasses.replace(result.run, screened=screened))
         warn_unreached_output(u, y, model, names, box, settings)
-        # The least squares simulates a few sets at a time: through the kernel where the analysis ran on it.
-        kernel = result.settings.engine == "numba" and compiled_simulation(model)
-        result = record_least_squares(result, u, y, KernelSimulated(model) if kernel else model)
+        # The least squares simulates a few sets at a time: through the kernel where the analysis ran on it, by the
+        # model's recursion where the twin did, which compiles nothing.
+        simulated = {"numba": KernelSimulated, "twin": RecursionSimulated}.get(result.settings.engine)
+        fitted = simulated(model) if simulated and compiled_simulation(model) else model
+        result = record_least_squares(result, u, y, fitted)
         return output.commit(dated(result, timestamps))
 
 
@@ -269,7 +272,9 @@ def _analyse_samples(u, y, model, names, box, samples, settings, progress, outpu
     """
     n_sampled = samples.shape[0]
     model_order = [names.index(name) for name in model.names]
-    compiled = compiled_engine(settings.engine, settings.flavour)
+    # Chosen for the sets drawn; the analysis runs the engine chosen here.
+    settings = settings.replace(engine=chosen_engine(settings, samples, y.size, model=model))
+    compiled = settings.engine == "numba"
     workers = settings.workers or _checks.default_workers()
     sims = None
     if not getattr(model, "streams", True):
@@ -376,6 +381,24 @@ class KernelSimulated(Model):
             return np.concatenate(list(source.output_chunks(u.shape[0])), axis=1)
         finally:
             source.close()
+
+
+class RecursionSimulated(Model):
+    """A single-input linear model simulated by its own numpy recursion, which is the kernel's bit for bit.
+
+    What the record's least squares simulates after a run on the twin engine: the fit would otherwise run the
+    compiled kernel (:class:`KernelSimulated`), compiling it in a process that the twin spared that.
+    """
+
+    def __init__(self, model):
+        super().__init__(model.names, model.n_inputs)
+        self._model = model
+
+    def __repr__(self):
+        return repr(self._model)
+
+    def simulate(self, params, u, dt=1.0, x0="zero"):
+        return self._model.simulate(params, u, dt=dt, x0=x0)
 
 
 def _analyse_to_target(u, y, model, names, box, samples, settings, generator, progress, output):

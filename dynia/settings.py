@@ -57,7 +57,7 @@ SAMPLERS = ("uniform", "lhs", "sobol")
 ADAPTIVE_SAMPLERS = ("iis", "de")
 FLAVOURS = ("thesis", "mcat", "weighted")
 WINDOWS = ("centred", "trailing")
-ENGINES = ("auto", "numba", "numpy")
+ENGINES = ("auto", "numba", "numpy", "twin")
 X0 = ("zero", "steady")
 DTYPES = ("float64", "float32")
 # A finer CLD-gradient grid only spreads the behavioural set (a few hundred
@@ -217,9 +217,12 @@ class AnalysisSettings:
     window : {"centred", "trailing"}, default "centred"
         Where a window lies: centred on its step, or trailing it (the 2n+1
         steps up to the step, as an online analysis sees them).
-    engine : {"auto", "numba", "numpy"}, default "auto"
-        The compiled kernels (numba), plain numpy, or numba where it can;
-        results agree to rounding (:mod:`dynia.engine.kernels`).
+    engine : {"auto", "numba", "numpy", "twin"}, default "auto"
+        The compiled kernels (numba), plain numpy, their numpy twin, or the
+        twin for a small run and numba where it can. The twin
+        (:mod:`dynia.engine.twin`) gives the kernels' numbers bit for bit with
+        nothing to compile; numba and numpy agree to rounding
+        (:mod:`dynia.engine.kernels`).
     workers : int or None, default None
         Threads (None: every core), at most :data:`MAX_WORKERS`. Results do
         not depend on it.
@@ -301,7 +304,11 @@ class AnalysisSettings:
     )
     engine: str = dataclasses.field(
         default="auto",
-        metadata=dict(help="the compiled kernels (numba), plain numpy, or numba where it can", choices=ENGINES),
+        metadata=dict(
+            help="the compiled kernels (numba), plain numpy, their numpy twin, or the twin for a small run and numba "
+            "where it can",
+            choices=ENGINES,
+        ),
     )
     workers: int | None = dataclasses.field(default=None, metadata=dict(help="threads (None: every core)", metavar="N"))
     dt: float | None = dataclasses.field(
@@ -461,9 +468,10 @@ class AnalysisSettings:
                 f"sampler {self.sampler!r} draws importance-weighted samples, which the mcat flavour cannot "
                 "use; take flavour 'thesis' or 'weighted'"
             )
-        if self.engine == "numba":
+        if self.engine in ("numba", "twin"):
+            which = "compiled engine" if self.engine == "numba" else "twin engine"
             raise SettingsError(
-                f"sampler {self.sampler!r} draws importance-weighted samples, which the compiled engine does "
+                f"sampler {self.sampler!r} draws importance-weighted samples, which the {which} does "
                 "not take; use engine 'auto' or 'numpy'"
             )
         if self.n_samples < 10:

@@ -141,5 +141,7 @@ def test_suggest_json_stays_json_on_a_terminal(capsys, uncompiled, monkeypatch, 
 def test_the_kernels_say_they_are_compiled_once_a_run_has_compiled_them():
     model = FirstOrder()
     u = np.r_[np.zeros(5), np.ones(45)]
-    dynia.run(u, model.simulate([[2.0, 5.0]], u)[0], model, {"K": (0, 5), "T": (1, 9)}, n_samples=60, n=3, rng=1)
+    y = model.simulate([[2.0, 5.0]], u)[0]
+    # On the kernels: "auto" would take their numpy twin for so small a run, which compiles nothing.
+    dynia.run(u, y, model, {"K": (0, 5), "T": (1, 9)}, n_samples=60, n=3, rng=1, engine="numba")
     assert kernels.compiled() is kernels.AVAILABLE

@@ -41,7 +41,11 @@ def assert_same(result, reference):
     assert result.names == reference.names
     for attribute in ("samples", "bounds", "time", "ic", "ci", "median", "gradient", "bin_centres"):
         assert_array_equal(getattr(result, attribute), getattr(reference, attribute), err_msg=attribute)
-    assert result.settings == reference.settings
+    settings = result.settings
+    # "auto" takes the kernels on the cluster and, for a small run on one machine, their numpy twin: the same numbers.
+    if (settings.engine, reference.settings.engine) == ("numba", "twin"):
+        settings = settings.replace(engine="twin")
+    assert settings == reference.settings
 
 
 @pytest.mark.parametrize("engine", ["numba", "numpy"])

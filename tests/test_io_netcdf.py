@@ -190,7 +190,7 @@ def test_the_run_record_keeps_its_types_through_a_file(thesis_result, tmp_path):
 
 def test_settings_are_the_frozen_analysis_settings_and_the_record_is_frozen(thesis_result, adaptive_result):
     assert type(thesis_result.settings) is AnalysisSettings and type(thesis_result.run) is RunRecord
-    assert thesis_result.settings.n_samples == 400 and thesis_result.settings.engine in ("numba", "numpy")
+    assert thesis_result.settings.n_samples == 400 and thesis_result.settings.engine in ("numba", "numpy", "twin")
     with pytest.raises(dataclasses.FrozenInstanceError):
         thesis_result.settings.n = 3
     with pytest.raises(dataclasses.FrozenInstanceError):

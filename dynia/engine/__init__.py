@@ -5,9 +5,10 @@ reading the absolute errors from a source (:mod:`~dynia.engine.error_sources`),
 :mod:`~dynia.engine.selection` picks each window's behavioural set,
 :mod:`~dynia.engine.flavours` turns it into limits, IC and CLD gradient,
 :mod:`~dynia.engine.cld` holds the likelihood and CLD arithmetic,
-:mod:`~dynia.engine.kernels` the compiled (numba) versions of the hot loops
-and :mod:`~dynia.engine.noise` the noise floor: which windows tell parameter
-sets apart beyond what measurement noise alone does.
+:mod:`~dynia.engine.kernels` the compiled (numba) versions of the hot loops,
+:mod:`~dynia.engine.twin` their numpy twin for small runs (their numbers bit
+for bit, nothing to compile) and :mod:`~dynia.engine.noise` the noise floor:
+which windows tell parameter sets apart beyond what measurement noise alone does.
 """
 
 import importlib
@@ -20,7 +21,7 @@ _NAMES = {
     "FLAVOURS": "flavours",
     "ENGINES": "flavours",
 }
-_SUBMODULES = frozenset({"cld", "error_sources", "flavours", "kernels", "noise", "selection", "windows"})
+_SUBMODULES = frozenset({"cld", "error_sources", "flavours", "kernels", "noise", "selection", "twin", "windows"})
 
 __all__ = ["moving_window", "FLAVOURS", "WINDOWS", "ENGINES"]
 

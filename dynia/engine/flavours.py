@@ -2,7 +2,8 @@
 
 ``"thesis"`` and ``"weighted"`` run on numpy (:class:`ThesisFlavour`,
 :class:`WeightedFlavour`) or on the compiled kernels of
-:mod:`dynia.engine.kernels` (:class:`CompiledFlavour`), alike to rounding (see there);
+:mod:`dynia.engine.kernels` (:class:`CompiledFlavour`), alike to rounding (see there),
+or on their numpy twin (:class:`TwinFlavour`, :mod:`dynia.engine.twin`), the kernels' numbers bit for bit;
 importance-weighted samples take :class:`ImportanceFlavour`; ``"mcat"`` is
 :class:`McatFlavour`. See :mod:`dynia.engine.windows` for what each computes.
 
@@ -20,7 +21,7 @@ import numpy as np
 from .. import _checks
 from ..errors import SettingsError
 from ..settings import ENGINES, FLAVOURS, ic_batches
-from . import cld, kernels
+from . import cld, kernels, twin
 from .noise import quantile_position
 from .selection import lowest_stable, lowest_weighted, selected_columns, stable_rank_mask
 
@@ -29,6 +30,7 @@ __all__ = [
     "ENGINES",
     "FLAVOUR_CLASSES",
     "compiled_engine",
+    "chosen_engine",
     "flavour_analysis",
     "bin_centres_of",
     "importance_weights",
@@ -36,6 +38,7 @@ __all__ = [
     "ThesisFlavour",
     "WeightedFlavour",
     "CompiledFlavour",
+    "TwinFlavour",
     "ImportanceFlavour",
     "McatFlavour",
     "BatchedFlavour",
@@ -83,15 +86,51 @@ def compiled_engine(engine, flavour, weights=None):
                 "engine='numba' covers the 'thesis' and 'weighted' flavours without "
                 "importance weights; use engine='numpy' or 'auto' for this analysis"
             )
-    return engine != "numpy" and supported and kernels.AVAILABLE
+    return engine in ("auto", "numba") and supported and kernels.AVAILABLE
+
+
+def chosen_engine(settings, params, n_steps, weights=None, model=None):
+    """The engine that analyses a run, as its result records it: "twin", "numba" or "numpy".
+
+    "auto" takes the compiled kernels where they can (:func:`compiled_engine`), else numpy; and, where it would take
+    the kernels, their numpy twin (:mod:`dynia.engine.twin`), which gives their numbers and compiles nothing, for a
+    small run that the twin covers (at most :data:`~dynia.engine.twin.AUTO_MOST_VALUES` samples x steps and
+    :data:`~dynia.engine.twin.AUTO_MOST_STEPS` steps). "twin" refuses a run the twin does not cover. ``params``
+    (n_samples, n_params) are the sets analysed, ``model`` the model a run simulates (none for given simulations or
+    errors).
+    """
+    engine = settings.engine
+    compiled = compiled_engine(engine, settings.flavour, weights)
+    small = n_steps <= twin.AUTO_MOST_STEPS and params.shape[0] * n_steps <= twin.AUTO_MOST_VALUES
+    if engine == "twin" or (engine == "auto" and compiled and small):
+        if twin.covers(settings.flavour, params, weights, settings.ic_error, model):
+            return "twin"
+        if engine == "twin":
+            raise SettingsError(
+                "engine 'twin' covers the 'thesis' and 'weighted' flavours without importance weights or ic_error, "
+                "of models simulated in numpy and parameters without a negative zero; use engine 'auto', 'numba' or "
+                "'numpy' for this analysis"
+            )
+    return "numba" if compiled else "numpy"
 
 
 def flavour_analysis(
-    flavour, compiled, params, bounds, percentage, bins, conf_level, min_points, weights=None, ic_error=False
+    flavour,
+    compiled,
+    params,
+    bounds,
+    percentage,
+    bins,
+    conf_level,
+    min_points,
+    weights=None,
+    ic_error=False,
+    on_twin=False,
 ):
     """The object that analyses windows for ``flavour``, on the compiled kernels or on numpy.
 
-    Compiled, it has ``analyse_rows(window_errors, measured, m, slots)``;
+    Compiled, it has ``analyse_rows(window_errors, measured, m, slots)``
+    (and, ``on_twin``, runs on the kernels' numpy twin, :class:`TwinFlavour`, which has no batches);
     otherwise ``analyse(mae, usable)``. Either returns the
     :class:`WindowResults` of the windows and has ``count``, ``n_bins`` and
     ``bin_centres``. With importance ``weights`` (n_samples,) it is an
@@ -136,7 +175,8 @@ def flavour_analysis(
             params, bounds, percentage, bins, conf_level, importance_weights(weights, params.shape[0]), flavour
         )
     if compiled:
-        return CompiledFlavour(params, bounds, percentage, bins, conf_level, flavour, min_points)
+        kind = TwinFlavour if on_twin else CompiledFlavour
+        return kind(params, bounds, percentage, bins, conf_level, flavour, min_points)
     return FLAVOUR_CLASSES[flavour](params, bounds, percentage, bins, conf_level)
 
 
@@ -274,6 +314,8 @@ class CompiledFlavour:
     limits off each batch of samples, from the same window costs.
     """
 
+    _analyse_windows = staticmethod(kernels.analyse_windows)
+
     def __init__(self, params, bounds, percentage, bins, conf_level, flavour, min_points, batches=0):
         reference = ThesisFlavour(params, bounds, percentage, bins, conf_level)
         self.count = reference.count
@@ -336,12 +378,21 @@ class CompiledFlavour:
         )
         # The square roots are taken here, as the numpy flavours take them.
         if not self.batches:
-            kernels.analyse_windows(*common)
+            self._analyse_windows(*common)
             return WindowResults(ic, ci, median, gradient, *np.sqrt(extreme_costs))
         batch_ic, batch_ci = np.empty((self.batches, n_params, m)), np.empty((self.batches, n_params, m, 2))
         batches = (self.batch_counts, self.batch_positions)
         kernels.analyse_windows_batched(*common, batches, (batch_ic, batch_ci))
         return WindowResults(ic, ci, median, gradient, *np.sqrt(extreme_costs), batch_ic, batch_ci)
+
+
+class TwinFlavour(CompiledFlavour):
+    """:class:`CompiledFlavour` on the numpy twin of its kernel (:func:`dynia.engine.twin.analyse_windows`).
+
+    The kernel's numbers bit for bit, and nothing to compile; no Monte Carlo batches.
+    """
+
+    _analyse_windows = staticmethod(twin.analyse_windows)
 
 
 def importance_weights(weights, n_samples):

@@ -117,7 +117,7 @@ from ..progress import progress_bar
 from ..result import DyniaResult
 from ..settings import FLAVOURS, WINDOWS, AnalysisSettings, RunRecord
 from .error_sources import ArrayErrors, ScaledErrors, StreamedErrors
-from .flavours import compiled_engine, flavour_analysis, monte_carlo_errors
+from .flavours import chosen_engine, flavour_analysis, monte_carlo_errors
 from .noise import add_record_errors, floor_fields, floor_settings, record_fit, record_noise_floor, window_points
 
 __all__ = [
@@ -220,13 +220,15 @@ def moving_window(
         (the thesis) or ``t-2n .. t`` (ending at t, for online use). The
         trailing result at t equals the centred one at t-n wherever the
         centred window is not truncated by the end of the record.
-    engine : {"auto", "numba", "numpy"}, default "auto"
+    engine : {"auto", "numba", "numpy", "twin"}, default "auto"
         The compiled kernels of :mod:`dynia.engine.kernels` or plain numpy; their
         costs agree to rounding and their IC, limits and median are identical
-        wherever a window's behavioural set is (see that module).
-        "auto" takes numba when it is installed and
+        wherever a window's behavioural set is (see that module). "twin" is
+        the kernels' numpy twin (:mod:`dynia.engine.twin`), their numbers bit
+        for bit with nothing to compile. "auto" takes the twin for a small run
+        it covers, else numba when it is installed and
         the flavour is "thesis" or "weighted" without ``weights`` (the
-        other cases always run on numpy).
+        other cases always run on numpy): :func:`~dynia.engine.flavours.chosen_engine`.
     ic_error : bool, default False
         Also estimate the Monte Carlo standard errors of IC and limits, by
         batch means in the same pass (see the module documentation). Not
@@ -464,7 +466,7 @@ def analyse_errors(
     if chunk_steps is None:
         chunk_steps = default_chunk_steps(n_samples, 2 * settings.n)
     chunk_steps = _checks.whole_number(chunk_steps, "chunk_steps", minimum=1)
-    compiled, flavour_impl = _flavour(settings, params, bounds, weights)
+    engine, flavour_impl = _flavour(settings, params, bounds, weights, y.size)
     scale = error_scale(y)
     if scale != 1.0:
         errors = ScaledErrors(errors, scale)
@@ -472,11 +474,13 @@ def analyse_errors(
     own_output = output is None
     output = result_arrays(settings.store, settings.dtype) if own_output else output
     _allocate(output, flavour_impl, settings.ic_error, y.size, names=names, samples=params, bounds=bounds, time=time)
-    passed = _windows_pass(errors, flavour_impl, compiled, output, settings, (before, after), chunk_steps, progress)
+    passed = _windows_pass(
+        errors, flavour_impl, engine != "numpy", output, settings, (before, after), chunk_steps, progress
+    )
     floor = _noise_floor(y, params, bounds, time, settings, passed, scale, simulations)
     # What the engine did wins over what the caller asked: the samples analysed
     # (after any were dropped) and the engine that ran ("auto" resolved).
-    recorded = settings.replace(n_samples=n_samples, engine="numba" if compiled else "numpy")
+    recorded = settings.replace(n_samples=n_samples, engine=engine)
     run = dataclasses.replace(
         run or RunRecord(),
         n_behavioural=flavour_impl.count,
@@ -522,12 +526,12 @@ def _noise_floor(y, params, bounds, time, settings, passed, scale, simulations):
     return record_noise_floor(best, upper, threshold, points, slots, n_params, settings.percentage, n_samples, fit)
 
 
-def _flavour(settings, params, bounds, weights):
-    """Whether the compiled kernels run, and the flavour's analysis of one window's costs."""
-    compiled = compiled_engine(settings.engine, settings.flavour, weights)
+def _flavour(settings, params, bounds, weights, n_steps):
+    """The engine that runs (:func:`~dynia.engine.flavours.chosen_engine`), and the flavour's analysis of a window."""
+    engine = chosen_engine(settings, params, n_steps, weights)
     flavour_impl = flavour_analysis(
         settings.flavour,
-        compiled,
+        engine != "numpy",
         params,
         bounds,
         settings.percentage,
@@ -536,8 +540,9 @@ def _flavour(settings, params, bounds, weights):
         settings.min_points,
         weights=weights,
         ic_error=settings.ic_error,
+        on_twin=engine == "twin",
     )
-    return compiled, flavour_impl
+    return engine, flavour_impl
 
 
 def _time_of_steps(time, n_steps):
