@@ -259,6 +259,11 @@ def run(
         why="the adaptive schemes run on one machine, as do target_se and results stored as they are produced: "
         "use dynia.run; the cluster's workers are its threads",
     )
+    settings.require(
+        "dynia.distributed.run",
+        engine=("auto", "numba", "numpy"),
+        why="its workers analyse on the compiled kernels, or on numpy; the twin serves small runs of dynia.run",
+    )
     names, box = parameter_box(bounds, model.names, type(model).__name__)
     model.check_ranges(dict(zip(names, box)))
     settings.check_record(y.size)

@@ -9,7 +9,7 @@ import pytest
 from cli_cases import HEATING, cli_run, cli_succeeded
 
 import dynia
-from dynia.engine import kernels
+from dynia.engine import kernels, twin
 from dynia.models import FirstOrder
 
 HEATING_ARGS = (
@@ -77,8 +77,14 @@ def test_identify_prints_the_estimates_errors_and_validation_error_of_identified
     assert all(line.startswith("dynia: warning:") for line in stderr.splitlines()), stderr
 
 
+def on_kernels(monkeypatch):
+    """Every run of "auto" on the compiled kernels, as a run too large for their numpy twin goes."""
+    monkeypatch.setattr(twin, "AUTO_MOST_VALUES", 0)
+
+
 def test_a_terminal_shows_progress_on_stderr_and_never_on_stdout(tmp_path, capsys, uncompiled, monkeypatch):
     on_terminal(monkeypatch)
+    on_kernels(monkeypatch)
     stdout, stderr, _ = _identify(capsys, tmp_path)
     assert BAR in stderr and NOTICE in stderr and f"{WROTE} {tmp_path / 'fit'}" in stderr
     assert BAR not in stdout and NOTICE not in stdout and "\r" not in stdout
@@ -105,8 +111,15 @@ def test_the_compilation_notice_only_before_the_kernels_are_compiled(tmp_path, c
         assert BAR not in stderr and NOTICE not in stderr and WROTE in stderr
 
 
+def test_a_run_on_the_twin_compiles_nothing_and_says_nothing_of_compiling(tmp_path, capsys, uncompiled, monkeypatch):
+    on_terminal(monkeypatch)
+    _, stderr, _ = _identify(capsys, tmp_path)  # 801 steps x 2000 sets: "auto" takes the twin
+    assert BAR in stderr and NOTICE not in stderr
+
+
 def test_a_second_run_shows_the_progress_of_both_analyses(tmp_path, capsys, monkeypatch):
     on_terminal(monkeypatch)
+    on_kernels(monkeypatch)
     # Uncompiled until the first analysis has run, as in a fresh process.
     answers = iter([False])
     monkeypatch.setattr(kernels, "compiled", lambda: next(answers, True))
@@ -129,6 +142,7 @@ def test_analyse_outside_a_terminal_writes_nothing_but_warnings_to_stderr(tmp_pa
 @pytest.mark.parametrize("quiet", [False, True])
 def test_suggest_json_stays_json_on_a_terminal(capsys, uncompiled, monkeypatch, quiet):
     on_terminal(monkeypatch)
+    on_kernels(monkeypatch)
     args = ["--seed", "1", "--max-samples", "2000", "--json"] + (["--quiet"] if quiet else [])
     status, stdout, stderr = cli_run(capsys, "suggest", HEATING, *HEATING_ARGS[:-4], *args)
     assert status == 0, stderr

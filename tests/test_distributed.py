@@ -189,6 +189,8 @@ def test_other_bad_arguments_are_clear_errors(client, record):
         run(u, y, FirstOrder(), BOUNDS, client=client, sampler="iis")
     with pytest.raises(ValueError, match="engine must be one of"):
         run(u, y, FirstOrder(), BOUNDS, client=client, engine="fast")
+    with pytest.raises(ValueError, match="does not support engine='twin'.*the twin serves small runs of dynia.run"):
+        run(u, y, FirstOrder(), BOUNDS, client=client, engine="twin")
     with pytest.raises(ValueError, match="dt must be a finite number > 0"):
         run(u, y, FirstOrder(), BOUNDS, client=client, dt=0)
     with pytest.raises(ValueError, match="percentage 1 of n_samples 100 keeps 1 parameter sets per window"):

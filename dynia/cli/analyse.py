@@ -203,7 +203,7 @@ def _analysed(options, record, analysis, bounds, directory, caught):
     data = record.data
     # --on-disk: the run writes result.nc itself, block by block, and the result reads it lazily.
     settings = analysis.replace(store=directory / "result.nc") if options.on_disk else analysis
-    announce_compilation(options, settings)
+    announce_compilation(options, settings, settings.n_samples, record.y.shape[0])
     result = run(
         record.u,
         record.y,

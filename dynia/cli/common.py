@@ -24,7 +24,7 @@ import numpy as np
 
 from .. import __version__, models
 from ..engine import kernels
-from ..engine.flavours import compiled_engine
+from ..engine.flavours import takes_kernels
 from ..engine.windows import OverflowedWindowsWarning
 from ..errors import DyniaError, OutputError, SettingsError
 from ..io.csv import ProcessData, load_csv
@@ -581,13 +581,20 @@ def done(options):
     return 0
 
 
-def announce_compilation(options, settings):
+def announce_compilation(options, settings, n_samples, n_steps):
     """Say so before a run that may compile the numba kernels: the first of a process, on the compiled engine.
+
+    A run of at most ``n_samples`` sets over ``n_steps`` steps that "auto" gives to the kernels' numpy twin compiles
+    nothing, and nothing is said (:func:`dynia.engine.flavours.takes_kernels`).
 
     numba alone finds out whether its on-disk cache holds them (a second or so) or they compile (20-30 s of one core
     here, once after dynia or numba changes), hence "unless cached".
     """
-    if options.shows_progress and not kernels.compiled() and compiled_engine(settings.engine, settings.flavour):
+    if (
+        options.shows_progress
+        and not kernels.compiled()
+        and takes_kernels(settings, n_samples, n_steps, options.model_object)
+    ):
         print(
             "dynia: compiling the analysis kernels unless numba cached them "
             "(once after installing or upgrading dynia: 20-30 s)...",

@@ -213,7 +213,7 @@ def cli_action(options, caught):
         for line in notices:
             print(f"dynia: warning: {line}", file=sys.stderr)
         if options.method == "dynia":
-            announce_compilation(options, analysis)
+            announce_compilation(options, analysis, analysis.n_samples, record.y.shape[0])
         if options.min_length is not None:
             options = dataclasses.replace(options, min_length=min_length_steps(options.min_length, data.dt))
         with _identify_errors():

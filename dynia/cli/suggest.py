@@ -173,7 +173,8 @@ def cli_action(options, caught):
             f"{entry['reason']}"
             for entry in findings
         ]
-    announce_compilation(options, options.analysis)
+    # The pilot runs and the check of the proposal take at most --max-samples sets.
+    announce_compilation(options, options.analysis, options.max_samples, record.y.shape[0])
     given = options.given
     found = suggest(
         record.u,

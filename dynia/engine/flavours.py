@@ -31,6 +31,7 @@ __all__ = [
     "FLAVOUR_CLASSES",
     "compiled_engine",
     "chosen_engine",
+    "takes_kernels",
     "flavour_analysis",
     "bin_centres_of",
     "importance_weights",
@@ -112,6 +113,16 @@ def chosen_engine(settings, params, n_steps, weights=None, model=None):
                 "'numpy' for this analysis"
             )
     return "numba" if compiled else "numpy"
+
+
+def takes_kernels(settings, n_samples, n_steps, model=None):
+    """Whether a run of ``n_samples`` sets over ``n_steps`` steps will analyse on the compiled kernels.
+
+    What :func:`chosen_engine` decides, asked before the parameter sets are drawn (a negative zero among them, which
+    sends a run the twin would take to the kernels, cannot be foreseen): a front-end says so before a run that may
+    compile them.
+    """
+    return chosen_engine(settings, np.zeros((n_samples, 1)), n_steps, model=model) == "numba"
 
 
 def flavour_analysis(
