@@ -63,8 +63,9 @@ Python (:func:`~dynia.engine.kernels.driver.recursion_kernels`), not by a
 branch that would compile both; the Monte Carlo batches' read-off compiles
 with ``ic_error`` only; helpers that only compiled code calls have no
 Python wrappers; and no kernel assigns one array slice to another, which
-would compile numba's shape check and its message. The README's quick
-start compiles in about 20 CPU-s (``make bench``, ``cold-start``).
+would compile numba's shape check and its message. All of them compile in
+some 20 CPU-s, which is why a small run takes their numpy twin
+(:mod:`dynia.engine.twin`) and compiles nothing.
 """
 
 from .batches import analyse_windows_batched
