@@ -98,7 +98,7 @@ def window_sums(rows, measured, m, slots):
     """The error sums of m windows (m, n_samples) and their measured points (m,), as the compiled engine forms them.
 
     ``rows`` (m + slots - 1, n_samples) and ``measured`` (m + slots - 1,)
-    as :func:`dynia.engine.kernels.analyse_windows` takes them: window t
+    as :func:`dynia.engine.kernels.readoff.analyse_windows` takes them: window t
     holds rows t .. t + slots - 1.
 
     Examples
@@ -160,7 +160,7 @@ def _round(window, high, low, total):
 
 
 def analyse_windows(rows, measured, m, slots, cost_ranks, samples, bounds, bins, limits, min_points, results):
-    """:func:`dynia.engine.kernels.analyse_windows` in numpy: the same arguments, the same numbers written.
+    """:func:`dynia.engine.kernels.readoff.analyse_windows` in numpy: the same arguments, the same numbers written.
 
     ``rows`` and ``measured`` are the window inputs (``slots`` > 0) or the
     window sums and points (``slots`` = 0); every other argument and the
