@@ -10,9 +10,9 @@ import numpy as np
 from . import _checks
 from .adaptive import adaptive_run
 from .bounds import parameter_box
+from .engine import kernels
 from .engine.error_sources import ArrayErrors, StreamedErrors
 from .engine.flavours import chosen_engine
-from .engine.kernels import CompiledErrors
 from .engine.noise import RESIDUAL_CHUNK
 from .engine.windows import analyse_errors, default_chunk_steps
 from .errors import DyniaError, ModelError, SettingsError
@@ -301,7 +301,7 @@ def _analyse_samples(u, y, model, names, box, samples, settings, progress, outpu
         if sims is not None:
             errors = ArrayErrors(y, sims)
         elif compiled and compiled_simulation(model):
-            errors = CompiledErrors(
+            errors = kernels.CompiledErrors(
                 model, analysed[:, model_order], u, y, dt=settings.dt, x0=settings.x0, workers=workers
             )
         elif compiled and _compiled_state_space(model):
@@ -329,7 +329,8 @@ def _analyse_samples(u, y, model, names, box, samples, settings, progress, outpu
                 simulations=_simulations(u, y, model, analysed[:, model_order], sims, settings, errors),
             )
         finally:
-            if isinstance(errors, (CompiledErrors, StateErrors)):
+            # On the twin or numpy the kernels (and numba) are never imported: `compiled` comes first.
+            if isinstance(errors, StateErrors) or (compiled and isinstance(errors, kernels.CompiledErrors)):
                 errors.close()
         if not (isinstance(errors, StateErrors) and errors.diverged.any()):
             break
@@ -349,8 +350,8 @@ def _simulations(u, y, model, params, sims, settings, errors):
     def simulations(rows):
         if sims is not None:
             return [sims[rows]]
-        if isinstance(errors, CompiledErrors):
-            source = CompiledErrors(model, params[rows], u, y, dt=settings.dt, x0=settings.x0, workers=1)
+        if settings.engine == "numba" and isinstance(errors, kernels.CompiledErrors):
+            source = kernels.CompiledErrors(model, params[rows], u, y, dt=settings.dt, x0=settings.x0, workers=1)
             return source.output_chunks(RESIDUAL_CHUNK)
         return model.simulate_chunks(params[rows], u, dt=settings.dt, x0=settings.x0, chunk_steps=RESIDUAL_CHUNK)
 
@@ -376,7 +377,7 @@ class KernelSimulated(Model):
 
     def simulate(self, params, u, dt=1.0, x0="zero"):
         u = np.asarray(u, dtype=float)
-        source = CompiledErrors(self._model, params, u, np.zeros(u.shape[0]), dt=dt, x0=x0, workers=1)
+        source = kernels.CompiledErrors(self._model, params, u, np.zeros(u.shape[0]), dt=dt, x0=x0, workers=1)
         try:
             return np.concatenate(list(source.output_chunks(u.shape[0])), axis=1)
         finally:

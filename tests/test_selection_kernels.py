@@ -14,8 +14,9 @@ import numpy as np
 import pytest
 
 from dynia.engine import kernels
+from dynia.engine.flavours import parameter_ranks
 from dynia.engine.kernels import selection
-from dynia.engine.kernels.ranks import parameter_ranks, ranked_order_statistics
+from dynia.engine.kernels.ranks import ranked_order_statistics
 
 pytestmark = pytest.mark.skipif(not kernels.AVAILABLE, reason="numba is not installed")
 

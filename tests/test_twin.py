@@ -305,10 +305,11 @@ def test_auto_takes_the_twin_for_small_runs_it_covers(engine, monkeypatch):
 
 @needs_numba
 def test_the_quick_start_compiles_nothing(tmp_path):
-    """In a fresh process with an empty numba cache: no kernel compiled or loaded, nothing cached."""
+    """In a fresh process with an empty numba cache: numba not even imported, no kernel compiled, nothing cached."""
     cache = tmp_path / "numba"
     cache.mkdir()
     script = QUICK_START + (
+        "import sys\nassert 'numba' not in sys.modules, 'numba imported'\n"
         "import gc\nfrom numba.core.dispatcher import Dispatcher\n"
         "assert res.settings.engine == 'twin'\n"
         "compiled = [d for d in gc.get_objects() if isinstance(d, Dispatcher) and d.signatures]\n"

@@ -592,8 +592,8 @@ def announce_compilation(options, settings, n_samples, n_steps):
     """
     if (
         options.shows_progress
-        and not kernels.compiled()
         and takes_kernels(settings, n_samples, n_steps, options.model_object)
+        and not kernels.compiled()
     ):
         print(
             "dynia: compiling the analysis kernels unless numba cached them "

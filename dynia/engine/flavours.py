@@ -32,6 +32,7 @@ __all__ = [
     "compiled_engine",
     "chosen_engine",
     "takes_kernels",
+    "parameter_ranks",
     "flavour_analysis",
     "bin_centres_of",
     "importance_weights",
@@ -317,6 +318,25 @@ class WeightedFlavour(ThesisFlavour):
     weighted = True
 
 
+def parameter_ranks(columns):
+    """``(ranks, ordered)`` of ``columns`` (n_params, n_samples), as the window analysis takes them.
+
+    ``ordered`` holds each row sorted, ``ranks`` every sample's position in
+    its row's stable sort (ties in the order of the samples); see
+    :func:`~dynia.engine.kernels.readoff.analyse_windows` and its twin.
+
+    Examples
+    --------
+    >>> ranks, ordered = parameter_ranks(np.array([[0.3, 0.1, 0.3]]))
+    >>> ranks.tolist(), ordered.tolist()
+    ([[1, 0, 2]], [[0.1, 0.3, 0.3]])
+    """
+    order = np.argsort(columns, axis=1, kind="stable")
+    ranks = np.empty(columns.shape, dtype=np.int64)
+    np.put_along_axis(ranks, order, np.arange(columns.shape[1])[None, :], axis=1)
+    return ranks, np.ascontiguousarray(np.take_along_axis(columns, order, axis=1))
+
+
 class CompiledFlavour:
     """The thesis and weighted flavours on the compiled kernel :func:`~dynia.engine.kernels.readoff.analyse_windows`.
 
@@ -325,13 +345,16 @@ class CompiledFlavour:
     limits off each batch of samples, from the same window costs.
     """
 
-    _analyse_windows = staticmethod(kernels.analyse_windows)
+    @staticmethod
+    def _window_kernel():
+        """The kernel that analyses the windows, imported (with numba) when a flavour first analyses."""
+        return kernels.analyse_windows
 
     def __init__(self, params, bounds, percentage, bins, conf_level, flavour, min_points, batches=0):
         reference = ThesisFlavour(params, bounds, percentage, bins, conf_level)
         self.count = reference.count
         self.columns = reference.columns
-        self.ranks, self.ordered = kernels.parameter_ranks(self.columns)
+        self.ranks, self.ordered = parameter_ranks(self.columns)
         self.n_bins = bins
         self.bin_centres = reference.bin_centres
         self.lows = np.ascontiguousarray(bounds[:, 0])
@@ -389,7 +412,7 @@ class CompiledFlavour:
         )
         # The square roots are taken here, as the numpy flavours take them.
         if not self.batches:
-            self._analyse_windows(*common)
+            self._window_kernel()(*common)
             return WindowResults(ic, ci, median, gradient, *np.sqrt(extreme_costs))
         batch_ic, batch_ci = np.empty((self.batches, n_params, m)), np.empty((self.batches, n_params, m, 2))
         batches = (self.batch_counts, self.batch_positions)
@@ -403,7 +426,9 @@ class TwinFlavour(CompiledFlavour):
     The kernel's numbers bit for bit, and nothing to compile; no Monte Carlo batches.
     """
 
-    _analyse_windows = staticmethod(twin.analyse_windows)
+    @staticmethod
+    def _window_kernel():
+        return twin.analyse_windows
 
 
 def importance_weights(weights, n_samples):

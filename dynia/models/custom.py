@@ -38,6 +38,8 @@ array([[0.   , 0.5  , 0.875]])
 from __future__ import annotations
 
 import copy
+import functools
+import sys
 from collections.abc import Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 
@@ -46,13 +48,6 @@ import numpy as np
 from ..errors import DyniaError, ModelError
 from ..settings import check_dt, check_x0
 from .base import FLUSH_BELOW, Model, SameOutput, SimulationState, flush_tiny, refuse_ignored_params, user_code_failed
-
-try:
-    import numba
-    from numba.core.registry import CPUDispatcher
-except ImportError:  # the Python time loop serves
-    numba = None
-    CPUDispatcher = ()
 
 __all__ = ["FunctionModel", "StateSpaceModel", "StateErrors"]
 
@@ -279,7 +274,7 @@ class StateSpaceModel(Model):
             if state.shape != (self.n_states,) or not np.isfinite(state).all():
                 raise ModelError(f"x0 must be {self.n_states} finite numbers (n_states) or a callable; got {x0!r}")
             self.x0 = state
-        self.compiled = numba is not None and isinstance(step, CPUDispatcher) and isinstance(output, CPUDispatcher)
+        self.compiled = _is_numba_function(step) and _is_numba_function(output)
 
     def __repr__(self) -> str:
         return f"StateSpaceModel({_label(self.step_function)}, {_label(self.output_function)})"
@@ -373,7 +368,7 @@ class StateSpaceModel(Model):
         if self.compiled:
             sims = np.empty((params.shape[0], piece.shape[0]))
             try:
-                state = _compiled_loop(self.step_function, self.output_function, state, piece, params, dt, sims)
+                state = _compiled_loops()[0](self.step_function, self.output_function, state, piece, params, dt, sims)
             except Exception as error:
                 raise ModelError(f"{self!r}: the compiled time loop failed: {type(error).__name__}: {error}") from error
             return sims, state
@@ -424,7 +419,16 @@ class StateSpaceModel(Model):
         return y_k, flush_tiny(following)
 
 
-if numba is not None:
+def _is_numba_function(function):
+    """Whether ``function`` is a ``numba.njit`` function, found without importing numba (a numba function has)."""
+    numba = sys.modules.get("numba")
+    return numba is not None and isinstance(function, numba.core.registry.CPUDispatcher)
+
+
+@functools.cache
+def _compiled_loops():
+    """The time loops of a compiled StateSpaceModel, (outputs, errors): made, with numba imported, on first use."""
+    import numba
 
     @numba.njit(cache=False)
     def _flushed(state):
@@ -459,8 +463,7 @@ if numba is not None:
             state = _flushed(np.ascontiguousarray(step(state, piece[k], params, dt)))
         return state
 
-else:  # pragma: no cover - StateSpaceModel.compiled is False without numba
-    _flushed = _compiled_loop = _compiled_errors = None
+    return _compiled_loop, _compiled_errors
 
 
 class StateErrors:
@@ -518,7 +521,7 @@ class StateErrors:
 
         def block(number):
             lo, hi = self._ranges[number]
-            self._states[number] = _compiled_errors(
+            self._states[number] = _compiled_loops()[1](
                 model.step_function,
                 model.output_function,
                 self._states[number],

@@ -68,17 +68,31 @@ some 20 CPU-s, which is why a small run takes their numpy twin
 (:mod:`dynia.engine.twin`) and compiles nothing.
 """
 
-from .batches import analyse_windows_batched
-from .compile import AVAILABLE
-from .driver import CompiledErrors, compiled
-from .ranks import parameter_ranks
-from .readoff import analyse_windows
+import importlib
 
-__all__ = [
-    "AVAILABLE",
-    "compiled",
-    "analyse_windows",
-    "analyse_windows_batched",
-    "parameter_ranks",
-    "CompiledErrors",
-]
+# Each name loads its module on first use: importing the package loads neither numba nor a kernel, so a run that
+# the numpy twin analyses (dynia.engine.twin) never imports numba (a third of a second).
+_HOMES = {
+    "AVAILABLE": "compile",
+    "compiled": "driver",
+    "CompiledErrors": "driver",
+    "analyse_windows": "readoff",
+    "analyse_windows_batched": "batches",
+}
+
+__all__ = list(_HOMES)
+
+
+_MODULES = frozenset({"batches", "compile", "driver", "fused", "ranks", "readoff", "selection", "simulate", "sums"})
+
+
+def __getattr__(name):
+    if name in _HOMES:
+        return getattr(importlib.import_module(f"{__name__}.{_HOMES[name]}"), name)
+    if name in _MODULES:
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__) | _MODULES)

@@ -66,7 +66,7 @@ def _batch_state(batches, ranks):
     :func:`~dynia.engine.kernels.selection.next_bracket`, whose top bounds
     its candidates) and last threshold, its behavioural set, and the batch
     of the sample at every rank of every parameter (``ranks``, see
-    :func:`~dynia.engine.kernels.ranks.parameter_ranks`).
+    :func:`~dynia.engine.flavours.parameter_ranks`).
     """
     counts = batches[0]
     n_batches = counts.shape[0]

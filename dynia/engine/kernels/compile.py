@@ -12,15 +12,12 @@ import :func:`drop_stale_cache` deletes every cached kernel of the package
 older than its newest source file, and they compile afresh.
 """
 
+import importlib.util
 import os
 from pathlib import Path
 
-try:
-    import numba
-except ImportError:  # the numpy path serves
-    numba = None
-
-AVAILABLE = numba is not None
+# Whether numba is installed, found without importing it: it is imported when the first kernel is made.
+AVAILABLE = importlib.util.find_spec("numba") is not None
 
 __all__ = ["AVAILABLE", "jit", "inner", "drop_stale_cache"]
 
@@ -52,6 +49,8 @@ def jit(function, **options):
     """``function`` compiled by numba, releasing the GIL (``options`` as ``numba.njit`` takes them), or as it is."""
     if not AVAILABLE:
         return function
+    import numba
+
     try:
         # Compiled once, then loaded from numba's on-disk cache: next to this module, else the user's cache directory.
         return numba.njit(nogil=True, cache=True, **options)(function)

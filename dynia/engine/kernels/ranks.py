@@ -1,6 +1,7 @@
 """Order statistics of large sets counted through the samples' ranks: a bitset per set, no selection.
 
-Each parameter's values are sorted once per run (:func:`parameter_ranks`).
+Each parameter's values are sorted once per run
+(:func:`dynia.engine.flavours.parameter_ranks`).
 A set's k-th smallest value is then the sorted value at its k-th smallest
 rank: its members' ranks are set as bits of a word array and counted in
 order, a word at a time, in time linear in the samples / 64 rather than in
@@ -13,28 +14,9 @@ import numpy as np
 
 from .compile import inner, jit
 
-__all__ = ["parameter_ranks", "ranked_order_statistics", "batch_limits"]
+__all__ = ["ranked_order_statistics", "batch_limits"]
 
 _ONE = np.uint64(1)
-
-
-def parameter_ranks(columns):
-    """``(ranks, ordered)`` of ``columns`` (n_params, n_samples), as the window analysis takes them.
-
-    ``ordered`` holds each row sorted, ``ranks`` every sample's position in
-    its row's stable sort (ties in the order of the samples); see
-    :func:`~dynia.engine.kernels.readoff.analyse_windows`.
-
-    Examples
-    --------
-    >>> ranks, ordered = parameter_ranks(np.array([[0.3, 0.1, 0.3]]))
-    >>> ranks.tolist(), ordered.tolist()
-    ([[1, 0, 2]], [[0.1, 0.3, 0.3]])
-    """
-    order = np.argsort(columns, axis=1, kind="stable")
-    ranks = np.empty(columns.shape, dtype=np.int64)
-    np.put_along_axis(ranks, order, np.arange(columns.shape[1])[None, :], axis=1)
-    return ranks, np.ascontiguousarray(np.take_along_axis(columns, order, axis=1))
 
 
 @inner

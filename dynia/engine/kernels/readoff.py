@@ -14,7 +14,7 @@ What every window is read off by, the ``rules``, is the tuple (samples,
 bounds, levels, weighted, bin_of): ``samples`` = (columns, ranks,
 ordered), the samples' parameter values (n_params, n_samples), every
 sample's position in the stable sort of its row of ``columns`` and the
-rows sorted (see :func:`~dynia.engine.kernels.ranks.parameter_ranks`);
+rows sorted (see :func:`~dynia.engine.flavours.parameter_ranks`);
 ``bounds`` = (lows, highs), the range of each parameter; the weighted
 limits' CLD levels; whether the limits are weighted; and every sample's
 gradient bin per parameter.
