@@ -90,6 +90,18 @@ def example_firstorder_input(steps=500):
     return dynia.synthetic.example_firstorder_input(steps)
 
 
+@pytest.fixture
+def fresh_process(monkeypatch):
+    """The engine's choice as in a fresh process: no kernel loaded, no analysis run on the twin yet.
+
+    Whatever the tests before ran in this worker (and tests/warm_kernels.py loads the kernels first).
+    """
+    from dynia.engine import kernels, twin
+
+    monkeypatch.setattr(kernels, "compiled", lambda: False)
+    monkeypatch.setattr(twin, "analyses_run", 0)
+
+
 @pytest.fixture(scope="session")
 def example1():
     """Thesis example 1 on 500 steps: k=2, T=3, noise 0.5, 2000 samples of [0, 7]^2."""

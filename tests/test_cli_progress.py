@@ -32,9 +32,8 @@ def on_terminal(monkeypatch):
 
 
 @pytest.fixture
-def uncompiled(monkeypatch):
+def uncompiled(fresh_process):
     """The kernels as in a fresh process, whatever the tests before compiled in this one."""
-    monkeypatch.setattr(kernels, "compiled", lambda: False)
 
 
 def _identify(capsys, tmp_path, *extra):

@@ -11,6 +11,7 @@ sets tied exactly. Then what the twin refuses, how "auto" chooses, and that the 
 """
 
 import dataclasses
+import importlib
 import os
 import subprocess
 import sys
@@ -106,7 +107,7 @@ def record(steps=240, seed=0, gaps=True):
 
 
 @needs_numba
-def test_the_quick_start_runs_on_the_twin_with_the_kernels_numbers():
+def test_the_quick_start_runs_on_the_twin_with_the_kernels_numbers(fresh_process):
     u, y = quick_start_record()
     options = dict(n_samples=2000, n=10, percentage=10, rng=1)
     auto = dynia.run(u, y, FirstOrder(), {"K": (0, 7), "T": (0, 7)}, **options)
@@ -285,7 +286,7 @@ def test_what_the_twin_does_not_cover_it_refuses():
 
 @needs_numba
 @pytest.mark.parametrize("engine", ["auto", "twin"])
-def test_auto_takes_the_twin_for_small_runs_it_covers(engine, monkeypatch):
+def test_auto_takes_the_twin_for_small_runs_it_covers(engine, fresh_process, monkeypatch):
     settings = AnalysisSettings(n_samples=100, engine=engine)
 
     def chosen(n_samples, steps, **changes):
@@ -322,3 +323,20 @@ def test_the_quick_start_compiles_nothing(tmp_path):
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "[]"
     assert not [path for path in cache.rglob("*") if path.is_file()]  # numba makes a module's folder, and no more
+
+
+@needs_numba
+def test_a_process_that_loaded_the_kernels_or_ran_the_twin_often_takes_the_kernels(fresh_process, monkeypatch):
+    """The numbers are the same either way: "auto" takes whichever costs this process less."""
+    settings, params = AnalysisSettings(n_samples=100), np.ones((100, 2))
+    assert chosen_engine(settings, params, 50) == "twin"
+    monkeypatch.setattr(twin, "analyses_run", twin.AUTO_MOST_RUNS - 1)
+    u, y = quick_start_record()
+    dynia.run(u, y, FirstOrder(), {"K": (0, 7), "T": (0, 7)}, n_samples=200, n=3, rng=1)  # the tenth on the twin
+    assert twin.analyses_run == twin.AUTO_MOST_RUNS
+    assert chosen_engine(settings, params, 50) == "numba"
+    monkeypatch.setattr(twin, "analyses_run", 0)
+    importlib.import_module("dynia.engine.kernels.driver")
+    monkeypatch.setattr(kernels, "compiled", lambda: True)  # a run of the process loaded them
+    assert chosen_engine(settings, params, 50) == "numba"
+    assert chosen_engine(settings.replace(engine="twin"), params, 50) == "twin"  # asked for, it is taken

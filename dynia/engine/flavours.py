@@ -14,6 +14,7 @@ kernel :func:`dynia.engine.kernels.batches.analyse_windows_batched`), from which
 """
 
 import math
+import sys
 from typing import NamedTuple
 
 import numpy as np
@@ -97,14 +98,15 @@ def chosen_engine(settings, params, n_steps, weights=None, model=None):
     "auto" takes the compiled kernels where they can (:func:`compiled_engine`), else numpy; and, where it would take
     the kernels, their numpy twin (:mod:`dynia.engine.twin`), which gives their numbers and compiles nothing, for a
     small run that the twin covers (at most :data:`~dynia.engine.twin.AUTO_MOST_VALUES` samples x steps and
-    :data:`~dynia.engine.twin.AUTO_MOST_STEPS` steps). "twin" refuses a run the twin does not cover. ``params``
-    (n_samples, n_params) are the sets analysed, ``model`` the model a run simulates (none for given simulations or
-    errors).
+    :data:`~dynia.engine.twin.AUTO_MOST_STEPS` steps), while the process has not loaded the kernels and has run
+    fewer than :data:`~dynia.engine.twin.AUTO_MOST_RUNS` analyses on the twin. "twin" refuses a run the twin does
+    not cover. ``params`` (n_samples, n_params) are the sets analysed, ``model`` the model a run simulates (none for
+    given simulations or errors).
     """
     engine = settings.engine
     compiled = compiled_engine(engine, settings.flavour, weights)
     small = n_steps <= twin.AUTO_MOST_STEPS and params.shape[0] * n_steps <= twin.AUTO_MOST_VALUES
-    if engine == "twin" or (engine == "auto" and compiled and small):
+    if engine == "twin" or (engine == "auto" and compiled and small and not _kernels_pay()):
         if twin.covers(settings.flavour, params, weights, settings.ic_error, model):
             return "twin"
         if engine == "twin":
@@ -114,6 +116,17 @@ def chosen_engine(settings, params, n_steps, weights=None, model=None):
                 "'numpy' for this analysis"
             )
     return "numba" if compiled else "numpy"
+
+
+def _kernels_pay():
+    """Whether this process is better served by the kernels than their twin, even for a small run.
+
+    So once a run has loaded them, or after :data:`~dynia.engine.twin.AUTO_MOST_RUNS` analyses on the twin. The
+    kernels' module is not imported to find out: no run loaded them while it is not.
+    """
+    if twin.analyses_run >= twin.AUTO_MOST_RUNS:
+        return True
+    return "dynia.engine.kernels.driver" in sys.modules and kernels.compiled()
 
 
 def takes_kernels(settings, n_samples, n_steps, model=None):
@@ -425,6 +438,10 @@ class TwinFlavour(CompiledFlavour):
 
     The kernel's numbers bit for bit, and nothing to compile; no Monte Carlo batches.
     """
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        twin.analyses_run += 1
 
     @staticmethod
     def _window_kernel():

@@ -52,7 +52,7 @@ it covers. tests/test_twin.py checks it against the kernels bit for bit.
 
 import numpy as np
 
-__all__ = ["AUTO_MOST_VALUES", "AUTO_MOST_STEPS", "covers", "analyse_windows", "window_sums"]
+__all__ = ["AUTO_MOST_VALUES", "AUTO_MOST_STEPS", "AUTO_MOST_RUNS", "covers", "analyse_windows", "window_sums"]
 
 # The largest run that engine "auto" analyses on the twin rather than on the compiled kernels: samples x steps, and
 # steps, since much of a run on the twin is Python per step (the models' numpy recursion, the window sums, the
@@ -62,6 +62,15 @@ __all__ = ["AUTO_MOST_VALUES", "AUTO_MOST_STEPS", "covers", "analyse_windows", "
 # 20 CPU-s to compile in a fresh process, or a second to load from numba's cache.
 AUTO_MOST_VALUES = 2_000_000
 AUTO_MOST_STEPS = 1_000
+# How many analyses one process runs on the twin before "auto" takes the kernels even for small runs: ten cost about
+# as much as loading the kernels from numba's cache, and a process that goes on analysing small records (a study,
+# a notebook, a test suite) then runs each at a fifth of the twin's cost, for one compile at worst. "auto" also takes
+# the kernels once a run of the process has loaded them. The numbers are the same either way; only the recorded
+# engine differs.
+AUTO_MOST_RUNS = 10
+
+# How many analyses this process has run on the twin (dynia.engine.flavours.TwinFlavour counts them).
+analyses_run = 0
 
 
 def covers(flavour, params, weights=None, ic_error=False, model=None):
