@@ -31,11 +31,6 @@ def on_terminal(monkeypatch):
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
 
 
-@pytest.fixture
-def uncompiled(fresh_process):
-    """The kernels as in a fresh process, whatever the tests before compiled in this one."""
-
-
 def _identify(capsys, tmp_path, *extra):
     out = tmp_path / "fit"
     status, stdout, stderr = cli_run(capsys, "identify", HEATING, *HEATING_ARGS, "--no-plots", *extra, "--out", out)
@@ -81,7 +76,7 @@ def on_kernels(monkeypatch):
     monkeypatch.setattr(twin, "AUTO_MOST_VALUES", 0)
 
 
-def test_a_terminal_shows_progress_on_stderr_and_never_on_stdout(tmp_path, capsys, uncompiled, monkeypatch):
+def test_a_terminal_shows_progress_on_stderr_and_never_on_stdout(tmp_path, capsys, fresh_process, monkeypatch):
     on_terminal(monkeypatch)
     on_kernels(monkeypatch)
     stdout, stderr, _ = _identify(capsys, tmp_path)
@@ -90,7 +85,7 @@ def test_a_terminal_shows_progress_on_stderr_and_never_on_stdout(tmp_path, capsy
     assert set(_table(stdout)) == {"K", "T"}
 
 
-def test_quiet_silences_the_progress_but_not_the_result(tmp_path, capsys, uncompiled, monkeypatch):
+def test_quiet_silences_the_progress_but_not_the_result(tmp_path, capsys, fresh_process, monkeypatch):
     on_terminal(monkeypatch)
     stdout, stderr, found = _identify(capsys, tmp_path, "--quiet")
     assert BAR not in stderr and NOTICE not in stderr and WROTE not in stderr
@@ -110,7 +105,7 @@ def test_the_compilation_notice_only_before_the_kernels_are_compiled(tmp_path, c
         assert BAR not in stderr and NOTICE not in stderr and WROTE in stderr
 
 
-def test_a_run_on_the_twin_compiles_nothing_and_says_nothing_of_compiling(tmp_path, capsys, uncompiled, monkeypatch):
+def test_a_run_on_the_twin_compiles_nothing_and_says_nothing_of_compiling(tmp_path, capsys, fresh_process, monkeypatch):
     on_terminal(monkeypatch)
     _, stderr, _ = _identify(capsys, tmp_path)  # 801 steps x 2000 sets: "auto" takes the twin
     assert BAR in stderr and NOTICE not in stderr
@@ -132,14 +127,14 @@ def test_a_second_run_shows_the_progress_of_both_analyses(tmp_path, capsys, monk
     assert BAR not in stdout and "second run" in stdout
 
 
-def test_analyse_outside_a_terminal_writes_nothing_but_warnings_to_stderr(tmp_path, capsys, uncompiled):
+def test_analyse_outside_a_terminal_writes_nothing_but_warnings_to_stderr(tmp_path, capsys, fresh_process):
     status, stdout, stderr = cli_run(capsys, "analyse", HEATING, *HEATING_ARGS, "--no-plots", "--out", tmp_path / "a")
     cli_succeeded(status, stdout, stderr)
     assert all(line.startswith("dynia: warning:") for line in stderr.splitlines()), stderr
 
 
 @pytest.mark.parametrize("quiet", [False, True])
-def test_suggest_json_stays_json_on_a_terminal(capsys, uncompiled, monkeypatch, quiet):
+def test_suggest_json_stays_json_on_a_terminal(capsys, fresh_process, monkeypatch, quiet):
     on_terminal(monkeypatch)
     on_kernels(monkeypatch)
     args = ["--seed", "1", "--max-samples", "2000", "--json"] + (["--quiet"] if quiet else [])
