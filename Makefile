@@ -67,8 +67,12 @@ test: $(INSTALLED)
 
 # pytest runs with a throwaway PostgreSQL server, started and stopped by .ci/with-postgres (its URL in
 # DYNIA_TEST_POSTGRES_URL; a server named there already is used instead). Its binaries: apt-get install postgresql.
+# One BLAS thread a process: every pytest-xdist worker already has a core of its own, and OpenBLAS threads that wait
+# for a core another worker holds made the small matrices of the models (scipy's expm of a TransferFunction, the
+# fits) up to 40 times slower on a busy machine; tests/test_fast.py and the model tests took 136 s instead of 76 s.
+# The notebooks run so already (tests/notebook.env).
 pytest: $(INSTALLED)
-	.ci/with-postgres $(PY) -m pytest
+	OPENBLAS_NUM_THREADS=1 .ci/with-postgres $(PY) -m pytest
 
 # The wheel a user installs, used from outside the checkout (see .ci/check-wheel).
 check-wheel: $(INSTALLED)
