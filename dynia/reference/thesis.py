@@ -484,19 +484,34 @@ def _first_of_stable_argsort(costs, count_max):
     smallest cost (partition and sort agree on it, NaN last), so a stable sort of just the samples costing
     that much or less, kept in sample order, ranks them as the sort of the whole row does, ties included.
     """
-    kth_cost = np.partition(costs, count_max - 1, axis=1)[:, count_max - 1 : count_max]
+    partitioned = np.argpartition(costs, count_max - 1, axis=1)
+    kth_cost = np.take_along_axis(costs, partitioned[:, count_max - 1 : count_max], axis=1)
     # A NaN there means fewer than count_max costs are numbers: then every sample is a candidate.
     candidate = (costs <= kth_cost) | np.isnan(kth_cost)
-    rows, columns = np.nonzero(candidate)
-    per_row = candidate.sum(axis=1)
-    position = np.arange(rows.size) - np.repeat(np.cumsum(per_row) - per_row, per_row)
-    # NaN after a row's candidates: the stable sort puts the padding behind them, NaN candidates included.
-    candidate_costs = np.full((costs.shape[0], per_row.max()), np.nan)
-    candidate_costs[rows, position] = costs[rows, columns]
-    candidate_samples = np.zeros(candidate_costs.shape, dtype=np.intp)
-    candidate_samples[rows, position] = columns
+    candidates = candidate.sum(axis=1)
+    best = np.empty((costs.shape[0], count_max), dtype=np.intp)
+    # Where no other cost ties the count_max-th, the partition's first count_max are the candidates.
+    exact = np.flatnonzero(candidates == count_max)
+    samples = np.sort(partitioned[exact, :count_max], axis=1)
+    best[exact] = _sorted_by_cost(costs[exact[:, None], samples], samples, count_max)
+    tied = np.flatnonzero(candidates != count_max)
+    if tied.size:
+        rows, samples = np.nonzero(candidate[tied])
+        counts = candidates[tied]
+        position = np.arange(rows.size) - np.repeat(np.cumsum(counts) - counts, counts)
+        # Rows shorter than the longest are padded with NaN costs, which the stable sort puts after theirs.
+        padded = np.zeros((tied.size, counts.max()), dtype=np.intp)
+        padded[rows, position] = samples
+        padded_costs = np.full(padded.shape, np.nan)
+        padded_costs[rows, position] = costs[tied[rows], samples]
+        best[tied] = _sorted_by_cost(padded_costs, padded, count_max)
+    return best
+
+
+def _sorted_by_cost(candidate_costs, candidates, count_max):
+    """The first ``count_max`` of each row of ``candidates`` (in sample order) in a stable sort by cost."""
     order = np.argsort(candidate_costs, axis=1, kind="stable")[:, :count_max]
-    return np.take_along_axis(candidate_samples, order, axis=1)
+    return np.take_along_axis(candidates, order, axis=1)
 
 
 def _likelihoods(best_costs):
