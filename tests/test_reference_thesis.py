@@ -197,8 +197,8 @@ def _window_by_window(costs, par, lb, ub, bins, percentage, conf_level):
     ns = par.size
     count_max = int(ns * (percentage / 100))
     rows = []
-    for window_costs_ in costs:
-        best_mat, _ = thesis.select_best_parameters(window_costs_, par, count_max)
+    for costs_of_window in costs:
+        best_mat, _ = thesis.select_best_parameters(costs_of_window, par, count_max)
         try:
             _, CI, _, gradient_vec = thesis.run_dynia(ns, par, best_mat, lb, ub, bins, conf_level=conf_level)
         except dynia.errors.SettingsError as error:
@@ -279,12 +279,15 @@ def test_moving_window_from_costs_equals_the_oracle_across_chunks_of_windows():
 
 
 def test_moving_window_from_costs_stops_where_the_matlab_does():
-    # The smallest behavioural value of the third window lies on the first bin edge: cld_gradient stops there.
-    par = np.array([0.1, 0.5, 0.9, 0.25, 0.75, 0.6])
-    costs = np.array([[0, 0, 1, 1, 1, 1], [1, 1, 1, 1, 0, 0], [1, 0, 0, 1, 1, 1], [0, 1, 1, 0, 1, 1.0]])
-    assert not _assert_fast_path_equals_oracle(costs, par, 0.0, 1.0, 3, 100 / 3)
-    with pytest.raises(ValueError, match="np.float64\\(0.5\\) lies exactly on a bin edge"):
-        thesis.moving_window_from_costs(costs, par, 0.0, 1.0, 6, 3, 100 / 3)
+    # Bins 3 on [0, 1]: the first edge is 0.5. The third window's behavioural values are 0.5 and 0.9, the
+    # smallest on that edge, where cld_gradient stops; the first window's 0.1 and 0.5 pass.
+    par = np.array([0.1, 0.5, 0.9, 0.25, 0.75, 0.6, 0.3, 0.2, 0.8, 0.4])
+    costs = np.ones((4, 10))
+    costs[0, [0, 1]] = costs[1, [4, 5]] = costs[2, [1, 2]] = costs[3, [0, 3]] = 0
+    assert not _assert_fast_path_equals_oracle(costs, par, 0.0, 1.0, 3, 20)
+    with pytest.raises(ValueError, match=r"np.float64\(0.5\) lies exactly on a bin edge"):
+        thesis.moving_window_from_costs(costs, par, 0.0, 1.0, 10, 3, 20)
+    assert _assert_fast_path_equals_oracle(costs[[0, 1, 3]], par, 0.0, 1.0, 3, 20)
 
 
 def test_moving_window_from_costs_needs_two_behavioural_sets_as_calc_likelihood_does():
