@@ -403,6 +403,10 @@ def conf_limits(par_sorted, count_max, conf_level):
     return np.array([par_sorted[cli[0]], par_sorted[cli[1]]])
 
 
+# Costs per chunk of windows in moving_window_from_costs (16 MB): its temporaries stay a few times that.
+_CHUNK_ELEMENTS = 2**21
+
+
 def moving_window_from_costs(wCost, par, lb, ub, ns, bins, percentage, *, conf_level=90):
     """``movingWindowCalcs`` for windows whose costs are given: the rest of its loop body, many windows at once.
 
@@ -454,8 +458,8 @@ def moving_window_from_costs(wCost, par, lb, ub, ns, bins, percentage, *, conf_l
     CI_t = np.zeros((n_windows, 2))
     gradient_data = np.zeros((bins, n_windows))
     count_max = math.floor(ns * (percentage / 100))
-    # Many windows at a time, each step in the arithmetic and order of the per-window functions; chunks keep
-    # the temporaries to a few megabytes however many windows there are.
+    # Many windows at a time, each step in the arithmetic and order of the per-window functions, in chunks
+    # so that the temporaries do not grow with the number of windows.
     chunk = max(1, _CHUNK_ELEMENTS // ns)
     for start in range(0, n_windows, chunk):
         windows = slice(start, min(start + chunk, n_windows))
@@ -472,9 +476,6 @@ def moving_window_from_costs(wCost, par, lb, ub, ns, bins, percentage, *, conf_l
         CI_t[windows] = CI.T
         IC[windows] = 1 - (CI[1] - CI[0]) / (ub - lb)
     return IC, CI_t, gradient_data
-
-
-_CHUNK_ELEMENTS = 2**21
 
 
 def _first_of_stable_argsort(costs, count_max):
