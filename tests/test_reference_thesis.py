@@ -188,6 +188,119 @@ def test_moving_window_from_costs_equals_moving_window_calcs():
         np.testing.assert_array_equal(got, expected)
 
 
+def _window_by_window(costs, par, lb, ub, bins, percentage, conf_level):
+    """The oracle for moving_window_from_costs: movingWindowCalcs's loop body over given costs, window by window.
+
+    Returns IC, CI_t and gradient_data of the windows the MATLAB gets through, and the error of the first it
+    stops at (None if none).
+    """
+    ns = par.size
+    count_max = int(ns * (percentage / 100))
+    rows = []
+    for costs_of_window in costs:
+        best_mat, _ = thesis.select_best_parameters(costs_of_window, par, count_max)
+        try:
+            _, CI, _, gradient_vec = thesis.run_dynia(ns, par, best_mat, lb, ub, bins, conf_level=conf_level)
+        except dynia.errors.SettingsError as error:
+            return None, error
+        rows.append((1 - (CI[1] - CI[0]) / (ub - lb), CI, gradient_vec[:, 0]))
+    IC, CI_t, gradient = (np.array(column) for column in zip(*rows))
+    return (IC, CI_t, gradient.T), None
+
+
+def _bin_limits(lb, ub, bins):
+    """cld_gradient's limits, by its repeated addition."""
+    limits = [lb + (ub - lb) / (bins - 1)]
+    while len(limits) < bins + 1:
+        limits.append(limits[-1] + (ub - lb) / (bins - 1))
+    return limits
+
+
+def _awkward_window_problem(rng, ns, n_windows, bins, lb, ub):
+    """Costs with ties, inf and NaN; parameter values with ties, on bin edges and off the sampling range."""
+    width = ub - lb
+    values = np.r_[
+        rng.uniform(lb - 0.1 * width, ub + 0.1 * width, 6),
+        _bin_limits(lb, ub, bins)[1:],  # edges of the second bin on (on the first one the MATLAB stops)
+        lb + width / (bins - 1) * np.arange(2, bins + 1),  # the edges as lb + k w, a rounding away
+        [ub, lb],
+    ]
+    par = rng.choice(values, ns) if rng.random() < 0.7 else rng.uniform(lb, ub, ns)
+    levels = [np.arange(4.0) / 3, rng.uniform(0, 2, 20), np.array([0.0, -0.0, 0.5])][rng.integers(3)]
+    costs = rng.choice(levels, (n_windows, ns))
+    for value, share in ((np.inf, rng.uniform(0, 0.3)), (np.nan, rng.uniform(0, 0.3))):
+        costs[rng.random(costs.shape) < share] = value
+    costs[rng.random(n_windows) < 0.1] = np.nan  # all NaN: every likelihood NaN
+    costs[rng.random(n_windows) < 0.1] = np.inf
+    mostly_nan = rng.random(n_windows) < 0.1  # fewer numbers than behavioural sets
+    costs[mostly_nan, : ns - 1] = np.nan
+    continuous = rng.random(n_windows) < 0.3
+    costs[continuous] = rng.random((continuous.sum(), ns))
+    return costs, par
+
+
+def _assert_fast_path_equals_oracle(costs, par, lb, ub, bins, percentage, conf_level=90):
+    expected, error = _window_by_window(costs, par, lb, ub, bins, percentage, conf_level)
+    if error is not None:
+        with pytest.raises(dynia.errors.SettingsError) as raised:
+            thesis.moving_window_from_costs(costs, par, lb, ub, par.size, bins, percentage, conf_level=conf_level)
+        assert str(raised.value) == str(error)
+        return False
+    got = thesis.moving_window_from_costs(costs, par, lb, ub, par.size, bins, percentage, conf_level=conf_level)
+    for got_array, expected_array in zip(got, expected, strict=True):
+        np.testing.assert_array_equal(got_array, expected_array)
+    return True
+
+
+# Where a window keeps an inf cost the oracle's calc_likelihood subtracts -inf from -inf: NaN, as in MATLAB.
+_ORACLE_ON_INF_COSTS = pytest.mark.filterwarnings("ignore:invalid value encountered in subtract:RuntimeWarning")
+
+
+@pytest.mark.parametrize("seed", range(40))
+@_ORACLE_ON_INF_COSTS
+def test_moving_window_from_costs_equals_the_oracle_window_by_window(seed):
+    rng = np.random.default_rng(seed)
+    ns, percentage = [(40, 5), (100, 2), (60, 5), (50, 10), (80, 25), (30, 100), (200, 1), (120, 50)][seed % 8]
+    bins = int(rng.choice([2, 3, 4, 7, 40]))
+    lb = float(rng.choice([0.0, 0.1, -3.0, 1.0]))
+    ub = lb + float(rng.choice([1.0, 0.7, 6.0, 2.0]))
+    conf_level = float(rng.choice([90, 50, 99.9]))
+    costs, par = _awkward_window_problem(rng, ns, 120, bins, lb, ub)
+    if not _assert_fast_path_equals_oracle(costs, par, lb, ub, bins, percentage, conf_level):
+        # The oracle stopped at a window: the windows that it gets through, without that one, compare too.
+        keep = np.ones(len(costs), dtype=bool)
+        for t in range(len(costs)):
+            keep[t] = _window_by_window(costs[t : t + 1], par, lb, ub, bins, percentage, conf_level)[1] is None
+        assert not keep.all()
+        assert _assert_fast_path_equals_oracle(costs[keep], par, lb, ub, bins, percentage, conf_level)
+
+
+@_ORACLE_ON_INF_COSTS
+def test_moving_window_from_costs_equals_the_oracle_across_chunks_of_windows():
+    # 10 000 samples: 230 windows span two of the fast path's chunks, and the 500 behavioural sets'
+    # likelihoods are summed over several of numpy's pairwise blocks.
+    rng = np.random.default_rng(11)
+    costs, par = _awkward_window_problem(rng, 10_000, 230, 40, 1.0, 3.0)
+    assert _assert_fast_path_equals_oracle(costs, par, 1.0, 3.0, 40, 5)
+
+
+def test_moving_window_from_costs_stops_where_the_matlab_does():
+    # Bins 3 on [0, 1]: the first edge is 0.5. The third window's behavioural values are 0.5 and 0.9, the
+    # smallest on that edge, where cld_gradient stops; the first window's 0.1 and 0.5 pass.
+    par = np.array([0.1, 0.5, 0.9, 0.25, 0.75, 0.6, 0.3, 0.2, 0.8, 0.4])
+    costs = np.ones((4, 10))
+    costs[0, [0, 1]] = costs[1, [4, 5]] = costs[2, [1, 2]] = costs[3, [0, 3]] = 0
+    assert not _assert_fast_path_equals_oracle(costs, par, 0.0, 1.0, 3, 20)
+    with pytest.raises(ValueError, match=r"np.float64\(0.5\) lies exactly on a bin edge"):
+        thesis.moving_window_from_costs(costs, par, 0.0, 1.0, 10, 3, 20)
+    assert _assert_fast_path_equals_oracle(costs[[0, 1, 3]], par, 0.0, 1.0, 3, 20)
+
+
+def test_moving_window_from_costs_needs_two_behavioural_sets_as_calc_likelihood_does():
+    with pytest.raises(ValueError, match="leaves 1 behavioural sets"):
+        thesis.moving_window_from_costs(np.zeros((3, 50)), np.arange(50.0), 0, 50, 50, 5, 2)
+
+
 def test_thesis_code_result_ranks_diverged_simulations_last_as_matlab_does():
     example = dynia.synthetic.thesis_example(1, np.random.default_rng(5))
     samples = np.random.default_rng(6).uniform(0, 7, (100, 2))

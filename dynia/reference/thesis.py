@@ -403,20 +403,26 @@ def conf_limits(par_sorted, count_max, conf_level):
     return np.array([par_sorted[cli[0]], par_sorted[cli[1]]])
 
 
+# Costs per chunk of windows in moving_window_from_costs (16 MB): its temporaries stay a few times that.
+_CHUNK_ELEMENTS = 2**21
+
+
 def moving_window_from_costs(wCost, par, lb, ub, ns, bins, percentage, *, conf_level=90):
-    """``movingWindowCalcs`` for windows whose costs are given: the rest of its loop body, window by window.
+    """``movingWindowCalcs`` for windows whose costs are given: the rest of its loop body, many windows at once.
 
     The cost loop of :func:`moving_window_calcs` runs in Python over every sample of every window, which
     is slow for long records. Given each window's costs ``wMAE.^2`` (for instance from
     :func:`dynia.engine.windows.window_costs`, which computes them as the MATLAB does, bit for bit), this runs
     the rest of the loop body: ``selectBestParameters``, ``runDynia`` and the information content. It
-    skips only ``cumulLikelihood``'s ``lhood_c_all``, which nothing reads. For the same costs it returns
-    what :func:`moving_window_calcs` returns.
+    skips only ``cumulLikelihood``'s ``lhood_c_all``, which nothing reads. It works on arrays of windows
+    rather than window by window, every step with the per-window functions' arithmetic in their order, so
+    for the same costs it returns what :func:`moving_window_calcs` returns, bit for bit, and stops with
+    the same error where ``cld_gradient`` stops.
 
     Parameters
     ----------
     wCost : array_like, shape (n_windows, ns)
-        Cost of every sample in every window; NaN ranks last, as MATLAB's ``sort`` puts it.
+        Cost of every sample in every window; inf and then NaN rank last, as MATLAB's ``sort`` puts them.
     par, lb, ub, ns, bins, percentage, conf_level
         As :func:`moving_window_calcs`.
 
@@ -452,19 +458,112 @@ def moving_window_from_costs(wCost, par, lb, ub, ns, bins, percentage, *, conf_l
     CI_t = np.zeros((n_windows, 2))
     gradient_data = np.zeros((bins, n_windows))
     count_max = math.floor(ns * (percentage / 100))
-    for t in range(n_windows):
-        best_mat, _ = select_best_parameters(wCost[t], par, count_max)
-        lhood = calc_likelihood(best_mat)
-        par_sorted_indices = np.argsort(best_mat[:, 1], kind="stable")
-        par_sorted = best_mat[par_sorted_indices, 1]
+    # Many windows at a time, each step in the arithmetic and order of the per-window functions, in chunks
+    # so that the temporaries do not grow with the number of windows.
+    chunk = max(1, _CHUNK_ELEMENTS // ns)
+    for start in range(0, n_windows, chunk):
+        windows = slice(start, min(start + chunk, n_windows))
+        best_indices = _first_of_stable_argsort(wCost[windows], count_max)
+        lhood = _likelihoods(np.take_along_axis(wCost[windows], best_indices, axis=1))
+        best_par = par[best_indices]
+        par_sorted_indices = np.argsort(best_par, axis=1, kind="stable")
+        par_sorted = np.take_along_axis(best_par, par_sorted_indices, axis=1)
         # cumulLikelihood's running sum, in the same order (numpy's cumsum adds left to right).
-        lhood_cumulated = np.cumsum(lhood[par_sorted_indices])
-        gradient_vec = cld_gradient(bins, ub, lb, par_sorted, lhood_cumulated, count_max)
-        CI = conf_limits(par_sorted, count_max, conf_level)
-        CI_t[t] = CI
-        IC[t] = 1 - (CI[1] - CI[0]) / (ub - lb)
-        gradient_data[:, t] = gradient_vec[:, 0]
+        lhood_cumulated = np.cumsum(np.take_along_axis(lhood, par_sorted_indices, axis=1), axis=1)
+        gradient_data[:, windows] = _cld_gradients(bins, ub, lb, par_sorted, lhood_cumulated).T
+        # conf_limits indexes the first axis: given the windows as columns it reads all their limits at once.
+        CI = conf_limits(par_sorted.T, count_max, conf_level)
+        CI_t[windows] = CI.T
+        IC[windows] = 1 - (CI[1] - CI[0]) / (ub - lb)
     return IC, CI_t, gradient_data
+
+
+def _first_of_stable_argsort(costs, count_max):
+    """Per row, the first ``count_max`` of ``np.argsort(row, kind="stable")``, without sorting the whole row.
+
+    Every sample the stable sort puts among the first ``count_max`` costs at most the ``count_max``-th
+    smallest cost (partition and sort agree on it, NaN last), so a stable sort of just the samples costing
+    that much or less, kept in sample order, ranks them as the sort of the whole row does, ties included.
+    """
+    partitioned = np.argpartition(costs, count_max - 1, axis=1)
+    kth_cost = np.take_along_axis(costs, partitioned[:, count_max - 1 : count_max], axis=1)
+    # A NaN there means fewer than count_max costs are numbers: then every sample is a candidate.
+    candidate = (costs <= kth_cost) | np.isnan(kth_cost)
+    candidates = candidate.sum(axis=1)
+    best = np.empty((costs.shape[0], count_max), dtype=np.intp)
+    # Where no other cost ties the count_max-th, the partition's first count_max are the candidates.
+    exact = np.flatnonzero(candidates == count_max)
+    samples = np.sort(partitioned[exact, :count_max], axis=1)
+    best[exact] = _sorted_by_cost(costs[exact[:, None], samples], samples, count_max)
+    tied = np.flatnonzero(candidates != count_max)
+    if tied.size:
+        rows, samples = np.nonzero(candidate[tied])
+        counts = candidates[tied]
+        position = np.arange(rows.size) - np.repeat(np.cumsum(counts) - counts, counts)
+        # Rows shorter than the longest are padded with NaN costs, which the stable sort puts after theirs.
+        padded = np.zeros((tied.size, counts.max()), dtype=np.intp)
+        padded[rows, position] = samples
+        padded_costs = np.full(padded.shape, np.nan)
+        padded_costs[rows, position] = costs[tied[rows], samples]
+        best[tied] = _sorted_by_cost(padded_costs, padded, count_max)
+    return best
+
+
+def _sorted_by_cost(candidate_costs, candidates, count_max):
+    """The first ``count_max`` of each row of ``candidates`` (in sample order) in a stable sort by cost."""
+    order = np.argsort(candidate_costs, axis=1, kind="stable")[:, :count_max]
+    return np.take_along_axis(candidates, order, axis=1)
+
+
+def _likelihoods(best_costs):
+    """:func:`calc_likelihood` of every row of ``best_costs``, with its arithmetic.
+
+    The row sums are numpy's pairwise sums along the contiguous last axis, the order in which ``np.sum``
+    adds a single row.
+    """
+    lhood = 1 - np.ascontiguousarray(best_costs)
+    lowest = lhood.min(axis=1)
+    shifted = lowest < 0
+    with np.errstate(invalid="ignore", divide="ignore"):  # inf costs make -inf - -inf and 0/0: NaN, as in MATLAB
+        lhood[shifted] = lhood[shifted] - lowest[shifted, None]
+        return lhood / lhood.sum(axis=1)[:, None]
+
+
+def _cld_gradients(bins, ub, lb, par_sorted, lhood_cumulated):
+    """The gradient column of :func:`cld_gradient` for every row of ``par_sorted`` at once.
+
+    ``cld_gradient`` meets bin b with ``next_limit`` at the b-th sum of its repeated addition. Its first
+    loop passes the bins whose limit lies below the smallest value and its last loop those above the
+    largest, both leaving 0. Its middle loop takes the bins from there on while the limit is at most the
+    largest value. The values below a limit come first (NaN last), and their count p never decreases
+    from one bin to the next, so the scan starting where the bin before stopped (at 0 for the first) stops
+    at ``min(p, size - 1)``: the bin reads the CLD one before that stop minus the CLD where it started.
+    """
+    size = par_sorted.shape[1]
+    limits = [lb + (ub - lb) / (bins - 1)]
+    while len(limits) < bins:
+        limits.append(limits[-1] + (ub - lb) / (bins - 1))
+    within_range = np.array([limit <= ub for limit in limits])
+    limits = np.array(limits, dtype=float)
+    # Each loop runs until its condition first fails: a running "and" over the bins marks the bins it takes.
+    first_loop = np.logical_and.accumulate((limits < par_sorted[:, :1]) & within_range, axis=1)
+    middle_condition = (limits <= par_sorted[:, -1:]) & within_range
+    middle_loop = np.logical_and.accumulate(middle_condition | first_loop, axis=1) & ~first_loop
+    # A value lies below every limit from the first limit above it on.
+    first_limit_above = np.searchsorted(limits, par_sorted, side="right")
+    rows = np.arange(par_sorted.shape[0])[:, None]
+    values_first_below = np.bincount((rows * (bins + 1) + first_limit_above).ravel(), minlength=rows.size * (bins + 1))
+    values_below = np.cumsum(values_first_below.reshape(-1, bins + 1), axis=1)[:, :bins]
+    scan_stop = np.minimum(values_below, size - 1)
+    on_edge = middle_loop & (scan_stop == 0)
+    if on_edge.any():
+        window = np.argmax(on_edge.any(axis=1))
+        cld_gradient(bins, ub, lb, par_sorted[window], lhood_cumulated[window], size)  # raises the MATLAB's stop
+    scan_start = np.concatenate([np.zeros_like(scan_stop[:, :1]), scan_stop[:, :-1]], axis=1)
+    end_cld = np.take_along_axis(lhood_cumulated, np.maximum(scan_stop - 1, 0), axis=1)
+    start_cld = np.take_along_axis(lhood_cumulated, scan_start, axis=1)
+    with np.errstate(invalid="ignore"):  # inf - inf where the likelihood is NaN
+        return np.where(middle_loop, end_cld - start_cld, 0.0)
 
 
 def euler_simulation(params, u, *, x=70.0, return_state=False):
