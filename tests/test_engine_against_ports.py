@@ -8,7 +8,7 @@ from conftest import example_firstorder_input, first_order_response
 
 from dynia import mcat, thesis
 from dynia.engine.selection import lowest_stable, stable_rank_mask
-from dynia.engine.windows import moving_window
+from dynia.engine.windows import moving_window, window_costs
 from dynia.errors import SettingsError
 
 
@@ -48,10 +48,15 @@ def test_thesis_flavour_equals_the_port_on_example1(example1):
     e = example1
     # The numpy engine is the port's arithmetic; the compiled one keeps the contract of tests/test_fast.py with it.
     res = moving_window(e["y"], e["sims"], e["params"], e["bounds"], n=10, engine="numpy")
-    for p in range(2):  # the port takes ~3 s a parameter here
-        IC, CI_t, _ = thesis.moving_window_calcs(500, e["params"][:, p], 0, 7, 2000, e["sims"], e["y"], 40, 10, 10)
-        np.testing.assert_array_equal(res.ic[p], IC)
-        np.testing.assert_array_equal(res.ci[p], CI_t)
+    # The port's loop over every sample of every window takes ~14 CPU-s a parameter here. Its window costs do not
+    # depend on the parameter, so the second parameter goes through moving_window_from_costs, the port's own rest of
+    # the loop body on the same costs (equal to the port bit for bit: tests/test_reference_thesis.py).
+    IC, CI_t, _ = thesis.moving_window_calcs(500, e["params"][:, 0], 0, 7, 2000, e["sims"], e["y"], 40, 10, 10)
+    costs = window_costs(e["y"], e["sims"], 10, 0, 500)
+    IC_T, CI_t_T, _ = thesis.moving_window_from_costs(costs, e["params"][:, 1], 0, 7, 2000, 40, 10)
+    for p, (ic, ci) in enumerate([(IC, CI_t), (IC_T, CI_t_T)]):
+        np.testing.assert_array_equal(res.ic[p], ic)
+        np.testing.assert_array_equal(res.ci[p], ci)
 
 
 @pytest.mark.parametrize("seed, n, bins, samples", [(0, 10, 20, 300), (1, 2, 40, 305), (2, 0, 7, 40)])
