@@ -27,7 +27,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.signal
 
 from . import _checks
 from .errors import SettingsError
@@ -427,11 +426,13 @@ def _tag_readings(rng, truth, raster, input_wander, output_disturbance, sensor_n
     at its scans (raster plus a late stamp); the output tag scans on its own
     phase and reads the exact response between raster points.
     """
+    from scipy.signal import lfilter  # here: scipy.signal takes 1.5 s to import, and most records do not filter
+
     scan, end, time_constant = truth.scan, truth.end, truth.time_constant
     u_true = truth.base_input_at(raster) + _ornstein_uhlenbeck(rng, raster.size, scan, 120.0, input_wander)
     drive = truth.gain_at(raster) * u_true
     pole = math.exp(-scan / time_constant)
-    states, _ = scipy.signal.lfilter([1 - pole], [1, -pole], drive, zi=[pole * drive[0]])
+    states, _ = lfilter([1 - pole], [1, -pole], drive, zi=[pole * drive[0]])
     states = np.r_[drive[0], states[:-1]]  # the output at each raster time, steady at the start
     disturbance = _ornstein_uhlenbeck(rng, raster.size, scan, 60.0, output_disturbance)
 
@@ -469,10 +470,12 @@ def _nonnegative(value, name):
 
 def _ornstein_uhlenbeck(rng, size, step, correlation_time, std):
     """A stationary Ornstein-Uhlenbeck process sampled every ``step``: exact AR(1)."""
+    from scipy.signal import lfilter  # here: scipy.signal takes 1.5 s to import, and most records do not filter
+
     decay = math.exp(-step / correlation_time)
     shocks = rng.normal(0, std, size)
     shocks[1:] *= math.sqrt(1 - decay**2)
-    return scipy.signal.lfilter([1.0], [1.0, -decay], shocks)
+    return lfilter([1.0], [1.0, -decay], shocks)
 
 
 def _zero_reading(times, values, at):

@@ -92,8 +92,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import minimize_scalar
-from scipy.signal import lfilter
 
 from . import _checks
 from .errors import DataError, SettingsError, SuggestionError
@@ -258,6 +256,11 @@ def dominant_time_constant(u, y, dt=None, x0="zero"):
     -------
     TimeScale
     """
+    # Here, not at the top: scipy.signal (with the scipy.stats it loads) takes 1.5 s to import, and every command
+    # of the command line imports this module for its window's duration, which needs neither.
+    from scipy.optimize import minimize_scalar
+    from scipy.signal import lfilter
+
     u, y, dt, _ = unpack(u, y, dt)
     dt, x0 = check_dt(1.0 if dt is None else dt), check_x0(x0)
     columns = np.asarray(u, dtype=float)
