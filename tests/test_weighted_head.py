@@ -1,8 +1,9 @@
 """The importance-weighted analysis reads only the head of each window's cost order: the same bits as sorting all.
 
 The fast forms (:func:`~dynia.engine.selection.lowest_weighted_head`, the
-importance flavour) against their plain references, tolerance zero: costs
-with ties, with infinities, weights equal, zero or far apart.
+importance flavour, and the blocked :func:`~dynia.engine.windows.window_mean`
+they are fed by) against their plain references, tolerance zero: costs with
+ties, with infinities, weights equal, zero or far apart.
 """
 
 import numpy as np
@@ -12,6 +13,7 @@ from dynia.engine import cld
 from dynia.engine.flavours import ImportanceFlavour
 from dynia.engine.noise import quantile_position
 from dynia.engine.selection import lowest_weighted, lowest_weighted_head
+from dynia.engine.windows import plain_window_mean, window_mean
 
 
 def _costs(kind, rows, n, rng):
@@ -135,3 +137,18 @@ def test_a_cld_short_of_its_level_reads_the_population_largest_value():
     ci, _, _, _ = _plain_importance_analysis(flavour, mae.copy(), usable, conf_level, False)
     np.testing.assert_array_equal(results.ci, ci)
     assert results.ci[0, 0, 1] == 1.0
+
+
+@pytest.mark.parametrize("n_samples", [0, 1, 4095, 4096, 4097, 9000])
+def test_window_mean_in_blocks_equals_the_plain_pass(n_samples):
+    rng = np.random.default_rng(n_samples)
+    m, slots = 37, 21
+    errors = rng.random((n_samples, m + slots - 1)) * 10.0 ** rng.integers(-5, 5, (n_samples, m + slots - 1))
+    errors[: n_samples // 3, 5] = 1e308  # sums that overflow to inf
+    measured = (rng.random(m + slots - 1) < 0.6).astype(float)
+    measured[:slots] = 0.0  # a window without a measured point: 0/0
+    mae, present = window_mean(errors, measured, m, slots)
+    plain_mae, plain_present = plain_window_mean(errors, measured, m, slots)
+    np.testing.assert_array_equal(mae, plain_mae)
+    np.testing.assert_array_equal(present, plain_present)
+    assert mae.flags.c_contiguous and mae.shape == (m, n_samples)
