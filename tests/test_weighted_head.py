@@ -17,6 +17,11 @@ from dynia.engine.windows import plain_window_mean, window_mean
 
 
 def _costs(kind, rows, n, rng):
+    if kind == "mixed":  # rows of every kind, so behavioural sets of very different sizes side by side
+        kinds = ["distinct", "few values", "all equal", "infinite", "one big tie", "rising"]
+        return np.concatenate([_costs(kinds[row % len(kinds)], 1, n, rng) for row in range(rows)])
+    if kind == "rising":  # the order of the samples: the heaviest weights come last
+        return np.linspace(0, 1, n)[None, :].repeat(rows, axis=0)
     if kind == "distinct":
         return rng.random((rows, n))
     if kind == "few values":  # ties everywhere, the threshold among them
@@ -41,7 +46,7 @@ def _weights(kind, n, rng):
     return weights / weights.sum()
 
 
-COST_KINDS = ["distinct", "few values", "all equal", "infinite", "missing", "one big tie"]
+COST_KINDS = ["distinct", "few values", "all equal", "infinite", "missing", "one big tie", "rising", "mixed"]
 WEIGHT_KINDS = ["equal", "random", "zero", "far apart", "heavy last"]
 
 
@@ -95,7 +100,7 @@ def _plain_importance_analysis(flavour, mae, usable, conf_level, likelihood_limi
 
 
 @pytest.mark.parametrize("flavour_name", ["thesis", "weighted"])
-@pytest.mark.parametrize("cost_kind", ["distinct", "few values", "all equal", "infinite", "one big tie"])
+@pytest.mark.parametrize("cost_kind", ["distinct", "few values", "all equal", "infinite", "one big tie", "mixed"])
 @pytest.mark.parametrize("weight_kind", ["equal", "random", "far apart", "heavy last"])
 def test_importance_flavour_reads_the_head_as_the_whole_population(flavour_name, cost_kind, weight_kind):
     rng = np.random.default_rng(len(flavour_name) + 7 * len(cost_kind) + 13 * len(weight_kind))

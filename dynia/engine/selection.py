@@ -107,22 +107,21 @@ def lowest_weighted_head(cost, prior_weights, fraction):
     if np.isnan(cost).any():  # a partition places NaNs in no stable order: sort them all
         count = n_samples
     heads, lengths = [None] * rows, np.zeros(rows, dtype=np.intp)
-    pending = np.arange(rows)
-    while pending.size:
-        head = _stable_head(cost[pending], count)
+    # Every row at once first; a row whose head falls short of its fraction then grows on its own, two to eight
+    # times as its weight so far suggests.
+    pending = [(np.arange(rows), count)]
+    while pending:
+        group, count = pending.pop()
+        head = _stable_head(cost[group], count)
         cumulative = np.cumsum(prior_weights[head], axis=1)
         reached = (cumulative < fraction).sum(axis=1)
-        done = (reached < count) | (count == n_samples)
-        for row, row_head, row_reached in zip(pending[done], head[done], reached[done]):
-            lengths[row] = min(row_reached, n_samples - 1) + 1
-            heads[row] = row_head[: lengths[row]]
-        short = ~done
-        if short.any():
-            # Grow the head as the short rows' weight so far suggests, two to eight times.
-            weight_so_far = cumulative[short, -1].min()
-            growth = 1.25 * fraction / weight_so_far if weight_so_far > 0 else 8.0
-            count = min(n_samples, math.ceil(count * min(max(growth, 2.0), 8.0)))
-        pending = pending[short]
+        for row, row_head, row_reached, weight_so_far in zip(group, head, reached, cumulative[:, -1]):
+            if row_reached < count or count == n_samples:
+                lengths[row] = min(row_reached, n_samples - 1) + 1
+                heads[row] = row_head[: lengths[row]]
+            else:
+                growth = 1.25 * fraction / weight_so_far if weight_so_far > 0 else 8.0
+                pending.append((np.array([row]), min(n_samples, math.ceil(count * min(max(growth, 2.0), 8.0)))))
     width = int(lengths.max(initial=0))
     order = np.zeros((rows, width), dtype=np.intp)
     behavioural = np.arange(width) < lengths[:, None]
