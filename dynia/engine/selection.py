@@ -109,19 +109,19 @@ def lowest_weighted_head(cost, prior_weights, fraction):
     heads, lengths = [None] * rows, np.zeros(rows, dtype=np.intp)
     # Every row at once first; a row whose head falls short of its fraction then grows on its own, two to eight
     # times as its weight so far suggests.
-    pending = [(np.arange(rows), count)]
+    pending = [(slice(None), count)]
     while pending:
         group, count = pending.pop()
         head = _stable_head(cost[group], count)
         cumulative = np.cumsum(prior_weights[head], axis=1)
         reached = (cumulative < fraction).sum(axis=1)
-        for row, row_head, row_reached, weight_so_far in zip(group, head, reached, cumulative[:, -1]):
+        for row, row_head, row_reached, weight_so_far in zip(np.arange(rows)[group], head, reached, cumulative[:, -1]):
             if row_reached < count or count == n_samples:
                 lengths[row] = min(row_reached, n_samples - 1) + 1
                 heads[row] = row_head[: lengths[row]]
             else:
                 growth = 1.25 * fraction / weight_so_far if weight_so_far > 0 else 8.0
-                pending.append((np.array([row]), min(n_samples, math.ceil(count * min(max(growth, 2.0), 8.0)))))
+                pending.append((slice(row, row + 1), min(n_samples, math.ceil(count * min(max(growth, 2.0), 8.0)))))
     width = int(lengths.max(initial=0))
     order = np.zeros((rows, width), dtype=np.intp)
     behavioural = np.arange(width) < lengths[:, None]
@@ -136,12 +136,11 @@ def _stable_head(cost, count):
     chosen = np.argpartition(cost, count - 1, axis=1)[:, :count]
     threshold = np.take_along_axis(cost, chosen[:, -1:], axis=1)
     tied = (cost <= threshold).sum(axis=1) > count
-    if tied.any():
-        # More samples than count reach the threshold: those equal to it come in by index, as a stable sort takes them.
-        values, edge = cost[tied], threshold[tied]
-        below, equal = values < edge, values == edge
-        wanted = count - below.sum(axis=1, keepdims=True)
-        chosen[tied] = np.nonzero(below | (equal & (np.cumsum(equal, axis=1) <= wanted)))[1].reshape(-1, count)
+    # Where more than count samples reach the threshold, the ones equal to it come in by index, as a stable sort has it.
+    for row in np.flatnonzero(tied):
+        below = np.flatnonzero(cost[row] < threshold[row])
+        equal = np.flatnonzero(cost[row] == threshold[row])[: count - below.size]
+        chosen[row] = np.concatenate([below, equal])
     chosen.sort(axis=1)  # by index, so that the stable sort by cost keeps ties in index order
     return np.take_along_axis(
         chosen, np.argsort(np.take_along_axis(cost, chosen, axis=1), axis=1, kind="stable"), axis=1
