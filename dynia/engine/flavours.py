@@ -527,7 +527,7 @@ class ImportanceFlavour:
         likelihood = np.where(behavioural, np.where(lowest < 0, likelihood - lowest, likelihood), 0.0)
         mass = likelihood * prior
         total = _row_sums_over(mass, n_samples)
-        mass = np.where(total > 0, mass / np.where(total > 0, total, 1), prior)
+        mass = np.where(total > 0, mass / np.where(total > 0, total, 1), prior)  # all-equal costs >= 1
         limit_weights = _with_weightless_column(mass if self.likelihood_limits else prior)
         rows = order.shape[0]
         _, ci, median, gradient = _chunk_arrays(self.columns.shape[0], n_bins, rows)
