@@ -107,21 +107,24 @@ def lowest_weighted_head(cost, prior_weights, fraction):
     if np.isnan(cost).any():  # a partition places NaNs in no stable order: sort them all
         count = n_samples
     heads, lengths = [None] * rows, np.zeros(rows, dtype=np.intp)
-    # Every row at once first; a row whose head falls short of its fraction then grows on its own, two to eight
-    # times as its weight so far suggests.
-    pending = [(slice(None), count)]
+    # Every row at once first; the rows whose heads fall short of the fraction then grow two to eight times, as
+    # their weight so far suggests, together with the rows whose heads grow to about the same size.
+    pending = [(np.arange(rows), count)]
     while pending:
         group, count = pending.pop()
-        head = _stable_head(cost[group], count)
+        head = _stable_head(cost if group.size == rows else cost[group], count)
         cumulative = np.cumsum(prior_weights[head], axis=1)
         reached = (cumulative < fraction).sum(axis=1)
-        for row, row_head, row_reached, weight_so_far in zip(np.arange(rows)[group], head, reached, cumulative[:, -1]):
-            if row_reached < count or count == n_samples:
-                lengths[row] = min(row_reached, n_samples - 1) + 1
-                heads[row] = row_head[: lengths[row]]
-            else:
-                growth = 1.25 * fraction / weight_so_far if weight_so_far > 0 else 8.0
-                pending.append((slice(row, row + 1), min(n_samples, math.ceil(count * min(max(growth, 2.0), 8.0)))))
+        done = (reached < count) | (count == n_samples)
+        for row, row_head, row_reached in zip(group[done], head[done], reached[done]):
+            lengths[row] = min(row_reached, n_samples - 1) + 1
+            heads[row] = row_head[: lengths[row]]
+        weight_so_far = cumulative[~done, -1]
+        with np.errstate(divide="ignore"):
+            growth = np.clip(1.25 * fraction / weight_so_far, 2.0, 8.0)
+        counts = np.minimum(np.ceil(count * growth), n_samples).astype(np.intp)
+        scales = np.frexp(counts)[1]
+        pending += [(group[~done][scales == scale], int(counts[scales == scale].max())) for scale in np.unique(scales)]
     width = int(lengths.max(initial=0))
     order = np.zeros((rows, width), dtype=np.intp)
     behavioural = np.arange(width) < lengths[:, None]
