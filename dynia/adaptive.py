@@ -60,7 +60,7 @@ from scipy.optimize import differential_evolution
 from . import _checks
 from .bounds import parameter_box
 from .engine.error_sources import ArrayErrors
-from .engine.selection import lowest_weighted
+from .engine.selection import lowest_weighted_head
 from .engine.windows import analyse_errors, window_costs
 from .errors import SettingsError
 from .fit import record_least_squares
@@ -343,7 +343,7 @@ def _behavioural_boxes(y, sims, samples, prior_weights, fraction, n, edges, prio
     boxes = []
     for start, stop in zip(edges[:-1], edges[1:]):
         cost = window_costs(y, sims, n, start, stop, window)
-        order, behavioural = lowest_weighted(np.nan_to_num(cost, nan=np.inf), prior_weights, fraction)
+        order, behavioural = lowest_weighted_head(np.nan_to_num(cost, copy=False, nan=np.inf), prior_weights, fraction)
         chosen = np.unique(order[behavioural])
         boxes.append(_enlarged(samples[chosen].min(axis=0), samples[chosen].max(axis=0), prior, margin))
     return boxes

@@ -24,7 +24,7 @@ from ..errors import SettingsError
 from ..settings import ENGINES, FLAVOURS, ic_batches
 from . import cld, kernels, twin
 from .noise import quantile_position
-from .selection import lowest_stable, lowest_weighted, selected_columns, stable_rank_mask
+from .selection import lowest_stable, lowest_weighted_head, selected_columns, stable_rank_mask
 
 __all__ = [
     "FLAVOURS",
@@ -481,6 +481,7 @@ class ImportanceFlavour:
         self.conf_level = conf_level
         self.likelihood_limits = flavour == "weighted"
         self.bin_centres = bin_centres_of(bounds, bins)
+        self.largest = self.columns.max(axis=1)
 
     def analyse(self, mae, usable):
         return self._read_off(mae, usable, self.n_bins)
@@ -493,31 +494,78 @@ class ImportanceFlavour:
         with np.errstate(over="ignore"):
             cost = mae**2
         cost[~usable] = 0.0
-        order, behavioural = lowest_weighted(cost, self.prior_weights, self.fraction)
-        # The behavioural costs, in rank order; the rest repeat the lowest, which changes no minimum or maximum.
+        # Only the head of each window's cost order that holds a behavioural set is formed: the samples beyond
+        # weigh nothing, so they change no cumulative weight, bin mass or first value reaching a level.
+        order, behavioural = lowest_weighted_head(cost, self.prior_weights, self.fraction)
         ranked_cost = np.take_along_axis(cost, order, axis=1)
-        behavioural_cost = np.where(behavioural, ranked_cost, ranked_cost[:, :1])
+        sizes = behavioural.sum(axis=1)
+        ic, ci, median, gradient = _chunk_arrays(self.columns.shape[0], n_bins, cost.shape[0])
+        # Windows whose sets are alike in size are read off together, as wide as the largest of them.
+        for group in _alike_in_size(sizes):
+            width = sizes[group].max()
+            ci[:, group], median[:, group], gradient[:, :, group] = self._read_off_heads(
+                ranked_cost[group, :width], order[group, :width], behavioural[group, :width], cost.shape[1], n_bins
+            )
+        for p, (low, high) in enumerate(self.bounds):
+            ic[p] = 1 - (ci[p, :, 1] - ci[p, :, 0]) / (high - low)
+        # The behavioural costs ascend in rank order: the first and the last are the lowest and the largest.
+        ends = np.stack([ranked_cost[:, 0], np.take_along_axis(ranked_cost, sizes[:, None] - 1, axis=1)[:, 0]], axis=1)
+        upper = np.sqrt(_population_quantile(cost))
+        return _blank_unusable(ic, ci, median, gradient, np.sqrt(ends), upper, usable)
+
+    def _read_off_heads(self, ranked_cost, order, behavioural, n_samples, n_bins):
+        """Limits (n_params, rows, 2), median (n_params, rows) and gradient (n_params, n_bins, rows) of the heads.
+
+        ``ranked_cost``, ``order`` and ``behavioural`` (rows, k) are the heads
+        of the windows' cost orders (:func:`~dynia.engine.selection.lowest_weighted_head`)
+        out of ``n_samples``.
+        """
         prior = np.where(behavioural, self.prior_weights[order], 0.0)
-        prior /= prior.sum(axis=1, keepdims=True)
-        likelihood = 1 - np.take_along_axis(cost, order, axis=1)
+        prior /= _row_sums_over(prior, n_samples)
+        likelihood = 1 - ranked_cost
         lowest = np.where(behavioural, likelihood, np.inf).min(axis=1, keepdims=True)
         likelihood = np.where(behavioural, np.where(lowest < 0, likelihood - lowest, likelihood), 0.0)
         mass = likelihood * prior
-        total = mass.sum(axis=1, keepdims=True)
+        total = _row_sums_over(mass, n_samples)
         mass = np.where(total > 0, mass / np.where(total > 0, total, 1), prior)  # all-equal costs >= 1
+        limit_weights = _with_weightless_column(mass if self.likelihood_limits else prior)
         rows = order.shape[0]
-        ic, ci, median, gradient = _chunk_arrays(self.columns.shape[0], n_bins, rows)
+        _, ci, median, gradient = _chunk_arrays(self.columns.shape[0], n_bins, rows)
         for p, column in enumerate(self.columns):
             values = column[order]
-            low, high = self.bounds[p]
+            # Where rounding leaves the CLD short of a level, the whole population's largest value is read off:
+            # a weightless last column holds it.
             ci[p], median[p] = cld.band_and_median(
-                values, mass if self.likelihood_limits else prior, self.conf_level, weighted=True
+                np.concatenate([values, np.broadcast_to(self.largest[p], (rows, 1))], axis=1),
+                limit_weights,
+                self.conf_level,
+                weighted=True,
             )
-            ic[p] = 1 - (ci[p, :, 1] - ci[p, :, 0]) / (high - low)
             if n_bins:
-                gradient[p] = cld.binned_mass(values, mass, low, high, self.bins).T
-        upper = np.sqrt(_population_quantile(cost))
-        return _blank_unusable(ic, ci, median, gradient, np.sqrt(behavioural_cost), upper, usable)
+                gradient[p] = cld.binned_mass(values, mass, *self.bounds[p], self.bins).T
+        return ci, median, gradient
+
+
+def _alike_in_size(sizes):
+    """The rows of ``sizes`` (rows,) in groups whose sizes lie within a factor of two: arrays of row indices."""
+    scales = np.frexp(sizes)[1]
+    return [np.flatnonzero(scales == scale) for scale in np.unique(scales)]
+
+
+def _row_sums_over(values, n_columns):
+    """Each row's sum as numpy forms it over ``n_columns`` columns, ``values`` first and zeros after, (rows, 1).
+
+    numpy's pairwise summation groups a row by its length, so the zeros are
+    summed too: the totals are those of the whole population's row, bit for bit.
+    """
+    padded = np.zeros((values.shape[0], n_columns))
+    padded[:, : values.shape[1]] = values
+    return padded.sum(axis=1, keepdims=True)
+
+
+def _with_weightless_column(weights):
+    """``weights`` (rows, k) with a column of zeros appended, (rows, k + 1)."""
+    return np.concatenate([weights, np.zeros((weights.shape[0], 1))], axis=1)
 
 
 class BatchedFlavour:

@@ -129,6 +129,7 @@ __all__ = [
     "default_chunk_steps",
     "window_inputs",
     "window_mean",
+    "plain_window_mean",
     "error_scale",
     "blank_overflowed",
     "report_overflowed",
@@ -145,6 +146,10 @@ SAFE_EXPONENT = 332
 # the dozen passes over a chunk in cache for a few thousand samples; for many
 # samples the four-halo floor of default_chunk_steps sets the size instead.
 _CHUNK_VALUES = 250_000
+
+# Samples per block of window_mean: its time-major errors and sums of a block stay in cache for windows of
+# a hundred steps.
+_MEAN_BLOCK = 4096
 
 
 def moving_window(
@@ -788,12 +793,31 @@ def window_mean(window_errors, measured, m, slots):
     Returns ``mae`` (m, n_samples) and the number of measured points per
     window (m,). Sums run left to right over each window, the order of
     :func:`dynia.reference.thesis.moving_window_calcs`, so the result depends on the
-    window's own errors only and equals the port's bit for bit.
+    window's own errors only and equals the port's bit for bit
+    (:func:`plain_window_mean` is the plain form).
     """
+    present = measured[0:m].copy()
+    for shift in range(1, slots):
+        present += measured[shift : shift + m]
+    mae = np.empty((m, window_errors.shape[0]))
+    # A block of samples at a time, time-major, so that each window sum adds whole rows held in cache.
+    for first in range(0, window_errors.shape[0], _MEAN_BLOCK):
+        errors = np.ascontiguousarray(window_errors[first : first + _MEAN_BLOCK].T)
+        total = mae[:, first : first + _MEAN_BLOCK]
+        total[...] = errors[0:m]
+        # A diverged simulation (the thesis's Euler scheme for small T) sums to inf and ranks last, as in
+        # MATLAB: an expected result, not a warning for the user.
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            for shift in range(1, slots):
+                total += errors[shift : shift + m]
+            total /= present[:, None]
+    return mae, present
+
+
+def plain_window_mean(window_errors, measured, m, slots):
+    """:func:`window_mean` in one plain pass over every sample, sample-major: the reference it is tested against."""
     total = window_errors[:, 0:m].copy()
     present = measured[0:m].copy()
-    # A diverged simulation (the thesis's Euler scheme for small T) sums to inf and ranks last, as in
-    # MATLAB: an expected result, not a warning for the user.
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         for shift in range(1, slots):
             total += window_errors[:, shift : shift + m]
