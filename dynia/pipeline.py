@@ -523,9 +523,14 @@ def warn_unreached_output(u, y, model, names, box, settings):
     """Warn (:class:`UnreachedOutputWarning`) when no corner of the parameter box reaches a thousandth of the output.
 
     ``box`` holds the bounds of the parameters ``names``, in that order.
-    The size of a signal is its 99th percentile of ``|value|`` (one spike
-    does not set it). The corners of the box hold each parameter's extremes,
-    so for the usual models the largest output any set in the box can give;
+    The output's size is its 99th percentile of ``|y|`` (one spike does not
+    set it); a corner's reach is the largest ``|value|`` of its simulation,
+    which holds no spikes. (Where the input acts for less than a hundredth
+    of the record, a step and then a long rest at zero, a corner's 99th
+    percentile is its decay in the rest, decades below what it reaches while
+    the input acts: that named a box that fits as out of reach.) The corners
+    of the box hold each parameter's extremes, so for the usual models the
+    largest output any set in the box can give;
     when even theirs stays three decades below the output's, no set can fit
     it and the verdicts would be ties or noise with no word why: data in
     other units than the model (1e100 apart), an offset that moved the data
@@ -547,7 +552,9 @@ def warn_unreached_output(u, y, model, names, box, settings):
         except DyniaError:
             return
         sims[~np.isfinite(sims)] = np.nan
-        corner_sizes = np.nanpercentile(np.abs(sims), 99, axis=1)
+        simulated = ~np.isnan(sims).all(axis=1)
+        corner_sizes = np.full(sims.shape[0], np.nan)
+        corner_sizes[simulated] = np.nanmax(np.abs(sims[simulated]), axis=1)
         size = float(np.nanpercentile(np.abs(y), 99))
     known = np.isfinite(corner_sizes)
     if not known.any():  # every corner overflowed: what the box reaches is unknown

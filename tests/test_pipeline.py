@@ -181,6 +181,22 @@ def test_a_model_that_cannot_reach_the_outputs_scale_is_named(scale, model_scale
         assert "no parameter set in the box reaches the output's size" in str(named[0].message)
 
 
+def test_a_long_rest_at_zero_is_no_output_out_of_reach():
+    """The thesis's example 1, then a rest at zero for 99 % of the record: the corners' 99th percentile was their
+    decay in the rest, 1e-98 against the noise's 1.3, and the box that holds the truth was named as out of reach."""
+    u = example_firstorder_input(100_000)
+    assert np.count_nonzero(u) < 0.01 * u.size
+    y = FirstOrder().simulate([[2.0, 3.0]], u)[0] + np.random.default_rng(1).normal(0, 0.5, u.size)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = dynia.run(u, y, FirstOrder(), {"K": (0, 7), "T": (0, 7)}, n_samples=300, rng=1)
+    assert not [item for item in caught if item.category is dynia.pipeline.UnreachedOutputWarning]
+    assert {name: verdict["verdict"] for name, verdict in result.verdicts.items()} == {
+        "K": "identified",
+        "T": "identified",
+    }
+
+
 @pytest.mark.parametrize("scale", [1e-280, 1e-300, 3e-308])
 def test_a_record_below_what_the_simulation_resolves_is_refused(scale):
     """Issue 32: at 1e-290 every set tied (K 0.279, T 0.112, weak) without a word; at 1e-280 it still held."""
