@@ -309,9 +309,11 @@ def run(
         )
         screened = screened.result()
     result = _result(u, y, model, names, box, samples, settings, flavour_impl, windows, analysed, totals, screened)
-    warn_unreached_output(u, y, model, names, box, settings)
-    # The least squares simulates a few sets at a time, some ten times: through the kernel where dynia.run does.
-    result = record_least_squares(result, u, y, KernelSimulated(model) if windows.fused else model)
+    # The box's corners and the least squares (some ten times) simulate a few sets at a time: through the kernel where
+    # dynia.run does, not the model's recursion, which loops over every step in Python.
+    simulating = KernelSimulated(model) if windows.fused else model
+    warn_unreached_output(u, y, simulating, names, box, settings)
+    result = record_least_squares(result, u, y, simulating)
     return result if timestamps is None else dataclasses.replace(result, timestamps=timestamps)
 
 

@@ -256,11 +256,12 @@ def run(
         else:
             result = _analyse_to_target(u, y, model, names, box, samples, settings, generator, progress, output)
         result = dataclasses.replace(result, run=dataclasses.replace(result.run, screened=screened))
-        warn_unreached_output(u, y, model, names, box, settings)
-        # The least squares simulates a few sets at a time: through the kernel where the analysis ran on it, by the
-        # model's recursion where the twin did, which compiles nothing.
+        # The box's corners and the least squares simulate a few sets at a time: through the kernel where the analysis
+        # ran on it (the model's recursion loops over every step in Python: 4 s for the corners of 200 000 steps), by
+        # the recursion where the twin did, which compiles nothing.
         simulated = {"numba": KernelSimulated, "twin": RecursionSimulated}.get(result.settings.engine)
         fitted = simulated(model) if simulated and compiled_simulation(model) else model
+        warn_unreached_output(u, y, fitted, names, box, settings)
         result = record_least_squares(result, u, y, fitted)
         return output.commit(dated(result, timestamps))
 
@@ -547,9 +548,8 @@ def warn_unreached_output(u, y, model, names, box, settings):
     # Corners that overflow or give NaN (an unstable corner, a record of missing values) are no reach: no warnings.
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
-        try:
-            sims = np.asarray(model.simulate(corners[:, order], u, dt=settings.dt, x0=settings.x0), dtype=float)
-        except DyniaError:
+        sims = _corner_outputs(model, corners[:, order], u, settings)
+        if sims is None:
             return
         sims[~np.isfinite(sims)] = np.nan
         simulated = ~np.isnan(sims).all(axis=1)
@@ -563,11 +563,26 @@ def warn_unreached_output(u, y, model, names, box, settings):
     if np.isfinite(size) and size > 0 and reach < _REACHED_SHARE * size:
         warnings.warn(
             f"no parameter set in the box reaches the output's size: the largest output of the box's corners is "
-            f"{reach:.3g}, the output's {size:.3g} (99th percentiles of the magnitudes), three decades and more "
-            "apart; check the units and offsets of the data against the model's, and the bounds that set the gain",
+            f"{reach:.3g} in magnitude, the output's size {size:.3g} (the 99th percentile of its magnitude), three "
+            "decades and more apart; check the units and offsets of the data against the model's, and the bounds "
+            "that set the gain",
             UnreachedOutputWarning,
             stacklevel=3,
         )
+
+
+def _corner_outputs(model, corners, u, settings):
+    """The corners' simulations, (corners, n_steps); None where the model refuses a corner.
+
+    The compiled kernel (:class:`KernelSimulated`) stops at a corner whose simulation is not finite, where the
+    model's own recursion gives it NaN and simulates the others: then the recursion simulates them.
+    """
+    for simulating in (model, model._model) if isinstance(model, KernelSimulated) else (model,):
+        try:
+            return np.asarray(simulating.simulate(corners, u, dt=settings.dt, x0=settings.x0), dtype=float)
+        except DyniaError:
+            continue
+    return None
 
 
 def _overflow_cause(u):

@@ -197,6 +197,20 @@ def test_a_long_rest_at_zero_is_no_output_out_of_reach():
     }
 
 
+@pytest.mark.parametrize("engine", ["numba", "numpy", "twin"])
+@pytest.mark.parametrize("scale, warned", [(1.0, False), (1e4, True)])
+def test_the_box_reach_is_judged_alike_on_every_engine(engine, scale, warned):
+    """After a run on the kernels the corners are simulated by the kernel (the recursion loops in Python: 4 s for
+    200 000 steps); after one on numpy or the twin by the recursion. The verdict on the reach is the same."""
+    u = np.r_[np.zeros(20), np.ones(80), np.zeros(100)]
+    y = (FirstOrder().simulate([[2.0, 3.0]], u)[0] + np.random.default_rng(0).normal(0, 0.05, u.size)) * scale
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = dynia.run(u, y, FirstOrder(), {"K": (0, 7), "T": (0.1, 7)}, n_samples=300, n=5, rng=1, engine=engine)
+    assert result.settings.engine == engine
+    assert bool([item for item in caught if item.category is dynia.pipeline.UnreachedOutputWarning]) is warned
+
+
 @pytest.mark.parametrize("scale", [1e-280, 1e-300, 3e-308])
 def test_a_record_below_what_the_simulation_resolves_is_refused(scale):
     """Issue 32: at 1e-290 every set tied (K 0.279, T 0.112, weak) without a word; at 1e-280 it still held."""
