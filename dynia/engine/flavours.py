@@ -24,7 +24,7 @@ from ..errors import SettingsError
 from ..settings import ENGINES, FLAVOURS, ic_batches
 from . import cld, kernels, twin
 from .noise import quantile_position
-from .selection import lowest_stable, lowest_weighted_head, selected_columns, stable_rank_mask
+from .selection import alike_in_size, lowest_stable, lowest_weighted_head, selected_columns, stable_rank_mask
 
 __all__ = [
     "FLAVOURS",
@@ -501,7 +501,7 @@ class ImportanceFlavour:
         sizes = behavioural.sum(axis=1)
         ic, ci, median, gradient = _chunk_arrays(self.columns.shape[0], n_bins, cost.shape[0])
         # Windows whose sets are alike in size are read off together, as wide as the largest of them.
-        for group in _alike_in_size(sizes):
+        for group in alike_in_size(sizes):
             width = sizes[group].max()
             ci[:, group], median[:, group], gradient[:, :, group] = self._read_off_heads(
                 ranked_cost[group, :width], order[group, :width], behavioural[group, :width], cost.shape[1], n_bins
@@ -544,12 +544,6 @@ class ImportanceFlavour:
             if n_bins:
                 gradient[p] = cld.binned_mass(values, mass, *self.bounds[p], self.bins).T
         return ci, median, gradient
-
-
-def _alike_in_size(sizes):
-    """The rows of ``sizes`` (rows,) in groups whose sizes lie within a factor of two: arrays of row indices."""
-    scales = np.frexp(sizes)[1]
-    return [np.flatnonzero(scales == scale) for scale in np.unique(scales)]
 
 
 def _row_sums_over(values, n_columns):

@@ -4,7 +4,14 @@ import math
 
 import numpy as np
 
-__all__ = ["lowest_stable", "stable_rank_mask", "selected_columns", "lowest_weighted", "lowest_weighted_head"]
+__all__ = [
+    "lowest_stable",
+    "stable_rank_mask",
+    "selected_columns",
+    "lowest_weighted",
+    "lowest_weighted_head",
+    "alike_in_size",
+]
 
 
 def lowest_stable(values, count):
@@ -123,13 +130,26 @@ def lowest_weighted_head(cost, prior_weights, fraction):
         with np.errstate(divide="ignore"):
             growth = np.clip(1.25 * fraction / weight_so_far, 2.0, 8.0)
         counts = np.minimum(np.ceil(count * growth), n_samples).astype(np.intp)
-        scales = np.frexp(counts)[1]
-        pending += [(group[~done][scales == scale], int(counts[scales == scale].max())) for scale in np.unique(scales)]
+        pending += [(group[~done][rows], int(counts[rows].max())) for rows in alike_in_size(counts)]
     width = int(lengths.max(initial=0))
     order = np.zeros((rows, width), dtype=np.intp)
     behavioural = np.arange(width) < lengths[:, None]
     order[behavioural] = np.concatenate(heads) if rows else []
     return order, behavioural
+
+
+def alike_in_size(sizes):
+    """The indices of ``sizes`` (rows,) in groups whose sizes lie within a factor of two (one power of two).
+
+    Rows of alike sizes go through one array as wide as the largest of them, wasting at most half of it.
+
+    Examples
+    --------
+    >>> [group.tolist() for group in alike_in_size(np.array([3, 9, 2, 12, 5]))]
+    [[0, 2], [4], [1, 3]]
+    """
+    scales = np.frexp(sizes)[1]
+    return [np.flatnonzero(scales == scale) for scale in np.unique(scales)]
 
 
 def _stable_head(cost, count):
