@@ -34,7 +34,8 @@ def _picked(sums, count, bracket):
     """The kernels' costs, threshold and behavioural set for one window's ``sums``, searched first in ``bracket``."""
     n_samples = sums.size
     cost = np.empty(n_samples)
-    selection.costs_from_sums(sums, PRESENT, cost)
+    nowhere = (np.nan, np.nan)
+    selection.count_costs(sums, PRESENT, nowhere, (nowhere, nowhere), cost)
     candidates = (np.empty(n_samples, dtype=np.int64), np.empty(n_samples))
     found = selection.find_candidates(cost, 0, 1, count, bracket[1], candidates)
     threshold, _ = selection.select_near(candidates[1], found, count - 1, bracket, np.empty(n_samples))
@@ -92,14 +93,54 @@ def test_the_quantile_near_a_bracket_is_the_sorted_value(seed, where):
 
 
 def test_the_next_bracket_follows_the_last_change_within_its_limits():
-    assert selection.next_bracket(1.0, np.nan, 0.0) == (0.5, 1.5)  # the first window: widest
-    low, high = selection.next_bracket(1.0, 0.98, 0.0)  # changed by 2 %: thrice that either side
+    ranks = selection.BRACKET_RANKS
+    assert selection.next_bracket(1.0, np.nan, 0.0, ranks) == (0.5, 1.5)  # the first window: widest
+    low, high = selection.next_bracket(1.0, 0.98, 0.0, ranks)  # changed by 2 %: thrice that either side
     assert low == pytest.approx(0.94) and high == pytest.approx(1.06)
-    low, high = selection.next_bracket(1.0, 1.0, 0.0)  # unchanged: the narrowest
+    low, high = selection.next_bracket(1.0, 1.0, 0.0, ranks)  # unchanged: the narrowest
     assert low == pytest.approx(1 - selection.NARROWEST) and high == pytest.approx(1 + selection.NARROWEST)
-    low, high = selection.next_bracket(1.0, 0.9, 1000.0)  # 1000 values a unit there: 128 either side, not 0.3
+    low, high = selection.next_bracket(1.0, 0.9, 1000.0, ranks)  # 1000 values a unit there: 128 either side, not 0.3
     assert low == pytest.approx(1 - 0.128) and high == pytest.approx(1 + 0.128)
-    assert selection.next_bracket(0.0, 1.0, 0.0) == (0.0, 0.0)
+    low, high = selection.next_bracket(1.0, 0.9, 1000.0, 20)  # a set of 5: 20 either side
+    assert low == pytest.approx(1 - 0.02) and high == pytest.approx(1 + 0.02)
+    assert selection.next_bracket(0.0, 1.0, 0.0, ranks) == (0.0, 0.0)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_one_pass_counts_the_costs_against_every_guess(seed):
+    rng = np.random.default_rng(seed)
+    sums, costs = _tied_costs(rng, int(rng.integers(50, 3000)))
+    sums[::97] = np.inf  # an overflowed window sum: an infinite cost, counted as numpy counts it
+    costs = (sums / PRESENT) ** 2
+    bound, reserve = np.quantile(costs[np.isfinite(costs)], [0.02, 0.1])
+    low, high = np.quantile(costs[np.isfinite(costs)], [0.85, 0.95])
+    narrow, wide = (low, high), (low / 2, np.inf)
+    cost = np.empty(sums.size)
+    counted = selection.count_costs(sums, PRESENT, (bound, reserve), (narrow, wide), cost)
+    np.testing.assert_array_equal(cost, costs)
+    assert counted == (
+        np.sum(costs <= bound),
+        np.sum(costs <= reserve),
+        np.sum(costs < low),
+        np.sum((costs >= low) & (costs <= high)),
+        np.sum(costs < wide[0]),
+        np.sum(costs >= wide[0]),
+    )
+
+
+@pytest.mark.parametrize("share", [0.01, 0.3])  # few kept (the branch), many (branch-free writes)
+def test_the_gathered_costs_are_in_index_order(share):
+    rng = np.random.default_rng(7)
+    _, cost = _tied_costs(rng, 2000)
+    bound = np.quantile(cost, share)
+    bracket = tuple(np.quantile(cost, [0.9 - share, 0.9]))
+    kept = int(np.sum(cost <= bound) + np.sum((cost >= bracket[0]) & (cost <= bracket[1])))
+    candidates, within = (np.empty(cost.size, dtype=np.int64), np.empty(cost.size)), np.empty(cost.size)
+    found, inside = selection.gather_costs(cost, bound, bracket, candidates, within, kept)
+    expected = np.flatnonzero(cost <= bound)
+    np.testing.assert_array_equal(candidates[0][:found], expected)
+    np.testing.assert_array_equal(candidates[1][:found], cost[expected])
+    np.testing.assert_array_equal(within[:inside], cost[(cost >= bracket[0]) & (cost <= bracket[1])])
 
 
 @pytest.mark.parametrize("seed", range(10))

@@ -340,3 +340,35 @@ def test_a_process_that_loaded_the_kernels_or_ran_the_twin_often_takes_the_kerne
     monkeypatch.setattr(kernels, "compiled", lambda: True)  # a run of the process loaded them
     assert chosen_engine(settings, params, 50) == "numba"
     assert chosen_engine(settings.replace(engine="twin"), params, 50) == "twin"  # asked for, it is taken
+
+
+@needs_numba
+@pytest.mark.parametrize("percentage", [0.5, 3, 12])
+@pytest.mark.parametrize("weighted", [False, True])
+def test_window_costs_that_jump_stall_and_tie(percentage, weighted):
+    # The kernel searches each window's threshold and quantile near the last window's: within a bracket, a wider
+    # one, a reserve above it, then among every cost. Costs that stand still, drift, jump a thousandfold either way
+    # and tie exactly take every one of these paths; every number must be the twin's all the same, and every Monte
+    # Carlo batch's those of its samples analysed alone.
+    rng = np.random.default_rng(int(percentage * 10) + weighted)
+    m, n_samples, batches = 90, 3000, 4
+    steps = np.resize([1.0, 1.0, 1.0001, 1.03, 1.5, 4.0, 1e3, 1e-3, 1e-3, 0.7, 50.0, 0.02], m)
+    sums = rng.gamma(2.0, 1.0, (m, n_samples)) * np.cumprod(steps)[:, None]
+    sums[20:24] = sums[19]  # windows that stand still
+    sums[40:50] = np.round(sums[40:50], 0)  # ties everywhere, zeros among them
+    sums[60:62] = 0.0  # every sample alike
+    present = np.full(m, 11.0)
+    params, bounds = rng.uniform(0, 1, (n_samples, 2)), np.array([[0.0, 1.0], [0.0, 1.0]])
+    flavour = "weighted" if weighted else "thesis"
+    on_twin = TwinFlavour(params, bounds, percentage, 12, 90, flavour, 6).analyse_sums(sums.copy(), present)
+    compiled = CompiledFlavour(params, bounds, percentage, 12, 90, flavour, 6).analyse_sums(sums.copy(), present)
+    assert_identical(on_twin, compiled)
+    if weighted:
+        return
+    with_batches = CompiledFlavour(params, bounds, percentage, 12, 90, flavour, 6, batches)
+    batched = with_batches.analyse_sums(sums.copy(), present)
+    assert_identical(batched._replace(batch_ic=None, batch_ci=None), compiled)
+    for b in range(batches):
+        alone = TwinFlavour(params[b::batches], bounds, percentage, 12, 90, flavour, 6)
+        own = alone.analyse_sums(np.ascontiguousarray(sums[:, b::batches]), present)
+        assert_identical((batched.batch_ic[b], batched.batch_ci[b]), (own.ic, own.ci))

@@ -13,7 +13,7 @@ import numpy as np
 from .compile import inner, jit
 from .ranks import batch_limits
 from .readoff import analyse_window, blank_window, read_off, window_state
-from .selection import behavioural, costs_from_sums, find_candidates, next_bracket, select_near
+from .selection import behavioural, find_candidates, next_bracket, select_near, threshold_ranks
 from .sums import window_sums
 
 __all__ = ["analyse_windows_batched"]
@@ -47,12 +47,11 @@ def analyse_windows_batched(
         if present < min_points:
             blank_window(t, results, batch_results)
             continue
-        costs_from_sums(sums, present, cost)
         # The candidates reach the bracket's top, and every batch's, so that they hold the batches' sets too.
         bound = track[1]
         for b in range(n_batches):
             bound = max(bound, brackets[b, 1]) if brackets[b, 1] == brackets[b, 1] else bound
-        found = analyse_window(t, bound, cost_ranks, positions, window, results)
+        found = analyse_window(t, (sums, present), bound, cost_ranks, positions, window, results)
         _read_off_batches(cost, candidates, found, batches, state, window[3], t, results, batch_results, work)
 
 
@@ -119,7 +118,7 @@ def _read_off_batches(cost, candidates, found, batches, state, rules, t, results
         if batch_found[b] < counts[b]:
             batch_found[b] = find_candidates(cost, b, n_batches, counts[b], bracket[1], members)
         threshold, density = select_near(members[1], batch_found[b], counts[b] - 1, bracket, work[0])
-        brackets[b, 0], brackets[b, 1] = next_bracket(threshold, last[b], density)
+        brackets[b, 0], brackets[b, 1] = next_bracket(threshold, last[b], density, threshold_ranks(counts[b]))
         last[b] = threshold
         if not by_rank:
             batch = (batch_ic[b], batch_ci[b], median, gradient)

@@ -24,7 +24,22 @@ import numpy as np
 
 from .compile import inner, jit
 from .ranks import ranked_order_statistics
-from .selection import behavioural, costs_from_sums, find_candidates, next_bracket, order_statistics, select_near
+from .selection import (
+    BRACKET_RANKS,
+    behavioural,
+    beside,
+    count_costs,
+    find_candidates,
+    gather_costs,
+    next_bracket,
+    open_bracket,
+    order_statistics,
+    reserve_bound,
+    select_near,
+    select_within,
+    threshold_ranks,
+    widened,
+)
 from .sums import window_sums
 
 __all__ = ["analyse_windows", "window_state", "analyse_window", "read_off", "blank_window"]
@@ -64,54 +79,103 @@ def analyse_windows(rows, measured, m, slots, cost_ranks, samples, bounds, bins,
         if present < min_points:
             blank_window(t, results, no_batches)
             continue
-        costs_from_sums(sums, present, window[1])
-        analyse_window(t, window[5][1], cost_ranks, positions, window, results)
+        analyse_window(t, (sums, present), window[5][1], cost_ranks, positions, window, results)
 
 
 @inner
 def window_state(n_samples, count, samples, bounds, bins, levels, weighted):
     """What :func:`analyse_window` works in and carries from window to window, made once a block.
 
-    (running, cost, candidates, rules, work, track): the running sums
-    ((high, low), total) of :func:`~dynia.engine.kernels.sums.window_sums`;
-    a window's costs; its candidates (indices, costs); the read-off's rules
-    (see the module documentation); its workspace (``_workspace``); and
-    ``track``, the brackets of the threshold and of the quantile (see
+    (running, cost, candidates, rules, work, track, within): the running
+    sums ((high, low), total) of
+    :func:`~dynia.engine.kernels.sums.window_sums`; a window's costs; its
+    candidates (indices, costs); the read-off's rules (see the module
+    documentation); its workspace (``_workspace``); ``track``, the brackets
+    of the threshold and of the quantile (see
     :func:`~dynia.engine.kernels.selection.next_bracket`) and their last
-    values, NaN before the first window.
+    values, NaN before the first window; and the costs within the
+    quantile's bracket.
     """
     running = ((np.empty(n_samples), np.empty(n_samples)), np.empty(n_samples))
     candidates = (np.empty(n_samples, dtype=np.int64), np.empty(n_samples))
     rules = (samples, bounds, levels, weighted, _bin_indices(samples[0], bounds, bins))
     track = np.full(6, np.nan)
-    return running, np.empty(n_samples), candidates, rules, _workspace(n_samples, count), track
+    return running, np.empty(n_samples), candidates, rules, _workspace(n_samples, count), track, np.empty(n_samples)
 
 
 @inner
-def analyse_window(t, bound, cost_ranks, positions, window, results):
-    """Window t from its costs (``window[1]``): its behavioural set, read-off and extreme costs, into ``results``.
+def analyse_window(t, window_sums, bound, cost_ranks, positions, window, results):
+    """Window t from its ``window_sums`` = (sums, present): its set, read-off and extreme costs, into ``results``.
 
-    The candidates are every cost up to ``bound`` (at least the bracket's
-    top, which the threshold is searched within); ``window`` is
+    Its costs go to ``window[1]``, and the candidates of its set are every
+    cost up to ``bound`` (at least the bracket's top, which the threshold is
+    searched within) or more (:func:`_gather_window`); ``window`` is
     :func:`window_state`'s, whose brackets move on. Returns how many
     candidates there were.
     """
     count, upper_position = cost_ranks
-    _, cost, candidates, rules, work, track = window
+    _, cost, candidates, rules, work, track, within = window
     ic, ci, median, gradient, extreme_costs = results
     scratch = work[0]
-    found = find_candidates(cost, 0, 1, count, bound, candidates)
+    found, quantile_bracket, quantile_counts = _gather_window(window_sums, bound, cost_ranks, window)
     threshold, density = select_near(candidates[1], found, count - 1, (track[0], track[1]), scratch)
     read_off_into = (ic, ci, median, gradient)
     smallest = read_off(count, candidates, found, threshold, rules, positions, t, read_off_into, True, work)
-    upper, quantile_density = select_near(cost, cost.shape[0], upper_position, (track[2], track[3]), scratch)
-    track[0], track[1] = next_bracket(threshold, track[4], density)
-    track[2], track[3] = next_bracket(upper, track[5], quantile_density)
+    n_samples = cost.shape[0]
+    if quantile_counts[1]:
+        upper, quantile_density = select_within(
+            cost, n_samples, upper_position, quantile_bracket, quantile_counts, within, True
+        )
+    else:  # beyond the wide bracket too: searched on from its side
+        side = beside(quantile_bracket, upper_position < quantile_counts[0])
+        upper, quantile_density = select_near(cost, n_samples, upper_position, side, scratch)
+    track[0], track[1] = next_bracket(threshold, track[4], density, threshold_ranks(count))
+    track[2], track[3] = next_bracket(upper, track[5], quantile_density, BRACKET_RANKS)
     track[4], track[5] = threshold, upper
     extreme_costs[0, t] = smallest
     extreme_costs[1, t] = threshold
     extreme_costs[2, t] = upper
     return found
+
+
+@inner
+def _gather_window(window_sums, bound, cost_ranks, window):
+    """A window's costs, the candidates of its behavioural set and the costs near its quantile, in two passes.
+
+    The first forms the costs (``window[1]``) and counts them against two
+    guesses at the threshold, ``bound`` and a reserve above it, and against
+    the quantile's bracket and a wider one; the second gathers the
+    candidates (``window[2]``), every cost up to the lower guess that holds
+    the set, and the costs within the narrower bracket that holds the
+    quantile (``window[6]``). A window that neither guess serves (a block's
+    first, or a jump) searches its threshold among every cost.
+    Returns how many candidates, and the quantile's bracket with the costs
+    below and within it; when neither bracket holds the quantile, the wide
+    one with none within.
+    """
+    count, upper_position = cost_ranks
+    _, cost, candidates, _, work, track, within = window
+    bounds = (bound, reserve_bound(bound, (track[0], track[1])))
+    narrow = open_bracket((track[2], track[3]))
+    wide = widened(narrow)
+    counted = count_costs(*window_sums, bounds, (narrow, wide), cost)
+    if counted[2] <= upper_position < counted[2] + counted[3]:
+        quantile_bracket, quantile_counts = narrow, (counted[2], counted[3])
+    elif counted[4] <= upper_position < counted[4] + counted[5]:
+        quantile_bracket, quantile_counts = wide, (counted[4], counted[5])
+    else:
+        quantile_bracket, quantile_counts = wide, (counted[4], 0)
+    gather_bound = bound if counted[0] >= count else (bounds[1] if counted[1] >= count else np.nan)
+    kept = (counted[0] if gather_bound == bound else counted[1]) + quantile_counts[1]
+    gathered = quantile_bracket if quantile_counts[1] else (np.nan, np.nan)
+    found, _ = gather_costs(cost, gather_bound, gathered, candidates, within, kept)
+    if found < count:
+        # Neither guess holds the set: its threshold is searched among every cost from above the reserve, and the
+        # candidates are the costs up to it.
+        above = beside((track[0], bounds[1]), False)
+        first_threshold, _ = select_near(cost, cost.shape[0], count - 1, above, work[0])
+        found = find_candidates(cost, 0, 1, count, first_threshold, candidates)
+    return found, quantile_bracket, quantile_counts
 
 
 @inner

@@ -1,10 +1,12 @@
 """A window's behavioural set and order statistics, found by selection: no sort, which cannot change their value.
 
-A window's costs are ``(sums / present)^2`` (:func:`costs_from_sums`). Its
-behavioural threshold, the count-th smallest cost (and every Monte Carlo
-batch's), and the noise floor's quantile are found by selection among the
-few costs within a bracket around the previous window's value, which a
-counting pass finds (:func:`select_near`, moved outward when it misses);
+A window's costs are ``(sums / present)^2``. Its behavioural threshold,
+the count-th smallest cost (and every Monte Carlo batch's), and the noise
+floor's quantile are found by selection among the few costs within a
+bracket around the previous window's value, which a counting pass finds
+(:func:`select_near`, moved outward when it misses); the pass that forms a
+window's costs counts for both at once (:func:`count_costs`), and one more
+gathers the few costs each needs (:func:`gather_costs`);
 the behavioural set is then the first ``count`` of a stable sort of the
 costs, ties to the lowest indices (:func:`behavioural`). The limits and
 median of a small set are order statistics of its values
@@ -16,11 +18,26 @@ import numpy as np
 
 from .compile import inner, jit
 
-__all__ = ["costs_from_sums", "find_candidates", "select_near", "next_bracket", "behavioural", "order_statistics"]
+__all__ = [
+    "count_costs",
+    "gather_costs",
+    "threshold_ranks",
+    "reserve_bound",
+    "widened",
+    "beside",
+    "find_candidates",
+    "open_bracket",
+    "select_near",
+    "select_within",
+    "next_bracket",
+    "behavioural",
+    "order_statistics",
+]
 
 # A window's behavioural threshold and quantile are searched first within a bracket around the previous
 # window's (select_near): its half-width thrice the last change, at least NARROWEST of the value, at most
-# WIDEST, and holding about BRACKET_RANKS values either side at the last window's density of values there.
+# WIDEST, and holding at most about BRACKET_RANKS values either side at the last window's density of values
+# there (a threshold's bracket fewer when its set is small: threshold_ranks).
 # A miss moves the bracket and widens it fourfold, RETRIES times, each a counting pass; the bench's record and
 # thesis example 1 need 0.1 to 1 such moves a window on average.
 NARROWEST, WIDEST = 0.002, 0.5
@@ -35,15 +52,99 @@ _FEW = 12
 
 
 @jit
-def costs_from_sums(sums, present, cost):
-    """``cost`` = (sums / present)^2, a window's costs.
+def count_costs(sums, present, bounds, brackets, cost):
+    """A window's costs, ``cost`` = (sums / present)^2, counted against two bounds and two brackets, in one pass.
 
-    A pass of its own, which vectorises: it streams the sums from memory,
-    and the passes that pick candidates then read the costs from cache.
+    ``bounds`` = (bound, reserve), guesses at or above the behavioural
+    threshold; ``brackets`` = ((low, high), (wide_low, wide_high)), where
+    the noise floor's quantile is looked for (see :func:`open_bracket`).
+    Returns (at or below bound, at or below reserve, below low, within
+    (low, high), below wide_low, within the wide bracket): enough to know
+    which gathering (:func:`gather_costs`) holds what each selection needs.
+    No branch, so that the division and the counts vectorise.
     """
+    bound, reserve = bounds
+    (low, high), (wide_low, wide_high) = brackets
+    under_bound, under_reserve, below, inside, wide_below, wide_inside = 0, 0, 0, 0, 0, 0
     for s in range(cost.shape[0]):
         mae = sums[s] / present
-        cost[s] = mae * mae
+        value = mae * mae
+        cost[s] = value
+        under_bound += value <= bound
+        under_reserve += value <= reserve
+        below += value < low
+        inside += (value >= low) & (value <= high)
+        wide_below += value < wide_low
+        wide_inside += (value >= wide_low) & (value <= wide_high)
+    return under_bound, under_reserve, below, inside, wide_below, wide_inside
+
+
+@jit
+def gather_costs(cost, bound, bracket, candidates, within, kept):
+    """Every cost at or below ``bound`` into ``candidates`` = (indices, costs), and every one within ``bracket``.
+
+    Both in index order: the candidates as :func:`find_candidates` keeps
+    them, the costs within (low, high) into ``within`` as :func:`select_near`
+    gathers them. Returns how many of each. ``kept``, about how many that
+    will be (:func:`count_costs` tells), chooses the loop: when few, a
+    branch almost always predicted; when many, branch-free writes of every
+    sample, each kept by counting it.
+    """
+    indices, costs = candidates
+    low, high = bracket
+    found, inside = 0, 0
+    if 8 * kept < cost.shape[0]:
+        for s in range(cost.shape[0]):
+            value = cost[s]
+            if (value <= bound) | ((value >= low) & (value <= high)):
+                if value <= bound:
+                    indices[found] = s
+                    costs[found] = value
+                    found += 1
+                if (value >= low) & (value <= high):
+                    within[inside] = value
+                    inside += 1
+        return found, inside
+    for s in range(cost.shape[0]):
+        value = cost[s]
+        indices[found] = s
+        costs[found] = value
+        found += value <= bound
+        within[inside] = value
+        inside += (value >= low) & (value <= high)
+    return found, inside
+
+
+@inner
+def threshold_ranks(count):
+    """The ranks a behavioural threshold's bracket holds either side, at most: ``BRACKET_RANKS``, or four times
+    ``count`` when that is fewer (a small set's candidates are then few too)."""
+    return min(BRACKET_RANKS, 4 * count)
+
+
+@inner
+def reserve_bound(bound, bracket):
+    """A second guess at or above the threshold, for when ``bound`` proves below it: the threshold's ``bracket``'s
+    top moved up by four of its widths, from ``bound``; NaN when either is."""
+    low, high = bracket
+    return bound + 4 * max(high - low, NARROWEST * abs(high))
+
+
+@inner
+def widened(bracket):
+    """``bracket`` = (low, high), opened, with four times its width added either side (as a missed search moves)."""
+    low, high = bracket
+    width = max(high - low, NARROWEST * max(abs(low), abs(high)))
+    return low - 4 * width, high + 4 * width
+
+
+@inner
+def beside(bracket, lower):
+    """Where a search that missed ``bracket`` = (low, high) looks next: four of its widths below it (``lower``), or
+    above it, as :func:`select_near` moves."""
+    low, high = bracket
+    width = max(high - low, NARROWEST * max(abs(low), abs(high)))
+    return (low - 4 * width, low) if lower else (high, high + 4 * width)
 
 
 @inner
@@ -106,6 +207,15 @@ def find_candidates(cost, first, stride, count, bound, candidates):
     return found
 
 
+@inner
+def open_bracket(bracket):
+    """``bracket`` = (low, high) as the selections search it first: everything, (-inf, inf), when it is NaN."""
+    low, high = bracket
+    if not low <= high:
+        return -np.inf, np.inf
+    return low, high
+
+
 @jit
 def select_near(values, n, k, bracket, scratch):
     """The k-th smallest (0-based) of ``values[:n]``, searched first within ``bracket`` = (low, high).
@@ -119,9 +229,7 @@ def select_near(values, n, k, bracket, scratch):
     the last bracket over its width (0 when that is infinite or none), for
     :func:`next_bracket`.
     """
-    low, high = bracket
-    if not low <= high:
-        low, high = -np.inf, np.inf
+    low, high = open_bracket(bracket)
     for attempt in range(RETRIES + 1):
         below = 0
         inside = 0
@@ -135,34 +243,52 @@ def select_near(values, n, k, bracket, scratch):
             low, high = (low - 4 * width if width > 0 and attempt < RETRIES - 1 else -np.inf), low
         else:
             low, high = high, (high + 4 * width if width > 0 and attempt < RETRIES - 1 else np.inf)
+    return select_within(values, n, k, (low, high), (below, inside), scratch, False)
+
+
+@inner
+def select_within(values, n, k, bracket, counted, scratch, gathered):
+    """The k-th smallest of ``values[:n]``, which lies within ``bracket``; and the values' density there.
+
+    ``counted`` = (below, inside), how many values lie below the bracket
+    and within it. The values within are in ``scratch[:inside]``, in index
+    order, when ``gathered``; otherwise they are copied there first.
+    Returns what :func:`select_near` returns.
+    """
+    low, high = bracket
+    below, inside = counted
     density = inside / (high - low) if high > low else 0.0
     if inside > CROWDED:
         # Every value within may be the same (samples that simulate alike, as all do once a record rests at zero).
         smallest, largest = np.inf, -np.inf
-        for i in range(n):
-            within = (values[i] >= low) & (values[i] <= high)
-            smallest = min(smallest, values[i] if within else np.inf)
-            largest = max(largest, values[i] if within else -np.inf)
+        for i in range(inside if gathered else n):
+            value = scratch[i] if gathered else values[i]
+            within = (value >= low) & (value <= high)
+            smallest = min(smallest, value if within else np.inf)
+            largest = max(largest, value if within else -np.inf)
         if smallest == largest:
             return smallest, density
-    taken = 0
-    # Branch-free: every value is written, and kept (by counting it) when it is within the bracket.
-    for i in range(n):
-        scratch[taken] = values[i]
-        taken += (values[i] >= low) & (values[i] <= high)
-    return _select(scratch, taken, k - below), density
+    if not gathered:
+        taken = 0
+        # Branch-free: every value is written, and kept (by counting it) when it is within the bracket.
+        for i in range(n):
+            scratch[taken] = values[i]
+            taken += (values[i] >= low) & (values[i] <= high)
+    return _select(scratch, inside, k - below), density
 
 
 @jit
-def next_bracket(value, previous, density):
+def next_bracket(value, previous, density, ranks):
     """(low, high) in which to look first for the next window's value, from ``value`` and the last two.
 
-    ``density`` is :func:`select_near`'s, values per unit near ``value``.
+    ``density`` is :func:`select_near`'s, values per unit near ``value``;
+    the bracket holds about ``ranks`` values either side at that density,
+    at most.
     """
     change = abs(value - previous)
     width = max(3.0 * change, NARROWEST * value) if change == change else WIDEST * value
     if density > 0:
-        width = min(width, BRACKET_RANKS / density)
+        width = min(width, ranks / density)
     width = min(width, WIDEST * value)
     return value - width, value + width
 
