@@ -265,17 +265,19 @@ def lag_states(lag, record, scale, steps, state, totals, states):
             y_e = y[e]
             missing = np.isnan(y_e)
             for i in range(hi - lo):
+                # Every coefficient loaded and each term kept or not by a select, as in the fused kernel: a load
+                # under the flag's branch would be a masked load, slow on AMD processors.
                 output = block_c[i] * x[i]
-                if now_out:
-                    output = output + block_feed_now[i] * now
-                if prev_out:
-                    output = output + block_feed_previous[i] * previous
+                with_now = output + block_feed_now[i] * now
+                output = with_now if now_out else output
+                with_previous = output + block_feed_previous[i] * previous
+                output = with_previous if prev_out else output
                 total[i] = total[i] + (0.0 if missing else abs(output - y_e)) * scale
                 # Also past the record's last step, whose state is never kept.
                 following = block_phi[i] * x[i]
-                if now_state:
-                    following = following + block_now[i] * now
-                if prev_state:
-                    following = following + block_previous[i] * previous
+                with_now = following + block_now[i] * now
+                following = with_now if now_state else following
+                with_previous = following + block_previous[i] * previous
+                following = with_previous if prev_state else following
                 x[i] = following if abs(following) >= FLUSH_BELOW else 0.0
         totals[lo:hi] = total
