@@ -109,7 +109,7 @@ def analyse_window(t, window_sums, bound, cost_ranks, positions, window, results
 
     Its costs go to ``window[1]``, and the candidates of its set are every
     cost up to ``bound`` (at least the bracket's top, which the threshold is
-    searched within) or more (:func:`_gather_window`); ``window`` is
+    searched within) or more (``_gather_window``); ``window`` is
     :func:`window_state`'s, whose brackets move on. Returns how many
     candidates there were.
     """

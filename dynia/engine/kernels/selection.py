@@ -132,7 +132,7 @@ def reserve_bound(bound, bracket):
 
 @inner
 def widened(bracket):
-    """``bracket`` = (low, high), opened, with four times its width added either side (as a missed search moves)."""
+    """``bracket`` = (low, high) with four times its width added either side (as a missed search moves)."""
     low, high = bracket
     width = max(high - low, NARROWEST * max(abs(low), abs(high)))
     return low - 4 * width, high + 4 * width
