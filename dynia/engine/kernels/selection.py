@@ -126,15 +126,14 @@ def threshold_ranks(count):
 def reserve_bound(bound, bracket):
     """A second guess at or above the threshold, for when ``bound`` proves below it: the threshold's ``bracket``'s
     top moved up by four of its widths, from ``bound``; NaN when either is."""
-    low, high = bracket
-    return bound + 4 * max(high - low, NARROWEST * abs(high))
+    return bound + 4 * _search_width(bracket)
 
 
 @inner
 def widened(bracket):
     """``bracket`` = (low, high) with four times its width added either side (as a missed search moves)."""
     low, high = bracket
-    width = max(high - low, NARROWEST * max(abs(low), abs(high)))
+    width = _search_width(bracket)
     return low - 4 * width, high + 4 * width
 
 
@@ -143,8 +142,15 @@ def beside(bracket, lower):
     """Where a search that missed ``bracket`` = (low, high) looks next: four of its widths below it (``lower``), or
     above it, as :func:`select_near` moves."""
     low, high = bracket
-    width = max(high - low, NARROWEST * max(abs(low), abs(high)))
+    width = _search_width(bracket)
     return (low - 4 * width, low) if lower else (high, high + 4 * width)
+
+
+@inner
+def _search_width(bracket):
+    """The width by which a search moves on from ``bracket`` = (low, high): its own, at least ``NARROWEST`` of it."""
+    low, high = bracket
+    return max(high - low, NARROWEST * max(abs(low), abs(high)))
 
 
 @inner
@@ -238,7 +244,7 @@ def select_near(values, n, k, bracket, scratch):
             inside += (values[i] >= low) & (values[i] <= high)
         if below <= k < below + inside:
             break
-        width = max(high - low, NARROWEST * max(abs(low), abs(high)))
+        width = _search_width((low, high))
         if k < below:
             low, high = (low - 4 * width if width > 0 and attempt < RETRIES - 1 else -np.inf), low
         else:
