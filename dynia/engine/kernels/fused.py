@@ -18,7 +18,7 @@ import numpy as np
 
 from ...models.base import FLUSH_BELOW
 from .compile import inner, jit
-from .simulate import absolute_errors, coefficient_tables, combine, delayed_inputs
+from .simulate import absolute_errors, coefficient_tables, combine, delayed_inputs, lag_following, lag_output
 from .sums import ring_sums, slide, window_sum
 
 __all__ = ["FUSED_BLOCK", "lag_window_sums", "general_window_sums"]
@@ -194,24 +194,12 @@ def _lag_samples(coefficients, flags, inputs, lo, block, compensated, leaving, w
     not_finite = 0
     for i in range(width):
         x = x_block[i]
-        # Every coefficient loaded, and each term kept or not by a select: a load under the flag's branch would be a
-        # masked load, slow on AMD processors (the simulation ran a third slower).
-        a_now, a_prev, g_now, g_prev, a_phi = feed_now[i], feed_prev[i], gamma_now[i], gamma_prev[i], phi[i]
-        output = c[i] * x
-        with_now = output + a_now * now
-        output = with_now if now_out else output
-        with_prev = output + a_prev * previous
-        output = with_prev if prev_out else output
+        output = lag_output(c[i], (feed_now[i], feed_prev[i]), x, (now, previous), (now_out, prev_out))
         not_finite += not np.isfinite(output)
         value = (0.0 if missing else abs(output - y_e)) * scale
         error[i] = value
         total[i] = total[i] + value
-        following = a_phi * x
-        with_now = following + g_now * now
-        following = with_now if now_state else following
-        with_prev = following + g_prev * previous
-        following = with_prev if prev_state else following
-        following = following if abs(following) >= FLUSH_BELOW else 0.0
+        following = lag_following(phi[i], (gamma_now[i], gamma_prev[i]), x, (now, previous), (now_state, prev_state))
         x_block[i] = following if advance else x
     bad = 0
     if sliding:

@@ -36,6 +36,8 @@ __all__ = [
     "coefficient_tables",
     "delayed_inputs",
     "absolute_errors",
+    "lag_output",
+    "lag_following",
 ]
 
 
@@ -171,6 +173,38 @@ def absolute_errors(row, output, y, lo, hi):
             row[s] = abs(output[s] - y)
 
 
+@inner
+def lag_output(c, feeds, x, inputs, flags):
+    """A lag's output ``c x``, plus ``feed_now u[k-d]`` and ``feed_prev u[k-d-1]`` where it has them, term by term.
+
+    ``feeds`` = (feed_now, feed_prev), ``inputs`` = (u[k-d], u[k-d-1]), ``flags`` = (now_out, prev_out). Every
+    coefficient is read and a term the model lacks dropped by a select: read under the flag's branch, a vectorised
+    loop's loads become masked loads, slow on AMD processors (the fused kernel's simulation ran a third slower).
+    """
+    now, previous = inputs
+    output = c * x
+    with_now = output + feeds[0] * now
+    output = with_now if flags[0] else output
+    with_previous = output + feeds[1] * previous
+    return with_previous if flags[1] else output
+
+
+@inner
+def lag_following(phi, gammas, x, inputs, flags):
+    """A lag's next state ``phi x``, plus ``gamma_now u[k-d]`` and ``gamma_prev u[k-d-1]`` where it has them.
+
+    As :func:`lag_output`: ``gammas`` = (gamma_now, gamma_prev), ``flags`` = (now_state, prev_state); a state
+    below ``FLUSH_BELOW`` in magnitude is 0.
+    """
+    now, previous = inputs
+    following = phi * x
+    with_now = following + gammas[0] * now
+    following = with_now if flags[0] else following
+    with_previous = following + gammas[1] * previous
+    following = with_previous if flags[1] else following
+    return following if abs(following) >= FLUSH_BELOW else 0.0
+
+
 @jit
 def simulate_lag(lag, padded_input, measured, first_step, last_step, state, errors, samples, outputs):
     """:func:`general_errors` for a ``lag`` (one state, one common dead time), fused; ``state`` is (1, n_samples).
@@ -199,20 +233,13 @@ def simulate_lag(lag, padded_input, measured, first_step, last_step, state, erro
         finite = True
         for s in range(lo, hi):
             x = current[s]
-            output = c[s] * x
-            if now_out:
-                output = output + feed_now[s] * now
-            if prev_out:
-                output = output + feed_prev[s] * previous
+            output = lag_output(c[s], (feed_now[s], feed_prev[s]), x, (now, previous), (now_out, prev_out))
             finite &= np.isfinite(output)
             row[s] = output if outputs else (0.0 if missing else abs(output - y))
             if advance:
-                x = phi[s] * x
-                if now_state:
-                    x = x + gamma_now[s] * now
-                if prev_state:
-                    x = x + gamma_prev[s] * previous
-                current[s] = x if abs(x) >= FLUSH_BELOW else 0.0
+                current[s] = lag_following(
+                    phi[s], (gamma_now[s], gamma_prev[s]), x, (now, previous), (now_state, prev_state)
+                )
         if not finite and bad_step < 0:
             bad_step = k
             # The row holds the output or |output - y|, non-finite exactly where the
@@ -247,7 +274,7 @@ def lag_states(lag, record, scale, steps, state, totals, states):
     coefficients, delay, flags = lag
     padded_input, y = record
     phi, gamma_now, gamma_prev, c, feed_now, feed_prev = coefficients
-    now_out, prev_out, now_state, prev_state = flags
+    out_flags, state_flags = (flags[0], flags[1]), (flags[2], flags[3])
     n_samples = state.shape[0]
     for lo in range(0, n_samples, _STATE_BLOCK):
         hi = min(lo + _STATE_BLOCK, n_samples)
@@ -264,20 +291,10 @@ def lag_states(lag, record, scale, steps, state, totals, states):
             previous = padded_input[max(e - delay - 1, -1) + 1]
             y_e = y[e]
             missing = np.isnan(y_e)
+            inputs = (now, previous)
             for i in range(hi - lo):
-                # Every coefficient loaded and each term kept or not by a select, as in the fused kernel: a load
-                # under the flag's branch would be a masked load, slow on AMD processors.
-                output = block_c[i] * x[i]
-                with_now = output + block_feed_now[i] * now
-                output = with_now if now_out else output
-                with_previous = output + block_feed_previous[i] * previous
-                output = with_previous if prev_out else output
+                output = lag_output(block_c[i], (block_feed_now[i], block_feed_previous[i]), x[i], inputs, out_flags)
                 total[i] = total[i] + (0.0 if missing else abs(output - y_e)) * scale
                 # Also past the record's last step, whose state is never kept.
-                following = block_phi[i] * x[i]
-                with_now = following + block_now[i] * now
-                following = with_now if now_state else following
-                with_previous = following + block_previous[i] * previous
-                following = with_previous if prev_state else following
-                x[i] = following if abs(following) >= FLUSH_BELOW else 0.0
+                x[i] = lag_following(block_phi[i], (block_now[i], block_previous[i]), x[i], inputs, state_flags)
         totals[lo:hi] = total
