@@ -283,8 +283,35 @@ def window_stretches(windows, length, *, min_windows=1, bridge=0):
 
 
 def stretch_bands(result, p, stretches):
-    """Band of parameter ``p`` over each stretch: the median of its windows' limits, (n_stretches, 2)."""
-    return np.array([np.median(result.ci[p, steps], axis=0) for steps in stretches]).reshape(-1, 2)
+    """Band of parameter ``p`` over each stretch: the median of its windows' limits, (n_stretches, 2).
+
+    Each column's median as ``np.median`` gives it (NaN when a window's limit
+    is), for every stretch at once: one sort of all the stretches' limits,
+    not a median per stretch, of which a long record has hundreds.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> ci = np.array([[[1.0, 4.0], [3.0, 6.0], [2.0, 5.0], [7.0, 9.0], [8.0, np.nan]]])
+    >>> stretch_bands(SimpleNamespace(ci=ci), 0, [np.array([0, 1, 2]), np.array([3, 4])]).tolist()
+    [[2.0, 5.0], [7.5, nan]]
+    """
+    if not stretches:
+        return np.empty((0, 2))
+    lengths = np.array([steps.size for steps in stretches])
+    limits = result.ci[p, np.concatenate(stretches)]
+    owner = np.repeat(np.arange(lengths.size), lengths)
+    first = np.cumsum(lengths) - lengths
+    bands = np.empty((lengths.size, 2))
+    for side in range(2):
+        # Within each stretch ascending, NaN last, as np.median partitions them.
+        ordered = limits[np.lexsort((limits[:, side], owner)), side]
+        lower, upper = ordered[first + (lengths - 1) // 2], ordered[first + lengths // 2]
+        # np.median's mean of the middle one or two: summed from 0.0 (so -0.0 gives 0.0), then divided by their number.
+        with np.errstate(invalid="ignore", over="ignore"):  # evaluated for the odd stretches too, and dropped
+            bands[:, side] = np.where(lengths % 2 == 1, 0.0 + lower, ((0.0 + lower) + upper) / 2)
+        bands[np.isnan(ordered[first + lengths - 1]), side] = np.nan
+    return bands
 
 
 def noise_widening(result):

@@ -302,3 +302,26 @@ def test_a_result_without_its_half_window_or_not_a_result_is_refused():
         structure_warnings(result)
     with pytest.raises(TypeError, match="result must be a DyniaResult; got dict"):
         structure_warnings({"ic": result.ic})
+
+
+def test_stretch_bands_are_np_medians_bit_for_bit():
+    # The oracle: np.median of each stretch's limits, one stretch at a time. Bit for bit, signed zeros, NaN and
+    # infinities included: the bands decide verdicts, and a re-run must not move one by a rounding.
+    from types import SimpleNamespace
+
+    from dynia.structure import stretch_bands
+
+    rng = np.random.default_rng(7)
+    for _ in range(2000):
+        n = int(rng.integers(1, 40))
+        ci = np.round(rng.normal(size=(1, n, 2)), int(rng.integers(0, 3)))
+        ci[ci == 0] = rng.choice([0.0, -0.0], size=int((ci == 0).sum()))
+        odd = rng.integers(n, size=2)
+        ci[0, odd[0], rng.integers(2)] = rng.choice([np.nan, np.inf, -np.inf, 1e308, ci[0, odd[1], 0]])
+        stretches = [np.sort(rng.choice(n, int(rng.integers(1, n + 1)), replace=False)) for _ in range(3)]
+        with np.errstate(invalid="ignore", over="ignore"):
+            expected = np.array([np.median(ci[0, steps], axis=0) for steps in stretches])
+        bands = stretch_bands(SimpleNamespace(ci=ci), 0, stretches)
+        np.testing.assert_array_equal(bands, expected)
+        np.testing.assert_array_equal(np.signbit(bands), np.signbit(expected))
+    assert stretch_bands(SimpleNamespace(ci=np.zeros((1, 3, 2))), 0, []).shape == (0, 2)
