@@ -372,3 +372,31 @@ def test_window_costs_that_jump_stall_and_tie(percentage, weighted):
         alone = TwinFlavour(params[b::batches], bounds, percentage, 12, 90, flavour, 6)
         own = alone.analyse_sums(np.ascontiguousarray(sums[:, b::batches]), present)
         assert_identical((batched.batch_ic[b], batched.batch_ci[b]), (own.ic, own.ci))
+
+
+@needs_numba
+@pytest.mark.parametrize("batches", [0, 4])
+def test_brackets_handed_from_block_to_block_steer_the_work_never_the_numbers(batches):
+    # A flavour hands each block of windows the brackets the last block left, so that its first window's selections
+    # start near their answer (blocks analysed side by side take whichever finished last). Whatever those brackets
+    # hold, left by another record a thousandfold off, by one window or by many, the numbers are a fresh start's.
+    rng = np.random.default_rng(batches)
+    m, n_samples = 60, 3000
+    steps = np.resize([1.0, 1.03, 4.0, 1e3, 1e-3, 0.7, 1.0], m)
+    sums = rng.gamma(2.0, 1.0, (m, n_samples)) * np.cumprod(steps)[:, None]
+    sums[30:33] = 0.0
+    present = np.full(m, 11.0)
+    params, bounds = rng.uniform(0, 1, (n_samples, 2)), np.array([[0.0, 1.0], [0.0, 1.0]])
+    fresh = CompiledFlavour(params, bounds, 3, 12, 90, "thesis", 6, batches).analyse_sums(sums.copy(), present)
+    carried = CompiledFlavour(params, bounds, 3, 12, 90, "thesis", 6, batches)
+    carried.analyse_sums(sums[::-1] * 1e3, present)
+    cuts = [0, 7, 8, 31, 32, 60]
+    blocks = [carried.analyse_sums(sums[a:b].copy(), present[a:b]) for a, b in zip(cuts[:-1], cuts[1:])]
+    # Each field's window axis: the last, but for the limits' pairs (ci, batch_ci), which come after it.
+    joined = type(fresh)(
+        *(
+            None if field is None else np.concatenate([block[i] for block in blocks], axis=-1 - name.endswith("ci"))
+            for i, (name, field) in enumerate(zip(fresh._fields, fresh))
+        )
+    )
+    assert_identical(joined, fresh)

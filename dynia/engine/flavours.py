@@ -386,6 +386,9 @@ class CompiledFlavour:
             dtype=np.int64,
         )
         self.batch_positions = np.array([self._positions(count) for count in self.batch_counts], dtype=np.int64)
+        # The brackets the kernels' selections carry from window to window (see analyse_windows's track and
+        # analyse_windows_batched's tracks), NaN before the first block.
+        self._tracks = (np.full(6, np.nan), np.full((batches, 2), np.nan), np.full(batches, np.nan))
 
     def _positions(self, count):
         lower_share = (1 - self.conf_level / 100) / 2
@@ -423,13 +426,19 @@ class CompiledFlavour:
             self.min_points,
             (ic, ci, median, gradient, extreme_costs),
         )
+        # Where the last block analysed left its brackets: this block's first window starts its selections there
+        # rather than among every sample. Blocks analysed side by side each take whichever finished last; which one,
+        # changes only how long a selection takes, never its result.
+        tracks = tuple(np.copy(track) for track in self._tracks)
         # The square roots are taken here, as the numpy flavours take them.
         if not self.batches:
-            self._window_kernel()(*common)
+            self._window_kernel()(*common, tracks[0])
+            self._tracks = tracks
             return WindowResults(ic, ci, median, gradient, *np.sqrt(extreme_costs))
         batch_ic, batch_ci = np.empty((self.batches, n_params, m)), np.empty((self.batches, n_params, m, 2))
         batches = (self.batch_counts, self.batch_positions)
-        kernels.analyse_windows_batched(*common, batches, (batch_ic, batch_ci))
+        kernels.analyse_windows_batched(*common, tracks, batches, (batch_ic, batch_ci))
+        self._tracks = tracks
         return WindowResults(ic, ci, median, gradient, *np.sqrt(extreme_costs), batch_ic, batch_ci)
 
 

@@ -168,13 +168,14 @@ def _round(window, high, low, total):
     total[bad] = high[bad] + low[bad]
 
 
-def analyse_windows(rows, measured, m, slots, cost_ranks, samples, bounds, bins, limits, min_points, results):
+def analyse_windows(rows, measured, m, slots, cost_ranks, samples, bounds, bins, limits, min_points, results, track):
     """:func:`dynia.engine.kernels.readoff.analyse_windows` in numpy: the same arguments, the same numbers written.
 
     ``rows`` and ``measured`` are the window inputs (``slots`` > 0) or the
     window sums and points (``slots`` = 0); every other argument and the
     outputs ``ic``, ``ci``, ``median``, ``gradient`` and ``extreme_costs``
-    are as the kernel's, grouped as it groups them.
+    are as the kernel's, grouped as it groups them. ``track``, where the
+    kernel's selections start, is left as it is: a sort needs no bracket.
     """
     count, upper_position = cost_ranks
     columns, ranks, ordered = samples

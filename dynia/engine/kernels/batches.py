@@ -21,7 +21,20 @@ __all__ = ["analyse_windows_batched"]
 
 @jit
 def analyse_windows_batched(
-    rows, measured, m, slots, cost_ranks, samples, bounds, bins, limits, min_points, results, batches, batch_results
+    rows,
+    measured,
+    m,
+    slots,
+    cost_ranks,
+    samples,
+    bounds,
+    bins,
+    limits,
+    min_points,
+    results,
+    tracks,
+    batches,
+    batch_results,
 ):
     """:func:`~dynia.engine.kernels.readoff.analyse_windows`, and the IC and limits of every batch of samples.
 
@@ -31,15 +44,20 @@ def analyse_windows_batched(
     positions. Writes ``batch_results`` = (batch_ic (B, n_params, m),
     batch_ci (B, n_params, m, 2)), each batch bit-identical to
     ``analyse_windows`` on that batch's samples alone; the window sums are
-    formed once for all.
+    formed once for all. ``tracks`` = (track, brackets (B, 2), last (B,)):
+    ``analyse_windows``'s ``track`` and every batch's threshold bracket and
+    last threshold (see :func:`_batch_state`), where the first window's
+    selections start (NaN: nowhere) and the last window leaves them; they
+    steer the work only.
     """
     # As analyse_windows's, with the batches' two after: positional, each group a tuple.
     positions, levels, weighted = limits
     counts, _ = batches
     n_batches = counts.shape[0]
-    window = window_state(rows.shape[1], cost_ranks[0], samples, bounds, bins, levels, weighted)
-    cost, candidates, work, track = window[1], window[2], window[4], window[5]
-    state = _batch_state(batches, samples[1])
+    track, batch_brackets, batch_last = tracks
+    window = window_state(rows.shape[1], cost_ranks[0], samples, bounds, bins, levels, weighted, track)
+    cost, candidates, work = window[1], window[2], window[4]
+    state = _batch_state(batches, samples[1], batch_brackets, batch_last)
     brackets = state[3]
     present = 0.0
     for t in range(m):
@@ -56,7 +74,7 @@ def analyse_windows_batched(
 
 
 @inner
-def _batch_state(batches, ranks):
+def _batch_state(batches, ranks, brackets, last):
     """What :func:`_read_off_batches` carries from window to window, for ``batches`` = (counts, positions).
 
     (batch_of, member_candidates, member_found, brackets, last_thresholds,
@@ -65,7 +83,8 @@ def _batch_state(batches, ranks):
     :func:`~dynia.engine.kernels.selection.next_bracket`, whose top bounds
     its candidates) and last threshold, its behavioural set, and the batch
     of the sample at every rank of every parameter (``ranks``, see
-    :func:`~dynia.engine.flavours.parameter_ranks`).
+    :func:`~dynia.engine.flavours.parameter_ranks`). The ``brackets`` and
+    ``last`` thresholds are given, and updated in place.
     """
     counts = batches[0]
     n_batches = counts.shape[0]
@@ -80,8 +99,8 @@ def _batch_state(batches, ranks):
         batch_of,
         (np.empty((n_batches, size), dtype=np.int64), np.empty((n_batches, size))),
         np.empty(n_batches, dtype=np.int64),
-        np.full((n_batches, 2), np.nan),
-        np.full(n_batches, np.nan),
+        brackets,
+        last,
         np.empty((n_batches, counts.max() if n_batches else 0), dtype=np.int64),
         at_rank,
     )

@@ -46,7 +46,7 @@ __all__ = ["analyse_windows", "window_state", "analyse_window", "read_off", "bla
 
 
 @jit
-def analyse_windows(rows, measured, m, slots, cost_ranks, samples, bounds, bins, limits, min_points, results):
+def analyse_windows(rows, measured, m, slots, cost_ranks, samples, bounds, bins, limits, min_points, results, track):
     """Analyse the m windows of a block; see :mod:`dynia.engine` for the method.
 
     ``rows`` (m + slots - 1, n_samples) and ``measured`` (m + slots - 1,)
@@ -67,11 +67,16 @@ def analyse_windows(rows, measured, m, slots, cost_ranks, samples, bounds, bins,
     gradient (n_params, bins, m), extreme_costs (3, m)), the last the
     smallest cost, the largest behavioural cost (the count-th smallest) and
     the ``upper_position``-th smallest of every window; windows with fewer
-    than ``min_points`` measured points get NaN.
+    than ``min_points`` measured points get NaN. ``track`` (6,) holds the
+    brackets the first window's selections start from (see
+    :func:`window_state`; NaN: none) and is left holding the last window's:
+    handed on to the next block, it spares that block's first window a
+    selection among every sample. It steers the work only: any start
+    gives the same results.
     """
     # Numba takes no keywords nor records: the arguments stay positional, grouped as tuples where they belong together.
     positions, levels, weighted = limits
-    window = window_state(rows.shape[1], cost_ranks[0], samples, bounds, bins, levels, weighted)
+    window = window_state(rows.shape[1], cost_ranks[0], samples, bounds, bins, levels, weighted, track)
     no_batches = (np.empty((0, 1, 1)), np.empty((0, 1, 1, 2)))
     present = 0.0
     for t in range(m):
@@ -83,23 +88,22 @@ def analyse_windows(rows, measured, m, slots, cost_ranks, samples, bounds, bins,
 
 
 @inner
-def window_state(n_samples, count, samples, bounds, bins, levels, weighted):
+def window_state(n_samples, count, samples, bounds, bins, levels, weighted, track):
     """What :func:`analyse_window` works in and carries from window to window, made once a block.
 
     (running, cost, candidates, rules, work, track, within): the running
     sums ((high, low), total) of
     :func:`~dynia.engine.kernels.sums.window_sums`; a window's costs; its
     candidates (indices, costs); the read-off's rules (see the module
-    documentation); its workspace (``_workspace``); ``track``, the brackets
-    of the threshold and of the quantile (see
-    :func:`~dynia.engine.kernels.selection.next_bracket`) and their last
-    values, NaN before the first window; and the costs within the
-    quantile's bracket.
+    documentation); its workspace (``_workspace``); ``track`` (given,
+    updated in place), the brackets of the threshold and of the quantile
+    (see :func:`~dynia.engine.kernels.selection.next_bracket`) and their
+    last values, NaN before the first window of a run; and the costs within
+    the quantile's bracket.
     """
     running = ((np.empty(n_samples), np.empty(n_samples)), np.empty(n_samples))
     candidates = (np.empty(n_samples, dtype=np.int64), np.empty(n_samples))
     rules = (samples, bounds, levels, weighted, _bin_indices(samples[0], bounds, bins))
-    track = np.full(6, np.nan)
     return running, np.empty(n_samples), candidates, rules, _workspace(n_samples, count), track, np.empty(n_samples)
 
 
