@@ -46,7 +46,7 @@ def analyse_windows_batched(
     ``analyse_windows`` on that batch's samples alone; the window sums are
     formed once for all. ``tracks`` = (track, brackets (B, 2), last (B,)):
     ``analyse_windows``'s ``track`` and every batch's threshold bracket and
-    last threshold (see :func:`_batch_state`), where the first window's
+    last threshold (see ``_batch_state``), where the first window's
     selections start (NaN: nowhere) and the last window leaves them; they
     steer the work only.
     """
