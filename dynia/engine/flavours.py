@@ -386,6 +386,10 @@ class CompiledFlavour:
             dtype=np.int64,
         )
         self.batch_positions = np.array([self._positions(count) for count in self.batch_counts], dtype=np.int64)
+        # Every sample's batch, and the batch of the sample at every rank of every parameter: fixed for the run.
+        self.batch_of = np.arange(n_samples, dtype=np.int64) % max(batches, 1)
+        self.batch_at_rank = np.empty_like(self.ranks)
+        np.put_along_axis(self.batch_at_rank, self.ranks, np.broadcast_to(self.batch_of, self.ranks.shape), axis=1)
         # The brackets the kernels' selections carry from window to window (see analyse_windows's track and
         # analyse_windows_batched's tracks), NaN before the first block.
         self._tracks = (np.full(6, np.nan), np.full((batches, 2), np.nan), np.full(batches, np.nan))
@@ -436,7 +440,7 @@ class CompiledFlavour:
             self._tracks = tracks
             return WindowResults(ic, ci, median, gradient, *np.sqrt(extreme_costs))
         batch_ic, batch_ci = np.empty((self.batches, n_params, m)), np.empty((self.batches, n_params, m, 2))
-        batches = (self.batch_counts, self.batch_positions)
+        batches = (self.batch_counts, self.batch_positions, self.batch_of, self.batch_at_rank)
         kernels.analyse_windows_batched(*common, tracks, batches, (batch_ic, batch_ci))
         self._tracks = tracks
         return WindowResults(ic, ci, median, gradient, *np.sqrt(extreme_costs), batch_ic, batch_ci)

@@ -38,10 +38,14 @@ def analyse_windows_batched(
 ):
     """:func:`~dynia.engine.kernels.readoff.analyse_windows`, and the IC and limits of every batch of samples.
 
-    ``batches`` = (counts, positions): batch b of the ``B = counts.size``
-    batches holds samples b, b + B, b + 2B, ...; its behavioural set is its
+    ``batches`` = (counts, positions, batch_of, at_rank): batch b of the
+    ``B = counts.size`` batches holds samples b, b + B, b + 2B, ...
+    (``batch_of``, every sample's batch); its behavioural set is its
     ``counts[b]`` lowest costs and ``positions[b]`` (2,) its thesis limits'
-    positions. Writes ``batch_results`` = (batch_ic (B, n_params, m),
+    positions; ``at_rank`` (n_params, n_samples) holds the batch of the
+    sample at every rank of every parameter (see
+    :func:`~dynia.engine.flavours.parameter_ranks`), fixed for a run like
+    ``batch_of``. Writes ``batch_results`` = (batch_ic (B, n_params, m),
     batch_ci (B, n_params, m, 2)), each batch bit-identical to
     ``analyse_windows`` on that batch's samples alone; the window sums are
     formed once for all. ``tracks`` = (track, brackets (B, 2), last (B,)):
@@ -52,13 +56,12 @@ def analyse_windows_batched(
     """
     # As analyse_windows's, with the batches' two after: positional, each group a tuple.
     positions, levels, weighted = limits
-    counts, _ = batches
+    counts = batches[0]
     n_batches = counts.shape[0]
     track, batch_brackets, batch_last = tracks
     window = window_state(rows.shape[1], cost_ranks[0], samples, bounds, bins, levels, weighted, track)
     cost, candidates, work = window[1], window[2], window[4]
-    state = _batch_state(batches, samples[1], batch_brackets, batch_last)
-    brackets = state[3]
+    state = _batch_state(batches, samples[1].shape[1], batch_brackets, batch_last)
     present = 0.0
     for t in range(m):
         sums, present = window_sums(rows, measured, t, slots, present, window[0])
@@ -68,41 +71,31 @@ def analyse_windows_batched(
         # The candidates reach the bracket's top, and every batch's, so that they hold the batches' sets too.
         bound = track[1]
         for b in range(n_batches):
-            bound = max(bound, brackets[b, 1]) if brackets[b, 1] == brackets[b, 1] else bound
+            top = batch_brackets[b, 1]
+            bound = max(bound, top) if top == top else bound
         found = analyse_window(t, (sums, present), bound, cost_ranks, positions, window, results)
         _read_off_batches(cost, candidates, found, batches, state, window[3], t, results, batch_results, work)
 
 
 @inner
-def _batch_state(batches, ranks, brackets, last):
-    """What :func:`_read_off_batches` carries from window to window, for ``batches`` = (counts, positions).
+def _batch_state(batches, n_samples, brackets, last):
+    """What :func:`_read_off_batches` carries from window to window, for ``batches`` (see analyse_windows_batched).
 
-    (batch_of, member_candidates, member_found, brackets, last_thresholds,
-    selected, at_rank): each sample's batch, the batches' candidates
-    (indices, costs) and how many, each batch's bracket (see
-    :func:`~dynia.engine.kernels.selection.next_bracket`, whose top bounds
-    its candidates) and last threshold, its behavioural set, and the batch
-    of the sample at every rank of every parameter (``ranks``, see
-    :func:`~dynia.engine.flavours.parameter_ranks`). The ``brackets`` and
-    ``last`` thresholds are given, and updated in place.
+    (member_candidates, member_found, brackets, last_thresholds, selected):
+    the batches' candidates (indices, costs) and how many, each batch's
+    bracket (see :func:`~dynia.engine.kernels.selection.next_bracket`, whose
+    top bounds its candidates) and last threshold, and its behavioural set.
+    The ``brackets`` and ``last`` thresholds are given, and updated in place.
     """
     counts = batches[0]
     n_batches = counts.shape[0]
-    n_params, n_samples = ranks.shape
-    batch_of = _batch_of(n_samples, n_batches)
     size = (n_samples + n_batches - 1) // max(n_batches, 1)
-    at_rank = np.empty((n_params, n_samples if n_batches else 0), dtype=np.int64)
-    for p in range(n_params):
-        for s in range(at_rank.shape[1]):
-            at_rank[p, ranks[p, s]] = batch_of[s]
     return (
-        batch_of,
         (np.empty((n_batches, size), dtype=np.int64), np.empty((n_batches, size))),
         np.empty(n_batches, dtype=np.int64),
         brackets,
         last,
         np.empty((n_batches, counts.max() if n_batches else 0), dtype=np.int64),
-        at_rank,
     )
 
 
@@ -122,8 +115,8 @@ def _read_off_batches(cost, candidates, found, batches, state, rules, t, results
     whose median and gradient a batch leaves alone.
     """
     # Ten arguments: the population's candidates (three), the batches and their state, how and where to read off.
-    counts, positions = batches
-    batch_of, batch_candidates, batch_found, brackets, last, selected, at_rank = state
+    counts, positions, batch_of, at_rank = batches
+    batch_candidates, batch_found, brackets, last, selected = state
     (_, ranks, ordered), (lows, highs), weighted = rules[0], rules[1], rules[3]
     batch_ic, batch_ci = batch_results
     median, gradient = results[2], results[3]
@@ -152,16 +145,6 @@ def _read_off_batches(cost, candidates, found, batches, state, rules, t, results
         for b in range(n_batches):
             batch_ci[b, p, t, 0], batch_ci[b, p, t, 1] = limits[b, 0], limits[b, 1]
             batch_ic[b, p, t] = 1 - (limits[b, 1] - limits[b, 0]) / (highs[p] - lows[p])
-
-
-@inner
-def _batch_of(n_samples, n_batches):
-    """The batch of every sample: sample s belongs to batch s mod n_batches (none without batches)."""
-    batch_of = np.empty(n_samples if n_batches else 0, dtype=np.int64)
-    for first in range(0, batch_of.shape[0], max(n_batches, 1)):
-        for b in range(min(n_batches, n_samples - first)):
-            batch_of[first + b] = b
-    return batch_of
 
 
 @inner
