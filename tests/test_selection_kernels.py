@@ -15,7 +15,7 @@ import pytest
 
 from dynia.engine import kernels
 from dynia.engine.flavours import parameter_ranks
-from dynia.engine.kernels import selection
+from dynia.engine.kernels import bits, selection
 from dynia.engine.kernels.ranks import ranked_order_statistics
 
 pytestmark = pytest.mark.skipif(not kernels.AVAILABLE, reason="numba is not installed")
@@ -128,19 +128,44 @@ def test_one_pass_counts_the_costs_against_every_guess(seed):
     )
 
 
-@pytest.mark.parametrize("share", [0.01, 0.3])  # few kept (the branch), many (branch-free writes)
-def test_the_gathered_costs_are_in_index_order(share):
+@pytest.mark.parametrize("share", [0.01, 0.3])
+@pytest.mark.parametrize("n_samples", [2000, 128, 64, 63, 1])  # whole words of 64, and a part word after them
+@pytest.mark.parametrize("loop", ["marked", "every"])  # a word of bits per 64 costs (few kept), or every cost written
+def test_the_gathered_costs_are_in_index_order(share, n_samples, loop):
     rng = np.random.default_rng(7)
-    _, cost = _tied_costs(rng, 2000)
-    bound = np.quantile(cost, share)
-    bracket = tuple(np.quantile(cost, [0.9 - share, 0.9]))
-    kept = int(np.sum(cost <= bound) + np.sum((cost >= bracket[0]) & (cost <= bracket[1])))
+    _, cost = _tied_costs(rng, n_samples)
+    cost[::29] = np.nan  # a window the simulation could not score: never kept, as numpy's comparisons keep none
+    bound = np.nanquantile(cost, share)
+    bracket = tuple(np.nanquantile(cost, [0.9 - share, 0.9]))
+    kept = 0 if loop == "marked" else n_samples  # the estimate that chooses the loop
     candidates, within = (np.empty(cost.size, dtype=np.int64), np.empty(cost.size)), np.empty(cost.size)
     found, inside = selection.gather_costs(cost, bound, bracket, candidates, within, kept)
     expected = np.flatnonzero(cost <= bound)
     np.testing.assert_array_equal(candidates[0][:found], expected)
     np.testing.assert_array_equal(candidates[1][:found], cost[expected])
     np.testing.assert_array_equal(within[:inside], cost[(cost >= bracket[0]) & (cost <= bracket[1])])
+
+
+def test_words_of_bits_count_find_and_mark_as_numpy_does():
+    import numba
+
+    # The helpers have no wrapper for calls from Python (kernels call them): each is reached through one that has.
+    lowest_set_bit, popcount = (numba.njit(lambda word, f=f: f(word)) for f in (bits.lowest_set_bit, bits.popcount))
+    mark_at_most = numba.njit(lambda values, bound: bits.mark_at_most(values, bound))
+    mark_within = numba.njit(lambda values, bracket: bits.mark_within(values, bracket))
+    rng = np.random.default_rng(3)
+    for position in range(64):
+        word = np.uint64(1) << np.uint64(position)
+        above = np.uint64(rng.integers(0, 2**63)) << np.uint64(position + 1) if position < 63 else np.uint64(0)
+        assert lowest_set_bit(word) == lowest_set_bit(word | above) == position
+        assert popcount(word | above) == bin(int(word | above)).count("1")
+    values = rng.uniform(0, 1, 64)
+    values[5] = np.nan
+    at_most = sum(1 << j for j in np.flatnonzero(values <= 0.5).tolist())
+    within = sum(1 << j for j in np.flatnonzero((values >= 0.25) & (values <= 0.75)).tolist())
+    assert int(mark_at_most(values, 0.5)) == at_most
+    assert int(mark_within(values, (0.25, 0.75))) == within
+    assert int(mark_at_most(values, np.inf)) == 2**64 - 1 - (1 << 5)  # every value but the NaN
 
 
 @pytest.mark.parametrize("seed", range(10))

@@ -12,20 +12,10 @@ once (:func:`batch_limits`), are found so when the sets are large.
 
 import numpy as np
 
+from .bits import ONE, popcount
 from .compile import inner, jit
 
 __all__ = ["ranked_order_statistics", "batch_limits"]
-
-_ONE = np.uint64(1)
-
-
-@inner
-def _popcount(word):
-    """How many bits of the uint64 ``word`` are set (the bit-parallel count: pairs, nibbles, bytes, then a sum)."""
-    word = word - ((word >> _ONE) & np.uint64(0x5555555555555555))
-    word = (word & np.uint64(0x3333333333333333)) + ((word >> np.uint64(2)) & np.uint64(0x3333333333333333))
-    word = (word + (word >> np.uint64(4))) & np.uint64(0x0F0F0F0F0F0F0F0F)
-    return np.int64((word * np.uint64(0x0101010101010101)) >> np.uint64(56))
 
 
 @jit
@@ -42,7 +32,7 @@ def ranked_order_statistics(ranks, ordered, selected, count, positions, words):
     """
     for i in range(count):
         rank = ranks[selected[i]]
-        words[rank >> 6] |= _ONE << np.uint64(rank & 63)
+        words[rank >> 6] |= ONE << np.uint64(rank & 63)
     # Ascending targets: each walk goes on from the word the last one stopped in.
     lower, w, seen = _set_bit_at(words, positions[0], np.int64(0), np.int64(0))  # not literals: one compile
     middle, w, seen = _set_bit_at(words, (count - 1) // 2, w, seen)
@@ -57,14 +47,14 @@ def _set_bit_at(words, target, w, seen):
 
     Returns its position, the word it lies in and the set bits before that word, for the next, later target.
     """
-    while seen + _popcount(words[w]) <= target:
-        seen += _popcount(words[w])
+    while seen + popcount(words[w]) <= target:
+        seen += popcount(words[w])
         w += 1
     word = words[w]
     counted = seen
     bit = 0
     while True:
-        if (word >> np.uint64(bit)) & _ONE:
+        if (word >> np.uint64(bit)) & ONE:
             if counted == target:
                 return 64 * w + bit, w, seen
             counted += 1
@@ -86,7 +76,7 @@ def batch_limits(selected, counts, positions, ranks, ordered, at_rank, words, li
     for b in range(counts.shape[0]):
         for i in range(counts[b]):
             rank = ranks[selected[b, i]]
-            words[rank >> 6] |= _ONE << np.uint64(rank & 63)
+            words[rank >> 6] |= ONE << np.uint64(rank & 63)
     _walk_to_limits(words, at_rank, ordered, positions[:, 0], True, limits[:, 0])
     _walk_to_limits(words, at_rank, ordered, counts - 1 - positions[:, 1], False, limits[:, 1])
     words[:] = 0
@@ -109,7 +99,7 @@ def _walk_to_limits(words, at_rank, ordered, targets, upward, limits):
         word = words[w]
         for j in range(64 if word else 0):
             bit = j if upward else 63 - j
-            if (word >> np.uint64(bit)) & _ONE:
+            if (word >> np.uint64(bit)) & ONE:
                 rank = 64 * w + bit
                 b = at_rank[rank]
                 if seen[b] == targets[b]:

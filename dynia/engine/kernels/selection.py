@@ -16,6 +16,7 @@ ranks instead (:mod:`dynia.engine.kernels.ranks`).
 
 import numpy as np
 
+from .bits import ONE, lowest_set_bit, mark_at_most, mark_within
 from .compile import inner, jit
 
 __all__ = [
@@ -65,7 +66,7 @@ def count_costs(sums, present, bounds, brackets, cost):
     """
     bound, reserve = bounds
     (low, high), (wide_low, wide_high) = brackets
-    under_bound, under_reserve, below, inside, wide_below, wide_inside = 0, 0, 0, 0, 0, 0
+    under_bound, under_reserve, below, up_to_high, wide_below, up_to_wide_high = 0, 0, 0, 0, 0, 0
     for s in range(cost.shape[0]):
         mae = sums[s] / present
         value = mae * mae
@@ -73,10 +74,12 @@ def count_costs(sums, present, bounds, brackets, cost):
         under_bound += value <= bound
         under_reserve += value <= reserve
         below += value < low
-        inside += (value >= low) & (value <= high)
+        up_to_high += value <= high
         wide_below += value < wide_low
-        wide_inside += (value >= wide_low) & (value <= wide_high)
-    return under_bound, under_reserve, below, inside, wide_below, wide_inside
+        up_to_wide_high += value <= wide_high
+    # A bracket's low is at most its high (open_bracket, widened), so what lies within is what is at or below the
+    # high less what is below the low: one comparison a count fewer than testing both ends.
+    return under_bound, under_reserve, below, up_to_high - below, wide_below, up_to_wide_high - wide_below
 
 
 @jit
@@ -86,25 +89,25 @@ def gather_costs(cost, bound, bracket, candidates, within, kept):
     Both in index order: the candidates as :func:`find_candidates` keeps
     them, the costs within (low, high) into ``within`` as :func:`select_near`
     gathers them. Returns how many of each. ``kept``, about how many that
-    will be (:func:`count_costs` tells), chooses the loop: when few, a
-    branch almost always predicted; when many, branch-free writes of every
-    sample, each kept by counting it.
+    will be (:func:`count_costs` tells), chooses the loop. When few, a word
+    of bits marks each 64 costs' keepers (:mod:`~dynia.engine.kernels.bits`)
+    and only those are written: a branch per cost
+    mispredicts whenever about one in ten is kept (a tenth behavioural).
+    When many (a window of near ties, as a record resting at zero makes),
+    every cost is written and kept by counting it: visiting thousands of set
+    bits one by one costs more.
     """
+    if 4 * kept >= cost.shape[0]:
+        return _write_every(cost, bound, bracket, candidates, within)
+    return _write_marked(cost, bound, bracket, candidates, within)
+
+
+@inner
+def _write_every(cost, bound, bracket, candidates, within):
+    """:func:`gather_costs` writing every cost, each kept by counting it: no branch."""
     indices, costs = candidates
     low, high = bracket
     found, inside = 0, 0
-    if 8 * kept < cost.shape[0]:
-        for s in range(cost.shape[0]):
-            value = cost[s]
-            if (value <= bound) | ((value >= low) & (value <= high)):
-                if value <= bound:
-                    indices[found] = s
-                    costs[found] = value
-                    found += 1
-                if (value >= low) & (value <= high):
-                    within[inside] = value
-                    inside += 1
-        return found, inside
     for s in range(cost.shape[0]):
         value = cost[s]
         indices[found] = s
@@ -112,6 +115,40 @@ def gather_costs(cost, bound, bracket, candidates, within, kept):
         found += value <= bound
         within[inside] = value
         inside += (value >= low) & (value <= high)
+    return found, inside
+
+
+@inner
+def _write_marked(cost, bound, bracket, candidates, within):
+    """:func:`gather_costs` writing the costs each word of bits marks, 64 costs to a word."""
+    # The loops stay in this one function: a helper that numba calls, not inlines, counts references on every call.
+    indices, costs = candidates
+    n = cost.shape[0]
+    whole = n - n % 64
+    found, inside = 0, 0
+    for base in range(0, whole, 64):
+        word = mark_at_most(cost[base : base + 64], bound)
+        while word:
+            s = base + lowest_set_bit(word)
+            indices[found] = s
+            costs[found] = cost[s]
+            found += 1
+            word &= word - ONE
+        word = mark_within(cost[base : base + 64], bracket)
+        while word:
+            within[inside] = cost[base + lowest_set_bit(word)]
+            inside += 1
+            word &= word - ONE
+    low, high = bracket
+    for s in range(whole, n):
+        value = cost[s]
+        if value <= bound:
+            indices[found] = s
+            costs[found] = value
+            found += 1
+        if (value >= low) & (value <= high):
+            within[inside] = value
+            inside += 1
     return found, inside
 
 
