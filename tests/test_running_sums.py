@@ -228,7 +228,11 @@ def test_a_cached_kernel_older_than_any_source_of_the_package_is_dropped(tmp_pat
     (package / "__pycache__").mkdir(parents=True)
     for name in ("readoff.py", "sums.py"):
         (package / name).write_text("")
-    mapped = elsewhere / package.resolve().relative_to(package.resolve().anchor)
+    # Where numba puts the package's kernels under NUMBA_CACHE_DIR: asked of numba itself, so that a release that
+    # moves them fails here rather than leaving stale kernels to run (a helper's old code, once a loop that hung).
+    from numba.core.caching import _CacheLocator
+
+    mapped = elsewhere / _CacheLocator.get_suitable_cache_subpath(str(package / "readoff.py"))
     mapped.mkdir(parents=True)
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(elsewhere))
     stale = [package / "__pycache__" / "readoff.analyse-1.nbi", mapped / "readoff.analyse-1.py311.1.nbc"]

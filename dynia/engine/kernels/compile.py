@@ -12,6 +12,7 @@ import :func:`drop_stale_cache` deletes every cached kernel of the package
 older than its newest source file, and they compile afresh.
 """
 
+import hashlib
 import importlib.util
 import os
 from pathlib import Path
@@ -25,14 +26,19 @@ __all__ = ["AVAILABLE", "jit", "inner", "drop_stale_cache"]
 def drop_stale_cache(package=Path(__file__).parent):
     """Delete the cached kernels of ``package`` written before its newest source file changed.
 
-    numba caches next to the sources (``__pycache__``), or under ``NUMBA_CACHE_DIR`` at the sources' absolute path
-    when that is set. An installed package's sources do not change after the install, so this finds nothing to do.
-    Returns the number of files deleted.
+    numba caches next to the sources (``__pycache__``), or under ``NUMBA_CACHE_DIR`` when that is set, in a folder
+    named after the sources' directory and a hash of its path. An installed package's sources do not change after
+    the install, so this finds nothing to do. Returns the number of files deleted.
     """
     newest = max(source.stat().st_mtime for source in package.glob("*.py"))
     folders = [package / "__pycache__"]
     if os.environ.get("NUMBA_CACHE_DIR"):
-        folders.append(Path(os.environ["NUMBA_CACHE_DIR"]) / package.resolve().relative_to(package.resolve().anchor))
+        elsewhere = Path(os.environ["NUMBA_CACHE_DIR"])
+        # Recent numba keys the folder by the directory's name and a SHA-1 of its absolute path (a path too long
+        # for Windows otherwise); older releases mirrored the absolute path. Both are looked in.
+        directory = Path(os.path.abspath(package))
+        hashed = hashlib.sha1(str(directory).encode()).hexdigest()
+        folders += [elsewhere / f"{directory.name}_{hashed}", elsewhere / directory.relative_to(directory.anchor)]
     deleted = 0
     for folder in folders:
         for cached in [*folder.glob("*.nbi"), *folder.glob("*.nbc")]:
