@@ -34,8 +34,7 @@ def _picked(sums, count, bracket):
     """The kernels' costs, threshold and behavioural set for one window's ``sums``, searched first in ``bracket``."""
     n_samples = sums.size
     cost = np.empty(n_samples)
-    nowhere = (np.nan, np.nan)
-    selection.count_costs(sums, PRESENT, nowhere, (nowhere, nowhere), cost)
+    selection.form_costs(sums, PRESENT, cost)
     candidates = (np.empty(n_samples, dtype=np.int64), np.empty(n_samples))
     found = selection.find_candidates(cost, 0, 1, count, bracket[1], candidates)
     threshold, _ = selection.select_near(candidates[1], found, count - 1, bracket, np.empty(n_samples))
@@ -111,13 +110,14 @@ def test_one_pass_counts_the_costs_against_every_guess(seed):
     rng = np.random.default_rng(seed)
     sums, costs = _tied_costs(rng, int(rng.integers(50, 3000)))
     sums[::97] = np.inf  # an overflowed window sum: an infinite cost, counted as numpy counts it
+    sums[5::101] = np.nan  # a sum the simulation could not form: counted nowhere
     costs = (sums / PRESENT) ** 2
-    bound, reserve = np.quantile(costs[np.isfinite(costs)], [0.02, 0.1])
-    low, high = np.quantile(costs[np.isfinite(costs)], [0.85, 0.95])
+    finite = costs[np.isfinite(costs)]
+    # Bounds at costs that occur (ties on them), and between costs.
+    bound, reserve = np.quantile(finite, 0.02, method="lower"), np.quantile(finite, 0.1)
+    low, high = np.quantile(finite, [0.85, 0.95], method="nearest")
     narrow, wide = (low, high), (low / 2, np.inf)
-    cost = np.empty(sums.size)
-    counted = selection.count_costs(sums, PRESENT, (bound, reserve), (narrow, wide), cost)
-    np.testing.assert_array_equal(cost, costs)
+    counted = selection.count_costs(sums, PRESENT, (bound, reserve), (narrow, wide))
     assert counted == (
         np.sum(costs <= bound),
         np.sum(costs <= reserve),
@@ -128,18 +128,42 @@ def test_one_pass_counts_the_costs_against_every_guess(seed):
     )
 
 
+@pytest.mark.parametrize("present", [1.0, 3.0, 7.0, 21.0, 201.0])
+def test_a_cost_bound_carried_to_the_sums_keeps_exactly_the_same_sums(present):
+    import numba
+
+    # Reached through a compiled wrapper: the helper has none for calls from Python.
+    sum_bound = numba.njit(lambda bound, present: selection.sum_bound(bound, present))
+    rng = np.random.default_rng(int(present))
+    for total in np.concatenate([rng.gamma(2.0, 1.0, 300) * present, [0.0, 5e-324, 1e-300, 1e150, 1e300]]):
+        cost = (total / present) ** 2
+        # The cost of a sum that occurs, the doubles beside it, and some between costs.
+        for bound in (cost, np.nextafter(cost, 0), np.nextafter(cost, np.inf), cost * (1 + 1e-9), cost * 0.97):
+            limit = sum_bound(bound, present)
+            near = total + np.arange(-8, 9) * np.spacing(total)
+            near = np.concatenate([near, -near, [limit, np.nextafter(limit, np.inf)]])
+            near = near[np.isfinite(near)]
+            np.testing.assert_array_equal(np.abs(near) <= limit, (near / present) ** 2 <= bound)
+    assert sum_bound(np.inf, present) == np.inf
+    assert sum_bound(-1.0, present) == -np.inf
+    assert np.isnan(sum_bound(np.nan, present))
+
+
 @pytest.mark.parametrize("share", [0.01, 0.3])
 @pytest.mark.parametrize("n_samples", [2000, 128, 64, 63, 1])  # whole words of 64, and a part word after them
-@pytest.mark.parametrize("loop", ["marked", "every"])  # a word of bits per 64 costs (few kept), or every cost written
+@pytest.mark.parametrize("loop", ["marked", "every"])  # a word of bits per 64 sums (few kept), or every cost written
 def test_the_gathered_costs_are_in_index_order(share, n_samples, loop):
     rng = np.random.default_rng(7)
-    _, cost = _tied_costs(rng, n_samples)
-    cost[::29] = np.nan  # a window the simulation could not score: never kept, as numpy's comparisons keep none
-    bound = np.nanquantile(cost, share)
-    bracket = tuple(np.nanquantile(cost, [0.9 - share, 0.9]))
+    sums, _ = _tied_costs(rng, n_samples)
+    sums[3::29] = np.nan  # a window the simulation could not score: never kept, as numpy's comparisons keep none
+    sums[::31] *= -1  # a sum's sign does not change its cost
+    sums[7::37] = np.inf
+    cost = (sums / PRESENT) ** 2
+    bound = np.nanquantile(cost, share, method="nearest")  # a cost that occurs: ties on the bound are kept
+    bracket = tuple(np.nanquantile(cost, [0.9 - share, 0.9], method="nearest"))
     kept = 0 if loop == "marked" else n_samples  # the estimate that chooses the loop
     candidates, within = (np.empty(cost.size, dtype=np.int64), np.empty(cost.size)), np.empty(cost.size)
-    found, inside = selection.gather_costs(cost, bound, bracket, candidates, within, kept)
+    found, inside = selection.gather_costs((sums, PRESENT), bound, bracket, candidates, within, kept)
     expected = np.flatnonzero(cost <= bound)
     np.testing.assert_array_equal(candidates[0][:found], expected)
     np.testing.assert_array_equal(candidates[1][:found], cost[expected])
@@ -152,19 +176,19 @@ def test_words_of_bits_count_find_and_mark_as_numpy_does():
     # The helpers have no wrapper for calls from Python (kernels call them): each is reached through one that has.
     lowest_set_bit, popcount = (numba.njit(lambda word, f=f: f(word)) for f in (bits.lowest_set_bit, bits.popcount))
     mark_at_most = numba.njit(lambda values, bound: bits.mark_at_most(values, bound))
-    mark_within = numba.njit(lambda values, bracket: bits.mark_within(values, bracket))
+    mark_between = numba.njit(lambda values, bracket: bits.mark_between(values, bracket))
     rng = np.random.default_rng(3)
     for position in range(64):
         word = np.uint64(1) << np.uint64(position)
         above = np.uint64(rng.integers(0, 2**63)) << np.uint64(position + 1) if position < 63 else np.uint64(0)
         assert lowest_set_bit(word) == lowest_set_bit(word | above) == position
         assert popcount(word | above) == bin(int(word | above)).count("1")
-    values = rng.uniform(0, 1, 64)
+    values = rng.uniform(-1, 1, 64)  # marked by magnitude
     values[5] = np.nan
-    at_most = sum(1 << j for j in np.flatnonzero(values <= 0.5).tolist())
-    within = sum(1 << j for j in np.flatnonzero((values >= 0.25) & (values <= 0.75)).tolist())
+    at_most = sum(1 << j for j in np.flatnonzero(np.abs(values) <= 0.5).tolist())
+    between = sum(1 << j for j in np.flatnonzero((np.abs(values) > 0.25) & (np.abs(values) <= 0.75)).tolist())
     assert int(mark_at_most(values, 0.5)) == at_most
-    assert int(mark_within(values, (0.25, 0.75))) == within
+    assert int(mark_between(values, (0.25, 0.75))) == between
     assert int(mark_at_most(values, np.inf)) == 2**64 - 1 - (1 << 5)  # every value but the NaN
 
 

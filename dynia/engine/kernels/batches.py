@@ -13,7 +13,7 @@ import numpy as np
 from .compile import inner, jit
 from .ranks import batch_limits
 from .readoff import analyse_window, blank_window, read_off, window_state
-from .selection import behavioural, find_candidates, next_bracket, select_near, threshold_ranks
+from .selection import behavioural, find_candidates, form_costs, next_bracket, select_near, threshold_ranks
 from .sums import window_sums
 
 __all__ = ["analyse_windows_batched"]
@@ -73,8 +73,9 @@ def analyse_windows_batched(
         for b in range(n_batches):
             top = batch_brackets[b, 1]
             bound = max(bound, top) if top == top else bound
-        found = analyse_window(t, (sums, present), bound, cost_ranks, positions, window, results)
-        _read_off_batches(cost, candidates, found, batches, state, window[3], t, results, batch_results, work)
+        found, formed = analyse_window(t, (sums, present), bound, cost_ranks, positions, window, results)
+        costs = (cost, (sums, present), formed)
+        _read_off_batches(costs, candidates, found, batches, state, window[3], t, results, batch_results, work)
 
 
 @inner
@@ -100,8 +101,12 @@ def _batch_state(batches, n_samples, brackets, last):
 
 
 @inner
-def _read_off_batches(cost, candidates, found, batches, state, rules, t, results, batch_results, work):
+def _read_off_batches(costs, candidates, found, batches, state, rules, t, results, batch_results, work):
     """Every Monte Carlo batch's IC and limits at window t, from the population's ``candidates``.
+
+    ``costs`` = (cost, window_sums, formed): the window's cost array, its
+    sums and whether the costs are formed in it yet; a batch whose members
+    are not all among the candidates forms them (once a window).
 
     Each batch's threshold is searched as the population's is (within a
     bracket around its last,
@@ -123,11 +128,15 @@ def _read_off_batches(cost, candidates, found, batches, state, rules, t, results
     n_batches = counts.shape[0]
     # As for the population (see read_off): the walk over the ranks pays once the sets are a 32nd of the samples.
     by_rank = not weighted and 32 * counts.sum() >= ranks.shape[1]
+    cost, window_sums, formed = costs
     _deal_candidates(candidates, found, batch_of, batch_candidates, batch_found)
     for b in range(n_batches):
         members = (batch_candidates[0][b], batch_candidates[1][b])
         bracket = (brackets[b, 0], brackets[b, 1])
         if batch_found[b] < counts[b]:
+            if not formed:
+                form_costs(*window_sums, cost)
+                formed = True
             batch_found[b] = find_candidates(cost, b, n_batches, counts[b], bracket[1], members)
         threshold, density = select_near(members[1], batch_found[b], counts[b] - 1, bracket, work[0])
         brackets[b, 0], brackets[b, 1] = next_bracket(threshold, last[b], density, threshold_ranks(counts[b]))

@@ -2,7 +2,7 @@
 
 A pass that keeps a few values of many (a window's candidates, the costs
 near a quantile) marks them as bits, 64 values to a word, in a loop that
-vectorises (:func:`mark_at_most`, :func:`mark_within`), then visits only the
+vectorises (:func:`mark_at_most`, :func:`mark_between`), then visits only the
 set bits (:func:`lowest_set_bit`): no branch per value to mispredict, and
 no write per value that is not kept. The limits of a large set count its
 members' ranks a word at a time (:func:`popcount`,
@@ -13,7 +13,7 @@ import numpy as np
 
 from .compile import inner
 
-__all__ = ["ONE", "popcount", "lowest_set_bit", "mark_at_most", "mark_within"]
+__all__ = ["ONE", "popcount", "lowest_set_bit", "mark_at_most", "mark_between"]
 
 #: The uint64 1: shifts and masks of words stay unsigned, as numba types a literal 1 signed.
 ONE = np.uint64(1)
@@ -42,26 +42,26 @@ def lowest_set_bit(word):
 
 @inner
 def mark_at_most(values, bound):
-    """A word whose bit j is set when ``values[j] <= bound``, for the 64 ``values`` (none for a NaN value or bound).
+    """A word whose bit j is set when ``|values[j]| <= bound``, for the 64 ``values`` (none for a NaN value or bound).
 
     ``values`` is a view of 64, indexed from 0: an index LLVM cannot prove non-negative (base + j) takes numba's
     wraparound, and the loop no longer vectorises (a third of the speed).
     """
     word = np.uint64(0)
     for j in range(64):
-        word |= np.uint64(values[j] <= bound) << np.uint64(j)
+        word |= np.uint64(abs(values[j]) <= bound) << np.uint64(j)
     return word
 
 
 @inner
-def mark_within(values, bracket):
-    """A word whose bit j is set when ``values[j]`` lies within ``bracket`` = (low, high), ends included.
+def mark_between(values, bracket):
+    """A word whose bit j is set when ``low < |values[j]| <= high``, ``bracket`` = (low, high).
 
     As :func:`mark_at_most`, for 64 ``values``.
     """
     low, high = bracket
     word = np.uint64(0)
     for j in range(64):
-        value = values[j]
-        word |= np.uint64((value >= low) & (value <= high)) << np.uint64(j)
+        size = abs(values[j])
+        word |= np.uint64((size > low) & (size <= high)) << np.uint64(j)
     return word

@@ -30,6 +30,7 @@ from .selection import (
     beside,
     count_costs,
     find_candidates,
+    form_costs,
     gather_costs,
     next_bracket,
     open_bracket,
@@ -111,17 +112,18 @@ def window_state(n_samples, count, samples, bounds, bins, levels, weighted, trac
 def analyse_window(t, window_sums, bound, cost_ranks, positions, window, results):
     """Window t from its ``window_sums`` = (sums, present): its set, read-off and extreme costs, into ``results``.
 
-    Its costs go to ``window[1]``, and the candidates of its set are every
-    cost up to ``bound`` (at least the bracket's top, which the threshold is
-    searched within) or more (``_gather_window``); ``window`` is
-    :func:`window_state`'s, whose brackets move on. Returns how many
-    candidates there were.
+    The candidates of its set are every cost up to ``bound`` (at least the
+    bracket's top, which the threshold is searched within) or more
+    (``_gather_window``); ``window`` is :func:`window_state`'s, whose
+    brackets move on. Returns how many candidates there were, and whether
+    every cost was formed into ``window[1]`` (only a selection among every
+    cost needs them).
     """
     count, upper_position = cost_ranks
     _, cost, candidates, rules, work, track, within = window
     ic, ci, median, gradient, extreme_costs = results
     scratch = work[0]
-    found, quantile_bracket, quantile_counts = _gather_window(window_sums, bound, cost_ranks, window)
+    found, quantile_bracket, quantile_counts, formed = _gather_window(window_sums, bound, cost_ranks, window)
     threshold, density = select_near(candidates[1], found, count - 1, (track[0], track[1]), scratch)
     read_off_into = (ic, ci, median, gradient)
     smallest = read_off(count, candidates, found, threshold, rules, positions, t, read_off_into, True, work)
@@ -130,7 +132,10 @@ def analyse_window(t, window_sums, bound, cost_ranks, positions, window, results
         upper, quantile_density = select_within(
             cost, n_samples, upper_position, quantile_bracket, quantile_counts, within, True
         )
-    else:  # beyond the wide bracket too: searched on from its side
+    else:  # beyond the wide bracket too: searched on from its side, among every cost
+        if not formed:
+            form_costs(*window_sums, cost)
+            formed = True
         side = beside(quantile_bracket, upper_position < quantile_counts[0])
         upper, quantile_density = select_near(cost, n_samples, upper_position, side, scratch)
     track[0], track[1] = next_bracket(threshold, track[4], density, threshold_ranks(count))
@@ -139,30 +144,31 @@ def analyse_window(t, window_sums, bound, cost_ranks, positions, window, results
     extreme_costs[0, t] = smallest
     extreme_costs[1, t] = threshold
     extreme_costs[2, t] = upper
-    return found
+    return found, formed
 
 
 @inner
 def _gather_window(window_sums, bound, cost_ranks, window):
-    """A window's costs, the candidates of its behavioural set and the costs near its quantile, in two passes.
+    """The candidates of a window's behavioural set and the costs near its quantile, in two passes over its sums.
 
-    The first forms the costs (``window[1]``) and counts them against two
-    guesses at the threshold, ``bound`` and a reserve above it, and against
-    the quantile's bracket and a wider one; the second gathers the
-    candidates (``window[2]``), every cost up to the lower guess that holds
-    the set, and the costs within the narrower bracket that holds the
-    quantile (``window[6]``). A window that neither guess serves (a block's
-    first, or a jump) searches its threshold among every cost.
-    Returns how many candidates, and the quantile's bracket with the costs
-    below and within it; when neither bracket holds the quantile, the wide
-    one with none within.
+    The first counts the costs, unformed (:func:`~dynia.engine.kernels.selection.count_costs`),
+    against two guesses at the threshold, ``bound`` and a reserve above it,
+    and against the quantile's bracket and a wider one; the second gathers
+    the candidates (``window[2]``), every cost up to the lower guess that
+    holds the set, and the costs within the narrower bracket that holds the
+    quantile (``window[6]``), forming those costs only. A window that
+    neither guess serves (a block's first, or a jump) forms every cost
+    (``window[1]``) and searches its threshold among them. Returns how many
+    candidates, the quantile's bracket with the costs below and within it
+    (when neither bracket holds the quantile, the wide one with none
+    within), and whether every cost was formed.
     """
     count, upper_position = cost_ranks
     _, cost, candidates, _, work, track, within = window
     bounds = (bound, reserve_bound(bound, (track[0], track[1])))
     narrow = open_bracket((track[2], track[3]))
     wide = widened(narrow)
-    counted = count_costs(*window_sums, bounds, (narrow, wide), cost)
+    counted = count_costs(*window_sums, bounds, (narrow, wide))
     if counted[2] <= upper_position < counted[2] + counted[3]:
         quantile_bracket, quantile_counts = narrow, (counted[2], counted[3])
     elif counted[4] <= upper_position < counted[4] + counted[5]:
@@ -172,14 +178,16 @@ def _gather_window(window_sums, bound, cost_ranks, window):
     gather_bound = bound if counted[0] >= count else (bounds[1] if counted[1] >= count else np.nan)
     kept = (counted[0] if gather_bound == bound else counted[1]) + quantile_counts[1]
     gathered = quantile_bracket if quantile_counts[1] else (np.nan, np.nan)
-    found, _ = gather_costs(cost, gather_bound, gathered, candidates, within, kept)
-    if found < count:
-        # Neither guess holds the set: its threshold is searched among every cost from above the reserve, and the
-        # candidates are the costs up to it.
-        above = beside((track[0], bounds[1]), False)
-        first_threshold, _ = select_near(cost, cost.shape[0], count - 1, above, work[0])
-        found = find_candidates(cost, 0, 1, count, first_threshold, candidates)
-    return found, quantile_bracket, quantile_counts
+    found, _ = gather_costs(window_sums, gather_bound, gathered, candidates, within, kept)
+    if found >= count:
+        return found, quantile_bracket, quantile_counts, False
+    # Neither guess holds the set: its threshold is searched among every cost from above the reserve, and the
+    # candidates are the costs up to it.
+    form_costs(*window_sums, cost)
+    above = beside((track[0], bounds[1]), False)
+    first_threshold, _ = select_near(cost, cost.shape[0], count - 1, above, work[0])
+    found = find_candidates(cost, 0, 1, count, first_threshold, candidates)
+    return found, quantile_bracket, quantile_counts, True
 
 
 @inner

@@ -4,9 +4,12 @@ A window's costs are ``(sums / present)^2``. Its behavioural threshold,
 the count-th smallest cost (and every Monte Carlo batch's), and the noise
 floor's quantile are found by selection among the few costs within a
 bracket around the previous window's value, which a counting pass finds
-(:func:`select_near`, moved outward when it misses); the pass that forms a
-window's costs counts for both at once (:func:`count_costs`), and one more
-gathers the few costs each needs (:func:`gather_costs`);
+(:func:`select_near`, moved outward when it misses). A window's first pass
+counts for both at once on the sums, with no cost formed (a cost grows with
+its sum's magnitude, so each cost bound is carried to the sums exactly:
+:func:`sum_bound`), and one more gathers the few costs each needs, forming
+only those (:func:`gather_costs`); a miss of both forms every cost
+(:func:`form_costs`);
 the behavioural set is then the first ``count`` of a stable sort of the
 costs, ties to the lowest indices (:func:`behavioural`). The limits and
 median of a small set are order statistics of its values
@@ -16,10 +19,14 @@ ranks instead (:mod:`dynia.engine.kernels.ranks`).
 
 import numpy as np
 
-from .bits import ONE, lowest_set_bit, mark_at_most, mark_within
+from .bits import ONE, lowest_set_bit, mark_at_most, mark_between
 from .compile import inner, jit
 
 __all__ = [
+    "cost_of",
+    "form_costs",
+    "sum_bound",
+    "sum_bracket",
     "count_costs",
     "gather_costs",
     "threshold_ranks",
@@ -47,14 +54,93 @@ RETRIES = 3
 # More values than this within a bracket are first checked for being all the same, which no selection then needs.
 CROWDED = 1024
 
+# The smallest positive and the largest double, where a sum bound's search starts and stops.
+_SMALLEST, _LARGEST = 5e-324, 1.7976931348623157e308
+
 # Order statistics this close to either end (a batch's limits: the 3rd smallest and 4th largest of 50 at 90 %)
 # are kept in a short sorted buffer in one pass, cheaper than a selection's unpredictable branches.
 _FEW = 12
 
 
+@inner
+def cost_of(total, present):
+    """A window's cost from one sample's error sum ``total`` over its ``present`` measured points: the squared MAE."""
+    mae = total / present
+    return mae * mae
+
+
 @jit
-def count_costs(sums, present, bounds, brackets, cost):
-    """A window's costs, ``cost`` = (sums / present)^2, counted against two bounds and two brackets, in one pass.
+def form_costs(sums, present, cost):
+    """Every sample's cost, ``cost`` = (sums / present)^2: what a selection among every cost needs (a miss)."""
+    for s in range(cost.shape[0]):
+        cost[s] = cost_of(sums[s], present)
+
+
+@inner
+def sum_bound(bound, present):
+    """The largest error sum whose cost is at most ``bound``: |sum| <= it exactly when ``cost_of(sum) <= bound``.
+
+    A cost grows with the sum's magnitude (each rounding is monotone, and
+    a sum and its negative give the same cost), so the sums at or below a
+    cost ``bound`` are those up to one value. It is searched from the
+    square root: by steps that double until a sum on the other side is met,
+    then by halving the gap; a few steps, a hundred at most (where costs are
+    subnormal, many sums share one). -inf where no sum qualifies (a
+    negative bound), inf for an infinite bound, NaN for a NaN one (nothing
+    qualifies). ``present`` is positive.
+    """
+    if bound != bound or bound == np.inf:
+        return bound
+    if bound < 0:
+        return -np.inf
+    # A zero bound starts where the smallest cost would: its answer lies below, among sums whose square underflows.
+    guess = np.sqrt(max(bound, _SMALLEST)) * present
+    if cost_of(guess, present) <= bound:
+        low, high = guess, _first_beyond(guess, bound, present, True)
+    else:
+        low, high = _first_beyond(guess, bound, present, False), guess
+    # low qualifies and high does not: halve the gap until they are neighbours.
+    following = np.nextafter(low, np.inf)
+    while following < high:
+        middle = low + (high - low) * 0.5
+        middle = middle if low < middle < high else following
+        if cost_of(middle, present) <= bound:
+            low = middle
+        else:
+            high = middle
+        following = np.nextafter(low, np.inf)
+    return low
+
+
+@inner
+def _first_beyond(start, bound, present, upward):
+    """A sum past which the cost crosses ``bound``, from ``start``: the first of steps doubling from one unit in the
+    last place, upward to a cost above ``bound`` (the largest double at most), or downward to one at most ``bound``
+    (0 at least, whose cost is 0)."""
+    step = abs(np.nextafter(start, np.inf if upward else -np.inf) - start)
+    while True:
+        if upward:
+            trial = min(start + step, _LARGEST)
+            if trial == _LARGEST or cost_of(trial, present) > bound:
+                return trial
+        else:
+            trial = max(start - step, 0.0)
+            if trial == 0.0 or cost_of(trial, present) <= bound:
+                return trial
+        step *= 2
+
+
+@inner
+def sum_bracket(bracket, present):
+    """``bracket`` = (low, high) of costs carried to the sums: (s_low, s_high) with cost within it exactly when
+    s_low < |sum| <= s_high. A cost below ``low`` is one at most the double before it."""
+    low, high = bracket
+    return sum_bound(np.nextafter(low, -np.inf), present), sum_bound(high, present)
+
+
+@jit
+def count_costs(sums, present, bounds, brackets):
+    """A window's costs, (sums / present)^2, counted against two bounds and two brackets, in one pass over the sums.
 
     ``bounds`` = (bound, reserve), guesses at or above the behavioural
     threshold; ``brackets`` = ((low, high), (wide_low, wide_high)), where
@@ -62,92 +148,103 @@ def count_costs(sums, present, bounds, brackets, cost):
     Returns (at or below bound, at or below reserve, below low, within
     (low, high), below wide_low, within the wide bracket): enough to know
     which gathering (:func:`gather_costs`) holds what each selection needs.
-    No branch, so that the division and the counts vectorise.
+    The costs are not formed: each bound is carried to the sums
+    (:func:`sum_bound`), so the pass compares magnitudes only, no division;
+    no branch, so that the counts vectorise.
     """
-    bound, reserve = bounds
-    (low, high), (wide_low, wide_high) = brackets
+    bound, reserve = sum_bound(bounds[0], present), sum_bound(bounds[1], present)
+    low, high = sum_bracket(brackets[0], present)
+    wide_low, wide_high = sum_bracket(brackets[1], present)
     under_bound, under_reserve, below, up_to_high, wide_below, up_to_wide_high = 0, 0, 0, 0, 0, 0
-    for s in range(cost.shape[0]):
-        mae = sums[s] / present
-        value = mae * mae
-        cost[s] = value
-        under_bound += value <= bound
-        under_reserve += value <= reserve
-        below += value < low
-        up_to_high += value <= high
-        wide_below += value < wide_low
-        up_to_wide_high += value <= wide_high
+    for s in range(sums.shape[0]):
+        size = abs(sums[s])
+        under_bound += size <= bound
+        under_reserve += size <= reserve
+        below += size <= low
+        up_to_high += size <= high
+        wide_below += size <= wide_low
+        up_to_wide_high += size <= wide_high
     # A bracket's low is at most its high (open_bracket, widened), so what lies within is what is at or below the
-    # high less what is below the low: one comparison a count fewer than testing both ends.
+    # high less what is below the low (at or below the low's sum bound): a comparison a count fewer than both ends.
     return under_bound, under_reserve, below, up_to_high - below, wide_below, up_to_wide_high - wide_below
 
 
 @jit
-def gather_costs(cost, bound, bracket, candidates, within, kept):
+def gather_costs(window_sums, bound, bracket, candidates, within, kept):
     """Every cost at or below ``bound`` into ``candidates`` = (indices, costs), and every one within ``bracket``.
 
-    Both in index order: the candidates as :func:`find_candidates` keeps
-    them, the costs within (low, high) into ``within`` as :func:`select_near`
-    gathers them. Returns how many of each. ``kept``, about how many that
-    will be (:func:`count_costs` tells), chooses the loop. When few, a word
-    of bits marks each 64 costs' keepers (:mod:`~dynia.engine.kernels.bits`)
-    and only those are written: a branch per cost
-    mispredicts whenever about one in ten is kept (a tenth behavioural).
-    When many (a window of near ties, as a record resting at zero makes),
-    every cost is written and kept by counting it: visiting thousands of set
-    bits one by one costs more.
+    The costs of ``window_sums`` = (sums, present), formed for these only
+    (:func:`cost_of`); both in index order: the candidates as
+    :func:`find_candidates` keeps them, the costs within (low, high) into
+    ``within`` as :func:`select_near` gathers them. Returns how many of
+    each. ``kept``, about how many that will be (:func:`count_costs` tells),
+    chooses the loop. When few, a word of bits marks each 64 sums' keepers
+    (:mod:`~dynia.engine.kernels.bits`) and only those are written: a branch
+    per sample mispredicts whenever about one in ten is kept (a tenth
+    behavioural). When many (a window of near ties, as a record resting at
+    zero makes), every cost is written and kept by counting it: visiting
+    thousands of set bits one by one costs more.
     """
-    if 4 * kept >= cost.shape[0]:
-        return _write_every(cost, bound, bracket, candidates, within)
-    return _write_marked(cost, bound, bracket, candidates, within)
+    sums, present = window_sums
+    limits = (sum_bound(bound, present), sum_bracket(bracket, present))
+    if 4 * kept >= sums.shape[0]:
+        return _write_every(window_sums, limits, candidates, within)
+    return _write_marked(window_sums, limits, candidates, within)
 
 
 @inner
-def _write_every(cost, bound, bracket, candidates, within):
-    """:func:`gather_costs` writing every cost, each kept by counting it: no branch."""
+def _write_every(window_sums, limits, candidates, within):
+    """:func:`gather_costs` writing every cost, each kept by counting it: no branch.
+
+    ``limits`` = (bound, (low, high)) on the sums' magnitudes (:func:`sum_bound`, :func:`sum_bracket`).
+    """
+    sums, present = window_sums
     indices, costs = candidates
-    low, high = bracket
+    bound, (low, high) = limits
     found, inside = 0, 0
-    for s in range(cost.shape[0]):
-        value = cost[s]
+    for s in range(sums.shape[0]):
+        size = abs(sums[s])
+        value = cost_of(size, present)
         indices[found] = s
         costs[found] = value
-        found += value <= bound
+        found += size <= bound
         within[inside] = value
-        inside += (value >= low) & (value <= high)
+        inside += (size > low) & (size <= high)
     return found, inside
 
 
 @inner
-def _write_marked(cost, bound, bracket, candidates, within):
-    """:func:`gather_costs` writing the costs each word of bits marks, 64 costs to a word."""
+def _write_marked(window_sums, limits, candidates, within):
+    """:func:`gather_costs` writing the costs each word of bits marks, 64 samples to a word; ``limits`` as there."""
     # The loops stay in this one function: a helper that numba calls, not inlines, counts references on every call.
+    sums, present = window_sums
     indices, costs = candidates
-    n = cost.shape[0]
+    bound, bracket = limits
+    n = sums.shape[0]
     whole = n - n % 64
     found, inside = 0, 0
     for base in range(0, whole, 64):
-        word = mark_at_most(cost[base : base + 64], bound)
+        word = mark_at_most(sums[base : base + 64], bound)
         while word:
             s = base + lowest_set_bit(word)
             indices[found] = s
-            costs[found] = cost[s]
+            costs[found] = cost_of(sums[s], present)
             found += 1
             word &= word - ONE
-        word = mark_within(cost[base : base + 64], bracket)
+        word = mark_between(sums[base : base + 64], bracket)
         while word:
-            within[inside] = cost[base + lowest_set_bit(word)]
+            within[inside] = cost_of(sums[base + lowest_set_bit(word)], present)
             inside += 1
             word &= word - ONE
     low, high = bracket
     for s in range(whole, n):
-        value = cost[s]
-        if value <= bound:
+        size = abs(sums[s])
+        if size <= bound:
             indices[found] = s
-            costs[found] = value
+            costs[found] = cost_of(size, present)
             found += 1
-        if (value >= low) & (value <= high):
-            within[inside] = value
+        if (size > low) & (size <= high):
+            within[inside] = cost_of(size, present)
             inside += 1
     return found, inside
 
