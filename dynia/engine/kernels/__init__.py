@@ -52,7 +52,11 @@ quantile by selection among the few costs within a bracket around the
 previous window's (:mod:`~dynia.engine.kernels.selection`); the limits and
 median of the population's set, and the batches' limits, by counting their
 members in a bitset of the samples' ranks, sorted once per run
-(:mod:`~dynia.engine.kernels.ranks`; a small set's by selection).
+(:mod:`~dynia.engine.kernels.ranks`; a small set's by selection). The two
+passes over a window's samples form no cost they need not: the first counts
+the sums against the selections' bounds carried to the sums (a cost grows
+with its sum's magnitude), the second marks the few to keep in words of
+bits and forms only their costs (:mod:`~dynia.engine.kernels.bits`).
 
 This package needs numba; :data:`~dynia.engine.kernels.compile.AVAILABLE`
 says whether it imported (:mod:`~dynia.engine.kernels.compile`).

@@ -78,7 +78,7 @@ def form_costs(sums, present, cost):
 
 @inner
 def sum_bound(bound, present):
-    """The largest error sum whose cost is at most ``bound``: |sum| <= it exactly when ``cost_of(sum) <= bound``.
+    """The largest error sum whose cost is at most ``bound``: ``abs(sum) <= it`` exactly when ``cost_of(sum) <= bound``.
 
     A cost grows with the sum's magnitude (each rounding is monotone, and
     a sum and its negative give the same cost), so the sums at or below a
@@ -133,7 +133,7 @@ def _first_beyond(start, bound, present, upward):
 @inner
 def sum_bracket(bracket, present):
     """``bracket`` = (low, high) of costs carried to the sums: (s_low, s_high) with cost within it exactly when
-    s_low < |sum| <= s_high. A cost below ``low`` is one at most the double before it."""
+    ``s_low < abs(sum) <= s_high``. A cost below ``low`` is one at most the double before it."""
     low, high = bracket
     return sum_bound(np.nextafter(low, -np.inf), present), sum_bound(high, present)
 
