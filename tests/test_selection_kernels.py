@@ -10,6 +10,8 @@ parameter values. Exact equality is the contract: these are order statistics,
 so no rounding enters.
 """
 
+import functools
+
 import numpy as np
 import pytest
 
@@ -41,6 +43,14 @@ def _picked(sums, count, bracket):
     selected, chosen = np.empty(count, dtype=np.int64), np.empty(count)
     selection.behavioural(count, candidates, found, threshold, selected, chosen)
     return cost, threshold, selected, chosen
+
+
+@functools.cache
+def _callable(helper):
+    """A kernels' helper, which has no wrapper for calls from Python, through a compiled one: made once a process."""
+    import numba
+
+    return numba.njit(lambda *arguments: helper(*arguments))
 
 
 BRACKETS = {  # around the answer x: (low, high) as multiples of it
@@ -130,10 +140,7 @@ def test_one_pass_counts_the_costs_against_every_guess(seed):
 
 @pytest.mark.parametrize("present", [1.0, 3.0, 7.0, 21.0, 201.0])
 def test_a_cost_bound_carried_to_the_sums_keeps_exactly_the_same_sums(present):
-    import numba
-
-    # Reached through a compiled wrapper: the helper has none for calls from Python.
-    sum_bound = numba.njit(lambda bound, present: selection.sum_bound(bound, present))
+    sum_bound = _callable(selection.sum_bound)
     rng = np.random.default_rng(int(present))
     for total in np.concatenate([rng.gamma(2.0, 1.0, 300) * present, [0.0, 5e-324, 1e-300, 1e150, 1e300]]):
         cost = (total / present) ** 2
@@ -171,12 +178,8 @@ def test_the_gathered_costs_are_in_index_order(share, n_samples, loop):
 
 
 def test_words_of_bits_count_find_and_mark_as_numpy_does():
-    import numba
-
-    # The helpers have no wrapper for calls from Python (kernels call them): each is reached through one that has.
-    lowest_set_bit, popcount = (numba.njit(lambda word, f=f: f(word)) for f in (bits.lowest_set_bit, bits.popcount))
-    mark_at_most = numba.njit(lambda values, bound: bits.mark_at_most(values, bound))
-    mark_between = numba.njit(lambda values, bracket: bits.mark_between(values, bracket))
+    lowest_set_bit, popcount = _callable(bits.lowest_set_bit), _callable(bits.popcount)
+    mark_at_most, mark_between = _callable(bits.mark_at_most), _callable(bits.mark_between)
     rng = np.random.default_rng(3)
     for position in range(64):
         word = np.uint64(1) << np.uint64(position)
