@@ -127,7 +127,7 @@ def test_one_pass_counts_the_costs_against_every_guess(seed):
     bound, reserve = np.quantile(finite, 0.02, method="lower"), np.quantile(finite, 0.1)
     low, high = np.quantile(finite, [0.85, 0.95], method="nearest")
     narrow, wide = (low, high), (low / 2, np.inf)
-    counted = selection.count_costs(sums, PRESENT, (bound, reserve), (narrow, wide))
+    counted = selection.count_costs(sums, selection.sum_limits((bound, reserve), (narrow, wide), PRESENT))
     assert counted == (
         np.sum(costs <= bound),
         np.sum(costs <= reserve),
@@ -170,7 +170,9 @@ def test_the_gathered_costs_are_in_index_order(share, n_samples, loop):
     bracket = tuple(np.nanquantile(cost, [0.9 - share, 0.9], method="nearest"))
     kept = 0 if loop == "marked" else n_samples  # the estimate that chooses the loop
     candidates, within = (np.empty(cost.size, dtype=np.int64), np.empty(cost.size)), np.empty(cost.size)
-    found, inside = selection.gather_costs((sums, PRESENT), bound, bracket, candidates, within, kept)
+    limits = selection.sum_limits((bound, bound), (bracket, bracket), PRESENT)
+    carried = (limits[0][0], limits[1][0])
+    found, inside = selection.gather_costs((sums, PRESENT), carried, candidates, within, kept)
     expected = np.flatnonzero(cost <= bound)
     np.testing.assert_array_equal(candidates[0][:found], expected)
     np.testing.assert_array_equal(candidates[1][:found], cost[expected])

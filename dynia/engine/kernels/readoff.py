@@ -38,6 +38,7 @@ from .selection import (
     reserve_bound,
     select_near,
     select_within,
+    sum_limits,
     threshold_ranks,
     widened,
 )
@@ -168,17 +169,20 @@ def _gather_window(window_sums, bound, cost_ranks, window):
     bounds = (bound, reserve_bound(bound, (track[0], track[1])))
     narrow = open_bracket((track[2], track[3]))
     wide = widened(narrow)
-    counted = count_costs(*window_sums, bounds, (narrow, wide))
+    at_most, brackets = sum_limits(bounds, (narrow, wide), window_sums[1])
+    counted = count_costs(window_sums[0], (at_most, brackets))
     if counted[2] <= upper_position < counted[2] + counted[3]:
-        quantile_bracket, quantile_counts = narrow, (counted[2], counted[3])
+        quantile_bracket, quantile_counts, gathered = narrow, (counted[2], counted[3]), brackets[0]
     elif counted[4] <= upper_position < counted[4] + counted[5]:
-        quantile_bracket, quantile_counts = wide, (counted[4], counted[5])
+        quantile_bracket, quantile_counts, gathered = wide, (counted[4], counted[5]), brackets[1]
     else:
-        quantile_bracket, quantile_counts = wide, (counted[4], 0)
-    gather_bound = bound if counted[0] >= count else (bounds[1] if counted[1] >= count else np.nan)
-    kept = (counted[0] if gather_bound == bound else counted[1]) + quantile_counts[1]
-    gathered = quantile_bracket if quantile_counts[1] else (np.nan, np.nan)
-    found, _ = gather_costs(window_sums, gather_bound, gathered, candidates, within, kept)
+        quantile_bracket, quantile_counts, gathered = wide, (counted[4], 0), (np.nan, np.nan)
+    if counted[0] >= count:
+        gather_bound, kept = at_most[0], counted[0]
+    else:  # the reserve, else nothing (NaN): the costs are then searched among all, below
+        gather_bound, kept = (at_most[1] if counted[1] >= count else np.nan), counted[1]
+    limits = (gather_bound, gathered)
+    found, _ = gather_costs(window_sums, limits, candidates, within, kept + quantile_counts[1])
     if found >= count:
         return found, quantile_bracket, quantile_counts, False
     # Neither guess holds the set: its threshold is searched among every cost from above the reserve, and the

@@ -6,8 +6,8 @@ floor's quantile are found by selection among the few costs within a
 bracket around the previous window's value, which a counting pass finds
 (:func:`select_near`, moved outward when it misses). A window's first pass
 counts for both at once on the sums, with no cost formed (a cost grows with
-its sum's magnitude, so each cost bound is carried to the sums exactly:
-:func:`sum_bound`), and one more gathers the few costs each needs, forming
+its sum's magnitude, so each cost bound is carried to the sums exactly,
+once a window: :func:`sum_limits`), and one more gathers the few costs each needs, forming
 only those (:func:`gather_costs`); a miss of both forms every cost
 (:func:`form_costs`);
 the behavioural set is then the first ``count`` of a stable sort of the
@@ -27,6 +27,7 @@ __all__ = [
     "form_costs",
     "sum_bound",
     "sum_bracket",
+    "sum_limits",
     "count_costs",
     "gather_costs",
     "threshold_ranks",
@@ -139,22 +140,33 @@ def sum_bracket(bracket, present):
 
 
 @jit
-def count_costs(sums, present, bounds, brackets):
+def sum_limits(bounds, brackets, present):
+    """Two cost ``bounds`` and two cost ``brackets`` carried to the sums over ``present`` points, once a window.
+
+    Returns ((bound, reserve), ((low, high), (wide_low, wide_high))) on the
+    sums' magnitudes (:func:`sum_bound`, :func:`sum_bracket`): what
+    :func:`count_costs` counts against and :func:`gather_costs` gathers
+    within, so that neither pass searches a limit again.
+    """
+    at_most = (sum_bound(bounds[0], present), sum_bound(bounds[1], present))
+    return at_most, (sum_bracket(brackets[0], present), sum_bracket(brackets[1], present))
+
+
+@jit
+def count_costs(sums, limits):
     """A window's costs, (sums / present)^2, counted against two bounds and two brackets, in one pass over the sums.
 
-    ``bounds`` = (bound, reserve), guesses at or above the behavioural
-    threshold; ``brackets`` = ((low, high), (wide_low, wide_high)), where
-    the noise floor's quantile is looked for (see :func:`open_bracket`).
-    Returns (at or below bound, at or below reserve, below low, within
-    (low, high), below wide_low, within the wide bracket): enough to know
-    which gathering (:func:`gather_costs`) holds what each selection needs.
-    The costs are not formed: each bound is carried to the sums
-    (:func:`sum_bound`), so the pass compares magnitudes only, no division;
-    no branch, so that the counts vectorise.
+    ``limits`` are :func:`sum_limits`' of the bounds (bound, reserve),
+    guesses at or above the behavioural threshold, and of the brackets
+    ((low, high), (wide_low, wide_high)), where the noise floor's quantile
+    is looked for (see :func:`open_bracket`). Returns (at or below bound, at
+    or below reserve, below low, within (low, high), below wide_low, within
+    the wide bracket): enough to know which gathering
+    (:func:`gather_costs`) holds what each selection needs. The costs are
+    not formed: the pass compares the sums' magnitudes with the limits, no
+    division; no branch, so that the counts vectorise.
     """
-    bound, reserve = sum_bound(bounds[0], present), sum_bound(bounds[1], present)
-    low, high = sum_bracket(brackets[0], present)
-    wide_low, wide_high = sum_bracket(brackets[1], present)
+    (bound, reserve), ((low, high), (wide_low, wide_high)) = limits
     under_bound, under_reserve, below, up_to_high, wide_below, up_to_wide_high = 0, 0, 0, 0, 0, 0
     for s in range(sums.shape[0]):
         size = abs(sums[s])
@@ -170,12 +182,14 @@ def count_costs(sums, present, bounds, brackets):
 
 
 @jit
-def gather_costs(window_sums, bound, bracket, candidates, within, kept):
-    """Every cost at or below ``bound`` into ``candidates`` = (indices, costs), and every one within ``bracket``.
+def gather_costs(window_sums, limits, candidates, within, kept):
+    """Every cost at or below a bound into ``candidates`` = (indices, costs), and every one within a bracket.
 
-    The costs of ``window_sums`` = (sums, present), formed for these only
+    ``limits`` = (bound, (low, high)) carried to the sums' magnitudes
+    (:func:`sum_bound`, :func:`sum_bracket`; NaN keeps nothing). The costs
+    of ``window_sums`` = (sums, present), formed for these only
     (:func:`cost_of`); both in index order: the candidates as
-    :func:`find_candidates` keeps them, the costs within (low, high) into
+    :func:`find_candidates` keeps them, the costs within the bracket into
     ``within`` as :func:`select_near` gathers them. Returns how many of
     each. ``kept``, about how many that will be (:func:`count_costs` tells),
     chooses the loop. When few, a word of bits marks each 64 sums' keepers
@@ -185,9 +199,7 @@ def gather_costs(window_sums, bound, bracket, candidates, within, kept):
     zero makes), every cost is written and kept by counting it: visiting
     thousands of set bits one by one costs more.
     """
-    sums, present = window_sums
-    limits = (sum_bound(bound, present), sum_bracket(bracket, present))
-    if 4 * kept >= sums.shape[0]:
+    if 4 * kept >= window_sums[0].shape[0]:
         return _write_every(window_sums, limits, candidates, within)
     return _write_marked(window_sums, limits, candidates, within)
 
@@ -196,7 +208,7 @@ def gather_costs(window_sums, bound, bracket, candidates, within, kept):
 def _write_every(window_sums, limits, candidates, within):
     """:func:`gather_costs` writing every cost, each kept by counting it: no branch.
 
-    ``limits`` = (bound, (low, high)) on the sums' magnitudes (:func:`sum_bound`, :func:`sum_bracket`).
+    ``limits`` as there: on the sums' magnitudes.
     """
     sums, present = window_sums
     indices, costs = candidates
