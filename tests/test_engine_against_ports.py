@@ -220,6 +220,22 @@ def test_missing_measurements_use_the_points_present():
     assert np.isnan(with_one.ic[0, 4]) and np.isfinite(with_one.ic[0, [3, 5]]).all()
 
 
+@pytest.mark.parametrize("flavour", ["thesis", "weighted", "mcat"])
+def test_a_gap_longer_than_a_window_is_blank_and_leaves_the_other_windows_as_they_were(flavour, example1):
+    e = example1
+    y = e["y"].copy()
+    y[60:90] = np.nan  # windows of 21 steps centred on 70-79 hold no measured point
+    options = dict(n=10, percentage=10, bins=8, flavour=flavour, chunk_steps=17)
+    gapped = moving_window(y, e["sims"], e["params"], e["bounds"], **options)
+    whole = moving_window(e["y"], e["sims"], e["params"], e["bounds"], **options)
+    assert np.isnan(gapped.ic[:, 70:80]).all() and np.isnan(gapped.ci[:, 70:80]).all()
+    assert np.isfinite(gapped.ic[:, 69]).all() and np.isfinite(gapped.ic[:, 80]).all()  # points on one side suffice
+    untouched = np.r_[: 60 - 10, 90 + 10 : y.size]  # windows that reach no missing point
+    np.testing.assert_array_equal(gapped.ic[:, untouched], whole.ic[:, untouched])
+    np.testing.assert_array_equal(gapped.ci[:, untouched], whole.ci[:, untouched])
+    np.testing.assert_array_equal(gapped.gradient[..., untouched], whole.gradient[..., untouched])
+
+
 @pytest.mark.parametrize(
     "change, message",
     [

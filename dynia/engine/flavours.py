@@ -658,11 +658,12 @@ class McatFlavour:
         """``1 - mae/max(mae)`` (or ``1 - mae`` once a window had max 0), lifted above 0."""
         mae = np.where(usable[:, None], mae, 0.0)
         nonzero = (mae.max(axis=1) != 0) | ~usable
-        # id_time.m divides only while every window so far had a non-zero maximum.
+        # id_time.m divides only while every window so far had a non-zero maximum. A window without enough measured
+        # points is blanked later and breaks no run of divisions, but is not divided (0 / 0 would rank NaNs).
         divide = np.logical_and.accumulate(nonzero) & self.every_window_nonzero
         self.every_window_nonzero = bool(divide[-1])
         with np.errstate(invalid="ignore", divide="ignore"):
-            scaled = np.where(divide[:, None], mae / mae.max(axis=1, keepdims=True), mae)
+            scaled = np.where((divide & usable)[:, None], mae / mae.max(axis=1, keepdims=True), mae)
         likelihood = 1 - scaled
         lowest = likelihood.min(axis=1, keepdims=True)
         return np.where(lowest <= 0, likelihood - lowest + 1000 * np.finfo(float).eps, likelihood)
