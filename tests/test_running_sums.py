@@ -20,6 +20,7 @@ from conftest import compiled_window_costs, example_firstorder_input
 
 import dynia
 from dynia.engine import kernels
+from dynia.engine.kernels.fused import FUSED_BLOCK, LAG_BLOCK
 from dynia.engine.kernels.sums import first_window, next_window
 from dynia.engine.noise import window_points
 from dynia.engine.windows import default_chunk_steps, moving_window, window_costs, window_halos
@@ -103,7 +104,11 @@ MODELS = [
 def test_the_fused_kernel_equals_the_error_rows_bit_for_bit(model, bounds, n, window, x0):
     u, y = _record()
     options = dict(n=n, window=window, percentage=10, min_points=min(3, 2 * n + 1))
-    fused = dynia.run(u, y, model, bounds, n_samples=700, rng=5, x0=x0, dt=0.7, engine="numba", workers=2, **options)
+    # Two workers of 1 050 samples each: each worker's range spans a block boundary of the lag and general kernels.
+    n_samples = 2 * (max(LAG_BLOCK, FUSED_BLOCK) + 26)
+    fused = dynia.run(
+        u, y, model, bounds, n_samples=n_samples, rng=5, x0=x0, dt=0.7, engine="numba", workers=2, **options
+    )
     order = [fused.names.index(name) for name in model.names]
     sims = model.simulate(fused.samples[:, order], u, dt=0.7, x0=x0)
     rows = moving_window(
@@ -113,7 +118,7 @@ def test_the_fused_kernel_equals_the_error_rows_bit_for_bit(model, bounds, n, wi
         fused.bounds,
         names=fused.names,
         engine="numba",
-        chunk_steps=default_chunk_steps(700, 2 * n),
+        chunk_steps=default_chunk_steps(n_samples, 2 * n),
         **options,
     )
     for name in ("ic", "ci", "median", "gradient"):

@@ -21,13 +21,18 @@ from .compile import inner, jit
 from .simulate import absolute_errors, coefficient_tables, combine, delayed_inputs, lag_following, lag_output
 from .sums import ring_sums, slide, window_sum
 
-__all__ = ["FUSED_BLOCK", "lag_window_sums", "general_window_sums"]
+__all__ = ["FUSED_BLOCK", "LAG_BLOCK", "lag_window_sums", "general_window_sums"]
 
 # Samples a block of the fused kernel holds: its states, coefficients and sums (a dozen arrays of this length for one
 # state, 96 kB) and its window's errors stay in the L2 cache while the block runs through every step of a chunk. Each
 # step of a block has a fixed cost (views of the ring and the sums): on the bench's 20k samples, 1024 ran the
-# first-order model 12 % and the second-order one 20 % faster than 256, whose arrays fit the L1 cache.
+# first-order model 12 % and the second-order one 20 % faster than 256, whose arrays fit the L1 cache (AMD EPYC).
 FUSED_BLOCK = 1024
+# A lag's block: its one pass a step over a dozen arrays runs faster where they stay in a 48 kB L1 cache. On an Intel
+# Xeon (AVX-512, 2 MB L2) 512 swept the bench's first-order record 15-20 % faster than 1024 at n = 10 and 10 % at
+# n = 100, and dynia.run took 3-11 % less CPU time in every one of six alternated runs; the general kernels (FOPDT,
+# second order) ran 2-7 % slower at 512, so they keep FUSED_BLOCK.
+LAG_BLOCK = 512
 
 
 @jit
@@ -66,8 +71,8 @@ def lag_window_sums(lag, record, scale, steps, first_end, carried, sums, samples
     state, ring, totals = carried
     row = (state[0], ring, totals)
     bad_step, bad_sample = -1, -1
-    for block_start in range(samples[0], samples[1], FUSED_BLOCK):
-        block_stop = min(block_start + FUSED_BLOCK, samples[1])
+    for block_start in range(samples[0], samples[1], LAG_BLOCK):
+        block_stop = min(block_start + LAG_BLOCK, samples[1])
         step, sample = _fused_lag_block(lag, record, scale, steps, first_end, row, sums, block_start, block_stop)
         if step >= 0 and (bad_step < 0 or step < bad_step):
             bad_step, bad_sample = step, sample
