@@ -38,7 +38,8 @@ class RecursionKernels(NamedTuple):
 def recursion_kernels(recursion):
     """The kernels of a discretised linear model's ``recursion`` (coefficients, delays, terms), and its form for them.
 
-    A lag (one state that carries over, seen in the output, one dead time)
+    A lag (one state that carries over, seen in the output; one dead time
+    or one a sample, as a first order plus dead time with a sampled delay)
     takes the lag loops, a pass over the samples per step, and has a state
     pass of its own; any other model the general loops, term by term, and
     no state pass (the error rows serve). Decided here, and only here, so
@@ -47,9 +48,11 @@ def recursion_kernels(recursion):
     """
     coefficients, delays, (state_terms, output_terms) = recursion
     phi, gamma_now, gamma_prev, c, feed_now, feed_prev = coefficients
-    if c.shape[0] == 1 and delays.shape[0] == 1 and state_terms[0, 0] and output_terms[0]:
+    if c.shape[0] == 1 and state_terms[0, 0] and output_terms[0]:
         flags = (bool(output_terms[1]), bool(output_terms[2]), bool(state_terms[0, 1]), bool(state_terms[0, 2]))
-        lag = ((phi[0, 0], gamma_now[0], gamma_prev[0], c[0], feed_now, feed_prev), delays[0], flags)
+        # One dead time as an integer: the kernels are then compiled without the gathering of each sample's inputs.
+        lag_delays = delays[0] if delays.shape[0] == 1 else delays
+        lag = ((phi[0, 0], gamma_now[0], gamma_prev[0], c[0], feed_now, feed_prev), lag_delays, flags)
         return RecursionKernels(simulate_lag, lag_window_sums, lag_states, lag)
     return RecursionKernels(general_errors, general_window_sums, None, recursion)
 

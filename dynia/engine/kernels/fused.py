@@ -18,7 +18,18 @@ import numpy as np
 
 from ...models.base import FLUSH_BELOW
 from .compile import inner, jit
-from .simulate import absolute_errors, coefficient_tables, combine, delayed_inputs, lag_following, lag_output
+from .simulate import (
+    absolute_errors,
+    block_delays,
+    coefficient_tables,
+    combine,
+    delayed_inputs,
+    input_at,
+    lag_following,
+    lag_input_buffers,
+    lag_inputs,
+    lag_output,
+)
 from .sums import ring_sums, slide, window_sum
 
 __all__ = ["FUSED_BLOCK", "LAG_BLOCK", "lag_window_sums", "general_window_sums"]
@@ -73,7 +84,9 @@ def lag_window_sums(lag, record, scale, steps, first_end, carried, sums, samples
     bad_step, bad_sample = -1, -1
     for block_start in range(samples[0], samples[1], LAG_BLOCK):
         block_stop = min(block_start + LAG_BLOCK, samples[1])
-        step, sample = _fused_lag_block(lag, record, scale, steps, first_end, row, sums, block_start, block_stop)
+        block = (block_start, block_stop)
+        delays = block_delays(lag[1], block_start, block_stop)
+        step, sample = _fused_lag_block(lag, delays, record, scale, steps, first_end, row, sums, block)
         if step >= 0 and (bad_step < 0 or step < bad_step):
             bad_step, bad_sample = step, sample
     return bad_step, bad_sample
@@ -119,8 +132,9 @@ def _fused_block(recursion, record, scale, steps, first_end, carried, sums, lo, 
 
 
 @inner
-def _fused_lag_block(lag, record, scale, steps, first_end, carried, sums, lo, hi):
-    """:func:`_fused_block` for a ``lag``: one loop per step; ``carried``'s state is its one row.
+def _fused_lag_block(lag, delays, record, scale, steps, first_end, carried, sums, block):
+    """:func:`_fused_block` for a ``lag``, samples [lo, hi) = ``block``: one loop per step; ``carried``'s state is its
+    one row, ``delays`` the dead time they share or theirs (see :func:`~dynia.engine.kernels.simulate.lag_inputs`).
 
     The recursion's arithmetic is
     :func:`~dynia.engine.kernels.simulate.simulate_lag`'s, the sums'
@@ -129,33 +143,31 @@ def _fused_lag_block(lag, record, scale, steps, first_end, carried, sums, lo, hi
     the window sum and write it, except at the block's first window and
     past the record, which take ``ring_sums``.
     """
-    coefficients, delay, flags = lag
+    coefficients, _, flags = lag
     padded_input, y = record
     state, ring, totals = carried
+    lo, hi = block
     width = hi - lo
     slots = ring.shape[0]
     last_step = y.shape[0] - 1
     x_block, total = state[lo:hi].copy(), totals[lo:hi].copy()
     error = np.zeros(width)
     compensated = (np.zeros(width), np.zeros(width))
-    high, low = compensated
-    block = (x_block, total, error)
+    samples = (x_block, total, error)
+    inputs = lag_input_buffers(delays, width)
     bad_step, bad_sample = -1, -1
     for e in range(steps[0], steps[1]):
         if e > last_step:
             error[:] = 0.0
             ring_sums(ring, lo, hi, e, first_end, error, compensated, sums)
             continue
-        now = padded_input[max(e - delay, -1) + 1]
-        previous = padded_input[max(e - delay - 1, -1) + 1]
+        inputs = lag_inputs(padded_input, delays, e, inputs, e == steps[0])
         y_e = y[e]
-        missing = np.isnan(y_e)
-        advance = e != last_step
         sliding = e > first_end
         leaving = ring[e % slots, lo:hi]
         window = sums[e - first_end, lo:hi] if sliding else error
-        inputs = (now, previous, y_e, missing, advance, sliding, scale)
-        finite, bad = _lag_samples(coefficients, flags, inputs, lo, block, compensated, leaving, window)
+        step = (y_e, np.isnan(y_e), e != last_step, sliding, scale)
+        finite, bad = _lag_samples(coefficients, flags, (inputs, step), lo, samples, compensated, leaving, window)
         if not finite and bad_step < 0:
             bad_step = e
             for i in range(width):  # as in simulate_lag: the sample is not known where y is missing
@@ -165,11 +177,7 @@ def _fused_lag_block(lag, record, scale, steps, first_end, carried, sums, lo, hi
         if not sliding:
             ring_sums(ring, lo, hi, e, first_end, error, compensated, sums)
         elif bad:
-            block_ring = ring[:, lo:hi]
-            for i in range(width):
-                if not np.isfinite(window[i]):
-                    high[i], low[i] = window_sum(block_ring, (e + 1) % slots, slots, slots, i)
-                    window[i] = high[i] + low[i]
+            _sum_afresh(ring[:, lo:hi], (e + 1) % slots, compensated, window)
     # Element by element: a slice assignment would compile numba's shape check and its message, seconds of a first run.
     for i in range(width):
         state[lo + i] = x_block[i]
@@ -178,16 +186,30 @@ def _fused_lag_block(lag, record, scale, steps, first_end, carried, sums, lo, hi
 
 
 @inner
+def _sum_afresh(block_ring, first, compensated, window):
+    """The window sums that slid to a non-finite value, summed afresh from ``block_ring``'s rows from ``first``."""
+    high, low = compensated
+    slots = block_ring.shape[0]
+    for i in range(window.shape[0]):
+        if not np.isfinite(window[i]):
+            high[i], low[i] = window_sum(block_ring, first, slots, slots, i)
+            window[i] = high[i] + low[i]
+
+
+@inner
 def _lag_samples(coefficients, flags, inputs, lo, block, compensated, leaving, window):
     """One step of :func:`_fused_lag_block` for its samples: simulate, err, advance and, when sliding, slide.
 
     ``block`` = (x_block, total, error), the block's states, totals and
-    this step's errors; ``compensated`` = (high, low), its window sums.
-    Returns whether every output was finite and how many window sums were not.
+    this step's errors; ``compensated`` = (high, low), its window sums;
+    ``inputs`` = ((u[k-d], u[k-d-1]), shared or one a sample (see
+    :func:`~dynia.engine.kernels.simulate.input_at`), (y, missing, advance,
+    sliding, scale)). Returns whether every output was finite and how many
+    window sums were not.
     """
     phi, gamma_now, gamma_prev, c, feed_now, feed_prev = coefficients
     now_out, prev_out, now_state, prev_state = flags
-    now, previous, y_e, missing, advance, sliding, scale = inputs
+    (now, previous), (y_e, missing, advance, sliding, scale) = inputs
     x_block, total, error = block
     high, low = compensated
     width = x_block.shape[0]
@@ -199,12 +221,13 @@ def _lag_samples(coefficients, flags, inputs, lo, block, compensated, leaving, w
     not_finite = 0
     for i in range(width):
         x = x_block[i]
-        output = lag_output(c[i], (feed_now[i], feed_prev[i]), x, (now, previous), (now_out, prev_out))
+        sample_inputs = (input_at(now, i), input_at(previous, i))
+        output = lag_output(c[i], (feed_now[i], feed_prev[i]), x, sample_inputs, (now_out, prev_out))
         not_finite += not np.isfinite(output)
         value = (0.0 if missing else abs(output - y_e)) * scale
         error[i] = value
         total[i] = total[i] + value
-        following = lag_following(phi[i], (gamma_now[i], gamma_prev[i]), x, (now, previous), (now_state, prev_state))
+        following = lag_following(phi[i], (gamma_now[i], gamma_prev[i]), x, sample_inputs, (now_state, prev_state))
         x_block[i] = following if advance else x
     bad = 0
     if sliding:

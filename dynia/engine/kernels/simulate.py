@@ -8,11 +8,15 @@ a ``recursion`` = (coefficients, delays, terms): ``coefficients`` =
 dead time in steps, or one per sample; ``terms`` = (state_terms,
 output_terms), (n_states, n_states + 2) and (n_states + 2,), flagging the
 terms the numpy path keeps (sources: the states, then u[k-d], then
-u[k-d-1]). A lag model (one state that carries over, seen in the output,
-one dead time) reaches them as a ``lag`` = (coefficients, delay, flags):
-its one state's coefficients (phi, gamma_now, gamma_prev and c of
-(n_samples,)), its dead time and (now_out, prev_out, now_state,
-prev_state), whether u[k-d] and u[k-d-1] enter the output and the state.
+u[k-d-1]). A lag model (one state that carries over, seen in the output)
+reaches them as a ``lag`` = (coefficients, delays, flags): its one state's
+coefficients (phi, gamma_now, gamma_prev and c of (n_samples,)), its dead
+time or one per sample, as a recursion's, and (now_out, prev_out,
+now_state, prev_state), whether u[k-d] and u[k-d-1] enter the output and
+the state; its delays are an integer where every sample shares the dead
+time, so that a run compiles the kernels for the kind it has, and the
+inputs of a step are then two values, or else two arrays, one value a
+sample (:func:`lag_inputs`).
 Which form a model takes, and so which kernels, is decided in one place:
 :func:`dynia.engine.kernels.driver.recursion_kernels`.
 
@@ -35,9 +39,14 @@ __all__ = [
     "combine",
     "coefficient_tables",
     "delayed_inputs",
+    "delayed_input",
     "absolute_errors",
     "lag_output",
     "lag_following",
+    "block_delays",
+    "lag_input_buffers",
+    "lag_inputs",
+    "input_at",
 ]
 
 
@@ -154,6 +163,13 @@ def delayed_inputs(delayed, padded_input, delays, k, lo, hi):
 
 
 @inner
+def delayed_input(values, padded_input, delays, k):
+    """u[k-d] into ``values``, one a sample, each of its own dead time ``delays``: as :func:`delayed_inputs` does."""
+    for s in range(values.shape[0]):
+        values[s] = padded_input[max(k - delays[s], -1) + 1]
+
+
+@inner
 def _output_row(row, output, y, lo, hi, outputs):
     """``row[lo:hi]`` = the ``output`` itself, or (without ``outputs``) its error (see :func:`absolute_errors`)."""
     if outputs:
@@ -207,7 +223,7 @@ def lag_following(phi, gammas, x, inputs, flags):
 
 @jit
 def simulate_lag(lag, padded_input, measured, first_step, last_step, state, errors, samples, outputs):
-    """:func:`general_errors` for a ``lag`` (one state, one common dead time), fused; ``state`` is (1, n_samples).
+    """:func:`general_errors` for a ``lag`` (one state, its dead times), fused; ``state`` is (1, n_samples).
 
     The same products and sums in the same order, with each term present
     exactly when the general kernel uses it; one pass over the samples per
@@ -216,16 +232,18 @@ def simulate_lag(lag, padded_input, measured, first_step, last_step, state, erro
     terms as the numpy path does, gives the same numbers as this one, which
     assumes the state carries over.
     """
-    coefficients, delay, flags = lag
+    coefficients, _, flags = lag
     phi, gamma_now, gamma_prev, c, feed_now, feed_prev = coefficients
     now_out, prev_out, now_state, prev_state = flags
     lo, hi = samples
     current = state[0]
+    delays = block_delays(lag[1], lo, hi)
+    inputs = lag_input_buffers(delays, hi - lo)
     bad_step, bad_sample = -1, -1
     for j in range(errors.shape[0]):
         k = first_step + j
-        now = padded_input[max(k - delay, -1) + 1]
-        previous = padded_input[max(k - delay - 1, -1) + 1]
+        inputs = lag_inputs(padded_input, delays, k, inputs, j == 0)
+        now, previous = inputs
         y = measured[j]
         missing = np.isnan(y)
         row = errors[j]
@@ -233,12 +251,13 @@ def simulate_lag(lag, padded_input, measured, first_step, last_step, state, erro
         finite = True
         for s in range(lo, hi):
             x = current[s]
-            output = lag_output(c[s], (feed_now[s], feed_prev[s]), x, (now, previous), (now_out, prev_out))
+            sample_inputs = (input_at(now, s - lo), input_at(previous, s - lo))
+            output = lag_output(c[s], (feed_now[s], feed_prev[s]), x, sample_inputs, (now_out, prev_out))
             finite &= np.isfinite(output)
             row[s] = output if outputs else (0.0 if missing else abs(output - y))
             if advance:
                 current[s] = lag_following(
-                    phi[s], (gamma_now[s], gamma_prev[s]), x, (now, previous), (now_state, prev_state)
+                    phi[s], (gamma_now[s], gamma_prev[s]), x, sample_inputs, (now_state, prev_state)
                 )
         if not finite and bad_step < 0:
             bad_step = k
@@ -251,6 +270,58 @@ def simulate_lag(lag, padded_input, measured, first_step, last_step, state, erro
         if not advance:
             break
     return bad_step, bad_sample
+
+
+@inner
+def block_delays(delays, lo, hi):
+    """A lag's dead times for samples [lo, hi): the one every sample shares (an integer), or theirs, from lo.
+
+    A lag carries one dead time as an integer and one a sample as an
+    array, so that each kernel is compiled for the kind a run has: a shared
+    dead time's loops keep its inputs scalars (see :func:`lag_inputs`).
+    """
+    if isinstance(delays, int):
+        return delays
+    return delays[lo:hi]
+
+
+@inner
+def lag_input_buffers(delays, width):
+    """What :func:`lag_inputs` fills for ``width`` samples: two arrays for a dead time each, none for a shared one."""
+    if isinstance(delays, int):
+        return 0.0, 0.0
+    return np.empty(width), np.empty(width)
+
+
+@inner
+def lag_inputs(padded_input, delays, k, buffers, first):
+    """A lag's inputs at step k, (u[k-d], u[k-d-1]): two values, or two arrays of one value a sample.
+
+    ``delays`` is the dead time every sample shares (an integer: two
+    values), or one per sample (an array, from the block's first sample,
+    :func:`block_delays`):
+    ``buffers`` (:func:`lag_input_buffers`, last step's) are then refilled,
+    u[k-d] gathered and u[k-d-1] taken from the last step's u[k-d] (gathered
+    too at the ``first`` step). A loop over the samples reads either with
+    :func:`input_at`.
+    """
+    if isinstance(delays, int):
+        return padded_input[max(k - delays, -1) + 1], padded_input[max(k - delays - 1, -1) + 1]
+    now, previous = buffers
+    if first:
+        delayed_input(previous, padded_input, delays, k - 1)
+    else:
+        now, previous = previous, now
+    delayed_input(now, padded_input, delays, k)
+    return now, previous
+
+
+@inner
+def input_at(values, i):
+    """Sample i's value of a step's input (see :func:`lag_inputs`): the value every sample shares, or ``values[i]``."""
+    if isinstance(values, float):
+        return values
+    return values[i]
 
 
 # Samples the state pass of a lag model runs through every step at a time: their eight arrays (2 kB each) stay in
@@ -271,30 +342,38 @@ def lag_states(lag, record, scale, steps, state, totals, states):
     block of samples at a time runs through every step, in the L1 cache and
     vectorised: the least work of an analysis.
     """
-    coefficients, delay, flags = lag
-    padded_input, y = record
-    phi, gamma_now, gamma_prev, c, feed_now, feed_prev = coefficients
-    out_flags, state_flags = (flags[0], flags[1]), (flags[2], flags[3])
     n_samples = state.shape[0]
     for lo in range(0, n_samples, _STATE_BLOCK):
         hi = min(lo + _STATE_BLOCK, n_samples)
-        x, total = state[lo:hi].copy(), totals[lo:hi].copy()
-        # Views from the block's start: the loop over them vectorises.
-        block_phi, block_now, block_previous = phi[lo:hi], gamma_now[lo:hi], gamma_prev[lo:hi]
-        block_c, block_feed_now, block_feed_previous = c[lo:hi], feed_now[lo:hi], feed_prev[lo:hi]
-        kept = 0
-        for e in range(y.shape[0]):
-            while kept < steps.shape[0] and steps[kept] == e:
-                states[kept, lo:hi] = x
-                kept += 1
-            now = padded_input[max(e - delay, -1) + 1]
-            previous = padded_input[max(e - delay - 1, -1) + 1]
-            y_e = y[e]
-            missing = np.isnan(y_e)
-            inputs = (now, previous)
-            for i in range(hi - lo):
-                output = lag_output(block_c[i], (block_feed_now[i], block_feed_previous[i]), x[i], inputs, out_flags)
-                total[i] = total[i] + (0.0 if missing else abs(output - y_e)) * scale
-                # Also past the record's last step, whose state is never kept.
-                x[i] = lag_following(block_phi[i], (block_now[i], block_previous[i]), x[i], inputs, state_flags)
-        totals[lo:hi] = total
+        _lag_states_block(lag, block_delays(lag[1], lo, hi), record, scale, steps, (state, totals, states), lo, hi)
+
+
+@inner
+def _lag_states_block(lag, delays, record, scale, steps, outputs, lo, hi):
+    """:func:`lag_states` for samples [lo, hi), ``delays`` the dead time they share or theirs (:func:`block_delays`)."""
+    coefficients, _, flags = lag
+    padded_input, y = record
+    state, totals, states = outputs
+    phi, gamma_now, gamma_prev, c, feed_now, feed_prev = coefficients
+    out_flags, state_flags = (flags[0], flags[1]), (flags[2], flags[3])
+    x, total = state[lo:hi].copy(), totals[lo:hi].copy()
+    # Views from the block's start: the loop over them vectorises.
+    block_phi, block_now, block_previous = phi[lo:hi], gamma_now[lo:hi], gamma_prev[lo:hi]
+    block_c, block_feed_now, block_feed_previous = c[lo:hi], feed_now[lo:hi], feed_prev[lo:hi]
+    inputs = lag_input_buffers(delays, hi - lo)
+    kept = 0
+    for e in range(y.shape[0]):
+        while kept < steps.shape[0] and steps[kept] == e:
+            states[kept, lo:hi] = x
+            kept += 1
+        inputs = lag_inputs(padded_input, delays, e, inputs, e == 0)
+        now, previous = inputs
+        y_e = y[e]
+        missing = np.isnan(y_e)
+        for i in range(hi - lo):
+            sample_inputs = (input_at(now, i), input_at(previous, i))
+            output = lag_output(block_c[i], (block_feed_now[i], block_feed_previous[i]), x[i], sample_inputs, out_flags)
+            total[i] = total[i] + (0.0 if missing else abs(output - y_e)) * scale
+            # Also past the record's last step, whose state is never kept.
+            x[i] = lag_following(block_phi[i], (block_now[i], block_previous[i]), x[i], sample_inputs, state_flags)
+    totals[lo:hi] = total
