@@ -41,8 +41,9 @@ __all__ = ["FUSED_BLOCK", "LAG_BLOCK", "lag_window_sums", "general_window_sums"]
 FUSED_BLOCK = 1024
 # A lag's block: its one pass a step over a dozen arrays runs faster where they stay in a 48 kB L1 cache. On an Intel
 # Xeon (AVX-512, 2 MB L2) 512 swept the bench's first-order record 15-20 % faster than 1024 at n = 10 and 10 % at
-# n = 100, and dynia.run took 3-11 % less CPU time in every one of six alternated runs; the general kernels (FOPDT,
-# second order) ran 2-7 % slower at 512, so they keep FUSED_BLOCK.
+# n = 100, and dynia.run took 3-11 % less CPU time in every one of six alternated runs; FOPDT with a dead time a
+# sample (a lag too) 2.34-2.50 ns a sample-step against 2.47-2.67. The general kernels (second order) ran 2-7 %
+# slower at 512, so they keep FUSED_BLOCK.
 LAG_BLOCK = 512
 
 
