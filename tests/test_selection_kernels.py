@@ -245,3 +245,19 @@ def test_an_answer_just_outside_the_bracket_is_found_on_its_side(seed):
     for bracket in ((ordered[k - 6], ordered[k - 1]), (ordered[k + 1], ordered[k + 6])):
         value, _ = selection.select_near(values, values.size, k, bracket, np.empty(values.size))
         assert value == ordered[k]
+
+
+@pytest.mark.parametrize("n_samples", [1, 63, 64, 65, 2000])
+def test_a_window_ties_only_when_every_sum_has_one_finite_magnitude(n_samples):
+    tied_cost = _callable(selection.tied_cost)
+    sums = np.full(n_samples, 2.5)
+    sums[::3] = -2.5  # a sum's sign does not change its cost
+    assert tied_cost(sums, PRESENT) == (2.5 / PRESENT) ** 2
+    assert tied_cost(np.zeros(n_samples), PRESENT) == 0.0
+    for where in {0, n_samples // 2, n_samples - 1}:  # in the first 64 or after them
+        # One sum alone is a tie of one, whatever its value; not when it is NaN or infinite.
+        for odd in (np.nextafter(2.5, 3.0), np.nan, np.inf) if n_samples > 1 else (np.nan, np.inf):
+            other = sums.copy()
+            other[where] = odd
+            assert np.isnan(tied_cost(other, PRESENT))
+    assert np.isnan(tied_cost(np.full(n_samples, np.inf), PRESENT))  # an overflowed window is no tie

@@ -29,6 +29,7 @@ from .selection import (
     behavioural,
     beside,
     count_costs,
+    every_candidate,
     find_candidates,
     form_costs,
     gather_costs,
@@ -40,6 +41,7 @@ from .selection import (
     select_within,
     sum_limits,
     threshold_ranks,
+    tied_cost,
     widened,
 )
 from .sums import window_sums
@@ -116,29 +118,27 @@ def analyse_window(t, window_sums, bound, cost_ranks, positions, window, results
     The candidates of its set are every cost up to ``bound`` (at least the
     bracket's top, which the threshold is searched within) or more
     (``_gather_window``); ``window`` is :func:`window_state`'s, whose
-    brackets move on. Returns how many candidates there were, and whether
-    every cost was formed into ``window[1]`` (only a selection among every
-    cost needs them).
+    brackets move on. A window whose samples all tie
+    (:func:`~dynia.engine.kernels.selection.tied_cost`) takes every sample
+    as a candidate and selects nothing. Returns how many candidates there
+    were, and whether every cost was formed into ``window[1]`` (only a
+    selection among every cost needs them).
     """
     count, upper_position = cost_ranks
-    _, cost, candidates, rules, work, track, within = window
+    _, _, candidates, rules, work, track, _ = window
     ic, ci, median, gradient, extreme_costs = results
-    scratch = work[0]
-    found, quantile_bracket, quantile_counts, formed = _gather_window(window_sums, bound, cost_ranks, window)
-    threshold, density = select_near(candidates[1], found, count - 1, (track[0], track[1]), scratch)
+    tie = tied_cost(*window_sums)
+    if tie == tie:
+        found, formed = every_candidate(tie, candidates), False
+        # No density: the next brackets are as wide as the last change asks, which finds the next window's values.
+        threshold, density, upper, quantile_density = tie, 0.0, tie, 0.0
+    else:
+        found, quantile_bracket, quantile_counts, formed = _gather_window(window_sums, bound, cost_ranks, window)
+        threshold, density = select_near(candidates[1], found, count - 1, (track[0], track[1]), work[0])
+        quantile = (quantile_bracket, quantile_counts)
+        upper, quantile_density, formed = _upper_quantile(window_sums, upper_position, quantile, formed, window)
     read_off_into = (ic, ci, median, gradient)
     smallest = read_off(count, candidates, found, threshold, rules, positions, t, read_off_into, True, work)
-    n_samples = cost.shape[0]
-    if quantile_counts[1]:
-        upper, quantile_density = select_within(
-            cost, n_samples, upper_position, quantile_bracket, quantile_counts, within, True
-        )
-    else:  # beyond the wide bracket too: searched on from its side, among every cost
-        if not formed:
-            form_costs(*window_sums, cost)
-            formed = True
-        side = beside(quantile_bracket, upper_position < quantile_counts[0])
-        upper, quantile_density = select_near(cost, n_samples, upper_position, side, scratch)
     track[0], track[1] = next_bracket(threshold, track[4], density, threshold_ranks(count))
     track[2], track[3] = next_bracket(upper, track[5], quantile_density, BRACKET_RANKS)
     track[4], track[5] = threshold, upper
@@ -146,6 +146,30 @@ def analyse_window(t, window_sums, bound, cost_ranks, positions, window, results
     extreme_costs[1, t] = threshold
     extreme_costs[2, t] = upper
     return found, formed
+
+
+@inner
+def _upper_quantile(window_sums, upper_position, quantile, formed, window):
+    """The noise floor's quantile, the ``upper_position``-th smallest cost, and the density of costs near it.
+
+    ``quantile`` = (bracket, (below, within)), :func:`_gather_window`'s;
+    when the bracket holds it, the costs within were gathered (``window[6]``),
+    else it is searched on from the bracket's side among every cost, formed
+    first unless ``formed``. Returns the quantile, the density and whether
+    every cost is formed.
+    """
+    _, cost, _, _, work, _, within = window
+    quantile_bracket, quantile_counts = quantile
+    n_samples = cost.shape[0]
+    if quantile_counts[1]:
+        upper, density = select_within(cost, n_samples, upper_position, quantile_bracket, quantile_counts, within, True)
+        return upper, density, formed
+    # Beyond the wide bracket too: searched on from its side, among every cost.
+    if not formed:
+        form_costs(*window_sums, cost)
+    side = beside(quantile_bracket, upper_position < quantile_counts[0])
+    upper, density = select_near(cost, n_samples, upper_position, side, work[0])
+    return upper, density, True
 
 
 @inner

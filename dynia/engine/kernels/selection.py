@@ -28,6 +28,8 @@ __all__ = [
     "sum_bound",
     "sum_bracket",
     "sum_limits",
+    "tied_cost",
+    "every_candidate",
     "count_costs",
     "gather_costs",
     "threshold_ranks",
@@ -137,6 +139,42 @@ def sum_bracket(bracket, present):
     ``s_low < abs(sum) <= s_high``. A cost below ``low`` is one at most the double before it."""
     low, high = bracket
     return sum_bound(np.nextafter(low, -np.inf), present), sum_bound(high, present)
+
+
+@inner
+def tied_cost(sums, present):
+    """The cost of every sample when all the window sums have one finite magnitude, else NaN: a window of ties.
+
+    Such a window (every simulation settled to the same output, as when a
+    record rests at zero) needs no selection: its threshold and quantile
+    are that cost and its behavioural set the first samples. The first 64
+    sums decide at once for the windows that differ, nearly all of them.
+    Only sums of one magnitude count as ties; sums that differ but round to
+    one cost are left to the selections, which find the same.
+    """
+    n = sums.shape[0]
+    size = abs(sums[0])
+    if not np.isfinite(size):
+        return np.nan
+    head = min(n, 64)
+    alike = 0
+    for s in range(head):
+        alike += abs(sums[s]) == size
+    if alike < head:
+        return np.nan
+    for s in range(head, n):
+        alike += abs(sums[s]) == size
+    return cost_of(size, present) if alike == n else np.nan
+
+
+@inner
+def every_candidate(cost, candidates):
+    """Every sample a candidate of cost ``cost``, into ``candidates`` = (indices, costs), in index order: how many."""
+    indices, costs = candidates
+    for s in range(indices.shape[0]):
+        indices[s] = s
+        costs[s] = cost
+    return indices.shape[0]
 
 
 @jit
