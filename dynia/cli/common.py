@@ -587,8 +587,8 @@ def announce_compilation(options, settings, n_samples, n_steps):
     A run of at most ``n_samples`` sets over ``n_steps`` steps that "auto" gives to the kernels' numpy twin compiles
     nothing, and nothing is said (:func:`dynia.engine.flavours.takes_kernels`).
 
-    numba alone finds out whether its on-disk cache holds them (a second or so) or they compile (20-30 s of one core
-    here, once after dynia or numba changes), hence "unless cached".
+    numba alone finds out whether its on-disk cache holds them (a second or so) or they compile (15 s of one core on
+    an Intel Xeon, 20-30 s on an AMD EPYC, once after dynia or numba changes), hence "unless cached".
     """
     if (
         options.shows_progress
@@ -597,6 +597,6 @@ def announce_compilation(options, settings, n_samples, n_steps):
     ):
         print(
             "dynia: compiling the analysis kernels unless numba cached them "
-            "(once after installing or upgrading dynia: 20-30 s)...",
+            "(once after installing or upgrading dynia: 15-30 s)...",
             file=sys.stderr,
         )
