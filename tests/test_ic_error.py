@@ -71,6 +71,24 @@ def test_every_batch_is_its_samples_analysed_alone(example1, engine):
     np.testing.assert_array_equal(result.ci_se, ci_se)
 
 
+def test_batches_of_a_record_resting_at_zero_are_their_samples_analysed_alone():
+    """Windows where every sample ties (each batch's set is then its first members, nothing selected): exact."""
+    u = np.r_[np.full(150, 1.0), np.zeros(650)]
+    y = dynia.models.FirstOrder().simulate([[2.0, 3.0]], u)[0] + np.random.default_rng(3).normal(0, 0.5, u.size)
+    params = np.random.default_rng(4).uniform([0.1, 0.5], [4, 7], (2000, 2))
+    sims = dynia.models.FirstOrder().simulate(params, u)
+    bounds = [[0, 4], [0, 7]]
+    costs = compiled_window_costs(y, sims, 10)
+    tied = (costs == costs[:, :1]).all(axis=1)
+    assert tied.sum() >= 200  # the shortcut is taken, and not everywhere
+    result = moving_window(y, sims, params, bounds, engine="numba", ic_error=True)
+    batches = result.run.ic_batches
+    alone = [moving_window(y, sims[b::batches], params[b::batches], bounds, engine="numba") for b in range(batches)]
+    ic_se, ci_se = monte_carlo_errors(np.stack([r.ic for r in alone]), np.stack([r.ci for r in alone]))
+    np.testing.assert_array_equal(result.ic_se, ic_se)
+    np.testing.assert_array_equal(result.ci_se, ci_se)
+
+
 def test_batches_shrink_to_keep_five_behavioural_sets_and_refuse_fewer():
     assert ic_batches(2000, 10) == 10
     assert ic_batches(300, 10) == 6  # 300 // 6 = 50 samples, 5 behavioural

@@ -73,8 +73,8 @@ def analyse_windows_batched(
         for b in range(n_batches):
             top = batch_brackets[b, 1]
             bound = max(bound, top) if top == top else bound
-        found, formed = analyse_window(t, (sums, present), bound, cost_ranks, positions, window, results)
-        costs = (cost, (sums, present), formed)
+        found, formed, tie = analyse_window(t, (sums, present), bound, cost_ranks, positions, window, results)
+        costs = (cost, (sums, present), formed, tie)
         _read_off_batches(costs, candidates, found, batches, state, window[3], t, results, batch_results, work)
 
 
@@ -104,9 +104,13 @@ def _batch_state(batches, n_samples, brackets, last):
 def _read_off_batches(costs, candidates, found, batches, state, rules, t, results, batch_results, work):
     """Every Monte Carlo batch's IC and limits at window t, from the population's ``candidates``.
 
-    ``costs`` = (cost, window_sums, formed): the window's cost array, its
-    sums and whether the costs are formed in it yet; a batch whose members
-    are not all among the candidates forms them (once a window).
+    ``costs`` = (cost, window_sums, formed, tie): the window's cost array,
+    its sums, whether the costs are formed in it yet, and the cost every
+    sample ties at (NaN when they do not: see
+    :func:`~dynia.engine.kernels.selection.tied_cost`); a batch whose
+    members are not all among the candidates forms them (once a window).
+    When every sample ties, each batch's set is its first members and
+    nothing is dealt or selected.
 
     Each batch's threshold is searched as the population's is (within a
     bracket around its last,
@@ -128,17 +132,23 @@ def _read_off_batches(costs, candidates, found, batches, state, rules, t, result
     n_batches = counts.shape[0]
     # As for the population (see read_off): the walk over the ranks pays once the sets are a 32nd of the samples.
     by_rank = not weighted and 32 * counts.sum() >= ranks.shape[1]
-    cost, window_sums, formed = costs
-    _deal_candidates(candidates, found, batch_of, batch_candidates, batch_found)
+    cost, window_sums, formed, tie = costs
+    if tie == tie:
+        _first_members(tie, counts, batch_candidates, batch_found)
+    else:
+        _deal_candidates(candidates, found, batch_of, batch_candidates, batch_found)
     for b in range(n_batches):
         members = (batch_candidates[0][b], batch_candidates[1][b])
         bracket = (brackets[b, 0], brackets[b, 1])
-        if batch_found[b] < counts[b]:
-            if not formed:
-                form_costs(*window_sums, cost)
-                formed = True
-            batch_found[b] = find_candidates(cost, b, n_batches, counts[b], bracket[1], members)
-        threshold, density = select_near(members[1], batch_found[b], counts[b] - 1, bracket, work[0])
+        if tie == tie:
+            threshold, density = tie, 0.0
+        else:
+            if batch_found[b] < counts[b]:
+                if not formed:
+                    form_costs(*window_sums, cost)
+                    formed = True
+                batch_found[b] = find_candidates(cost, b, n_batches, counts[b], bracket[1], members)
+            threshold, density = select_near(members[1], batch_found[b], counts[b] - 1, bracket, work[0])
         brackets[b, 0], brackets[b, 1] = next_bracket(threshold, last[b], density, threshold_ranks(counts[b]))
         last[b] = threshold
         if not by_rank:
@@ -154,6 +164,21 @@ def _read_off_batches(costs, candidates, found, batches, state, rules, t, result
         for b in range(n_batches):
             batch_ci[b, p, t, 0], batch_ci[b, p, t, 1] = limits[b, 0], limits[b, 1]
             batch_ic[b, p, t] = 1 - (limits[b, 1] - limits[b, 0]) / (highs[p] - lows[p])
+
+
+@inner
+def _first_members(tie, counts, batch_candidates, batch_found):
+    """Each batch's first ``counts[b]`` members, samples b, b + B, ..., as its candidates, all of cost ``tie``.
+
+    Where every sample ties, they are the batch's behavioural set, as a stable sort of its costs takes ties.
+    """
+    batch_indices, batch_costs = batch_candidates
+    n_batches = counts.shape[0]
+    for b in range(n_batches):
+        for i in range(counts[b]):
+            batch_indices[b, i] = b + i * n_batches
+            batch_costs[b, i] = tie
+        batch_found[b] = counts[b]
 
 
 @inner

@@ -121,8 +121,9 @@ def analyse_window(t, window_sums, bound, cost_ranks, positions, window, results
     brackets move on. A window whose samples all tie
     (:func:`~dynia.engine.kernels.selection.tied_cost`) takes every sample
     as a candidate and selects nothing. Returns how many candidates there
-    were, and whether every cost was formed into ``window[1]`` (only a
-    selection among every cost needs them).
+    were, whether every cost was formed into ``window[1]`` (only a
+    selection among every cost needs them) and the tied cost (NaN when the
+    samples do not all tie).
     """
     count, upper_position = cost_ranks
     _, _, candidates, rules, work, track, _ = window
@@ -145,7 +146,7 @@ def analyse_window(t, window_sums, bound, cost_ranks, positions, window, results
     extreme_costs[0, t] = smallest
     extreme_costs[1, t] = threshold
     extreme_costs[2, t] = upper
-    return found, formed
+    return found, formed, tie
 
 
 @inner
