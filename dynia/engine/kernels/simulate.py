@@ -157,14 +157,13 @@ def delayed_inputs(delayed, padded_input, delays, k, lo, hi):
         now[lo:hi] = padded_input[max(k - delays[0], -1) + 1]
         previous[lo:hi] = padded_input[max(k - delays[0] - 1, -1) + 1]
     else:
-        for s in range(lo, hi):
-            now[s] = padded_input[max(k - delays[s], -1) + 1]
-            previous[s] = padded_input[max(k - delays[s] - 1, -1) + 1]
+        delayed_input(now[lo:hi], padded_input, delays[lo:hi], k)
+        delayed_input(previous[lo:hi], padded_input, delays[lo:hi], k - 1)
 
 
 @inner
 def delayed_input(values, padded_input, delays, k):
-    """u[k-d] into ``values``, one a sample, each of its own dead time ``delays``: as :func:`delayed_inputs` does."""
+    """u[k-d] into ``values``, one a sample, each of its own dead time ``delays`` (u[k-d-1] is this at k - 1)."""
     for s in range(values.shape[0]):
         values[s] = padded_input[max(k - delays[s], -1) + 1]
 
