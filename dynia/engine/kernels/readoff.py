@@ -29,8 +29,8 @@ from .selection import (
     behavioural,
     beside,
     count_costs,
-    every_candidate,
     find_candidates,
+    first_candidates,
     form_costs,
     gather_costs,
     next_bracket,
@@ -119,8 +119,8 @@ def analyse_window(t, window_sums, bound, cost_ranks, positions, window, results
     bracket's top, which the threshold is searched within) or more
     (``_gather_window``); ``window`` is :func:`window_state`'s, whose
     brackets move on. A window whose samples all tie
-    (:func:`~dynia.engine.kernels.selection.tied_cost`) takes every sample
-    as a candidate and selects nothing. Returns how many candidates there
+    (:func:`~dynia.engine.kernels.selection.tied_cost`) takes its first
+    ``count`` samples as the candidates and selects nothing. Returns how many candidates there
     were, whether every cost was formed into ``window[1]`` (only a
     selection among every cost needs them) and the tied cost (NaN when the
     samples do not all tie).
@@ -130,7 +130,7 @@ def analyse_window(t, window_sums, bound, cost_ranks, positions, window, results
     ic, ci, median, gradient, extreme_costs = results
     tie = tied_cost(*window_sums)
     if tie == tie:
-        found, formed = every_candidate(tie, candidates), False
+        found, formed = first_candidates(tie, count, candidates), False
         # No density: the next brackets are as wide as the last change asks, which finds the next window's values.
         threshold, density, upper, quantile_density = tie, 0.0, tie, 0.0
     else:

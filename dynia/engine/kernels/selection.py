@@ -29,7 +29,7 @@ __all__ = [
     "sum_bracket",
     "sum_limits",
     "tied_cost",
-    "every_candidate",
+    "first_candidates",
     "count_costs",
     "gather_costs",
     "threshold_ranks",
@@ -168,13 +168,16 @@ def tied_cost(sums, present):
 
 
 @inner
-def every_candidate(cost, candidates):
-    """Every sample a candidate of cost ``cost``, into ``candidates`` = (indices, costs), in index order: how many."""
+def first_candidates(cost, count, candidates):
+    """The first ``count`` samples as the candidates, all of cost ``cost``, into ``candidates`` = (indices, costs).
+
+    Where every sample ties they are the behavioural set, as a stable sort takes ties. Returns ``count``.
+    """
     indices, costs = candidates
-    for s in range(indices.shape[0]):
+    for s in range(count):
         indices[s] = s
         costs[s] = cost
-    return indices.shape[0]
+    return count
 
 
 @jit
